@@ -1,0 +1,3 @@
+from stvm.cli import main
+
+raise SystemExit(main())

@@ -1,0 +1,237 @@
+"""The `stvm` command: check · run (trace and debug come in their own modules).
+
+Exit codes (a contract): 0 ok, 1 compile errors, 2 usage error, 3 runtime fault.
+"""
+
+from __future__ import annotations
+
+import argparse
+import signal
+import sys
+from pathlib import Path
+
+from stvm.settings import DEFAULT_SETTINGS
+
+EXIT_OK, EXIT_COMPILE, EXIT_USAGE, EXIT_FAULT = 0, 1, 2, 3
+
+
+class _UsageError(Exception):
+    pass
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message: str) -> None:  # argparse exits 2 on usage errors, as we want
+        self.print_usage(sys.stderr)
+        print(f"stvm: error: {message}", file=sys.stderr)
+        raise SystemExit(EXIT_USAGE)
+
+
+def _settings(args):
+    try:
+        return DEFAULT_SETTINGS.with_overrides(getattr(args, "sysmac", None) or [])
+    except ValueError as exc:
+        raise _UsageError(str(exc)) from exc
+
+
+def _print_diagnostics(diags, sources) -> None:
+    from stvm.diagnostics import render
+    for d in diags:
+        sys.stderr.write(render(d, sources))
+
+
+def cmd_check(args) -> int:
+    from stvm.project import check
+    _require_files(args.files)
+    analysis, diags, sources = check(args.files, _settings(args))
+    _print_diagnostics(diags, sources)
+    errors = sum(d.is_error for d in diags)
+    if errors:
+        print(f"{errors} error(s)", file=sys.stderr)
+        return EXIT_COMPILE
+    return EXIT_OK
+
+
+def _require_files(files) -> None:
+    for f in files:
+        if not Path(f).exists():
+            raise _UsageError(f"no such file: {f}")
+
+
+def _parse_assignment(text: str) -> tuple[str, str]:
+    name, sep, value = text.partition("=")
+    if not sep or not name.strip():
+        raise _UsageError(f"--set needs NAME=VALUE, got {text!r}")
+    return name.strip(), value.strip()
+
+
+def literal_value(text: str, ty):
+    """An IEC literal typed on the command line (`--set`), converted to `ty`."""
+    from stvm.semantics import types as t
+    from stvm.syntax import parse_expression
+    from stvm.syntax import nodes as n
+    expr, diags = parse_expression(text, "<--set>")
+    if expr is None or any(d.is_error for d in diags):
+        if isinstance(ty, t.StringType):
+            return text.encode("utf-8")
+        raise ValueError(f"{text!r} is not an ST literal")
+    negate = False
+    if isinstance(expr, n.Unary) and expr.op == "MINUS":
+        negate, expr = True, expr.operand
+    if isinstance(expr, (n.IntLiteral, n.RealLiteral, n.BoolLiteral, n.StringLiteral)):
+        value = expr.value
+    elif isinstance(expr, n.TimeLiteral):
+        value = expr.value_ns
+    elif isinstance(expr, n.HashLiteral):
+        if isinstance(ty, t.EnumType):
+            return expr.text
+        text_value = expr.text
+        if isinstance(ty, t.BoolType):
+            value = text_value.upper() in ("TRUE", "1")
+        elif "." in text_value or "e" in text_value.lower() and "#" not in text_value:
+            value = float(text_value)
+        else:
+            from stvm.syntax.parser import decode_int
+            value = decode_int(text_value.lstrip("+-")) * (-1 if text_value.startswith("-") else 1)
+    elif isinstance(expr, n.Name) and len(expr.parts) == 1 and isinstance(ty, t.EnumType):
+        return expr.parts[0]
+    else:
+        raise ValueError(f"{text!r} is not a literal")
+    if negate:
+        value = -value
+    if isinstance(ty, t.RealType) and isinstance(value, int) and not isinstance(value, bool):
+        value = float(value)
+    return value
+
+
+def cmd_run(args) -> int:
+    from stvm.project import LoadError, load, parse_duration
+    from stvm.runtime.vm import PathError, RuntimeFault
+    _require_files(args.files)
+    settings = _settings(args)
+    try:
+        scan_ns = parse_duration(args.scan)
+        duration_ns = parse_duration(args.duration) if args.duration else None
+    except ValueError as exc:
+        raise _UsageError(str(exc)) from exc
+    if scan_ns <= 0:
+        raise _UsageError("--scan must be positive")
+    if args.cycles is not None and args.cycles < 0:
+        raise _UsageError("--cycles must be >= 0")
+    try:
+        project = load(args.files, settings, use_cache=not args.no_cache)
+    except LoadError as exc:
+        _print_diagnostics(exc.diagnostics, exc.sources)
+        print(f"{sum(d.is_error for d in exc.diagnostics)} error(s)", file=sys.stderr)
+        return EXIT_COMPILE
+    _print_diagnostics(project.warnings, project.sources)
+    vm = project.start(scan=scan_ns, realtime=args.realtime)
+    # validate --print names before running, so a typo is a usage error, not a lost run
+    for name in args.print or []:
+        try:
+            vm.resolve(name)
+        except PathError as exc:
+            raise _UsageError(str(exc)) from exc
+    for item in args.set or []:
+        name, text = _parse_assignment(item)
+        try:
+            ty = vm.type_of(name)
+            vm.set(name, literal_value(text, ty))
+        except PathError as exc:
+            raise _UsageError(str(exc)) from exc
+        except ValueError as exc:
+            raise _UsageError(f"--set {name}: {exc}") from exc
+    status = EXIT_OK
+    interrupted = False
+    previous = signal.getsignal(signal.SIGINT)
+    try:
+        try:
+            vm.run(cycles=args.cycles, duration_ns=duration_ns)
+        except KeyboardInterrupt:
+            interrupted = True
+        except RuntimeFault as fault:
+            sys.stderr.write(fault.render(project.sources))
+            status = EXIT_FAULT
+    finally:
+        signal.signal(signal.SIGINT, previous)
+        vm.close()
+    for name in args.print or []:
+        print(f"{name} = {vm.format(name)}")
+    if args.stats:
+        _print_stats(vm)
+    if interrupted:
+        print(f"stopped after {vm.scan_count} scans", file=sys.stderr)
+    return status
+
+
+def _print_stats(vm) -> None:
+    import numpy as np
+    durations = np.frombuffer(vm.scan_durations_ns, dtype=np.int64) / 1000.0
+    if len(durations) == 0:
+        print("scans: 0")
+        return
+    print(f"scans: {len(durations)}  scan time us: mean {durations.mean():.1f}  p50 {np.percentile(durations, 50):.1f}  "
+          f"p99 {np.percentile(durations, 99):.1f}  max {durations.max():.1f}")
+    if vm.realtime:
+        jitter = np.frombuffer(vm.jitter_ns, dtype=np.int64) / 1000.0
+        print(f"overruns: {vm.overruns}  jitter us: p50 {np.percentile(jitter, 50) if len(jitter) else 0:.1f}  "
+              f"max {jitter.max() if len(jitter) else 0:.1f}")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = _Parser(prog="stvm", description="Structured Text virtual machine")
+    parser.add_argument("--version", action="version", version="stvm " + __import__("stvm").__version__)
+    sub = parser.add_subparsers(dest="command", parser_class=_Parser)
+    sysmac_help = "override a Sysmac UNCERTAIN setting, NAME=VALUE (see README)"
+
+    check = sub.add_parser("check", help="check ST files and print diagnostics")
+    check.add_argument("files", nargs="+")
+    check.add_argument("--sysmac", action="append", metavar="NAME=VALUE", help=sysmac_help)
+    check.set_defaults(func=cmd_check)
+
+    run = sub.add_parser("run", help="run ST programs on the VM")
+    run.add_argument("files", nargs="+")
+    run.add_argument("--scan", default="10ms", help="default task period (default 10ms)")
+    limit = run.add_mutually_exclusive_group()
+    limit.add_argument("--cycles", type=int, help="number of scans to run")
+    limit.add_argument("--duration", help="VM time to run, e.g. 5s")
+    run.add_argument("--print", action="append", metavar="NAME", help="print NAME = VALUE after the run")
+    run.add_argument("--set", action="append", metavar="NAME=VALUE", help="set a variable before the first scan")
+    run.add_argument("--realtime", action="store_true", help="sleep to each deadline (default: virtual clock)")
+    run.add_argument("--stats", action="store_true", help="print scan-time statistics")
+    run.add_argument("--no-cache", action="store_true", help="do not use the compile cache")
+    run.add_argument("--sysmac", action="append", metavar="NAME=VALUE", help=sysmac_help)
+    run.set_defaults(func=cmd_run)
+    _register_extensions(sub)
+    return parser
+
+
+def _register_extensions(sub) -> None:
+    """Commands living in their own modules (demo, trace, debug) register themselves here."""
+    import importlib
+    for module_name in ("stvm.demo.cli", "stvm.trace.cli", "stvm.debug.cli"):
+        try:
+            module = importlib.import_module(module_name)
+        except ModuleNotFoundError as exc:
+            if exc.name and module_name.startswith(exc.name):
+                continue
+            raise
+        module.register(sub)
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if not getattr(args, "func", None):
+        parser.print_help(sys.stderr)
+        return EXIT_USAGE
+    try:
+        return args.func(args)
+    except _UsageError as exc:
+        print(f"stvm: error: {exc}", file=sys.stderr)
+        return EXIT_USAGE
+    except BrokenPipeError:
+        return EXIT_OK
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,828 @@
+"""Stage 3: lower the checked project to one Python module, with a map back to ST lines.
+
+Each FUNCTION_BLOCK/PROGRAM becomes a class (variables are slots `v_<name>`, the body is
+`__call__`), each FUNCTION a Python function with a frame object, each STRUCT a class with
+`_copy`/`_assign`. One Python statement group per ST statement; `LineMap` maps every generated
+line to the ST statement's span, so faults and breakpoints speak ST.
+
+Safety: only names from `lower.names` and `repr()`-ed literals of checked Python types are
+written; no ST text is ever copied into the generated source.
+"""
+
+from __future__ import annotations
+
+import bisect
+import math
+from dataclasses import dataclass, field
+
+from stvm.semantics import types as t
+from stvm.semantics.checker import Analysis, CallInfo
+from stvm.semantics.model import EXTERNAL, GLOBAL, IN_OUT, INPUT, OUTPUT, TEMP, POUInfo, Variable
+from stvm.lower.names import unit_name, var_attr
+from stvm.syntax import nodes as n
+
+
+@dataclass
+class LineMap:
+    """Generated line → ST span; `span_at` finds the statement a generated line belongs to."""
+
+    lines: list[int] = field(default_factory=list)
+    spans: list[n.Span] = field(default_factory=list)
+
+    def add(self, line: int, span: n.Span) -> None:
+        if self.lines and self.lines[-1] == line:
+            self.spans[-1] = span
+            return
+        self.lines.append(line)
+        self.spans.append(span)
+
+    def span_at(self, line: int) -> n.Span | None:
+        i = bisect.bisect_right(self.lines, line) - 1
+        return self.spans[i] if i >= 0 else None
+
+    def lines_for(self, file: str, st_line: int) -> list[int]:
+        """Generated lines where a statement starting at `file:st_line` begins (for breakpoints)."""
+        out = []
+        for gen_line, span in zip(self.lines, self.spans):
+            if span.file == file and span.line == st_line:
+                out.append(gen_line)
+        return out
+
+
+@dataclass
+class LoweredProject:
+    source: str
+    line_map: LineMap
+    classes: dict[str, str]            # POU/struct qualname key → Python class/function name
+    natives: dict[str, str]            # Python name → native registry key (functions)
+    native_fbs: dict[str, str]         # Python class name → native FB registry key
+    types: list[t.Type]                # `_T[i]` constants
+    sites: list[n.Span]                # `_fun_error(e, i)` call sites
+    globals_class: str = "G_globals"
+
+
+def _lit(value: object) -> str:
+    """Python source for a checked runtime constant (bool, int, float, bytes)."""
+    if isinstance(value, bool) or value is None:
+        return repr(value)
+    if isinstance(value, int):
+        return repr(value)
+    if isinstance(value, float):
+        if math.isnan(value):
+            return "float('nan')"
+        if math.isinf(value):
+            return "float('inf')" if value > 0 else "float('-inf')"
+        return repr(value)
+    if isinstance(value, bytes):
+        return repr(value)
+    raise AssertionError(f"not a literal: {type(value).__name__}")
+
+
+def _wrap(code: str, ty: t.IntType) -> str:
+    mask = (1 << ty.bits) - 1
+    if ty.signed:
+        half = 1 << (ty.bits - 1)
+        return f"((({code}) + {half} & {mask}) - {half})"
+    return f"(({code}) & {mask})"
+
+
+def _contains(dst: t.IntType, src: t.IntType) -> bool:
+    return dst.lo <= src.lo and src.hi <= dst.hi
+
+
+class _Writer:
+    def __init__(self) -> None:
+        self.lines: list[str] = []
+        self.indent = 0
+        self.line_map = LineMap()
+        self.span: n.Span | None = None
+
+    def line(self, text: str) -> None:
+        self.lines.append("    " * self.indent + text)
+        if self.span is not None:
+            self.line_map.add(len(self.lines), self.span)
+
+    def blank_span(self) -> None:
+        self.span = None
+
+
+class Lowerer:
+    def __init__(self, analysis: Analysis, settings) -> None:
+        self.a = analysis
+        self.model = analysis.model
+        self.facts = analysis.facts
+        self.settings = settings
+        self.w = _Writer()
+        self.classes: dict[str, str] = {}
+        self.natives: dict[str, str] = {}
+        self.native_fbs: dict[str, str] = {}
+        self.types: list[t.Type] = []
+        self.sites: list[n.Span] = []
+        self.tmp = 0
+        # per-POU state
+        self.pou: POUInfo | None = None
+        self.owner = "self"
+        self.loops: list[tuple[str, list[str]]] = []   # (kind, continue-code lines)
+
+    # ---- names
+    def assign_names(self) -> None:
+        for i, (key, st) in enumerate(sorted(self.model.structs.items())):
+            self.classes[key] = unit_name("S", i, st.qualname)  # type: ignore[attr-defined]
+        for i, (key, pou) in enumerate(sorted(self.model.pous.items())):
+            if pou.kind == "FUNCTION":
+                name = unit_name("N" if pou.native else "F", i, pou.qualname)
+                if pou.native:
+                    self.natives[name] = pou.qualname.split("\\")[-1].upper()
+            else:
+                name = unit_name("P", i, pou.qualname)
+                if pou.native:
+                    self.native_fbs[name] = pou.qualname.split("\\")[-1].upper()
+            self.classes[key] = name
+
+    def type_const(self, ty: t.Type) -> str:
+        for i, existing in enumerate(self.types):
+            if existing == ty and type(existing) is type(ty):
+                return f"_T[{i}]"
+        self.types.append(ty)
+        return f"_T[{len(self.types) - 1}]"
+
+    def new_tmp(self, stem: str) -> str:
+        self.tmp += 1
+        return f"_{stem}{self.tmp}"
+
+    # ---- default values
+    def enum_default(self, ty: t.EnumType) -> int:
+        if self.settings.enum_default == "zero" or not ty.members:
+            return 0
+        return ty.members[0][1]
+
+    def default_expr(self, ty: t.Type, init: object = None) -> str:
+        if isinstance(ty, t.BoolType):
+            return _lit(bool(init) if init is not None else False)
+        if isinstance(ty, t.IntType):
+            return _lit(init if init is not None else 0)
+        if isinstance(ty, t.RealType):
+            return _lit(float(init) if init is not None else 0.0)
+        if isinstance(ty, t.TimeType):
+            return _lit(init if init is not None else 0)
+        if isinstance(ty, t.StringType):
+            return _lit(init if init is not None else b"")
+        if isinstance(ty, t.EnumType):
+            return _lit(init if init is not None else self.enum_default(ty))
+        if isinstance(ty, t.StructType):
+            cls = self.classes[ty.qualname.lower()]
+            if isinstance(init, dict) and init:
+                parts = ", ".join(f"{var_attr(ty.field_name(k) or k)}={self.default_expr(ty.field_type(k), v)}"  # type: ignore[arg-type]
+                                  for k, v in init.items() if ty.field_type(k) is not None)
+                return f"_with({cls}(), {parts})"
+            return f"{cls}()"
+        if isinstance(ty, t.FBType):
+            return f"{self.classes[ty.qualname.lower()]}()"
+        if isinstance(ty, t.ArrayType):
+            if ty.dims is None:
+                return "None"
+            values = init if isinstance(init, list) else []
+            return self.array_expr(ty, list(ty.dims), values)
+        return "None"
+
+    def array_expr(self, ty: t.ArrayType, dims: list[tuple[int, int]], flat: list) -> str:
+        lo, hi = dims[0]
+        count = hi - lo + 1
+        if len(dims) == 1:
+            elem = ty.element
+            scalar = isinstance(elem, (t.BoolType, t.IntType, t.RealType, t.TimeType, t.StringType, t.EnumType))
+            if not flat:
+                if scalar:
+                    return f"[{self.default_expr(elem)}] * {count}"
+                return f"[{self.default_expr(elem)} for _ in range({count})]"
+            items = [self.default_expr(elem, flat[i] if i < len(flat) else None) for i in range(count)]
+            return "[" + ", ".join(items) + "]"
+        inner = 1
+        for l2, h2 in dims[1:]:
+            inner *= h2 - l2 + 1
+        rows = []
+        for i in range(count):
+            rows.append(self.array_expr(ty, dims[1:], flat[i * inner:(i + 1) * inner]))
+        return "[" + ", ".join(rows) + "]"
+
+    def var_default(self, var: Variable) -> str:
+        return self.default_expr(var.type, var.init)
+
+    # ---- module
+    def lower(self) -> LoweredProject:
+        self.assign_names()
+        w = self.w
+        w.line("# generated by stvm from checked ST; do not edit")
+        for key, st in sorted(self.model.structs.items()):
+            self.struct_class(key, st)  # type: ignore[arg-type]
+        self.globals_class()
+        for key, pou in sorted(self.model.pous.items()):
+            node = self.a.pou_nodes.get(key)
+            if pou.kind == "FUNCTION":
+                if not pou.native:
+                    self.function(pou, node)
+            else:
+                self.fb_class(pou, node)
+        return LoweredProject("\n".join(w.lines) + "\n", w.line_map, self.classes, self.natives,
+                              self.native_fbs, self.types, self.sites)
+
+    def struct_class(self, key: str, st: t.StructType) -> None:
+        w = self.w
+        w.blank_span()
+        cls = self.classes[key]
+        attrs = [var_attr(name) for name, _ in st.fields]
+        inits = self.a.type_inits.get(key, {})
+        w.line(f"class {cls}:")
+        w.indent += 1
+        w.line(f"__slots__ = {tuple(attrs)!r}")
+        w.line("def __init__(self):")
+        w.indent += 1
+        for (name, fty), attr in zip(st.fields, attrs):
+            w.line(f"self.{attr} = {self.default_expr(fty, inits.get(name.lower()))}")
+        if not attrs:
+            w.line("pass")
+        w.indent -= 1
+        w.line("def _copy(self):")
+        w.indent += 1
+        w.line(f"other = {cls}.__new__({cls})")
+        for (name, fty), attr in zip(st.fields, attrs):
+            if isinstance(fty, (t.StructType, t.ArrayType)):
+                w.line(f"other.{attr} = _copy_value(self.{attr})")
+            else:
+                w.line(f"other.{attr} = self.{attr}")
+        w.line("return other")
+        w.indent -= 1
+        w.line("def _assign(self, src):")
+        w.indent += 1
+        w.line("if src is self: return")
+        for (name, fty), attr in zip(st.fields, attrs):
+            if isinstance(fty, t.StructType):
+                w.line(f"self.{attr}._assign(src.{attr})")
+            elif isinstance(fty, t.ArrayType):
+                w.line(f"_assign_array(self.{attr}, src.{attr})")
+            else:
+                w.line(f"self.{attr} = src.{attr}")
+        w.indent -= 2
+
+    def globals_class(self) -> None:
+        w = self.w
+        w.blank_span()
+        attrs = [var_attr(v.name) for v in self.model.globals.values()]
+        w.line("class G_globals:")
+        w.indent += 1
+        w.line(f"__slots__ = {tuple(attrs)!r}")
+        w.line("def __init__(self):")
+        w.indent += 1
+        for var in self.model.globals.values():
+            w.line(f"self.{var_attr(var.name)} = {self.var_default(var)}")
+        if not attrs:
+            w.line("pass")
+        w.indent -= 2
+
+    def fb_class(self, pou: POUInfo, node: n.POU | None) -> None:
+        w = self.w
+        w.blank_span()
+        cls = self.classes[pou.key]
+        own = [v for v in pou.variables.values() if v.section != EXTERNAL]
+        attrs = [var_attr(v.name) for v in own]
+        if pou.native:
+            attrs.append("_impl")
+        w.line(f"class {cls}:")
+        w.indent += 1
+        w.line(f"__slots__ = {tuple(attrs)!r}")
+        w.line("def __init__(self):")
+        w.indent += 1
+        for var in own:
+            if var.section == IN_OUT:
+                w.line(f"self.{var_attr(var.name)} = None")
+            else:
+                w.line(f"self.{var_attr(var.name)} = {self.var_default(var)}")
+        if pou.native:
+            w.line(f"self._impl = _NATIVE_FB[{pou.qualname.split(chr(92))[-1].upper()!r}]()")
+        if not attrs:
+            w.line("pass")
+        w.indent -= 1
+        w.line("def __call__(self):")
+        w.indent += 1
+        self.pou = pou
+        self.owner = "self"
+        if pou.native:
+            w.line("self._impl.call(self, _ctx)")
+        else:
+            for var in own:
+                if var.section == TEMP:
+                    w.line(f"self.{var_attr(var.name)} = {self.var_default(var)}")
+            assert node is not None
+            self.body(node.body)
+            if not node.body and not any(v.section == TEMP for v in own):
+                w.line("pass")
+        w.indent -= 2
+        w.blank_span()
+
+    def function(self, pou: POUInfo, node: n.POU | None) -> None:
+        w = self.w
+        w.blank_span()
+        name = self.classes[pou.key]
+        params = pou.params()
+        args = ", ".join(var_attr(p.name) for p in params)
+        w.line(f"def {name}({args}):")
+        w.indent += 1
+        self.pou = pou
+        self.owner = "_f"
+        w.line("_f = _Frame()")
+        for p in params:
+            w.line(f"_f.{var_attr(p.name)} = {var_attr(p.name)}")
+        for var in pou.variables.values():
+            if var.section not in (INPUT, IN_OUT, EXTERNAL):
+                w.line(f"_f.{var_attr(var.name)} = {self.var_default(var)}")
+        assert pou.return_type is not None
+        w.line(f"_r = {self.default_expr(pou.return_type)}")
+        assert node is not None
+        self.body(node.body)
+        w.blank_span()
+        w.line("return _r")
+        w.indent -= 1
+
+    # ---- statements
+    def body(self, stmts: tuple[n.Statement, ...]) -> None:
+        if not stmts:
+            self.w.line("pass")
+            return
+        for s in stmts:
+            self.statement(s)
+
+    def statement(self, s: n.Statement) -> None:
+        self.w.span = s.span
+        guarded = isinstance(s, (n.Assign, n.CallStatement)) and self.has_native_call(s)
+        if guarded:
+            self.w.line("try:")
+            self.w.indent += 1
+        getattr(self, "st_" + type(s).__name__)(s)
+        if guarded:
+            self.w.indent -= 1
+            self.sites.append(s.span)
+            self.w.span = s.span
+            self.w.line(f"except _FunctionError as _e: _fun_error(_e, {len(self.sites) - 1})")
+
+    def has_native_call(self, node: object) -> bool:
+        stack = [node]
+        while stack:
+            x = stack.pop()
+            if isinstance(x, n.Call):
+                info = self.facts.calls.get(id(x))
+                if info is not None and not info.is_fb:
+                    return True
+            if isinstance(x, (n.Node,)) or hasattr(x, "__dataclass_fields__"):
+                for fname in getattr(x, "__dataclass_fields__", {}):
+                    if fname == "span":
+                        continue
+                    v = getattr(x, fname)
+                    if isinstance(v, tuple):
+                        stack.extend(v)
+                    elif v is not None and hasattr(v, "__dataclass_fields__"):
+                        stack.append(v)
+        return False
+
+    def st_Assign(self, s: n.Assign) -> None:
+        target_type = self.facts.types.get(id(s.target))
+        if target_type is None and isinstance(s.target, n.Name):
+            target_type = self.pou.return_type  # type: ignore[union-attr]
+        value = self.expr_as(s.value, target_type)
+        self.store(s.target, value, target_type)
+
+    def st_CallStatement(self, s: n.CallStatement) -> None:
+        info = self.facts.calls[id(s.call)]
+        if info.is_fb:
+            self.fb_call(s.call, info)  # type: ignore[arg-type]
+        else:
+            self.w.line(self.function_call(s.call, info))  # type: ignore[arg-type]
+
+    def st_If(self, s: n.If) -> None:
+        for i, (cond, body) in enumerate(s.branches):
+            self.w.span = cond.span if i else s.span
+            self.w.line(f"{'if' if i == 0 else 'elif'} {self.expr(cond)}:")
+            self.w.indent += 1
+            self.body(body)
+            self.w.indent -= 1
+        if s.else_body is not None:
+            self.w.span = s.span
+            self.w.line("else:")
+            self.w.indent += 1
+            self.body(s.else_body)
+            self.w.indent -= 1
+
+    def st_Case(self, s: n.Case) -> None:
+        sel = self.new_tmp("case")
+        self.w.line(f"{sel} = {self.expr(s.selector)}")
+        first = True
+        for labels, body in s.elements:
+            tests = []
+            for label in labels:
+                lo = self.facts.consts.get(id(label.low))
+                if label.high is None:
+                    tests.append(f"{sel} == {_lit(lo)}")
+                else:
+                    hi = self.facts.consts.get(id(label.high))
+                    tests.append(f"{_lit(lo)} <= {sel} <= {_lit(hi)}")
+            self.w.line(f"{'if' if first else 'elif'} {' or '.join(tests) or 'False'}:")
+            first = False
+            self.w.indent += 1
+            self.body(body)
+            self.w.indent -= 1
+        if s.else_body is not None:
+            if first:
+                self.w.line("if True:")
+            else:
+                self.w.line("else:")
+            self.w.indent += 1
+            self.body(s.else_body)
+            self.w.indent -= 1
+
+    def st_For(self, s: n.For) -> None:
+        var_type = self.facts.types[id(s.variable)]
+        assert isinstance(var_type, t.IntType)
+        self.store(s.variable, self.expr_as(s.start, var_type), var_type)
+        end = self.new_tmp("end")
+        self.w.line(f"{end} = {self.expr_as(s.end, var_type)}")
+        step_const = self.facts.consts.get(id(s.step)) if s.step is not None else 1
+        read = self.expr(s.variable)
+        if isinstance(step_const, int):
+            step = _lit(step_const)
+            cond = f"{read} <= {end}" if step_const > 0 else f"{read} >= {end}"
+        else:
+            step = self.new_tmp("step")
+            self.w.line(f"{step} = {self.expr_as(s.step, var_type)}")  # type: ignore[arg-type]
+            cond = f"({read} <= {end} if {step} > 0 else {read} >= {end})"
+        increment = self.store_code(s.variable, _wrap(f"{read} + {step}", var_type), var_type)
+        self.w.line(f"while {cond}:")
+        self.w.indent += 1
+        self.loops.append(("for", increment))
+        self.body(s.body)
+        self.loops.pop()
+        self.w.span = s.span
+        for line in increment:
+            self.w.line(line)
+        self.w.indent -= 1
+
+    def st_While(self, s: n.While) -> None:
+        self.w.line(f"while {self.expr(s.condition)}:")
+        self.w.indent += 1
+        self.loops.append(("while", []))
+        self.body(s.body)
+        self.loops.pop()
+        self.w.indent -= 1
+
+    def st_Repeat(self, s: n.Repeat) -> None:
+        self.w.line("while True:")
+        self.w.indent += 1
+        cond = self.expr(s.condition)
+        self.loops.append(("repeat", [f"if {cond}: break"]))
+        self.body(s.body)
+        self.loops.pop()
+        self.w.span = s.condition.span
+        self.w.line(f"if {cond}: break")
+        self.w.indent -= 1
+
+    def st_Exit(self, s: n.Exit) -> None:
+        self.w.line("break")
+
+    def st_Continue(self, s: n.Continue) -> None:
+        kind, code = self.loops[-1]
+        for line in code:
+            self.w.line(line)
+        self.w.line("continue")
+
+    def st_Return(self, s: n.Return) -> None:
+        self.w.line("return _r" if self.pou and self.pou.kind == "FUNCTION" else "return")
+
+    def st_Empty(self, s: n.Empty) -> None:
+        self.w.line("pass")
+
+    # ---- stores
+    def store(self, target: n.Expr, value: str, ty: t.Type | None) -> None:
+        for line in self.store_code(target, value, ty):
+            self.w.line(line)
+
+    def store_code(self, target: n.Expr, value: str, ty: t.Type | None) -> list[str]:
+        """Python statements that store `value` (already converted to `ty`) into `target`."""
+        aggregate = isinstance(ty, (t.StructType, t.ArrayType))
+        if isinstance(target, n.Name):
+            ref = self.facts.names[id(target)]
+            if ref.kind == "result":
+                return [f"_r = {value}" if not aggregate else f"_r = _copy_value({value})"]
+            var = ref.variable
+            assert var is not None
+            place = self.var_place(var, ref.kind == "global")
+            if var.section == IN_OUT and not aggregate:
+                return [f"{place}.set({value})"]
+            return [self.assign_into(place, value, ty)]
+        if isinstance(target, n.Member):
+            base = self.expr(target.base)
+            base_type = self.facts.types[id(target.base)]
+            attr = var_attr(self.member_name(base_type, target.name))
+            return [self.assign_into(f"{base}.{attr}", value, ty)]
+        if isinstance(target, n.Index):
+            place = self.index_code(target)
+            return [self.assign_into(place, value, ty)]
+        if isinstance(target, n.BitAccess):
+            current = self.expr(target.base)
+            base_type = self.facts.types[id(target.base)]
+            return self.store_code(target.base, f"_setbit({current}, {target.bit}, {value})", base_type)
+        raise AssertionError("checked: not an lvalue")
+
+    def assign_into(self, place: str, value: str, ty: t.Type | None) -> str:
+        if isinstance(ty, t.StructType):
+            return f"{place}._assign({value})"
+        if isinstance(ty, t.ArrayType):
+            return f"_assign_array({place}, {value})"
+        return f"{place} = {value}"
+
+    def member_name(self, base_type: t.Type, name: str) -> str:
+        if isinstance(base_type, t.StructType):
+            return base_type.field_name(name) or name
+        if isinstance(base_type, t.FBType):
+            pou = self.model.pous[base_type.qualname.lower()]
+            var = pou.pin(name)
+            return var.name if var else name
+        return name
+
+    def var_place(self, var: Variable, is_global: bool) -> str:
+        if is_global or var.section in (GLOBAL, EXTERNAL):
+            return f"_G.{var_attr(var.name)}"
+        return f"{self.owner}.{var_attr(var.name)}"
+
+    # ---- expressions
+    def expr_as(self, e: n.Expr, ty: t.Type | None) -> str:
+        """Code for `e` converted to type `ty` (implicit conversion of an assignment/argument)."""
+        src = self.facts.types.get(id(e))
+        if ty is None or src is None:
+            return self.expr(e)
+        if id(e) in self.facts.consts and not isinstance(self.facts.consts[id(e)], (list, dict)):
+            value = self.facts.consts[id(e)]
+            converted = self.convert_const(value, ty)
+            if converted is not None:
+                return _lit(converted)
+        return self.coerce(self.expr(e), src, ty)
+
+    def convert_const(self, value: object, ty: t.Type) -> object:
+        if isinstance(ty, t.RealType) and isinstance(value, (int, float)) and not isinstance(value, bool):
+            from stvm.runtime.helpers import _f32
+            return _f32(float(value)) if ty.bits == 32 else float(value)
+        if isinstance(ty, t.IntType) and isinstance(value, int) and not isinstance(value, bool):
+            return ty.wrap(value)
+        if isinstance(ty, t.StringType) and isinstance(value, bytes):
+            from stvm.runtime.helpers import _strfit
+            return _strfit(value, ty.max_bytes)
+        if isinstance(ty, (t.BoolType, t.TimeType, t.EnumType)) and isinstance(value, (bool, int)):
+            return value
+        return None
+
+    def coerce(self, code: str, src: t.Type, dst: t.Type) -> str:
+        if src == dst:
+            return code
+        if isinstance(dst, t.IntType) and isinstance(src, t.IntType):
+            return code if _contains(dst, src) else _wrap(code, dst)
+        if isinstance(dst, t.RealType):
+            if isinstance(src, t.IntType) or (isinstance(src, t.RealType) and src.bits > dst.bits):
+                return f"_f32({code})" if dst.bits == 32 else f"float({code})"
+            return code
+        if isinstance(dst, t.StringType) and isinstance(src, t.StringType):
+            if src.size <= dst.size:
+                return code
+            return f"_strfit({code}, {dst.max_bytes})"
+        return code
+
+    def expr(self, e: n.Expr) -> str:
+        if id(e) in self.facts.consts and not isinstance(e, n.Call):
+            value = self.facts.consts[id(e)]
+            ty = self.facts.types.get(id(e))
+            if ty is not None and not isinstance(value, (list, dict)):
+                converted = self.convert_const(value, ty)
+                if converted is not None:
+                    return _lit(converted)
+            if isinstance(value, (bool, int, float, bytes)):
+                return _lit(value)
+        return getattr(self, "ex_" + type(e).__name__)(e)
+
+    def ex_Name(self, e: n.Name) -> str:
+        ref = self.facts.names[id(e)]
+        if ref.kind == "enum":
+            return _lit(ref.value)
+        if ref.kind == "result":
+            return "_r"
+        var = ref.variable
+        assert var is not None
+        place = self.var_place(var, ref.kind == "global")
+        if var.section == IN_OUT and not isinstance(var.type, (t.StructType, t.ArrayType, t.FBType)):
+            return f"{place}.get()"
+        return place
+
+    def ex_Member(self, e: n.Member) -> str:
+        base_type = self.facts.types[id(e.base)]
+        return f"{self.expr(e.base)}.{var_attr(self.member_name(base_type, e.name))}"
+
+    def ex_BitAccess(self, e: n.BitAccess) -> str:
+        return f"((({self.expr(e.base)}) >> {e.bit}) & 1 == 1)"
+
+    def index_code(self, e: n.Index) -> str:
+        prefix, last = self.index_parts(e)
+        return f"{prefix}[{last}]"
+
+    def index_parts(self, e: n.Index) -> tuple[str, str]:
+        """(code of the container, code of the last subscript) for an element access."""
+        base_type = self.facts.types[id(e.base)]
+        code = self.expr(e.base)
+        assert isinstance(base_type, t.ArrayType)
+        if base_type.dims is None:
+            return code, self.expr(e.indices[0])
+        subscripts = []
+        for ix, (lo, hi) in zip(e.indices, base_type.dims):
+            const = self.facts.consts.get(id(ix))
+            if isinstance(const, int):
+                subscripts.append(f"{const - lo}")
+                continue
+            inner = self.expr(ix)
+            if inner.replace(".", "").replace("_", "").isalnum():
+                subscripts.append(f"({inner}) - {lo} if {lo} <= {inner} <= {hi} else _oob({inner}, {lo}, {hi})")
+            else:
+                tmp = self.new_tmp("i")
+                subscripts.append(f"{tmp} - {lo} if {lo} <= ({tmp} := {inner}) <= {hi} else _oob({tmp}, {lo}, {hi})")
+        for sub in subscripts[:-1]:
+            code += f"[{sub}]"
+        return code, subscripts[-1]
+
+    def ex_Index(self, e: n.Index) -> str:
+        return self.index_code(e)
+
+    def ex_Unary(self, e: n.Unary) -> str:
+        ty = self.facts.types[id(e)]
+        operand = self.expr_as(e.operand, ty)
+        if e.op == "NOT":
+            if isinstance(ty, t.BoolType):
+                return f"(not {operand})"
+            assert isinstance(ty, t.IntType)
+            return f"(~{operand} & {(1 << ty.bits) - 1})" if not ty.signed else f"(~{operand})"
+        if e.op == "PLUS":
+            return operand
+        if isinstance(ty, t.IntType):
+            return _wrap(f"-{operand}", ty)
+        if ty.name == "TIME":
+            return _wrap(f"-{operand}", t.LINT)  # type: ignore[arg-type]
+        return f"(-{operand})"
+
+    def ex_Binary(self, e: n.Binary) -> str:
+        op = e.op
+        if op in ("EQ", "NE", "LT", "GT", "LE", "GE"):
+            operand = self.facts.operand_types.get(id(e))
+            left = self.expr_as(e.left, operand) if operand is not None else self.expr(e.left)
+            right = self.expr_as(e.right, operand) if operand is not None else self.expr(e.right)
+            pyop = {"EQ": "==", "NE": "!=", "LT": "<", "GT": ">", "LE": "<=", "GE": ">="}[op]
+            return f"({left} {pyop} {right})"
+        ty = self.facts.types[id(e)]
+        if op in ("AND", "AMP", "OR", "XOR"):
+            pyop = {"AND": "&", "AMP": "&", "OR": "|", "XOR": "^"}[op]
+            return f"({self.expr_as(e.left, ty)} {pyop} {self.expr_as(e.right, ty)})"
+        if isinstance(ty, t.TimeType):
+            return self.time_binary(e, ty)
+        if op == "POW":
+            code = f"_expt({self.expr(e.left)}, {self.expr(e.right)})"
+            return f"_f32({code})" if isinstance(ty, t.RealType) and ty.bits == 32 else code
+        left = self.expr_as(e.left, ty)
+        right = self.expr_as(e.right, ty)
+        if isinstance(ty, t.IntType):
+            if op == "SLASH":
+                div = "_idiv" if self.settings.int_div_zero == "fault" else "_idiv0"
+                return _wrap(f"{div}({left}, {right})", ty)
+            if op == "MOD":
+                mod = "_imod" if self.settings.int_div_zero == "fault" else "_imod0"
+                return f"{mod}({left}, {right})"
+            pyop = {"PLUS": "+", "MINUS": "-", "STAR": "*"}[op]
+            return _wrap(f"{left} {pyop} {right}", ty)
+        assert isinstance(ty, t.RealType)
+        if op == "SLASH":
+            code = f"_fdiv({left}, {right})"
+        else:
+            code = f"({left} {({'PLUS': '+', 'MINUS': '-', 'STAR': '*'})[op]} {right})"
+        return f"_f32({code})" if ty.bits == 32 else code
+
+    def time_binary(self, e: n.Binary, ty: t.Type) -> str:
+        lt = self.facts.types[id(e.left)]
+        rt = self.facts.types[id(e.right)]
+        left, right = self.expr(e.left), self.expr(e.right)
+        if e.op in ("PLUS", "MINUS"):
+            return _wrap(f"{left} {'+' if e.op == 'PLUS' else '-'} {right}", t.LINT)  # type: ignore[arg-type]
+        if e.op == "STAR":
+            if isinstance(lt, t.RealType) or isinstance(rt, t.RealType):
+                return f"int({left} * {right})"
+            return _wrap(f"{left} * {right}", t.LINT)  # type: ignore[arg-type]
+        if isinstance(rt, t.RealType):
+            return f"int(_fdiv({left}, {right}))"
+        return _wrap(f"_idiv({left}, {right})", t.LINT)  # type: ignore[arg-type]
+
+    # ---- calls
+    def ex_Call(self, e: n.Call) -> str:
+        return self.function_call(e, self.facts.calls[id(e)])
+
+    def arg_code(self, var: Variable, value: n.Expr) -> str:
+        """Code for one argument bound to parameter `var` (by value, or a reference for in-outs)."""
+        if id(value) in self.facts.array_from_element:
+            assert isinstance(value, n.Index)
+            base_code = self.expr(value.base)
+            base_type = self.facts.types[id(value.base)]
+            assert isinstance(base_type, t.ArrayType)
+            if base_type.dims is None:
+                return f"_ArrayRef({base_code}.data, {base_code}.start + {self.expr(value.indices[0])})"
+            lo, hi = base_type.dims[0]
+            ix = self.expr(value.indices[0])
+            return f"_ArrayRef({base_code}, ({ix}) - {lo} if {lo} <= {ix} <= {hi} else _oob({ix}, {lo}, {hi}))"
+        ptype = var.type
+        vtype = self.facts.types.get(id(value))
+        if var.section == IN_OUT:
+            if isinstance(ptype, t.ArrayType) and ptype.dims is None:
+                code = self.expr(value)
+                if isinstance(vtype, t.ArrayType) and vtype.dims is None:
+                    return code
+                return f"_ArrayRef({code}, 0)"
+            if isinstance(vtype, (t.StructType, t.ArrayType, t.FBType)):
+                return self.expr(value)
+            return self.ref_code(value)
+        if isinstance(ptype, t.ArrayType) and ptype.dims is None:
+            code = self.expr(value)
+            return code if isinstance(vtype, t.ArrayType) and vtype.dims is None else f"_ArrayRef({code}, 0)"
+        if isinstance(ptype, t.GenericType):
+            return self.expr(value)
+        code = self.expr_as(value, ptype)
+        if isinstance(ptype, (t.StructType, t.ArrayType)):
+            return f"_copy_value({code})"
+        return code
+
+    def ref_code(self, value: n.Expr) -> str:
+        if isinstance(value, n.Name):
+            ref = self.facts.names[id(value)]
+            var = ref.variable
+            assert var is not None
+            if var.section == IN_OUT and ref.kind != "global":
+                return f"{self.owner}.{var_attr(var.name)}"
+            place = self.var_place(var, ref.kind == "global")
+            obj, attr = place.rsplit(".", 1)
+            return f"_AttrRef({obj}, {attr!r})"
+        if isinstance(value, n.Member):
+            base_type = self.facts.types[id(value.base)]
+            return f"_AttrRef({self.expr(value.base)}, {var_attr(self.member_name(base_type, value.name))!r})"
+        if isinstance(value, n.Index):
+            base, ix = self.index_parts(value)
+            return f"_ItemRef({base}, {ix})"
+        raise AssertionError("checked: in-out needs a variable")
+
+    def function_call(self, e: n.Call, info: CallInfo) -> str:
+        pou = info.pou
+        name = self.classes[pou.key]
+        given = {var.key: value for var, value in info.inputs}
+        args = []
+        for p in pou.params():
+            if p.key in given:
+                args.append(self.arg_code(p, given[p.key]))
+            elif pou.variadic and p is pou.params()[-1] and info.extra:
+                continue
+            else:
+                args.append(self.var_default(p))
+        for extra in info.extra:
+            last = pou.params()[-1]
+            args.append(self.arg_code(last, extra))
+        if pou.native:
+            lead = ["_ctx"]
+            if pou.generic:
+                lead.append(self.type_const(info.generic_type) if info.generic_type is not None else "None")
+            return f"{name}({', '.join(lead + args)})"
+        return f"{name}({', '.join(args)})"
+
+    def fb_call(self, e: n.Call, info: CallInfo) -> None:
+        assert info.instance is not None
+        inst = self.expr(info.instance)
+        if not inst.replace(".", "").replace("_", "").isalnum():
+            tmp = self.new_tmp("fb")
+            self.w.line(f"{tmp} = {inst}")
+            inst = tmp
+        for var, value in info.inputs:
+            attr = var_attr(var.name)
+            code = self.arg_code(var, value)
+            if var.section != IN_OUT and isinstance(var.type, t.StructType):
+                self.w.line(f"{inst}.{attr}._assign({self.expr(value)})")
+            elif var.section != IN_OUT and isinstance(var.type, t.ArrayType) and var.type.dims is not None:
+                self.w.line(f"_assign_array({inst}.{attr}, {self.expr(value)})")
+            else:
+                self.w.line(f"{inst}.{attr} = {code}")
+        self.w.line(f"{inst}()")
+        for var, target, negate in info.outputs:
+            target_type = self.facts.types.get(id(target))
+            value = f"{inst}.{var_attr(var.name)}"
+            if negate:
+                value = f"(not {value})"
+            elif target_type is not None:
+                value = self.coerce(value, var.type, target_type)
+            self.store(target, value, target_type)
+
+
+def lower_project(analysis: Analysis, settings) -> LoweredProject:
+    """Generate the Python module for a checked project."""
+    return Lowerer(analysis, settings).lower()

@@ -1,0 +1,33 @@
+"""Mangled Python names for ST names. Only names built here reach generated code.
+
+ST identifiers are validated (`[A-Za-z_][A-Za-z0-9_]*`) and given a kind prefix, so they can never
+collide with Python keywords, builtins or the generator's own helpers (which start with `_`).
+"""
+
+from __future__ import annotations
+
+import re
+
+_SAFE_NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
+
+
+def _checked(st_name: str) -> str:
+    if not _SAFE_NAME.fullmatch(st_name):  # semantics checked it; this catches our own bugs
+        raise AssertionError(f"unsafe ST name {st_name!r}")
+    return st_name.lower()
+
+
+def var_attr(st_name: str) -> str:
+    """Attribute holding variable/field/pin `st_name` on an instance, struct or frame."""
+    return "v_" + _checked(st_name)
+
+
+def st_name_of_attr(attr: str) -> str:
+    """Reverse of `var_attr` (lower-case ST name), for the debugger and tracer."""
+    return attr[2:] if attr.startswith("v_") else attr
+
+
+def unit_name(kind: str, index: int, qualname: str) -> str:
+    """Class/function name of a POU or struct: kind P (FB/PROGRAM), F (function), N (native fn), S (struct)."""
+    leaf = qualname.split("\\")[-1]
+    return f"{kind}{index}_{_checked(leaf)}"

@@ -1,0 +1,206 @@
+"""The pipeline driver: files → parse → check → lower → compile, with a content-hash cache.
+
+`check(paths)` stops after the checker; `load(paths)` returns a runnable `Project` or raises
+`LoadError` carrying every diagnostic. A cache entry (keyed by stvm's version, the settings and
+the text of every file including the stdlib) holds the lowered module and the model, so a
+repeated load skips parsing, checking and code generation.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import marshal
+import os
+import pickle
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Sequence
+
+from stvm import __version__
+from stvm.diagnostics import Diagnostic, has_errors, render, sort_key
+from stvm.lower import LoweredProject, lower_project
+from stvm.runtime.vm import GENERATED_FILENAME, VM
+from stvm.semantics import analyze
+from stvm.semantics.model import ProjectModel
+from stvm.settings import DEFAULT_SETTINGS, SysmacSettings
+from stvm.syntax import parse_text
+from stvm.syntax.parser import read_source
+
+MANIFEST = "stvm.toml"
+
+
+class LoadError(Exception):
+    """The ST sources have errors; `diagnostics` holds all of them."""
+
+    def __init__(self, diagnostics: list[Diagnostic], sources: dict[str, str]) -> None:
+        super().__init__(f"{sum(d.is_error for d in diagnostics)} error(s)")
+        self.diagnostics = diagnostics
+        self.sources = sources
+
+    def render(self) -> str:
+        return "".join(render(d, self.sources) for d in self.diagnostics)
+
+
+@dataclass
+class Project:
+    model: ProjectModel
+    lowered: LoweredProject
+    code: object
+    sources: dict[str, str]
+    settings: SysmacSettings
+    warnings: list[Diagnostic] = field(default_factory=list)
+    from_cache: bool = False
+    manifest: dict = field(default_factory=dict)
+    root: Path | None = None
+
+    def start(self, scan: str | int = "10ms", realtime: bool = False, start_dt_ns: int = 0,
+              transport=None) -> VM:
+        """A fresh VM for this project (all variables at their initial values)."""
+        scan_ns = parse_duration(scan) if isinstance(scan, str) else int(scan)
+        return VM(self, scan_ns=scan_ns, realtime=realtime, start_dt_ns=start_dt_ns, transport=transport)
+
+
+def parse_duration(text: str) -> int:
+    """'10ms', '1s', '500us', 'T#1ms' → nanoseconds (used by the CLI and the API)."""
+    from stvm.syntax.parser import LiteralError, decode_time
+    body = text.strip()
+    if "#" not in body:
+        body = "T#" + body
+    try:
+        ns = decode_time(body)
+    except (LiteralError, ValueError, KeyError) as exc:
+        raise ValueError(f"invalid duration {text!r} (examples: 1ms, 500us, 2s)") from exc
+    return ns
+
+
+def expand_paths(paths: Sequence[str | Path]) -> tuple[list[Path], dict, Path | None]:
+    """Files to load. A folder means its *.st files; a lone file in a folder with `stvm.toml`
+    means the project that manifest describes (so `stvm run st_src/PnP_Example.st` loads the
+    whole thesis project)."""
+    out: list[Path] = []
+    manifest: dict = {}
+    root: Path | None = None
+    for raw in paths:
+        path = Path(raw)
+        if path.is_dir():
+            out += sorted(path.glob("*.st"))
+            if (path / MANIFEST).exists():
+                manifest, root = _read_manifest(path / MANIFEST), path
+        else:
+            out.append(path)
+    if len(paths) == 1 and not Path(paths[0]).is_dir():
+        folder = Path(paths[0]).parent
+        if (folder / MANIFEST).exists():
+            manifest, root = _read_manifest(folder / MANIFEST), folder
+            listed = manifest.get("project", {}).get("files")
+            files = [folder / f for f in listed] if listed else sorted(folder.glob("*.st"))
+            out = files if Path(paths[0]).resolve() in {f.resolve() for f in files} else files + out
+    seen: set[Path] = set()
+    unique = []
+    for p in out:
+        key = p.resolve()
+        if key not in seen:
+            seen.add(key)
+            unique.append(p)
+    return unique, manifest, root
+
+
+def _read_manifest(path: Path) -> dict:
+    with path.open("rb") as fh:
+        return tomllib.load(fh)
+
+
+def _stdlib() -> list[tuple[str, str]]:
+    from stvm.stdlib import stdlib_sources
+    return stdlib_sources()
+
+
+def _cache_dir() -> Path:
+    base = os.environ.get("STVM_CACHE_DIR")
+    if base:
+        return Path(base)
+    return Path(os.environ.get("XDG_CACHE_HOME", Path.home() / ".cache")) / "stvm"
+
+
+def _cache_key(texts: list[tuple[str, str]], settings: SysmacSettings) -> str:
+    digest = hashlib.sha256()
+    digest.update(__version__.encode())
+    digest.update(repr(settings).encode())
+    for name, text in texts:
+        digest.update(name.encode() + b"\0" + text.encode("utf-8", "replace") + b"\0")
+    return digest.hexdigest()
+
+
+def _read_all(paths: Sequence[Path]) -> tuple[list[tuple[str, str]], list[Diagnostic]]:
+    from stvm.syntax.nodes import Span
+    texts = []
+    diags = []
+    for path in paths:
+        try:
+            texts.append((str(path), read_source(path)))
+        except OSError as exc:
+            diags.append(Diagnostic.error(f"cannot read file: {exc.strerror or exc}", Span(str(path), 0, 0, 0, 0)))
+    return texts, diags
+
+
+def check(paths: Sequence[str | Path], settings: SysmacSettings = DEFAULT_SETTINGS):
+    """Parse and check: (analysis or None, diagnostics sorted, sources)."""
+    files, _, _ = expand_paths(paths)
+    texts, diags = _read_all(files)
+    return _check_texts(texts, diags, settings)
+
+
+def _check_texts(texts, diags, settings):
+    sources = dict(texts)
+    units = []
+    for name, text in _stdlib():
+        unit, d = parse_text(text, name, settings)
+        units.append(unit)
+        diags += d
+        sources[name] = text
+    for name, text in texts:
+        unit, d = parse_text(text, name, settings)
+        units.append(unit)
+        diags += d
+    analysis = None
+    if not has_errors(diags):
+        analysis = analyze(units, settings)
+        diags += analysis.diagnostics
+    diags.sort(key=sort_key)
+    return (None if has_errors(diags) else analysis), diags, sources
+
+
+def load(paths: Sequence[str | Path], settings: SysmacSettings = DEFAULT_SETTINGS, use_cache: bool = True) -> Project:
+    """Load a runnable project from ST files (raises LoadError with every diagnostic)."""
+    files, manifest, root = expand_paths(paths)
+    texts, read_diags = _read_all(files)
+    if read_diags:
+        raise LoadError(read_diags, {})
+    key = _cache_key(texts + _stdlib(), settings)
+    cache_file = _cache_dir() / f"{key}.bin"
+    if use_cache and cache_file.exists():
+        try:
+            with cache_file.open("rb") as fh:
+                model, lowered, warnings, code_bytes, sources = pickle.load(fh)
+            return Project(model, lowered, marshal.loads(code_bytes), sources, settings, warnings, True, manifest, root)
+        except Exception:  # a stale or damaged cache entry is rebuilt, never fatal
+            pass
+    analysis, diags, sources = _check_texts(texts, [], settings)
+    if analysis is None:
+        raise LoadError(diags, sources)
+    lowered = lower_project(analysis, settings)
+    code = compile(lowered.source, GENERATED_FILENAME, "exec")
+    warnings = [d for d in diags if not d.is_error]
+    project = Project(analysis.model, lowered, code, sources, settings, warnings, False, manifest, root)
+    if use_cache:
+        try:
+            cache_file.parent.mkdir(parents=True, exist_ok=True)
+            tmp = cache_file.with_suffix(".tmp%d" % os.getpid())
+            with tmp.open("wb") as fh:
+                pickle.dump((analysis.model, lowered, warnings, marshal.dumps(code), sources), fh,
+                            protocol=pickle.HIGHEST_PROTOCOL)
+            tmp.replace(cache_file)
+        except OSError:
+            pass
+    return project

@@ -1,0 +1,141 @@
+"""Values as IEC literals (for `--print`, traces and the debugger), and literals back to values."""
+
+from __future__ import annotations
+
+import calendar
+import math
+
+import numpy as np
+
+from stvm.semantics import types as t
+
+_NS = 1_000_000_000
+_TIME_UNITS = [("d", 86_400 * _NS), ("h", 3600 * _NS), ("m", 60 * _NS), ("s", _NS), ("ms", 1_000_000),
+               ("us", 1_000), ("ns", 1)]
+
+
+def format_time(ns: int) -> str:
+    if ns == 0:
+        return "T#0s"
+    sign = "-" if ns < 0 else ""
+    rest = abs(ns)
+    parts = []
+    for unit, size in _TIME_UNITS:
+        count, rest = divmod(rest, size)
+        if count:
+            parts.append(f"{count}{unit}")
+    return f"T#{sign}{''.join(parts)}"
+
+
+def _fraction(ns: int) -> str:
+    return f".{ns:09d}".rstrip("0") if ns else ""
+
+
+def format_date(ns: int) -> str:
+    days = ns // (86_400 * _NS)
+    y, mo, d = _civil(days)
+    return f"D#{y:04d}-{mo:02d}-{d:02d}"
+
+
+def format_tod(ns: int) -> str:
+    secs, frac = divmod(ns, _NS)
+    h, rem = divmod(secs, 3600)
+    m, s = divmod(rem, 60)
+    return f"TOD#{h:02d}:{m:02d}:{s:02d}{_fraction(frac)}"
+
+
+def format_dt(ns: int) -> str:
+    days, rem = divmod(ns, 86_400 * _NS)
+    y, mo, d = _civil(days)
+    secs, frac = divmod(rem, _NS)
+    h, r2 = divmod(secs, 3600)
+    m, s = divmod(r2, 60)
+    return f"DT#{y:04d}-{mo:02d}-{d:02d}-{h:02d}:{m:02d}:{s:02d}{_fraction(frac)}"
+
+
+def _civil(days: int) -> tuple[int, int, int]:
+    import datetime
+    date = datetime.date(1970, 1, 1) + datetime.timedelta(days=days)
+    return date.year, date.month, date.day
+
+
+def format_string(value: bytes) -> str:
+    out = ["'"]
+    for byte in value:
+        ch = chr(byte)
+        if ch == "'":
+            out.append("$'")
+        elif ch == "$":
+            out.append("$$")
+        elif ch == "\n":
+            out.append("$L")
+        elif ch == "\r":
+            out.append("$R")
+        elif ch == "\t":
+            out.append("$T")
+        elif ch == "\f":
+            out.append("$P")
+        elif 32 <= byte < 127:
+            out.append(ch)
+        else:
+            out.append(f"${byte:02X}")
+    out.append("'")
+    return "".join(out)
+
+
+def format_real(value: float, bits: int) -> str:
+    if math.isnan(value):
+        return "nan"
+    if math.isinf(value):
+        return "inf" if value > 0 else "-inf"
+    text = str(np.float32(value)) if bits == 32 else repr(float(value))
+    if "e" not in text and "." not in text:
+        text += ".0"
+    return text
+
+
+def format_value(value: object, ty: t.Type, pous: dict | None = None) -> str:
+    """`value` (runtime representation) of type `ty` as an IEC literal."""
+    if isinstance(ty, t.BoolType):
+        return "TRUE" if value else "FALSE"
+    if isinstance(ty, t.IntType):
+        return str(int(value))  # type: ignore[arg-type]
+    if isinstance(ty, t.RealType):
+        return format_real(float(value), ty.bits)  # type: ignore[arg-type]
+    if isinstance(ty, t.TimeType):
+        ns = int(value)  # type: ignore[arg-type]
+        return {"TIME": format_time, "DATE": format_date, "TIME_OF_DAY": format_tod,
+                "DATE_AND_TIME": format_dt}[ty.name](ns)
+    if isinstance(ty, t.StringType):
+        return format_string(value)  # type: ignore[arg-type]
+    if isinstance(ty, t.EnumType):
+        name = ty.name_of(int(value))  # type: ignore[arg-type]
+        return f"{ty.name}#{name}" if name is not None else str(value)
+    if isinstance(ty, t.StructType):
+        parts = [f"{name} := {format_value(getattr(value, 'v_' + name.lower()), fty, pous)}" for name, fty in ty.fields]
+        return "(" + ", ".join(parts) + ")"
+    if isinstance(ty, t.ArrayType):
+        if ty.dims is None:
+            return "[" + ", ".join(format_value(v, ty.element, pous) for v in value.data[value.start:]) + "]"  # type: ignore[attr-defined]
+        return _format_array(value, ty, len(ty.dims), pous)  # type: ignore[arg-type]
+    if isinstance(ty, t.FBType) and pous is not None:
+        pou = pous.get(ty.qualname.lower())
+        if pou is None:
+            return "(…)"
+        parts = []
+        for var in pou.variables.values():
+            if var.section in ("VAR_IN_OUT", "VAR_EXTERNAL"):
+                continue
+            parts.append(f"{var.name} := {format_value(getattr(value, 'v_' + var.key), var.type, pous)}")
+        return "(" + ", ".join(parts) + ")"
+    return repr(value)
+
+
+def _format_array(value: list, ty: t.ArrayType, depth: int, pous) -> str:
+    if depth == 1:
+        return "[" + ", ".join(format_value(v, ty.element, pous) for v in value) + "]"
+    return "[" + ", ".join(_format_array(v, ty, depth - 1, pous) for v in value) + "]"
+
+
+def parse_datetime_ns(y: int, mo: int, d: int, h: int = 0, mi: int = 0, s: int = 0) -> int:
+    return calendar.timegm((y, mo, d, h, mi, s)) * _NS

@@ -1,0 +1,135 @@
+"""Helpers the generated code calls. Their names (all `_x`) are what `lower.codegen` emits.
+
+Kept small and branch-light: they run inside scans.
+"""
+
+from __future__ import annotations
+
+import math
+import struct
+
+from stvm.runtime.values import ArrayRef, AttrRef, FunctionError, ItemRef, STFault
+
+_pack_f = struct.Struct("<f")
+
+
+def _f32(x: float) -> float:
+    """Round to IEEE binary32 (every REAL store), keeping inf/nan; overflow becomes ±inf."""
+    try:
+        return _pack_f.unpack(_pack_f.pack(x))[0]
+    except OverflowError:
+        if x != x:
+            return x
+        return math.inf if x > 0 else -math.inf
+
+
+def _idiv(a: int, b: int) -> int:
+    """IEC integer division: truncates toward zero; division by zero is a major fault."""
+    if b == 0:
+        raise STFault("integer division by zero")
+    q = abs(a) // abs(b)
+    return q if (a < 0) == (b < 0) else -q
+
+
+def _idiv0(a: int, b: int) -> int:
+    """`int_div_zero=zero`: division by zero gives 0."""
+    if b == 0:
+        return 0
+    q = abs(a) // abs(b)
+    return q if (a < 0) == (b < 0) else -q
+
+
+def _imod(a: int, b: int) -> int:
+    """IEC MOD: the result has the dividend's sign; MOD 0 is a division-by-zero fault."""
+    if b == 0:
+        raise STFault("integer division by zero (MOD 0)")
+    return a - b * _idiv(a, b)
+
+
+def _imod0(a: int, b: int) -> int:
+    if b == 0:
+        return 0
+    return a - b * _idiv(a, b)
+
+
+def _fdiv(a: float, b: float) -> float:
+    """IEEE division: x/0 is ±inf, 0/0 is nan (REAL/LREAL never fault)."""
+    try:
+        return a / b
+    except ZeroDivisionError:
+        if a != a or a == 0:
+            return math.nan
+        return math.copysign(math.inf, a) * math.copysign(1.0, b)
+
+
+def _expt(a: float, b: float) -> float:
+    try:
+        result = float(a) ** b
+    except ZeroDivisionError:
+        return math.inf
+    except OverflowError:
+        return math.inf
+    if isinstance(result, complex):
+        return math.nan
+    return result
+
+
+def _oob(index: int, lo: int, hi: int) -> int:
+    raise STFault(f"array index {index} out of bounds {lo}..{hi}")
+
+
+def _strfit(value: bytes, max_bytes: int) -> bytes:
+    """Store into STRING[n]: truncate to n-1 bytes (Omron), never inside a UTF-8 sequence."""
+    if len(value) <= max_bytes:
+        return value
+    cut = value[:max_bytes]
+    # drop a partial UTF-8 character at the end
+    i = len(cut)
+    while i > 0 and (cut[i - 1] & 0xC0) == 0x80:
+        i -= 1
+    if i > 0 and cut[i - 1] >= 0xC0:
+        needed = 2 if cut[i - 1] < 0xE0 else 3 if cut[i - 1] < 0xF0 else 4
+        if len(cut) - (i - 1) < needed:
+            cut = cut[: i - 1]
+    return cut
+
+
+def _copy_value(value):
+    """Deep copy of an aggregate value (arrays are lists, structs have `_copy`)."""
+    if type(value) is list:
+        if value and type(value[0]) in (int, float, bool, bytes):
+            return value[:]
+        return [_copy_value(v) for v in value]
+    copy = getattr(value, "_copy", None)
+    return copy() if copy is not None else value
+
+
+def _assign_array(dst: list, src) -> None:
+    if isinstance(src, ArrayRef):
+        src = src.data[src.start:]
+    dst[:] = _copy_value(src)
+
+
+def _setbit(word: int, bit: int, value: bool) -> int:
+    return word | (1 << bit) if value else word & ~(1 << bit)
+
+
+def _with(obj, **fields):
+    for name, value in fields.items():
+        setattr(obj, name, value)
+    return obj
+
+
+class _Frame:
+    """Variables of one function call (attributes `v_<name>`), so in-outs can reference them."""
+
+    __slots__ = ("__dict__",)
+
+
+HELPERS = {
+    "_f32": _f32, "_idiv": _idiv, "_idiv0": _idiv0, "_imod": _imod, "_imod0": _imod0, "_fdiv": _fdiv,
+    "_expt": _expt, "_oob": _oob, "_strfit": _strfit, "_copy_value": _copy_value,
+    "_assign_array": _assign_array, "_setbit": _setbit, "_with": _with, "_Frame": _Frame,
+    "_AttrRef": AttrRef, "_ItemRef": ItemRef, "_ArrayRef": ArrayRef, "_FunctionError": FunctionError,
+    "_STFault": STFault,
+}

@@ -1,0 +1,88 @@
+"""Runtime value helpers shared by generated code and native POUs.
+
+Native stdlib code receives plain Python values (see `stvm.semantics.types` for the table) plus
+these few wrappers:
+
+* `ArrayRef(data, start)`: an ARRAY[*] parameter. Sysmac passes "the array from this element on"
+  when an element is given where an array is expected (sysmac.md 3 #4); `data` is the caller's own
+  list, so writes go straight into the caller's variable. `len(ref)` is the number of elements left.
+* `AttrRef` / `ItemRef`: a VAR_IN_OUT of an elementary type (a reference to a variable, a struct
+  field or an array element) with `get()` and `set(value)`.
+* `FunctionError`: raised by a native function to report an instruction error (ENO := FALSE); the
+  VM then applies `SysmacSettings.fun_error_policy` (default: skip the receiving assignment).
+* `STFault`: a major fault (division by zero, index out of range); stops the task.
+"""
+
+from __future__ import annotations
+
+
+class FunctionError(Exception):
+    """An instruction error: the function sets ENO FALSE and leaves its output unchanged."""
+
+
+class STFault(Exception):
+    """A major fault: the task stops; the VM adds the ST location, task and scan."""
+
+
+class ArrayRef:
+    __slots__ = ("data", "start")
+
+    def __init__(self, data: list, start: int = 0) -> None:
+        self.data = data
+        self.start = start
+
+    def __len__(self) -> int:
+        return len(self.data) - self.start
+
+    def __getitem__(self, index: int):
+        if not 0 <= index < len(self.data) - self.start:
+            raise FunctionError(f"array access {index} beyond the {len(self)} elements passed")
+        return self.data[self.start + index]
+
+    def __setitem__(self, index: int, value) -> None:
+        if not 0 <= index < len(self.data) - self.start:
+            raise FunctionError(f"array access {index} beyond the {len(self)} elements passed")
+        self.data[self.start + index] = value
+
+    def read(self, count: int) -> list:
+        """The first `count` elements (the caller checked `count <= len(self)`)."""
+        return self.data[self.start:self.start + count]
+
+    def write(self, values) -> None:
+        """Overwrite the first len(values) elements; later elements are not touched."""
+        values = list(values)
+        if len(values) > len(self):
+            raise FunctionError(f"{len(values)} elements do not fit in the {len(self)} passed")
+        self.data[self.start:self.start + len(values)] = values
+
+
+class AttrRef:
+    """Reference to `obj.<attr>` (a variable of a POU instance or a struct field)."""
+
+    __slots__ = ("obj", "attr")
+
+    def __init__(self, obj, attr: str) -> None:
+        self.obj = obj
+        self.attr = attr
+
+    def get(self):
+        return getattr(self.obj, self.attr)
+
+    def set(self, value) -> None:
+        setattr(self.obj, self.attr, value)
+
+
+class ItemRef:
+    """Reference to `lst[index]` (an array element)."""
+
+    __slots__ = ("lst", "index")
+
+    def __init__(self, lst: list, index: int) -> None:
+        self.lst = lst
+        self.index = index
+
+    def get(self):
+        return self.lst[self.index]
+
+    def set(self, value) -> None:
+        self.lst[self.index] = value

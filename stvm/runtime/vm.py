@@ -1,0 +1,368 @@
+"""Stage 4: the cyclic-task VM.
+
+Tasks run at integer multiples of the base period (the GCD of the task intervals), highest
+priority (lowest number) first, as a Sysmac controller's primary and periodic tasks do. One call
+of `scan()` is one base period. Time is virtual by default: each scan starts at `scan * base`
+nanoseconds and every clock the ST code can see reads `ctx.now_ns`.
+
+A runtime fault (division by zero, index out of bounds, …) stops the VM as a controller's major
+fault; `RuntimeFault` carries the ST span found by walking the traceback through the line map.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+import time
+from array import array
+from dataclasses import dataclass, field
+from types import TracebackType
+from typing import Any, Callable
+
+from stvm.runtime.context import RunContext
+from stvm.runtime.format import format_time, format_value
+from stvm.runtime.helpers import HELPERS
+from stvm.runtime.values import FunctionError, STFault
+from stvm.semantics import types as t
+from stvm.syntax.nodes import Span
+
+GENERATED_FILENAME = "<stvm-generated>"
+
+
+class RuntimeFault(Exception):
+    """A major fault: the task stopped at an ST location."""
+
+    def __init__(self, message: str, span: Span | None, task: str, scan: int, now_ns: int) -> None:
+        super().__init__(message)
+        self.message = message
+        self.span = span
+        self.task = task
+        self.scan = scan
+        self.now_ns = now_ns
+
+    def render(self, sources: dict[str, str] | None = None) -> str:
+        from stvm.diagnostics import excerpt
+        where = f"{self.span.file}:{self.span.line}:{self.span.column}" if self.span else "<unknown>"
+        text = f"{where}: fault: {self.message} (task {self.task}, scan {self.scan}, t={format_time(self.now_ns)})\n"
+        if self.span and sources:
+            text += excerpt(self.span, sources)
+        return text
+
+
+@dataclass
+class Task:
+    name: str
+    interval_ns: int
+    priority: int
+    every: int                                   # runs every `every` base ticks
+    programs: list[tuple[str, Any]] = field(default_factory=list)   # (instance name, instance)
+
+
+class PathError(KeyError):
+    """A variable path (`Main.x`, `Main.fb.Q`, `Main.arr[2]`, a global) that does not resolve."""
+
+    def __str__(self) -> str:
+        return str(self.args[0])
+
+
+_PATH_TOKEN = re.compile(r"\s*(?:([A-Za-z_][A-Za-z0-9_]*)|\[([^\]]*)\]|(\.))")
+
+
+class VM:
+    def __init__(self, project, scan_ns: int = 10_000_000, realtime: bool = False,
+                 start_dt_ns: int = 0, transport: Any = None, settings=None) -> None:
+        self.project = project
+        self.model = project.model
+        self.settings = settings or project.settings
+        self.ctx = RunContext(settings=self.settings, start_dt_ns=start_dt_ns, realtime=realtime,
+                              transport=transport)
+        self.realtime = realtime
+        ns: dict[str, Any] = dict(HELPERS)
+        from stvm.stdlib.registry import NATIVE_FBS, NATIVE_FUNCTIONS
+        ns["_NATIVE_FB"] = NATIVE_FBS
+        lowered = project.lowered
+        for py_name, key in lowered.natives.items():
+            native = NATIVE_FUNCTIONS.get(key)
+            if native is None:
+                raise RuntimeError(f"stdlib declares {key} native but no implementation is registered")
+            ns[py_name] = native.impl
+        for py_name, key in lowered.native_fbs.items():
+            if key not in NATIVE_FBS:
+                raise RuntimeError(f"stdlib declares FB {key} native but no implementation is registered")
+        ns["_T"] = lowered.types
+        ns["_ctx"] = self.ctx
+        ns["_fun_error"] = self._fun_error
+        ns["__stvm_unit__"] = lowered
+        exec(project.code, ns)
+        self.namespace = ns
+        self.globals = ns["G_globals"]()
+        ns["_G"] = self.globals
+        self.instances: dict[str, tuple[str, Any, str]] = {}   # key → (name, instance, program qualname)
+        self.tasks: list[Task] = []
+        self._build_tasks(scan_ns)
+        self.scan_count = 0
+        self.now_ns = 0
+        self.scan_durations_ns = array("q")
+        self.overruns = 0
+        self.fault: RuntimeFault | None = None
+        self.on_scan_end: list[Callable[["VM"], None]] = []
+        self._rt_start: float | None = None
+        self.jitter_ns = array("q")
+
+    # ---- setup
+    def _instance(self, name: str, qualname: str) -> Any:
+        cls = self.namespace[self.project.lowered.classes[qualname.lower()]]
+        inst = cls()
+        self.instances[name.lower()] = (name, inst, qualname)
+        return inst
+
+    def _build_tasks(self, scan_ns: int) -> None:
+        if self.model.tasks:
+            base = 0
+            for task in self.model.tasks:
+                base = math.gcd(base, task.interval_ns)
+            self.base_ns = base
+            for task in self.model.tasks:
+                runtime_task = Task(task.name, task.interval_ns, task.priority, task.interval_ns // base)
+                for inst_name, qualname in task.programs:
+                    runtime_task.programs.append((inst_name, self._instance(inst_name, qualname)))
+                self.tasks.append(runtime_task)
+        else:
+            self.base_ns = scan_ns
+            default = Task("DefaultTask", scan_ns, 0, 1)
+            for qualname in self.model.default_programs:
+                name = qualname.split("\\")[-1]
+                default.programs.append((name, self._instance(name, qualname)))
+            self.tasks.append(default)
+        self.tasks.sort(key=lambda tk: tk.priority)
+
+    # ---- running
+    def _fun_error(self, error: FunctionError, site: int) -> None:
+        span = self.project.lowered.sites[site]
+        if self.settings.fun_error_policy == "fault":
+            raise STFault(f"instruction error: {error}")
+        self.ctx.warn(f"{span.file}:{span.line}:{span.column}: instruction error (ENO FALSE, assignment skipped): {error}",
+                      once_key=(site, str(error)))
+
+    def scan(self) -> None:
+        """Run one base period: every task due at this tick, in priority order."""
+        if self.fault is not None:
+            raise self.fault
+        tick = self.scan_count
+        ctx = self.ctx
+        ctx.now_ns = self.now_ns
+        ctx.scan = tick
+        started = time.perf_counter_ns()
+        for task in self.tasks:
+            if tick % task.every:
+                continue
+            ctx.task = task.name
+            try:
+                for _, program in task.programs:
+                    program()
+            except RecursionError as exc:
+                self._raise_fault(f"stack overflow ({exc})", exc.__traceback__, task.name)
+            except STFault as exc:
+                self._raise_fault(str(exc), exc.__traceback__, task.name)
+            except FunctionError as exc:
+                self._raise_fault(f"instruction error: {exc}", exc.__traceback__, task.name)
+            except Exception as exc:  # an stvm bug: still report the ST location, not a traceback
+                self._raise_fault(f"internal error in stvm ({type(exc).__name__}: {exc})", exc.__traceback__, task.name)
+        self.scan_durations_ns.append(time.perf_counter_ns() - started)
+        for hook in self.on_scan_end:
+            hook(self)
+        self.scan_count += 1
+        self.now_ns += self.base_ns
+        if self.realtime:
+            self._sleep_to_deadline()
+
+    def _sleep_to_deadline(self) -> None:
+        now = time.perf_counter_ns()
+        if self._rt_start is None:
+            self._rt_start = now - self.base_ns
+        deadline = self._rt_start + self.scan_count * self.base_ns
+        if now > deadline:
+            self.overruns += 1
+            self.jitter_ns.append(now - deadline)
+            return
+        time.sleep((deadline - now) / 1e9)
+        self.jitter_ns.append(time.perf_counter_ns() - deadline)
+
+    def _raise_fault(self, message: str, tb: TracebackType | None, task: str) -> None:
+        span = self.st_span(tb)
+        self.fault = RuntimeFault(message, span, task, self.scan_count, self.now_ns)
+        raise self.fault
+
+    def st_span(self, tb: TracebackType | None) -> Span | None:
+        """The innermost ST statement on the traceback (generated frames only)."""
+        span = None
+        line_map = self.project.lowered.line_map
+        while tb is not None:
+            if tb.tb_frame.f_code.co_filename == GENERATED_FILENAME:
+                found = line_map.span_at(tb.tb_lineno)
+                if found is not None:
+                    span = found
+            tb = tb.tb_next
+        return span
+
+    def run(self, cycles: int | None = None, duration_ns: int | None = None,
+            until: Callable[[], bool] | None = None) -> None:
+        """Run `cycles` scans, or until `duration_ns` of VM time, or forever (Ctrl-C stops)."""
+        if cycles is None and duration_ns is not None:
+            cycles = -(-duration_ns // self.base_ns)
+        count = 0
+        while cycles is None or count < cycles:
+            self.scan()
+            count += 1
+            if until is not None and until():
+                break
+
+    def close(self) -> None:
+        transport = self.ctx.transport
+        if transport is not None and hasattr(transport, "close_all"):
+            transport.close_all()
+
+    # ---- variable access by path
+    def resolve(self, path: str) -> tuple[Any, Any, t.Type]:
+        """(container, key, type) for a path; container[key] or getattr(container, key) holds the value."""
+        tokens = []
+        pos = 0
+        while pos < len(path):
+            m = _PATH_TOKEN.match(path, pos)
+            if not m or m.end() == pos:
+                raise PathError(f"malformed variable path {path!r}")
+            pos = m.end()
+            if m.group(1):
+                tokens.append(("name", m.group(1)))
+            elif m.group(2) is not None:
+                tokens.append(("index", m.group(2)))
+        names = [tok for tok in tokens]
+        if not names or names[0][0] != "name":
+            raise PathError(f"malformed variable path {path!r}")
+        first = names[0][1].lower()
+        rest = names[1:]
+        pous = self.model.pous
+        if first in self.instances and rest and rest[0][0] == "name":
+            _, inst, qual = self.instances[first]
+            container: Any = inst
+            owner_type: t.Type = t.FBType(qual, qual, True)
+        elif first in self.model.globals:
+            var = self.model.globals[first]
+            container, key, ty = self.globals, "v_" + first, var.type
+            return self._walk(container, key, ty, rest, path)
+        elif first in self.instances:
+            raise PathError(f"{path!r} names a program instance; add a variable: {names[0][1]}.<var>")
+        else:
+            raise PathError(f"unknown variable {path!r} (programs: {', '.join(n for n, _, _ in self.instances.values())})")
+        name = rest[0][1]
+        pou = pous[owner_type.qualname.lower()]  # type: ignore[attr-defined]
+        var = pou.variables.get(name.lower())
+        if var is None:
+            raise PathError(f"{names[0][1]} has no variable {name!r}")
+        if var.section == "VAR_EXTERNAL":
+            return self._walk(self.globals, "v_" + var.key, self.model.globals[var.key].type, rest[1:], path)
+        return self._walk(container, "v_" + var.key, var.type, rest[1:], path)
+
+    def _walk(self, container: Any, key: Any, ty: t.Type, rest: list, path: str) -> tuple[Any, Any, t.Type]:
+        for kind, text in rest:
+            value = container[key] if isinstance(key, int) else getattr(container, key)
+            if kind == "name":
+                if isinstance(ty, t.StructType):
+                    fty = ty.field_type(text)
+                    if fty is None:
+                        raise PathError(f"{path!r}: {ty.name} has no member {text!r}")
+                    container, key, ty = value, "v_" + text.lower(), fty
+                elif isinstance(ty, t.FBType):
+                    pou = self.model.pous[ty.qualname.lower()]
+                    var = pou.pin(text)
+                    if var is None:
+                        raise PathError(f"{path!r}: {ty.name} has no member {text!r}")
+                    container, key, ty = value, "v_" + var.key, var.type
+                    if var.section == "VAR_IN_OUT":
+                        inner = getattr(container, key)
+                        if hasattr(inner, "get") and hasattr(inner, "set"):
+                            container, key = inner.obj if hasattr(inner, "obj") else inner.lst, \
+                                inner.attr if hasattr(inner, "attr") else inner.index
+                else:
+                    raise PathError(f"{path!r}: {ty.name} has no members")
+            else:
+                if not isinstance(ty, t.ArrayType) or ty.dims is None:
+                    raise PathError(f"{path!r}: not an array")
+                indices = [int(x.strip(), 0) for x in text.split(",")]
+                dims = list(ty.dims)
+                for ix in indices:
+                    if not dims:
+                        raise PathError(f"{path!r}: too many indices")
+                    lo, hi = dims.pop(0)
+                    if not lo <= ix <= hi:
+                        raise PathError(f"{path!r}: index {ix} outside {lo}..{hi}")
+                    if isinstance(key, int):
+                        value = container[key]
+                    container, key = value, ix - lo
+                    value = container[key]
+                if dims:
+                    ty = t.ArrayType(ty.name, ty.element, tuple(dims))
+                else:
+                    ty = ty.element
+        return container, key, ty
+
+    def get(self, path: str) -> Any:
+        container, key, _ = self.resolve(path)
+        return container[key] if isinstance(key, int) else getattr(container, key)
+
+    def type_of(self, path: str) -> t.Type:
+        return self.resolve(path)[2]
+
+    def set(self, path: str, value: Any) -> None:
+        container, key, ty = self.resolve(path)
+        value = coerce_python_value(value, ty)
+        if isinstance(key, int):
+            container[key] = value
+        else:
+            setattr(container, key, value)
+
+    def __getitem__(self, path: str) -> Any:
+        return self.get(path)
+
+    def __setitem__(self, path: str, value: Any) -> None:
+        self.set(path, value)
+
+    def format(self, path: str) -> str:
+        container, key, ty = self.resolve(path)
+        value = container[key] if isinstance(key, int) else getattr(container, key)
+        return format_value(value, ty, self.model.pous)
+
+
+def coerce_python_value(value: Any, ty: t.Type) -> Any:
+    """Check and convert a Python value given through the API or `--set` to `ty`'s representation."""
+    from stvm.runtime.helpers import _f32, _strfit
+    if isinstance(ty, t.BoolType):
+        if isinstance(value, bool):
+            return value
+        if value in (0, 1):
+            return bool(value)
+    elif isinstance(ty, t.IntType):
+        if isinstance(value, int) and not isinstance(value, bool):
+            if not ty.lo <= value <= ty.hi:
+                raise ValueError(f"{value} is out of range for {ty.name} ({ty.lo}..{ty.hi})")
+            return value
+    elif isinstance(ty, t.RealType):
+        if isinstance(value, (int, float)) and not isinstance(value, bool):
+            return _f32(float(value)) if ty.bits == 32 else float(value)
+    elif isinstance(ty, t.StringType):
+        if isinstance(value, str):
+            value = value.encode("utf-8")
+        if isinstance(value, (bytes, bytearray)):
+            value = bytes(value).split(b"\x00", 1)[0]
+            return _strfit(value, ty.max_bytes)
+    elif isinstance(ty, t.TimeType):
+        if isinstance(value, int) and not isinstance(value, bool):
+            return value
+    elif isinstance(ty, t.EnumType):
+        if isinstance(value, str):
+            v = ty.value_of(value.split("#")[-1])
+            if v is not None:
+                return v
+        if isinstance(value, int) and ty.name_of(value) is not None:
+            return value
+    raise ValueError(f"cannot store {value!r} in a {ty.name} variable")

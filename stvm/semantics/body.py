@@ -1,0 +1,885 @@
+"""Type checking of POU bodies: statements, expressions, calls (IEC 61131-3 + Sysmac rules).
+
+Typing rules follow shared/spec/sysmac.md section 2:
+* integer results take the highest-ranked operand type (signed+unsigned of one rank → unsigned) and
+  wrap at that width *before* any widening for the assignment;
+* an untyped integer literal takes the other operand's type when it fits, else DINT (LINT when
+  it does not fit DINT, or always LINT with `int_literal_type=lint`);
+* implicit conversions are the widening chart plus same-size signed↔unsigned; anything else is an
+  error that names the conversion function to use.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from stvm.semantics import types as t
+from stvm.semantics.model import EXTERNAL, GLOBAL, IN_OUT, INPUT, LOCAL, OUTPUT, TEMP, POUInfo, Variable
+from stvm.syntax import nodes as n
+
+if TYPE_CHECKING:
+    from stvm.semantics.checker import Checker
+
+_ARITH = {"PLUS": "+", "MINUS": "-", "STAR": "*", "SLASH": "/", "MOD": "MOD", "POW": "**"}
+_COMPARE = {"EQ": "=", "NE": "<>", "LT": "<", "GT": ">", "LE": "<=", "GE": ">="}
+_LOGIC = {"AND": "AND", "AMP": "AND", "OR": "OR", "XOR": "XOR"}
+OP_TEXT = {**_ARITH, **_COMPARE, **_LOGIC, "NOT": "NOT"}
+
+
+def int_literal_type(value: int, settings) -> t.Type:
+    if settings.int_literal_type == "lint":
+        return t.LINT
+    if t.DINT.lo <= value <= t.DINT.hi:
+        return t.DINT
+    if t.LINT.lo <= value <= t.LINT.hi:
+        return t.LINT
+    return t.ULINT
+
+
+def common_int(a: t.IntType, b: t.IntType) -> t.IntType:
+    if a.rank != b.rank:
+        return a if a.rank > b.rank else b
+    if a == b:
+        return a
+    # same rank: bit string, then unsigned wins (sysmac.md 2)
+    for cand in (a, b):
+        if cand.bitstring:
+            return cand
+    return a if not a.signed else b
+
+
+def real_for(int_type: t.IntType) -> t.RealType:
+    # Choice (sysmac.md 2 ranks REAL below DINT): an 8/16-bit integer with REAL stays REAL;
+    # a 32/64-bit integer mixed with a real computes in LREAL so no integer precision is lost.
+    return t.REAL if int_type.bits <= 16 else t.LREAL
+
+
+def implicit_ok(src: t.Type, dst: t.Type) -> bool:
+    """May a value of `src` be assigned/passed to `dst` without a conversion function?"""
+    if src == dst:
+        return True
+    if isinstance(src, t.StringType) and isinstance(dst, t.StringType):
+        return True
+    if isinstance(src, t.IntType) and isinstance(dst, t.IntType):
+        if src.bits == dst.bits:
+            return True
+        return src.bits < dst.bits and (not src.signed or dst.signed)
+    if isinstance(src, t.IntType) and isinstance(dst, t.RealType):
+        return not src.bitstring
+    if isinstance(src, t.RealType) and isinstance(dst, t.RealType):
+        return src.bits <= dst.bits
+    if isinstance(src, t.StructType) and isinstance(dst, t.StructType):
+        return src.qualname.lower() == dst.qualname.lower()
+    if isinstance(src, t.EnumType) and isinstance(dst, t.EnumType):
+        return src.qualname.lower() == dst.qualname.lower()
+    if isinstance(src, t.ArrayType) and isinstance(dst, t.ArrayType):
+        if dst.dims is None:
+            return implicit_ok(src.element, dst.element) and src.element.kind == dst.element.kind
+        return (src.dims is not None and len(src.dims) == len(dst.dims)
+                and all(h1 - l1 == h2 - l2 for (l1, h1), (l2, h2) in zip(src.dims, dst.dims))
+                and (src.element == dst.element or (isinstance(src.element, t.StringType) and isinstance(dst.element, t.StringType))
+                     or (getattr(src.element, "qualname", None) or "x").lower() == (getattr(dst.element, "qualname", None) or "y").lower()))
+    if isinstance(src, t.TimeType) and isinstance(dst, t.TimeType):
+        return src.name == dst.name
+    return False
+
+
+def conversion_hint(src: t.Type, dst: t.Type) -> str:
+    def base(ty: t.Type) -> str:
+        return ty.name.split("[")[0]
+    if src.kind in ("int", "real", "bool", "string", "time") and dst.kind in ("int", "real", "bool", "string", "time"):
+        return f"; use {base(src)}_TO_{base(dst)}"
+    return ""
+
+
+class _BodyChecker:
+    def __init__(self, checker: "Checker", pou: POUInfo, node: n.POU) -> None:
+        self.c = checker
+        self.pou = pou
+        self.node = node
+        self.facts = checker.facts
+        self.settings = checker.settings
+        self.loop_depth = 0
+        self.for_vars: list[str] = []
+
+    def error(self, message: str, span: n.Span, code: str = "") -> None:
+        self.c.error(message, span, code)
+
+    # ---- statements
+    def check(self) -> None:
+        for var in self.pou.variables.values():
+            if var.section == EXTERNAL and var.key not in self.c.globals:
+                self.error(f"VAR_EXTERNAL '{var.name}' has no matching VAR_GLOBAL", var.span, "E033")
+            elif var.section == EXTERNAL and self.c.globals[var.key].type != var.type:
+                self.error(f"VAR_EXTERNAL '{var.name}' is {var.type.name} but the global is "
+                           f"{self.c.globals[var.key].type.name}", var.span, "E033")
+        self.statements(self.node.body)
+
+    def statements(self, body: tuple[n.Statement, ...]) -> None:
+        for stmt in body:
+            self.statement(stmt)
+
+    def statement(self, s: n.Statement) -> None:
+        method = getattr(self, "stmt_" + type(s).__name__)
+        method(s)
+
+    def stmt_Assign(self, s: n.Assign) -> None:
+        target_type = self.lvalue(s.target)
+        value_type = self.expr(s.value, expected=target_type)
+        if target_type is not None and value_type is not None:
+            self.require_assignable(s.value, value_type, target_type, s.value.span)
+
+    def stmt_CallStatement(self, s: n.CallStatement) -> None:
+        if not isinstance(s.call, n.Call):
+            if isinstance(s.call, n.Name) and self.lookup_callable(s.call) is not None:
+                self.error(f"'{s.call.text}' is called without parentheses; write {s.call.text}();", s.span, "E040")
+            else:
+                self.expr(s.call)
+                self.error("this statement does nothing: expected an assignment (:=) or a call", s.span, "E040")
+            return
+        self.expr(s.call, statement=True)
+
+    def condition(self, expr: n.Expr, what: str) -> None:
+        ty = self.expr(expr)
+        if ty is not None and not isinstance(ty, t.BoolType):
+            self.error(f"{what} must be BOOL, not {ty.name}", expr.span, "E041")
+
+    def stmt_If(self, s: n.If) -> None:
+        for cond, body in s.branches:
+            self.condition(cond, "IF condition")
+            self.statements(body)
+        if s.else_body is not None:
+            self.statements(s.else_body)
+
+    def stmt_Case(self, s: n.Case) -> None:
+        sel = self.expr(s.selector)
+        if sel is not None and not isinstance(sel, (t.IntType, t.EnumType)):
+            self.error(f"CASE selector must be an integer or enumeration, not {sel.name}", s.selector.span, "E042")
+        seen: dict[int, n.Span] = {}
+        for labels, body in s.elements:
+            for label in labels:
+                lo = self.case_value(label.low, sel)
+                hi = self.case_value(label.high, sel) if label.high is not None else lo
+                if lo is not None and hi is not None:
+                    if hi < lo:
+                        self.error(f"empty case range {lo}..{hi}", label.span, "E042")
+                    elif hi - lo < 100000:
+                        for v in range(lo, hi + 1):
+                            if v in seen:
+                                self.error(f"case value {v} appears twice", label.span, "E042")
+                                break
+                            seen[v] = label.span
+            self.statements(body)
+        if s.else_body is not None:
+            self.statements(s.else_body)
+
+    def case_value(self, expr: n.Expr, sel: t.Type | None) -> int | None:
+        if isinstance(expr, n.Name):
+            if isinstance(sel, t.EnumType):
+                value = sel.value_of(expr.parts[0])
+                if value is not None:
+                    self.facts.consts[id(expr)] = value
+                    return value
+            value = self.c.const_value(expr, self.pou_namespace, self.pou)
+            if isinstance(value, int) and not isinstance(value, bool):
+                self.facts.consts[id(expr)] = value
+                return value
+            self.error(f"case label '{expr.parts[0]}' is not a constant of the selector's type", expr.span, "E042")
+            return None
+        if isinstance(expr, n.HashLiteral):
+            lit = self.c.hash_literal(expr, self.pou_namespace)
+            if lit is None:
+                return None
+            if isinstance(sel, t.EnumType) and lit[0] != sel:
+                self.error(f"case label is {lit[0].name}, the selector is {sel.name}", expr.span, "E042")
+            self.facts.consts[id(expr)] = lit[1]
+            return lit[1]  # type: ignore[return-value]
+        if isinstance(expr, n.IntLiteral):
+            if isinstance(sel, t.EnumType):
+                self.error(f"case label {expr.value} is an integer; the selector is {sel.name}", expr.span, "E042")
+            elif isinstance(sel, t.IntType) and not sel.lo <= expr.value <= sel.hi:
+                self.error(f"case label {expr.value} is out of range for {sel.name}", expr.span, "E042")
+            self.facts.consts[id(expr)] = expr.value
+            return expr.value
+        return None
+
+    def stmt_For(self, s: n.For) -> None:
+        var_type = self.lvalue(s.variable)
+        if var_type is not None and not isinstance(var_type, t.IntType):
+            self.error(f"FOR variable must be an integer, not {var_type.name}", s.variable.span, "E043")
+        for part in (s.start, s.end) + ((s.step,) if s.step is not None else ()):
+            ty = self.expr(part, expected=var_type)
+            if ty is not None and var_type is not None:
+                self.require_assignable(part, ty, var_type, part.span)
+        if s.step is not None:
+            step = self.c.const_value(s.step, self.pou_namespace, self.pou)
+            if step == 0:
+                self.error("FOR step is 0: the loop never ends", s.step.span, "E043")
+        self.loop_depth += 1
+        self.statements(s.body)
+        self.loop_depth -= 1
+
+    def stmt_While(self, s: n.While) -> None:
+        self.condition(s.condition, "WHILE condition")
+        self.loop_depth += 1
+        self.statements(s.body)
+        self.loop_depth -= 1
+
+    def stmt_Repeat(self, s: n.Repeat) -> None:
+        self.loop_depth += 1
+        self.statements(s.body)
+        self.loop_depth -= 1
+        self.condition(s.condition, "UNTIL condition")
+
+    def stmt_Exit(self, s: n.Exit) -> None:
+        if self.loop_depth == 0:
+            self.error("EXIT outside a loop", s.span, "E044")
+
+    def stmt_Continue(self, s: n.Continue) -> None:
+        if self.loop_depth == 0:
+            self.error("CONTINUE outside a loop", s.span, "E044")
+
+    def stmt_Return(self, s: n.Return) -> None:
+        pass
+
+    def stmt_Empty(self, s: n.Empty) -> None:
+        pass
+
+    @property
+    def pou_namespace(self) -> tuple[str, ...]:
+        return self.node.namespace
+
+    # ---- names
+    def resolve_name(self, name: n.Name) -> object:
+        """Resolve a Name: a NameRef for variables/enumerators/result, or None (diagnosed)."""
+        from stvm.semantics.checker import NameRef
+        if len(name.parts) == 1 and not name.rooted:
+            key = name.parts[0].lower()
+            var = self.pou.variables.get(key)
+            if var is not None:
+                if var.section == EXTERNAL:
+                    g = self.c.globals.get(key)
+                    return NameRef("global", g) if g is not None else None
+                return NameRef("var", var)
+            if self.pou.kind == "FUNCTION" and key == self.pou.name.lower():
+                return NameRef("result", pou=self.pou)
+            g = self.c.globals.get(key)
+            if g is not None:
+                return NameRef("global", g)
+            enum = self.c.bare_enumerator(name.parts[0], name.span)
+            if enum is not None:
+                return NameRef("enum", value=enum[1], pou=None, variable=Variable(name.parts[0], "ENUM", enum[0]))
+        return None
+
+    def lookup_callable(self, name: n.Name) -> POUInfo | None:
+        key = self.c.lookup_pou_key(name.parts, self.pou_namespace)
+        if key is None:
+            return None
+        return self.c.pous.get(key)
+
+    # ---- lvalues
+    def lvalue(self, target: n.Expr) -> t.Type | None:
+        """Check an assignment target; returns its type (None when already diagnosed)."""
+        if isinstance(target, n.Name):
+            ref = self.resolve_name(target)
+            if ref is None:
+                self.undeclared(target)
+                return None
+            self.facts.names[id(target)] = ref  # type: ignore[assignment]
+            kind = ref.kind  # type: ignore[attr-defined]
+            if kind == "enum":
+                self.error(f"cannot assign to enumerator '{target.text}'", target.span, "E050")
+                return None
+            if kind == "result":
+                self.facts.types[id(target)] = self.pou.return_type  # type: ignore[assignment]
+                return self.pou.return_type
+            var: Variable = ref.variable  # type: ignore[attr-defined]
+            if var.constant:
+                self.error(f"cannot assign to constant '{target.text}'", target.span, "E050")
+            if isinstance(var.type, t.FBType):
+                self.error(f"cannot assign to function block instance '{target.text}'", target.span, "E050")
+                return None
+            self.facts.types[id(target)] = var.type
+            return var.type
+        if isinstance(target, n.Member):
+            base_type = self.expr(target.base)
+            if base_type is None:
+                return None
+            if isinstance(base_type, t.FBType):
+                fb = self.c.pous.get(base_type.qualname.lower())
+                pin = fb.pin(target.name) if fb else None
+                if pin is not None and pin.section in (INPUT, OUTPUT, IN_OUT):
+                    what = {INPUT: "an input", OUTPUT: "an output", IN_OUT: "an in-out"}[pin.section]
+                    self.error(f"cannot assign to '{target.name}', {what} of function block {base_type.name}; "
+                               f"pass it in the call instead", target.span, "E051")
+                    return None
+            ty = self.expr(target)
+            if ty is not None and self.is_constant_path(target.base):
+                self.error("cannot assign to a member of a constant", target.span, "E050")
+            return ty
+        if isinstance(target, (n.Index, n.BitAccess)):
+            ty = self.expr(target)
+            if ty is not None and self.is_constant_path(target.base):
+                self.error("cannot assign into a constant", target.span, "E050")
+            return ty
+        if isinstance(target, n.Call):
+            self.expr(target)
+            self.error("cannot assign to a call result", target.span, "E050")
+            return None
+        self.error("this expression cannot be assigned to", target.span, "E050")
+        return None
+
+    def is_constant_path(self, base: n.Expr) -> bool:
+        while isinstance(base, (n.Member, n.Index, n.BitAccess)):
+            base = base.base
+        ref = self.facts.names.get(id(base))
+        return bool(ref is not None and getattr(ref, "variable", None) is not None and ref.variable.constant)  # type: ignore[attr-defined]
+
+    def undeclared(self, name: n.Name) -> None:
+        if self.lookup_callable(name) is not None:
+            self.error(f"'{name.text}' is a POU, not a variable", name.span, "E031")
+        else:
+            self.error(f"'{name.text}' is not declared", name.span, "E031")
+
+    # ---- assignability
+    def require_assignable(self, expr: n.Expr, src: t.Type, dst: t.Type, span: n.Span) -> None:
+        if isinstance(dst, t.FBType) or isinstance(src, t.FBType):
+            self.error("function block instances cannot be assigned", span, "E052")
+            return
+        if isinstance(src, t.VoidType):
+            self.error("this call has no result value", span, "E052")
+            return
+        if id(expr) in self.facts.untyped:
+            value = self.facts.consts.get(id(expr))
+            if isinstance(value, int) and not isinstance(value, bool):
+                if isinstance(dst, t.IntType):
+                    if not dst.lo <= value <= dst.hi:
+                        self.error(f"{value} is out of range for {dst.name} ({dst.lo}..{dst.hi})", span, "E022")
+                    return
+                if isinstance(dst, t.RealType):
+                    return
+            if isinstance(value, float) and isinstance(dst, t.RealType):
+                return
+        if implicit_ok(src, dst):
+            return
+        if isinstance(src, t.IntType) and isinstance(dst, t.IntType):
+            self.error(f"cannot assign {src.name} to {dst.name} implicitly (value may not fit){conversion_hint(src, dst)}", span, "E052")
+            return
+        self.error(f"type mismatch: cannot assign {src.name} to {dst.name}{conversion_hint(src, dst)}", span, "E052")
+
+    # ---- expressions
+    def expr(self, e: n.Expr, expected: t.Type | None = None, statement: bool = False) -> t.Type | None:
+        method = getattr(self, "expr_" + type(e).__name__)
+        ty = method(e, expected) if not isinstance(e, n.Call) else self.expr_Call(e, expected, statement)
+        if ty is not None:
+            self.facts.types[id(e)] = ty
+        return ty
+
+    def expr_IntLiteral(self, e: n.IntLiteral, expected) -> t.Type:
+        self.facts.untyped.add(id(e))
+        self.facts.consts[id(e)] = e.value
+        return int_literal_type(e.value, self.settings)
+
+    def expr_RealLiteral(self, e: n.RealLiteral, expected) -> t.Type:
+        self.facts.untyped.add(id(e))
+        self.facts.consts[id(e)] = e.value
+        return t.LREAL
+
+    def expr_BoolLiteral(self, e, expected) -> t.Type:
+        self.facts.consts[id(e)] = e.value
+        return t.BOOL
+
+    def expr_StringLiteral(self, e: n.StringLiteral, expected) -> t.Type:
+        self.facts.consts[id(e)] = e.value
+        return t.string_type(max(len(e.value) + 1, 1))
+
+    def expr_TimeLiteral(self, e: n.TimeLiteral, expected) -> t.Type:
+        self.facts.consts[id(e)] = e.value_ns
+        return t.ELEMENTARY[e.type_name]
+
+    def expr_HashLiteral(self, e: n.HashLiteral, expected) -> t.Type | None:
+        lit = self.c.hash_literal(e, self.pou_namespace)
+        if lit is None:
+            return None
+        self.facts.consts[id(e)] = lit[1]
+        return lit[0]
+
+    def expr_Name(self, e: n.Name, expected) -> t.Type | None:
+        ref = self.resolve_name(e)
+        if ref is None:
+            if len(e.parts) == 1 and isinstance(expected, t.EnumType) and expected.value_of(e.parts[0]) is not None:
+                from stvm.semantics.checker import NameRef
+                ref = NameRef("enum", value=expected.value_of(e.parts[0]), variable=Variable(e.parts[0], "ENUM", expected))
+            else:
+                self.undeclared(e)
+                return None
+        self.facts.names[id(e)] = ref  # type: ignore[assignment]
+        if ref.kind == "enum":  # type: ignore[attr-defined]
+            self.facts.consts[id(e)] = ref.value  # type: ignore[attr-defined]
+            return ref.variable.type  # type: ignore[attr-defined]
+        if ref.kind == "result":  # type: ignore[attr-defined]
+            return self.pou.return_type
+        var: Variable = ref.variable  # type: ignore[attr-defined]
+        if var.constant and var.init is not None and not isinstance(var.init, (list, dict)):
+            self.facts.consts[id(e)] = var.init
+        return var.type
+
+    def expr_Member(self, e: n.Member, expected) -> t.Type | None:
+        base = self.expr(e.base)
+        if base is None:
+            return None
+        if isinstance(base, t.StructType):
+            fty = base.field_type(e.name)
+            if fty is None:
+                self.error(f"{base.name} has no member '{e.name}'", e.span, "E034")
+            return fty
+        if isinstance(base, t.FBType):
+            fb = self.c.pous.get(base.qualname.lower())
+            var = fb.pin(e.name) if fb else None
+            if var is None:
+                self.error(f"function block {base.name} has no member '{e.name}'", e.span, "E034")
+                return None
+            if var.section not in (INPUT, OUTPUT) and not base.is_program:
+                self.error(f"'{e.name}' is internal to {base.name}; only inputs and outputs are visible outside", e.span, "E034")
+                return None
+            return var.type
+        self.error(f"'{self.describe(e.base)}' is {base.name}, which has no members", e.span, "E034")
+        return None
+
+    def expr_BitAccess(self, e: n.BitAccess, expected) -> t.Type | None:
+        base = self.expr(e.base)
+        if base is None:
+            return None
+        if not isinstance(base, t.IntType):
+            self.error(f"bit access needs an integer or bit string, not {base.name}", e.span, "E035")
+            return None
+        if not 0 <= e.bit < base.bits:
+            self.error(f"bit {e.bit} is outside {base.name} (0..{base.bits - 1})", e.span, "E035")
+            return None
+        return t.BOOL
+
+    def expr_Index(self, e: n.Index, expected) -> t.Type | None:
+        base = self.expr(e.base)
+        for ix in e.indices:
+            ity = self.expr(ix)
+            if ity is not None and not isinstance(ity, (t.IntType, t.EnumType)):
+                self.error(f"array index must be an integer, not {ity.name}", ix.span, "E036")
+        if base is None:
+            return None
+        if not isinstance(base, t.ArrayType):
+            self.error(f"'{self.describe(e.base)}' is {base.name}, not an array", e.span, "E036")
+            return None
+        if base.dims is None:
+            if len(e.indices) != 1:
+                self.error("an ARRAY[*] parameter takes one index", e.span, "E036")
+            return base.element
+        if len(e.indices) != len(base.dims):
+            self.error(f"{base.name} needs {len(base.dims)} index(es), got {len(e.indices)}", e.span, "E036")
+            return None
+        for ix, (lo, hi) in zip(e.indices, base.dims):
+            value = self.facts.consts.get(id(ix))
+            if isinstance(value, int) and not isinstance(value, bool) and not lo <= value <= hi:
+                self.error(f"index {value} is outside the bounds {lo}..{hi}", ix.span, "E036")
+        return base.element
+
+    def expr_Deref(self, e: n.Deref, expected) -> t.Type | None:
+        self.error("pointer dereference (^) is not supported", e.span, "E037")
+        return None
+
+    def expr_Unary(self, e: n.Unary, expected) -> t.Type | None:
+        ty = self.expr(e.operand, expected)
+        if ty is None:
+            return None
+        if e.op == "NOT":
+            if isinstance(ty, t.BoolType) or (isinstance(ty, t.IntType)):
+                if id(e.operand) in self.facts.consts and isinstance(ty, t.BoolType):
+                    self.facts.consts[id(e)] = not self.facts.consts[id(e.operand)]
+                return ty
+            self.error(f"NOT needs BOOL or a bit string, not {ty.name}", e.span, "E038")
+            return None
+        if isinstance(ty, (t.IntType, t.RealType)) or ty.name == "TIME":
+            if id(e.operand) in self.facts.untyped:
+                value = self.facts.consts[id(e.operand)]
+                folded = -value if e.op == "MINUS" else value
+                self.facts.untyped.add(id(e))
+                self.facts.consts[id(e)] = folded
+                if isinstance(folded, int):
+                    return int_literal_type(folded, self.settings)
+                return ty
+            if isinstance(ty, t.IntType) and not ty.signed and e.op == "MINUS":
+                # IEC: negation of an unsigned value wraps; Sysmac accepts it
+                return ty
+            if id(e.operand) in self.facts.consts and e.op == "MINUS" and isinstance(self.facts.consts[id(e.operand)], (int, float)) \
+                    and not isinstance(self.facts.consts[id(e.operand)], bool):
+                self.facts.consts[id(e)] = -self.facts.consts[id(e.operand)]  # type: ignore[operator]
+            return ty
+        self.error(f"unary {OP_TEXT.get(e.op, e.op)} needs a number, not {ty.name}", e.span, "E038")
+        return None
+
+    def literal_fits(self, e: n.Expr, ty: t.Type) -> bool:
+        value = self.facts.consts.get(id(e))
+        if isinstance(ty, t.IntType) and isinstance(value, int) and not isinstance(value, bool):
+            return ty.lo <= value <= ty.hi
+        if isinstance(ty, t.RealType):
+            return isinstance(value, (int, float)) and not isinstance(value, bool)
+        return False
+
+    def expr_Binary(self, e: n.Binary, expected) -> t.Type | None:
+        lt = self.expr(e.left)
+        rt = self.expr(e.right)
+        if lt is None or rt is None:
+            return None
+        lu = id(e.left) in self.facts.untyped
+        ru = id(e.right) in self.facts.untyped
+        op = e.op
+        sym = OP_TEXT.get(op, op)
+        if op in _COMPARE:
+            if self.comparable(lt, rt, e.left, e.right, op):
+                self.facts.types[id(e)] = t.BOOL
+                operand = self.operand_type(lt, rt, lu, ru, e)
+                if operand is not None:
+                    self.facts.operand_types[id(e)] = operand
+                return t.BOOL
+            self.error(f"cannot compare {lt.name} {sym} {rt.name}", e.span, "E039")
+            return None
+        if op in _LOGIC:
+            if isinstance(lt, t.BoolType) and isinstance(rt, t.BoolType):
+                return t.BOOL
+            if isinstance(lt, t.IntType) and isinstance(rt, t.IntType):
+                return self.operand_type(lt, rt, lu, ru, e)
+            self.error(f"{sym} needs BOOL or bit-string operands, not {lt.name} and {rt.name}", e.span, "E039")
+            return None
+        # arithmetic
+        if op == "POW":
+            if isinstance(lt, (t.IntType, t.RealType)) and isinstance(rt, (t.IntType, t.RealType)):
+                if isinstance(lt, t.RealType):
+                    return t.LREAL if lu else lt
+                return real_for(lt)  # type: ignore[arg-type]
+            self.error(f"** needs numbers, not {lt.name} and {rt.name}", e.span, "E039")
+            return None
+        if lu and ru:
+            a, b = self.facts.consts.get(id(e.left)), self.facts.consts.get(id(e.right))
+            folded = self.c.const_value(e, self.pou_namespace, self.pou)
+            from stvm.semantics.checker import _NOT_CONST
+            if folded is not _NOT_CONST and isinstance(folded, (int, float)):
+                self.facts.untyped.add(id(e))
+                self.facts.consts[id(e)] = folded
+                if isinstance(folded, int):
+                    return int_literal_type(folded, self.settings)
+                return t.LREAL
+            del a, b
+        if isinstance(lt, t.TimeType) or isinstance(rt, t.TimeType):
+            return self.time_arith(e, lt, rt)
+        if isinstance(lt, (t.IntType, t.RealType)) and isinstance(rt, (t.IntType, t.RealType)):
+            if op == "MOD" and not (isinstance(lt, t.IntType) and isinstance(rt, t.IntType)):
+                self.error(f"MOD needs integers, not {lt.name} and {rt.name}", e.span, "E039")
+                return None
+            return self.operand_type(lt, rt, lu, ru, e)
+        self.error(f"operator {sym} cannot be applied to {lt.name} and {rt.name}", e.span, "E039")
+        return None
+
+    def operand_type(self, lt: t.Type, rt: t.Type, lu: bool, ru: bool, e: n.Binary) -> t.Type | None:
+        """The type a binary operation on these operands computes in."""
+        if isinstance(lt, t.IntType) and isinstance(rt, t.IntType):
+            if lu and not ru and self.literal_fits(e.left, rt):
+                return rt
+            if ru and not lu and self.literal_fits(e.right, lt):
+                return lt
+            return common_int(lt, rt)
+        if isinstance(lt, t.RealType) and isinstance(rt, t.RealType):
+            if lu and not ru:
+                return rt
+            if ru and not lu:
+                return lt
+            return t.LREAL if t.LREAL in (lt, rt) else t.REAL
+        if isinstance(lt, t.RealType) and isinstance(rt, t.IntType):
+            if lu:
+                return t.REAL if ru or rt.bits <= 16 else real_for(rt)
+            return lt if lt.bits == 64 or ru else (t.REAL if rt.bits <= 16 else t.LREAL)
+        if isinstance(lt, t.IntType) and isinstance(rt, t.RealType):
+            if ru:
+                return t.REAL if lu or lt.bits <= 16 else real_for(lt)
+            return rt if rt.bits == 64 or lu else (t.REAL if lt.bits <= 16 else t.LREAL)
+        if lt == rt:
+            return lt
+        return None
+
+    def comparable(self, lt: t.Type, rt: t.Type, le: n.Expr, re_: n.Expr, op: str) -> bool:
+        if isinstance(lt, (t.IntType, t.RealType)) and isinstance(rt, (t.IntType, t.RealType)):
+            return True
+        if isinstance(lt, t.StringType) and isinstance(rt, t.StringType):
+            return True
+        if isinstance(lt, t.EnumType) and isinstance(rt, t.EnumType):
+            return lt.qualname.lower() == rt.qualname.lower()
+        if isinstance(lt, t.BoolType) and isinstance(rt, t.BoolType):
+            return True
+        if isinstance(lt, t.TimeType) and isinstance(rt, t.TimeType):
+            return lt.name == rt.name
+        return False
+
+    def time_arith(self, e: n.Binary, lt: t.Type, rt: t.Type) -> t.Type | None:
+        op = e.op
+        ln, rn = lt.name, rt.name
+        if op == "PLUS":
+            if ln == rn == "TIME":
+                return t.TIME
+            if ln in ("DATE_AND_TIME", "TIME_OF_DAY") and rn == "TIME":
+                return lt
+            if rn in ("DATE_AND_TIME", "TIME_OF_DAY") and ln == "TIME":
+                return rt
+        if op == "MINUS":
+            if ln == rn:
+                return t.TIME
+            if ln in ("DATE_AND_TIME", "TIME_OF_DAY") and rn == "TIME":
+                return lt
+        if op in ("STAR", "SLASH") and ln == "TIME" and isinstance(rt, (t.IntType, t.RealType)):
+            return t.TIME
+        if op == "STAR" and rn == "TIME" and isinstance(lt, (t.IntType, t.RealType)):
+            return t.TIME
+        self.error(f"operator {OP_TEXT.get(op, op)} cannot be applied to {ln} and {rn}", e.span, "E039")
+        return None
+
+    def describe(self, e: n.Expr) -> str:
+        if isinstance(e, n.Name):
+            return e.text
+        if isinstance(e, n.Member):
+            return f"{self.describe(e.base)}.{e.name}"
+        if isinstance(e, n.Index):
+            return f"{self.describe(e.base)}[…]"
+        return "expression"
+
+    # ---- calls
+    def expr_Call(self, e: n.Call, expected, statement: bool) -> t.Type | None:
+        from stvm.semantics.checker import CallInfo
+        callee = e.callee
+        pou: POUInfo | None = None
+        instance: n.Expr | None = None
+        if isinstance(callee, n.Name):
+            ref = self.resolve_name(callee) if len(callee.parts) == 1 else None
+            if ref is not None and getattr(ref, "variable", None) is not None and isinstance(ref.variable.type, t.FBType):  # type: ignore[attr-defined]
+                self.expr(callee)
+                instance = callee
+            elif ref is not None and ref.kind != "result":  # type: ignore[attr-defined]
+                self.expr(callee)
+                self.error(f"'{callee.text}' is {ref.variable.type.name}, not a function or function block instance", callee.span, "E045")  # type: ignore[attr-defined]
+                self.check_args_loosely(e)
+                return None
+            else:
+                pou = self.lookup_callable(callee)
+                if pou is None:
+                    self.error(f"unknown function '{callee.text}'", callee.span, "E045")
+                    self.check_args_loosely(e)
+                    return None
+                if pou.kind != "FUNCTION":
+                    self.error(f"'{callee.text}' is a {pou.kind.lower().replace('_', ' ')} type; call an instance of it", callee.span, "E045")
+                    self.check_args_loosely(e)
+                    return None
+        else:
+            ty = self.expr(callee)
+            if ty is None:
+                self.check_args_loosely(e)
+                return None
+            if not isinstance(ty, t.FBType):
+                self.error(f"'{self.describe(callee)}' is {ty.name}, not a function block instance", callee.span, "E045")
+                self.check_args_loosely(e)
+                return None
+            instance = callee
+        if instance is not None:
+            fbt = self.facts.types[id(instance)]
+            pou = self.c.pous.get(fbt.qualname.lower())  # type: ignore[attr-defined]
+            if pou is None:
+                return None
+            if pou.kind == "PROGRAM":
+                self.error("a PROGRAM cannot be called from ST; assign it to a task", e.span, "E045")
+                return None
+            if not statement:
+                self.error(f"a function block call is a statement; read its outputs as {self.describe(instance)}.Q", e.span, "E045")
+            info = CallInfo(pou, True, instance)
+            self.bind_args(e, pou, info, fb=True)
+            self.facts.calls[id(e)] = info
+            return t.VOID
+        assert pou is not None
+        info = CallInfo(pou, False, None)
+        self.bind_args(e, pou, info, fb=False)
+        self.facts.calls[id(e)] = info
+        ret = pou.return_type
+        if isinstance(ret, t.GenericType):
+            ret = info.generic_type
+            if ret is None:
+                self.error(f"cannot infer the result type of {pou.name}", e.span, "E046")
+                return None
+        return ret
+
+    def check_args_loosely(self, e: n.Call) -> None:
+        for arg in e.args:
+            if arg.kind in ("input", "positional"):
+                self.expr(arg.value)
+
+    def bind_args(self, e: n.Call, pou: POUInfo, info, fb: bool) -> None:
+        params = pou.params()
+        outputs = [v for v in pou.variables.values() if v.section == OUTPUT]
+        positional = [a for a in e.args if a.kind == "positional"]
+        formal = [a for a in e.args if a.kind != "positional"]
+        if positional and formal:
+            self.error("mix of formal (name := value) and positional arguments", e.span, "E047")
+        generic_types: list[t.Type] = []
+        bound: set[str] = set()
+        if positional:
+            if fb:
+                self.error(f"function block {pou.name} needs formal arguments (Name := value)", e.span, "E047")
+                return
+            if pou.variadic:
+                if len(positional) < max(len(params) - 1, 1):
+                    self.error(f"{pou.name} takes at least {max(len(params) - 1, 1)} arguments, got {len(positional)}", e.span, "E048")
+            elif len(positional) != len(params):
+                self.error(f"{pou.name} takes {len(params)} argument(s), got {len(positional)}", e.span, "E048")
+            for i, arg in enumerate(positional):
+                if i < len(params):
+                    self.bind_one(pou, params[i], arg, info, generic_types)
+                    bound.add(params[i].key)
+                elif pou.variadic and params:
+                    last = params[-1]
+                    self.bind_one(pou, last, arg, info, generic_types, extra=True)
+        for arg in formal:
+            assert arg.name is not None
+            if arg.kind == "input":
+                var = pou.pin(arg.name)
+                if var is None and pou.variadic and params:
+                    var = self.variadic_pin(pou, arg.name)
+                    if var is not None:
+                        self.bind_one(pou, var, arg, info, generic_types, extra=True)
+                        continue
+                if var is None or var.section not in (INPUT, IN_OUT):
+                    what = "output" if var is not None and var.section == OUTPUT else "input"
+                    hint = "; outputs are bound with =>" if var is not None and var.section == OUTPUT else ""
+                    self.error(f"{pou.name} has no {what} '{arg.name}'{hint}" if not hint else
+                               f"'{arg.name}' is an output of {pou.name}{hint}", arg.span, "E049")
+                    self.expr(arg.value)
+                    continue
+                if var.key in bound:
+                    self.error(f"argument '{arg.name}' given twice", arg.span, "E047")
+                bound.add(var.key)
+                self.bind_one(pou, var, arg, info, generic_types)
+            else:
+                var = pou.pin(arg.name)
+                if var is None or var.section != OUTPUT:
+                    self.error(f"{pou.name} has no output '{arg.name}'", arg.span, "E049")
+                    continue
+                target_type = self.lvalue(arg.value)
+                if target_type is not None:
+                    if arg.kind == "output_not" and not isinstance(var.type, t.BoolType):
+                        self.error("NOT => needs a BOOL output", arg.span, "E049")
+                    elif not implicit_ok(var.type, target_type):
+                        self.error(f"output {arg.name} is {var.type.name}; cannot bind it to {target_type.name}"
+                                   f"{conversion_hint(var.type, target_type)}", arg.span, "E052")
+                info.outputs.append((var, arg.value, arg.kind == "output_not"))
+        for p in params:
+            if p.section == IN_OUT and p.key not in bound and not (fb and positional):
+                if fb:
+                    # Choice (IEC 6.6.1.2): an FB in-out must be bound on every call
+                    self.error(f"in-out '{p.name}' of {pou.name} is not bound", e.span, "E048")
+                else:
+                    self.error(f"in-out '{p.name}' of {pou.name} is not bound", e.span, "E048")
+        if generic_types:
+            typed = [ty for ty, untyped in generic_types if not untyped]
+            info.generic_type = self.common_generic(typed or [ty for ty, _ in generic_types], e)
+
+    def variadic_pin(self, pou: POUInfo, name: str) -> Variable | None:
+        params = pou.params()
+        last = params[-1]
+        stem = last.name.rstrip("0123456789")
+        if name.lower().startswith(stem.lower()) and name[len(stem):].isdigit():
+            return last
+        return None
+
+    def common_generic(self, types_: list[t.Type], e: n.Call) -> t.Type | None:
+        result = types_[0]
+        for ty in types_[1:]:
+            if result == ty:
+                continue
+            if isinstance(result, t.IntType) and isinstance(ty, t.IntType):
+                result = common_int(result, ty)
+            elif isinstance(result, t.StringType) and isinstance(ty, t.StringType):
+                result = t.STRING
+            elif isinstance(result, (t.IntType, t.RealType)) and isinstance(ty, (t.IntType, t.RealType)):
+                result = t.LREAL if t.LREAL in (result, ty) or any(isinstance(x, t.IntType) and x.bits > 16 for x in (result, ty)) else t.REAL
+            else:
+                self.error(f"arguments of {e.callee.text if isinstance(e.callee, n.Name) else 'call'} have different types "
+                           f"({result.name}, {ty.name})", e.span, "E046")
+                return None
+        return result
+
+    def bind_one(self, pou: POUInfo, var: Variable, arg: n.Argument, info, generic_types: list, extra: bool = False) -> None:
+        ptype = var.type
+        if var.section == IN_OUT:
+            # an in-out is passed by reference: it must be a variable
+            if isinstance(ptype, t.ArrayType) and isinstance(arg.value, n.Index):
+                # Sysmac: an element where an array is expected = the array from that element on
+                aty = self.expr(arg.value)
+                base_ty = self.facts.types.get(id(arg.value.base))
+                if aty is not None and isinstance(base_ty, t.ArrayType) and self.element_ok(aty, ptype.element):
+                    self.facts.array_from_element.add(id(arg.value))
+                    self.lvalue_check_only(arg.value)
+                    info.inputs.append((var, arg.value))
+                    return
+                ty = aty
+            else:
+                ty = self.lvalue(arg.value) if self.is_lvalue_shape(arg.value) else None
+                if ty is None and not self.is_lvalue_shape(arg.value):
+                    self.expr(arg.value)
+                    self.error(f"in-out '{var.name}' of {pou.name} needs a variable, not an expression", arg.value.span, "E053")
+                    return
+            if ty is None:
+                return
+            if isinstance(ptype, t.GenericType):
+                if not ptype.accepts(ty):
+                    self.error(f"'{var.name}' of {pou.name} needs {ptype.name}, got {ty.name}", arg.value.span, "E052")
+                generic_types.append((ty, False))
+            elif isinstance(ptype, t.ArrayType) and isinstance(ty, t.ArrayType) and ptype.dims is None:
+                if not self.element_ok(ty.element, ptype.element):
+                    self.error(f"'{var.name}' of {pou.name} needs {ptype.name}, got {ty.name}", arg.value.span, "E052")
+            elif not (ty == ptype or (isinstance(ty, t.StringType) and isinstance(ptype, t.StringType))
+                      or (isinstance(ty, (t.StructType, t.EnumType)) and implicit_ok(ty, ptype))
+                      or (isinstance(ty, t.ArrayType) and implicit_ok(ty, ptype))
+                      or (isinstance(ty, t.IntType) and isinstance(ptype, t.IntType) and ty.bits == ptype.bits)):
+                self.error(f"in-out '{var.name}' of {pou.name} is {ptype.name}; got {ty.name}", arg.value.span, "E052")
+            info.inputs.append((var, arg.value))
+            return
+        if isinstance(ptype, t.ArrayType) and ptype.dims is None and isinstance(arg.value, n.Index):
+            aty = self.expr(arg.value)
+            base_ty = self.facts.types.get(id(arg.value.base))
+            if aty is not None and isinstance(base_ty, t.ArrayType) and self.element_ok(aty, ptype.element):
+                self.facts.array_from_element.add(id(arg.value))
+                info.inputs.append((var, arg.value))
+            return
+        ty = self.expr(arg.value, expected=ptype if not isinstance(ptype, t.GenericType) else None)
+        if ty is None:
+            return
+        if isinstance(ptype, t.GenericType):
+            if not ptype.accepts(ty):
+                self.error(f"'{var.name}' of {pou.name} needs {ptype.name}, got {ty.name}", arg.value.span, "E052")
+            else:
+                # untyped literals only decide the type when no typed argument does
+                generic_types.append((ty, id(arg.value) in self.facts.untyped))
+        elif isinstance(ptype, t.ArrayType) and ptype.dims is None:
+            if not (isinstance(ty, t.ArrayType) and self.element_ok(ty.element, ptype.element)):
+                self.error(f"'{var.name}' of {pou.name} needs {ptype.name}, got {ty.name}", arg.value.span, "E052")
+        else:
+            self.require_assignable(arg.value, ty, ptype, arg.value.span)
+        if extra:
+            info.extra.append(arg.value)
+        else:
+            info.inputs.append((var, arg.value))
+
+    def element_ok(self, have: t.Type, want: t.Type) -> bool:
+        if isinstance(want, t.GenericType):
+            return want.accepts(have)
+        return have == want or (isinstance(have, t.IntType) and isinstance(want, t.IntType) and have.bits == want.bits)
+
+    def is_lvalue_shape(self, e: n.Expr) -> bool:
+        return isinstance(e, (n.Name, n.Member, n.Index, n.BitAccess))
+
+    def lvalue_check_only(self, e: n.Expr) -> None:
+        if self.is_constant_path(e):
+            self.error("cannot pass a constant as an in-out", e.span, "E053")
+

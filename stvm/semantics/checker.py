@@ -1,0 +1,664 @@
+"""Stage 2: index every declaration, resolve names and types, collect every error in one pass.
+
+`analyze(units)` first indexes every type, POU and global of all units (so file order and
+declaration order never matter), then checks each POU body. It never raises for bad ST: each
+problem is a `Diagnostic`. For the code generator it records, per expression node, its type and
+what a name refers to (`Facts`).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+from stvm.diagnostics import Diagnostic
+from stvm.semantics import types as t
+from stvm.semantics.model import (EXTERNAL, GLOBAL, IN_OUT, INPUT, LOCAL, OUTPUT, TEMP, POUInfo,
+                                  ProjectModel, TaskInfo, Variable)
+from stvm.settings import DEFAULT_SETTINGS, SysmacSettings
+from stvm.syntax import nodes as n
+
+# Reserved words that the contextual lexer may still let through as names.
+_RESERVED = {
+    "if", "then", "else", "elsif", "end_if", "case", "of", "end_case", "for", "to", "by", "do", "end_for",
+    "while", "end_while", "repeat", "until", "end_repeat", "exit", "continue", "return", "and", "or", "xor",
+    "not", "mod", "true", "false", "var", "end_var", "function", "function_block", "program", "type",
+    "struct", "array", "constant", "retain",
+}
+
+
+@dataclass
+class NameRef:
+    """What a `Name` expression denotes."""
+
+    kind: str                     # 'var', 'global', 'enum', 'const', 'pou', 'result'
+    variable: Variable | None = None
+    pou: POUInfo | None = None
+    value: object = None          # enum value / constant
+
+
+@dataclass
+class CallInfo:
+    """A resolved call: the callee and how each argument binds."""
+
+    pou: POUInfo
+    is_fb: bool
+    instance: n.Expr | None       # the FB instance expression
+    inputs: list[tuple[Variable, n.Expr]] = field(default_factory=list)
+    outputs: list[tuple[Variable, n.Expr, bool]] = field(default_factory=list)   # (pin, target, negate)
+    extra: list[n.Expr] = field(default_factory=list)     # variadic extras, in order
+    generic_type: t.Type | None = None
+
+
+@dataclass
+class Facts:
+    types: dict[int, t.Type] = field(default_factory=dict)
+    names: dict[int, NameRef] = field(default_factory=dict)
+    calls: dict[int, CallInfo] = field(default_factory=dict)
+    untyped: set[int] = field(default_factory=set)        # untyped numeric literals (after folding)
+    consts: dict[int, object] = field(default_factory=dict)  # compile-time values of constant exprs
+    array_from_element: set[int] = field(default_factory=set)  # Index exprs passed as "array from here"
+    operand_types: dict[int, t.Type] = field(default_factory=dict)  # comparisons: the type compared in
+    keep: list = field(default_factory=list)              # keeps nodes alive so ids stay unique
+
+
+@dataclass
+class Analysis:
+    model: ProjectModel
+    facts: Facts
+    units: list[n.CompilationUnit]
+    pou_nodes: dict[str, n.POU]
+    diagnostics: list[Diagnostic]
+    type_inits: dict[str, dict[str, object]]   # struct qualname key → field key → initial value
+
+
+class _Index:
+    def __init__(self) -> None:
+        self.type_decls: dict[str, n.TypeDecl] = {}
+        self.pou_nodes: dict[str, n.POU] = {}
+        self.short_types: dict[str, list[str]] = {}
+        self.short_pous: dict[str, list[str]] = {}
+
+
+class Checker:
+    def __init__(self, units: list[n.CompilationUnit], settings: SysmacSettings) -> None:
+        self.units = units
+        self.settings = settings
+        self.diags: list[Diagnostic] = []
+        self.facts = Facts()
+        self.index = _Index()
+        self.resolved_types: dict[str, t.Type | None] = {}
+        self.resolving: set[str] = set()
+        self.type_inits: dict[str, dict[str, object]] = {}
+        self.pous: dict[str, POUInfo] = {}
+        self.globals: dict[str, Variable] = {}
+        self.global_nodes: dict[str, n.VarDecl] = {}
+        self.enumerators: dict[str, list[tuple[t.EnumType, int]]] = {}
+        self.structs: dict[str, t.Type] = {}
+        self.enums: dict[str, t.Type] = {}
+
+    # ---- diagnostics
+    def error(self, message: str, span: n.Span, code: str = "") -> None:
+        self.diags.append(Diagnostic.error(message, span, code))
+
+    def warning(self, message: str, span: n.Span) -> None:
+        self.diags.append(Diagnostic.warning(message, span))
+
+    # ---- indexing
+    def build_index(self) -> None:
+        for unit in self.units:
+            for decl in unit.types:
+                key = "\\".join(decl.namespace + (decl.name,)).lower()
+                if key in self.index.type_decls or decl.name.upper() in t.ELEMENTARY:
+                    self.error(f"duplicate declaration of type '{decl.name}'", decl.span, "E010")
+                    continue
+                self.check_identifier(decl.name, decl.span)
+                self.index.type_decls[key] = decl
+                self.index.short_types.setdefault(decl.name.lower(), []).append(key)
+            for pou in unit.pous:
+                key = "\\".join(pou.namespace + (pou.name,)).lower()
+                if key in self.index.pou_nodes:
+                    self.error(f"duplicate declaration of POU '{pou.name}'", pou.span, "E010")
+                    continue
+                self.index.pou_nodes[key] = pou
+                self.index.short_pous.setdefault(pou.name.lower(), []).append(key)
+        # types first (enumerators must be known before POU signatures resolve initial values)
+        for key, decl in self.index.type_decls.items():
+            self.resolve_declared_type(key)
+        for key, pou in self.index.pou_nodes.items():
+            self.pous[key] = self.declare_pou(pou)
+        for unit in self.units:
+            for g in unit.globals:
+                self.declare_globals(g.block, g.namespace)
+            for conf in unit.configurations:
+                for block in conf.globals:
+                    self.declare_globals(block, ())
+                for res in conf.resources:
+                    for block in res.globals:
+                        self.declare_globals(block, ())
+
+    def check_identifier(self, name: str, span: n.Span) -> None:
+        if name.lower() in _RESERVED:
+            self.error(f"'{name}' is a reserved word and cannot be used as a name", span, "E011")
+
+    def declare_globals(self, block: n.VarBlock, namespace: tuple[str, ...]) -> None:
+        if block.kind != GLOBAL:
+            self.error(f"only VAR_GLOBAL is allowed outside a POU, not {block.kind}", block.span, "E012")
+        for decl in block.decls:
+            vtype = self.resolve_type_spec(decl.type_spec, namespace)
+            for name, span in decl.names:
+                self.check_identifier(name, span)
+                if name.lower() in self.globals:
+                    self.error(f"duplicate declaration of global '{name}'", span, "E010")
+                    continue
+                var = Variable(name, GLOBAL, vtype or t.DINT, block.constant, span)
+                if vtype is not None and decl.init is not None:
+                    var.init = self.initial_value(decl.init, vtype, namespace, None)
+                elif block.constant and decl.init is None:
+                    self.error(f"constant '{name}' needs an initial value", span, "E013")
+                self.globals[name.lower()] = var
+                self.global_nodes[name.lower()] = decl
+
+    def declare_pou(self, pou: n.POU) -> POUInfo:
+        qual = "\\".join(pou.namespace + (pou.name,))
+        words = " ".join(pou.pragmas).lower().split()
+        native = "native" in words
+        info = POUInfo(pou.name, qual, pou.kind, None, native=native, generic="generic" in words,
+                       variadic="variadic" in words, file=pou.span.file, span=pou.span)
+        for word in words:
+            if word.startswith("alias:") or (word.count("=") == 1 and "alias" in words):
+                alias, _, pin = word.split(":", 1)[-1].partition("=")
+                if alias and pin:
+                    info.aliases[alias] = pin
+        self.check_identifier(pou.name, pou.span)
+        if pou.kind == "FUNCTION":
+            if pou.return_type is None:
+                self.error(f"function '{pou.name}' needs a return type", pou.span, "E014")
+                info.return_type = t.VOID
+            else:
+                info.return_type = self.resolve_type_spec(pou.return_type, pou.namespace, allow_generic=native) or t.DINT
+        elif pou.return_type is not None:
+            self.error(f"a {pou.kind} has no return type", pou.span, "E014")
+        for block in pou.var_blocks:
+            kind = block.kind
+            if kind == "VAR_STAT":
+                kind = LOCAL
+            if kind == GLOBAL:
+                self.error("VAR_GLOBAL is not allowed inside a POU; declare globals at top level", block.span, "E012")
+                continue
+            if pou.kind == "FUNCTION" and kind == OUTPUT:
+                pass
+            for decl in block.decls:
+                vtype = self.resolve_type_spec(decl.type_spec, pou.namespace, allow_generic=native,
+                                               allow_open_array=kind in (IN_OUT, INPUT))
+                for name, span in decl.names:
+                    self.check_identifier(name, span)
+                    key = name.lower()
+                    if key in info.variables:
+                        self.error(f"duplicate declaration of '{name}' in {pou.name}", span, "E010")
+                        continue
+                    if pou.kind == "FUNCTION" and key == pou.name.lower():
+                        self.error(f"'{name}' is the function's own name", span, "E010")
+                        continue
+                    var = Variable(name, kind, vtype or t.DINT, block.constant, span)
+                    if block.constant and decl.init is None and kind != EXTERNAL:
+                        self.error(f"constant '{name}' needs an initial value", span, "E013")
+                    info.variables[key] = var
+                    if vtype is not None and decl.init is not None:
+                        if kind == IN_OUT:
+                            self.error(f"VAR_IN_OUT '{name}' cannot have an initial value", span, "E013")
+                        else:
+                            var.init = self.initial_value(decl.init, vtype, pou.namespace, None)
+        return info
+
+    # ---- types
+    def lookup_type_key(self, parts: tuple[str, ...], rooted: bool, namespace: tuple[str, ...]) -> str | None:
+        key = "\\".join(parts).lower()
+        if key in self.index.type_decls:
+            return key
+        if not rooted:
+            for depth in range(len(namespace), 0, -1):
+                cand = "\\".join(namespace[:depth] + parts).lower()
+                if cand in self.index.type_decls:
+                    return cand
+            if len(parts) == 1:
+                # Choice: a short name unique across namespaces resolves (Sysmac resolves
+                # library types by short name when unambiguous; ambiguity is an error).
+                cands = self.index.short_types.get(parts[0].lower(), [])
+                if len(cands) == 1:
+                    return cands[0]
+        return None
+
+    def lookup_pou_key(self, parts: tuple[str, ...], namespace: tuple[str, ...]) -> str | None:
+        key = "\\".join(parts).lower()
+        if key in self.index.pou_nodes:
+            return key
+        for depth in range(len(namespace), 0, -1):
+            cand = "\\".join(namespace[:depth] + parts).lower()
+            if cand in self.index.pou_nodes:
+                return cand
+        if len(parts) == 1:
+            cands = self.index.short_pous.get(parts[0].lower(), [])
+            if len(cands) == 1:
+                return cands[0]
+        return None
+
+    def resolve_declared_type(self, key: str) -> t.Type | None:
+        if key in self.resolved_types:
+            return self.resolved_types[key]
+        decl = self.index.type_decls[key]
+        if key in self.resolving:
+            self.error(f"type '{decl.name}' is defined in terms of itself", decl.span, "E015")
+            return None
+        self.resolving.add(key)
+        qual = "\\".join(decl.namespace + (decl.name,))
+        result: t.Type | None
+        body = decl.body
+        if isinstance(body, n.EnumDecl):
+            members = []
+            next_value = 0
+            seen = set()
+            for name, value, span in body.members:
+                if name.lower() in seen:
+                    self.error(f"duplicate enumerator '{name}'", span, "E010")
+                    continue
+                seen.add(name.lower())
+                if value is not None:
+                    next_value = value
+                members.append((name, next_value))
+                next_value += 1
+            base = t.ELEMENTARY.get((body.base or "INT").upper(), t.INT)
+            result = t.EnumType(decl.name, qual, tuple(members), base)
+            if body.default is not None and result.value_of(body.default) is None:
+                self.error(f"'{body.default}' is not an enumerator of {decl.name}", body.span, "E016")
+            for name, value in members:
+                self.enumerators.setdefault(name.lower(), []).append((result, value))
+            self.enums[key] = result
+        elif isinstance(body, n.StructDecl):
+            fields: list[tuple[str, t.Type]] = []
+            inits: dict[str, object] = {}
+            placeholder = t.StructType(decl.name, qual, ())
+            self.resolved_types[key] = placeholder
+            for fdecl in body.fields:
+                ftype = self.resolve_type_spec(fdecl.type_spec, decl.namespace)
+                for fname, fspan in fdecl.names:
+                    if any(f[0].lower() == fname.lower() for f in fields):
+                        self.error(f"duplicate field '{fname}' in {decl.name}", fspan, "E010")
+                        continue
+                    fields.append((fname, ftype or t.DINT))
+                    if ftype is not None and fdecl.init is not None:
+                        inits[fname.lower()] = self.initial_value(fdecl.init, ftype, decl.namespace, None)
+            result = t.StructType(decl.name, qual, tuple(fields))
+            self.type_inits[key] = inits
+            self.structs[key] = result
+        else:
+            result = self.resolve_type_spec(body.type_spec, decl.namespace)
+            if result is not None and body.init is not None:
+                self.type_inits[key] = {"": self.initial_value(body.init, result, decl.namespace, None)}
+        self.resolving.discard(key)
+        self.resolved_types[key] = result
+        return result
+
+    def resolve_type_spec(self, spec: n.TypeSpec, namespace: tuple[str, ...], allow_generic: bool = False,
+                          allow_open_array: bool = False) -> t.Type | None:
+        if isinstance(spec, n.NamedTypeSpec):
+            if len(spec.parts) == 1:
+                upper = spec.parts[0].upper()
+                if upper in t.ELEMENTARY:
+                    return t.ELEMENTARY[upper]
+                if upper == "WSTRING":
+                    return t.STRING
+                if upper in t.GENERICS:
+                    if allow_generic:
+                        return t.GENERICS[upper]
+                    self.error(f"generic type {upper} is only allowed in library declarations", spec.span, "E017")
+                    return None
+            key = self.lookup_type_key(spec.parts, spec.rooted, namespace)
+            if key is not None:
+                return self.resolve_declared_type(key)
+            pkey = self.lookup_pou_key(spec.parts, namespace)
+            if pkey is not None:
+                pou = self.index.pou_nodes[pkey]
+                if pou.kind == "FUNCTION":
+                    self.error(f"'{spec.text}' is a function, not a type", spec.span, "E018")
+                    return None
+                return t.FBType(pou.name, "\\".join(pou.namespace + (pou.name,)), pou.kind == "PROGRAM")
+            self.error(f"unknown type '{spec.text}'", spec.span, "E018")
+            return None
+        if isinstance(spec, n.StringTypeSpec):
+            size = self.const_int(spec.size, namespace)
+            if size is None:
+                return t.STRING
+            if not 1 <= size <= 1986:
+                self.error(f"STRING size {size} is outside 1..1986", spec.span, "E019")
+                return t.STRING
+            return t.string_type(size)
+        if isinstance(spec, n.ArrayTypeSpec):
+            element = self.resolve_type_spec(spec.element, namespace)
+            if element is None:
+                return None
+            if any(r is None for r in spec.ranges):
+                if not allow_open_array:
+                    self.error("ARRAY[*] is only allowed for VAR_IN_OUT and inputs of library POUs", spec.span, "E019")
+                return t.ArrayType(f"ARRAY[*] OF {element.name}", element, None)
+            dims = []
+            for lo_expr, hi_expr in spec.ranges:  # type: ignore[misc]
+                lo = self.const_int(lo_expr, namespace)
+                hi = self.const_int(hi_expr, namespace)
+                if lo is None or hi is None:
+                    return None
+                if hi < lo:
+                    self.error(f"array bounds {lo}..{hi} are empty", spec.span, "E019")
+                    return None
+                dims.append((lo, hi))
+            if isinstance(element, t.ArrayType) and element.dims:
+                dims += list(element.dims)
+                element = element.element
+            text = ",".join(f"{lo}..{hi}" for lo, hi in dims)
+            return t.ArrayType(f"ARRAY[{text}] OF {element.name}", element, tuple(dims))
+        if isinstance(spec, n.SubrangeTypeSpec):
+            base = t.ELEMENTARY.get(spec.base.upper())
+            if not isinstance(base, t.IntType):
+                self.error(f"subrange base must be an integer type, not {spec.base}", spec.span, "E019")
+                return None
+            # Choice: a subrange is its base type (range checks at run time are not modelled).
+            return base
+        if isinstance(spec, n.RefTypeSpec):
+            self.error("REF_TO/POINTER TO are not supported by stvm", spec.span, "E019")
+            return None
+        self.error("unsupported type specification", getattr(spec, "span", n.NO_SPAN), "E019")
+        return None
+
+    # ---- constant evaluation
+    def const_int(self, expr: n.Expr, namespace: tuple[str, ...]) -> int | None:
+        value = self.const_value(expr, namespace, None)
+        if isinstance(value, bool) or not isinstance(value, int):
+            if value is not _NOT_CONST:
+                self.error("expected a constant integer", expr.span, "E020")
+            else:
+                self.error("expected a constant integer expression", expr.span, "E020")
+            return None
+        return value
+
+    def const_value(self, expr: n.Expr, namespace: tuple[str, ...], pou: POUInfo | None) -> object:
+        """Evaluate a constant expression at compile time; `_NOT_CONST` if it is not one."""
+        if isinstance(expr, (n.IntLiteral, n.BoolLiteral, n.StringLiteral)):
+            return expr.value
+        if isinstance(expr, n.RealLiteral):
+            return expr.value
+        if isinstance(expr, n.TimeLiteral):
+            return expr.value_ns
+        if isinstance(expr, n.HashLiteral):
+            lit = self.hash_literal(expr, namespace, report=False)
+            return _NOT_CONST if lit is None else lit[1]
+        if isinstance(expr, n.Unary):
+            v = self.const_value(expr.operand, namespace, pou)
+            if v is _NOT_CONST:
+                return v
+            if expr.op == "MINUS" and isinstance(v, (int, float)) and not isinstance(v, bool):
+                return -v
+            if expr.op == "PLUS":
+                return v
+            if expr.op == "NOT" and isinstance(v, bool):
+                return not v
+            return _NOT_CONST
+        if isinstance(expr, n.Binary):
+            a = self.const_value(expr.left, namespace, pou)
+            b = self.const_value(expr.right, namespace, pou)
+            if a is _NOT_CONST or b is _NOT_CONST or isinstance(a, (bytes, bool)) or isinstance(b, (bytes, bool)):
+                return _NOT_CONST
+            try:
+                if expr.op == "PLUS":
+                    return a + b
+                if expr.op == "MINUS":
+                    return a - b
+                if expr.op == "STAR":
+                    return a * b
+                if expr.op == "SLASH":
+                    if isinstance(a, int) and isinstance(b, int):
+                        q = abs(a) // abs(b)
+                        return q if (a < 0) == (b < 0) else -q
+                    return a / b
+                if expr.op == "MOD" and isinstance(a, int) and isinstance(b, int):
+                    return int(math.fmod(a, b))
+            except ZeroDivisionError:
+                return _NOT_CONST
+            return _NOT_CONST
+        if isinstance(expr, n.Name) and len(expr.parts) == 1:
+            key = expr.parts[0].lower()
+            var = pou.variables.get(key) if pou else None
+            if var is None:
+                var = self.globals.get(key)
+            if var is not None:
+                if var.constant and var.init is not None:
+                    return var.init
+                return _NOT_CONST
+            enum = self.bare_enumerator(expr.parts[0], expr.span, report=False)
+            if enum is not None:
+                return enum[1]
+        return _NOT_CONST
+
+    def bare_enumerator(self, name: str, span: n.Span, report: bool = True) -> tuple[t.EnumType, int] | None:
+        cands = self.enumerators.get(name.lower(), [])
+        if not cands:
+            return None
+        if self.settings.bare_enumerators == "require_type":
+            if report:
+                self.error(f"enumerator '{name}' needs its type: write Type#{name}", span, "E021")
+            return None
+        distinct = {c[0].qualname.lower(): c for c in cands}
+        if len(distinct) > 1:
+            if report:
+                names = ", ".join(sorted(c[0].name for c in distinct.values()))
+                self.error(f"enumerator '{name}' is ambiguous (in {names}); write Type#{name}", span, "E021")
+            return None
+        return cands[0]
+
+    def hash_literal(self, expr: n.HashLiteral, namespace: tuple[str, ...], report: bool = True) -> tuple[t.Type, object] | None:
+        """Resolve `Prefix#value`: (type, runtime value) or None (with a diagnostic when `report`)."""
+        prefix = expr.prefix
+        if len(prefix) == 1 and prefix[0].upper() in t.ELEMENTARY and not expr.rooted:
+            ty = t.ELEMENTARY[prefix[0].upper()]
+            text = expr.text
+            try:
+                if isinstance(ty, t.IntType):
+                    value = int(text.replace("_", "").split("#")[-1], int(text.split("#")[0]) if text.count("#") else 10) \
+                        if "#" in text else int(text.replace("_", ""))
+                    if text.startswith("-") and "#" in text:
+                        value = -int(text[1:].replace("_", "").split("#")[1], int(text[1:].split("#")[0]))
+                    if not ty.lo <= value <= ty.hi:
+                        if report:
+                            self.error(f"{value} is out of range for {ty.name} ({ty.lo}..{ty.hi})", expr.span, "E022")
+                        return None
+                    return ty, value
+                if isinstance(ty, t.RealType):
+                    value = float(text.replace("_", ""))
+                    return ty, _round_real(value, ty)
+                if isinstance(ty, t.BoolType):
+                    if text.upper() in ("TRUE", "1"):
+                        return ty, True
+                    if text.upper() in ("FALSE", "0"):
+                        return ty, False
+            except ValueError:
+                pass
+            if report:
+                self.error(f"malformed typed literal '{prefix[0]}#{text}'", expr.span, "E022")
+            return None
+        key = self.lookup_type_key(prefix, expr.rooted, namespace)
+        if key is None and len(prefix) > 1 and prefix[0].startswith("_"):
+            key = None
+        if key is None:
+            # Sysmac listings sometimes print the enum type without its leading 'e' (sysmac.md 3 #1):
+            # that stays an error; the restored source fixes it.
+            if report:
+                self.error(f"unknown enumeration type '{chr(92).join(prefix)}' in '{chr(92).join(prefix)}#{expr.text}'", expr.span, "E018")
+            return None
+        ty = self.resolve_declared_type(key)
+        if not isinstance(ty, t.EnumType):
+            if report:
+                self.error(f"'{chr(92).join(prefix)}' is not an enumeration type", expr.span, "E018")
+            return None
+        value = ty.value_of(expr.text)
+        if value is None:
+            if report:
+                self.error(f"'{expr.text}' is not an enumerator of {ty.name}", expr.span, "E016")
+            return None
+        return ty, value
+
+    # ---- initial values
+    def initial_value(self, init: n.Initializer, ty: t.Type, namespace: tuple[str, ...], pou: POUInfo | None) -> object:
+        """Compile-time initial value in runtime representation (structs: dict, arrays: list)."""
+        if isinstance(init, n.ExprInit):
+            if isinstance(ty, t.ArrayType) and ty.dims:
+                # `ARRAY … := 5` is not an initialiser for the whole array
+                self.error("an array initialiser is written in brackets: [1, 2, 3(0)]", init.span, "E023")
+                return None
+            value = self.const_value(init.expr, namespace, pou)
+            if value is _NOT_CONST:
+                if isinstance(init.expr, n.Name) and len(init.expr.parts) == 1 and isinstance(ty, t.EnumType):
+                    v = ty.value_of(init.expr.parts[0])
+                    if v is not None:
+                        return v
+                self.error("initial value must be a constant expression", init.span, "E023")
+                return None
+            if isinstance(ty, t.EnumType) and isinstance(init.expr, n.Name):
+                v = ty.value_of(init.expr.parts[0])
+                if v is not None:
+                    return v
+            return self.convert_constant(value, ty, init.span, init.expr)
+        if isinstance(init, n.ArrayInit):
+            if not isinstance(ty, t.ArrayType) or not ty.dims:
+                self.error(f"an array initialiser cannot initialise {ty.name}", init.span, "E023")
+                return None
+            values: list = []
+            for count, item in init.items:
+                v = self.initial_value(item, ty.element, namespace, pou) if item is not None else None
+                values.extend([v] * count)
+            if len(values) > ty.length:
+                self.error(f"{len(values)} initial values for an array of {ty.length} elements", init.span, "E023")
+                values = values[: ty.length]
+            return values
+        if isinstance(init, n.StructInit):
+            if not isinstance(ty, t.StructType):
+                self.error(f"a structure initialiser cannot initialise {ty.name}", init.span, "E023")
+                return None
+            out = {}
+            for fname, finit in init.items:
+                ftype = ty.field_type(fname)
+                if ftype is None:
+                    self.error(f"{ty.name} has no member '{fname}'", finit.span, "E024")
+                    continue
+                out[fname.lower()] = self.initial_value(finit, ftype, namespace, pou)
+            return out
+        return None
+
+    def convert_constant(self, value: object, ty: t.Type, span: n.Span, expr: n.Expr | None = None) -> object:
+        if isinstance(ty, t.BoolType):
+            if isinstance(value, bool):
+                return value
+        elif isinstance(ty, t.IntType):
+            if isinstance(value, int) and not isinstance(value, bool):
+                if not ty.lo <= value <= ty.hi:
+                    typed = isinstance(expr, n.HashLiteral)
+                    if not typed:
+                        self.error(f"{value} is out of range for {ty.name} ({ty.lo}..{ty.hi})", span, "E022")
+                        return None
+                    return ty.wrap(value)
+                return value
+        elif isinstance(ty, t.RealType):
+            if isinstance(value, (int, float)) and not isinstance(value, bool):
+                return _round_real(float(value), ty)
+        elif isinstance(ty, t.StringType):
+            if isinstance(value, bytes):
+                if len(value) > ty.max_bytes:
+                    self.warning(f"initial value truncated to {ty.max_bytes} bytes of {ty.name}", span)
+                    return value[: ty.max_bytes]
+                return value
+        elif isinstance(ty, t.TimeType):
+            if isinstance(value, int) and not isinstance(value, bool) and expr is not None:
+                if isinstance(expr, n.TimeLiteral) and _time_compatible(expr.type_name, ty.name):
+                    return value
+                if not isinstance(expr, n.TimeLiteral) and not isinstance(expr, n.IntLiteral):
+                    return value
+        elif isinstance(ty, t.EnumType):
+            if isinstance(value, int) and isinstance(expr, (n.HashLiteral, n.Name)):
+                return value
+        self.error(f"initial value does not fit type {ty.name}", span, "E023")
+        return None
+
+    # ---- entry
+    def run(self) -> Analysis:
+        self.build_index()
+        for key, pou in self.index.pou_nodes.items():
+            info = self.pous[key]
+            if info.native:
+                if pou.body:
+                    self.error(f"native POU '{pou.name}' must not have a body", pou.span, "E025")
+                continue
+            _BodyChecker(self, info, pou).check()
+        tasks, defaults = self.check_configuration()
+        model = ProjectModel(self.pous, self.globals, tasks, defaults, self.structs, self.enums)
+        return Analysis(model, self.facts, self.units, dict(self.index.pou_nodes), self.diags, self.type_inits)
+
+    def check_configuration(self) -> tuple[list[TaskInfo], list[str]]:
+        configs = [c for u in self.units for c in u.configurations]
+        if len(configs) > 1:
+            self.error("more than one CONFIGURATION", configs[1].span, "E030")
+        if configs:
+            conf = configs[0]
+            tasks: dict[str, TaskInfo] = {}
+            for res in conf.resources:
+                for task in res.tasks:
+                    params = {k: v for k, v in task.params}
+                    interval = params.get("INTERVAL")
+                    if interval is None:
+                        self.error(f"task '{task.name}' needs INTERVAL (event tasks are not supported)", task.span, "E031")
+                        continue
+                    ns = self.const_value(interval, (), None)
+                    if not isinstance(ns, int) or isinstance(interval, n.IntLiteral) or ns <= 0:
+                        self.error("INTERVAL must be a positive TIME literal", interval.span, "E031")
+                        continue
+                    prio = self.const_value(params.get("PRIORITY", n.IntLiteral(0)), (), None)
+                    if task.name.lower() in tasks:
+                        self.error(f"duplicate task '{task.name}'", task.span, "E010")
+                    tasks[task.name.lower()] = TaskInfo(task.name, ns, prio if isinstance(prio, int) else 0, [])
+                for prog in res.programs:
+                    key = self.lookup_pou_key(prog.type_name, ())
+                    if key is None or self.pous[key].kind != "PROGRAM":
+                        self.error(f"unknown program type '{chr(92).join(prog.type_name)}'", prog.span, "E032")
+                        continue
+                    if prog.task is None or prog.task.lower() not in tasks:
+                        self.error(f"program '{prog.instance}' needs WITH <task> naming a declared task", prog.span, "E031")
+                        continue
+                    if any(p[0].lower() == prog.instance.lower() for tk in tasks.values() for p in tk.programs):
+                        self.error(f"duplicate program instance '{prog.instance}'", prog.span, "E010")
+                        continue
+                    tasks[prog.task.lower()].programs.append((prog.instance, self.pous[key].qualname))
+            ordered = sorted(tasks.values(), key=lambda tk: tk.priority)
+            return ordered, []
+        programs = [info.qualname for key, info in self.pous.items()
+                    if info.kind == "PROGRAM" and not info.file.startswith("<stdlib")]
+        return [], programs
+
+
+_NOT_CONST = object()
+
+
+def _round_real(value: float, ty: t.Type) -> float:
+    if isinstance(ty, t.RealType) and ty.bits == 32:
+        import numpy as np
+        with np.errstate(over="ignore"):
+            return float(np.float32(value))
+    return float(value)
+
+
+def _time_compatible(literal_type: str, target: str) -> bool:
+    return literal_type == target
+
+
+from stvm.semantics.body import _BodyChecker  # noqa: E402  (body checker needs Checker defined)
+
+
+def analyze(units: list[n.CompilationUnit], settings: SysmacSettings = DEFAULT_SETTINGS) -> Analysis:
+    """Check all units together; returns the model, per-node facts and every diagnostic."""
+    return Checker(units, settings).run()

@@ -1,0 +1,78 @@
+"""The checked project: what the checker hands the code generator and the runtime.
+
+Plain, picklable data (the load cache stores it): POU signatures with resolved variable types,
+globals, configuration/tasks. The per-expression facts the code generator needs (types, what each
+name resolves to) live in `Analysis.facts`, keyed by node identity, and are not cached.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from stvm.semantics.types import Type
+from stvm.syntax import nodes as n
+
+INPUT, OUTPUT, IN_OUT, LOCAL, TEMP, GLOBAL, EXTERNAL = (
+    "VAR_INPUT", "VAR_OUTPUT", "VAR_IN_OUT", "VAR", "VAR_TEMP", "VAR_GLOBAL", "VAR_EXTERNAL")
+
+
+@dataclass
+class Variable:
+    name: str                 # the user's spelling
+    section: str              # VAR_INPUT, VAR_OUTPUT, VAR_IN_OUT, VAR, VAR_TEMP, VAR_GLOBAL, VAR_EXTERNAL
+    type: Type
+    constant: bool = False
+    span: n.Span = n.NO_SPAN
+    init: object = None       # the constant initial value (runtime representation) or None for the type default
+
+    @property
+    def key(self) -> str:
+        return self.name.lower()
+
+
+@dataclass
+class POUInfo:
+    name: str
+    qualname: str             # namespace path joined with '\'
+    kind: str                 # FUNCTION, FUNCTION_BLOCK, PROGRAM
+    return_type: Type | None
+    variables: dict[str, Variable] = field(default_factory=dict)  # key → Variable, in declaration order
+    native: bool = False
+    generic: bool = False
+    variadic: bool = False
+    aliases: dict[str, str] = field(default_factory=dict)         # pin alias key → pin key
+    file: str = ""
+    span: n.Span = n.NO_SPAN
+
+    @property
+    def key(self) -> str:
+        return self.qualname.lower()
+
+    def params(self) -> list[Variable]:
+        """Inputs then in-outs, in declaration order: the positional parameter order."""
+        inputs = [v for v in self.variables.values() if v.section == INPUT]
+        in_outs = [v for v in self.variables.values() if v.section == IN_OUT]
+        return inputs + in_outs
+
+    def pin(self, name: str) -> Variable | None:
+        key = name.lower()
+        key = self.aliases.get(key, key)
+        return self.variables.get(key)
+
+
+@dataclass
+class TaskInfo:
+    name: str
+    interval_ns: int
+    priority: int
+    programs: list[tuple[str, str]]   # (instance name, program qualname)
+
+
+@dataclass
+class ProjectModel:
+    pous: dict[str, POUInfo]              # qualname key → POU
+    globals: dict[str, Variable]          # key → global variable
+    tasks: list[TaskInfo]                 # empty: a default task for the lone programs
+    default_programs: list[str]           # program qualnames to run in the default task
+    structs: dict[str, Type]              # qualname key → StructType
+    enums: dict[str, Type]                # qualname key → EnumType

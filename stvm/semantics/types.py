@@ -1,0 +1,276 @@
+"""The ST type model shared by the checker, the code generator, the runtime and the stdlib.
+
+Types are frozen dataclasses so they can be compared, hashed and pickled into the load cache.
+Elementary types are singletons in `ELEMENTARY`; derived types are built by the checker.
+
+Runtime representation of each type (what generated code and native POUs see):
+
+| ST type                         | Python value                                          |
+|---------------------------------|-------------------------------------------------------|
+| BOOL                            | bool                                                  |
+| SINT…LINT, USINT…ULINT, BYTE…   | int, always inside the type's range (wrapped)         |
+| REAL                            | float holding a value exactly representable in binary32 |
+| LREAL                           | float                                                 |
+| TIME, DATE, TOD, DT             | int nanoseconds (DATE/TOD/DT: since 1970-01-01)       |
+| STRING[n]                       | bytes, at most n-1 bytes, never containing 16#00      |
+| enum                            | int (the enumerator's value)                          |
+| STRUCT                          | instance of the generated struct class (attributes `v_<name>`) |
+| ARRAY                           | list (nested lists for several dimensions)            |
+| FUNCTION_BLOCK                  | instance of the generated/native FB class             |
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+
+@dataclass(frozen=True)
+class Type:
+    name: str
+
+    @property
+    def kind(self) -> str:
+        return "type"
+
+    def __str__(self) -> str:
+        return self.name
+
+
+@dataclass(frozen=True)
+class BoolType(Type):
+    @property
+    def kind(self) -> str:
+        return "bool"
+
+
+@dataclass(frozen=True)
+class IntType(Type):
+    """Signed/unsigned integers and bit strings (BYTE…LWORD are unsigned, `bitstring`)."""
+
+    bits: int = 16
+    signed: bool = True
+    bitstring: bool = False
+
+    @property
+    def kind(self) -> str:
+        return "int"
+
+    @property
+    def lo(self) -> int:
+        return -(1 << (self.bits - 1)) if self.signed else 0
+
+    @property
+    def hi(self) -> int:
+        return (1 << (self.bits - 1)) - 1 if self.signed else (1 << self.bits) - 1
+
+    @property
+    def rank(self) -> int:
+        # sysmac.md 2: 1 USINT/SINT/BYTE, 2 UINT/INT/WORD, 4 DINT/UDINT/DWORD, 6 LINT/ULINT/LWORD
+        return {8: 1, 16: 2, 32: 4, 64: 6}[self.bits]
+
+    def wrap(self, value: int) -> int:
+        mask = (1 << self.bits) - 1
+        value &= mask
+        if self.signed and value > self.hi:
+            value -= 1 << self.bits
+        return value
+
+
+@dataclass(frozen=True)
+class RealType(Type):
+    bits: int = 32
+
+    @property
+    def kind(self) -> str:
+        return "real"
+
+    @property
+    def rank(self) -> int:
+        return 3 if self.bits == 32 else 5
+
+
+@dataclass(frozen=True)
+class TimeType(Type):
+    """TIME (a duration) and DATE/TOD/DT (points in time), all integer nanoseconds."""
+
+    @property
+    def kind(self) -> str:
+        return "time"
+
+
+@dataclass(frozen=True)
+class StringType(Type):
+    """STRING[size]: `size` bytes of storage including the terminating NUL (Omron)."""
+
+    size: int = 1986
+
+    @property
+    def kind(self) -> str:
+        return "string"
+
+    @property
+    def max_bytes(self) -> int:
+        return self.size - 1
+
+
+@dataclass(frozen=True)
+class EnumType(Type):
+    qualname: str = ""
+    members: tuple[tuple[str, int], ...] = ()
+    base: Type | None = None
+
+    @property
+    def kind(self) -> str:
+        return "enum"
+
+    def value_of(self, member: str) -> int | None:
+        for name, value in self.members:
+            if name.lower() == member.lower():
+                return value
+        return None
+
+    def name_of(self, value: int) -> str | None:
+        for name, member_value in self.members:
+            if member_value == value:
+                return name
+        return None
+
+
+@dataclass(frozen=True)
+class StructType(Type):
+    qualname: str = ""
+    # (field name, field type) in declaration order
+    fields: tuple[tuple[str, Type], ...] = field(default=(), compare=False, hash=False)
+
+    @property
+    def kind(self) -> str:
+        return "struct"
+
+    def field_type(self, name: str) -> Type | None:
+        for field_name, field_type in self.fields:
+            if field_name.lower() == name.lower():
+                return field_type
+        return None
+
+    def field_name(self, name: str) -> str | None:
+        for field_name, _ in self.fields:
+            if field_name.lower() == name.lower():
+                return field_name
+        return None
+
+
+@dataclass(frozen=True)
+class ArrayType(Type):
+    element: Type = None  # type: ignore[assignment]
+    # (lo, hi) per dimension; None for an `ARRAY[*]` parameter (any bounds)
+    dims: tuple[tuple[int, int], ...] | None = ()
+
+    @property
+    def kind(self) -> str:
+        return "array"
+
+    @property
+    def length(self) -> int:
+        total = 1
+        for lo, hi in self.dims or ():
+            total *= hi - lo + 1
+        return total
+
+
+@dataclass(frozen=True)
+class FBType(Type):
+    """A FUNCTION_BLOCK or PROGRAM type; members are looked up in the project index."""
+
+    qualname: str = ""
+    is_program: bool = False
+
+    @property
+    def kind(self) -> str:
+        return "program" if self.is_program else "fb"
+
+
+@dataclass(frozen=True)
+class GenericType(Type):
+    """IEC generic types (ANY, ANY_NUM, …) usable only in stdlib signatures."""
+
+    @property
+    def kind(self) -> str:
+        return "generic"
+
+    def accepts(self, other: Type) -> bool:
+        k = other.kind
+        n = self.name
+        if n in ("ANY", "ANY_ELEMENTARY"):
+            return k in ("bool", "int", "real", "time", "string", "enum") or n == "ANY"
+        if n == "ANY_NUM":
+            return k in ("int", "real") and not getattr(other, "bitstring", False)
+        if n == "ANY_MAGNITUDE":
+            return (k in ("int", "real") and not getattr(other, "bitstring", False)) or other.name == "TIME"
+        if n == "ANY_INT":
+            return k == "int" and not other.bitstring  # type: ignore[attr-defined]
+        if n == "ANY_REAL":
+            return k == "real"
+        if n == "ANY_BIT":
+            return k == "bool" or (k == "int" and other.bitstring)  # type: ignore[attr-defined]
+        if n == "ANY_STRING":
+            return k == "string"
+        if n == "ANY_DATE":
+            return k == "time" and other.name != "TIME"
+        return False
+
+
+@dataclass(frozen=True)
+class VoidType(Type):
+    @property
+    def kind(self) -> str:
+        return "void"
+
+
+def _ints() -> dict[str, Type]:
+    table: dict[str, Type] = {}
+    for name, bits, signed, bitstring in [
+        ("SINT", 8, True, False), ("INT", 16, True, False), ("DINT", 32, True, False), ("LINT", 64, True, False),
+        ("USINT", 8, False, False), ("UINT", 16, False, False), ("UDINT", 32, False, False), ("ULINT", 64, False, False),
+        ("BYTE", 8, False, True), ("WORD", 16, False, True), ("DWORD", 32, False, True), ("LWORD", 64, False, True),
+    ]:
+        table[name] = IntType(name, bits, signed, bitstring)
+    return table
+
+
+BOOL = BoolType("BOOL")
+REAL = RealType("REAL", 32)
+LREAL = RealType("LREAL", 64)
+TIME = TimeType("TIME")
+DATE = TimeType("DATE")
+TOD = TimeType("TIME_OF_DAY")
+DT = TimeType("DATE_AND_TIME")
+STRING = StringType("STRING", 1986)
+VOID = VoidType("VOID")
+
+ELEMENTARY: dict[str, Type] = {
+    "BOOL": BOOL, "REAL": REAL, "LREAL": LREAL,
+    "TIME": TIME, "LTIME": TIME, "DATE": DATE, "TIME_OF_DAY": TOD, "TOD": TOD,
+    "DATE_AND_TIME": DT, "DT": DT, "STRING": STRING,
+    **_ints(),
+}
+GENERICS: dict[str, Type] = {
+    name: GenericType(name)
+    for name in ("ANY", "ANY_ELEMENTARY", "ANY_NUM", "ANY_MAGNITUDE", "ANY_INT", "ANY_REAL",
+                 "ANY_BIT", "ANY_STRING", "ANY_DATE")
+}
+
+SINT, INT, DINT, LINT = (ELEMENTARY[n] for n in ("SINT", "INT", "DINT", "LINT"))
+USINT, UINT, UDINT, ULINT = (ELEMENTARY[n] for n in ("USINT", "UINT", "UDINT", "ULINT"))
+BYTE, WORD, DWORD, LWORD = (ELEMENTARY[n] for n in ("BYTE", "WORD", "DWORD", "LWORD"))
+
+
+def string_type(size: int) -> StringType:
+    return STRING if size == 1986 else StringType(f"STRING[{size}]", size)
+
+
+def is_integer(t: Type) -> bool:
+    return isinstance(t, IntType)
+
+
+def is_numeric(t: Type) -> bool:
+    return isinstance(t, (IntType, RealType))

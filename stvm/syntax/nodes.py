@@ -1,0 +1,420 @@
+"""The ST syntax tree: frozen dataclasses, each with a source span kept out of equality.
+
+Spans let diagnostics, faults, traces and breakpoints speak in ST lines; keeping them out of `==`
+means reformatted source gives equal trees.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+
+@dataclass(frozen=True)
+class Span:
+    file: str
+    line: int
+    column: int
+    end_line: int
+    end_column: int
+
+    def __str__(self) -> str:
+        return f"{self.file}:{self.line}:{self.column}"
+
+
+NO_SPAN = Span("<builtin>", 0, 0, 0, 0)
+
+
+def _span() -> Span:
+    return field(default=NO_SPAN, repr=False, compare=False)
+
+
+class Node:
+    span: Span
+
+
+# ---- expressions ---------------------------------------------------------------------------
+
+class Expr(Node):
+    pass
+
+
+@dataclass(frozen=True)
+class IntLiteral(Expr):
+    value: int
+    span: Span = _span()
+
+
+@dataclass(frozen=True)
+class RealLiteral(Expr):
+    value: float
+    text: str
+    span: Span = _span()
+
+
+@dataclass(frozen=True)
+class BoolLiteral(Expr):
+    value: bool
+    span: Span = _span()
+
+
+@dataclass(frozen=True)
+class StringLiteral(Expr):
+    value: bytes
+    double_quoted: bool = False
+    span: Span = _span()
+
+
+@dataclass(frozen=True)
+class TimeLiteral(Expr):
+    """T#…, D#…, TOD#…, DT#… as integer nanoseconds; `type_name` is TIME, DATE, TIME_OF_DAY or DATE_AND_TIME."""
+
+    type_name: str
+    value_ns: int
+    span: Span = _span()
+
+
+@dataclass(frozen=True)
+class HashLiteral(Expr):
+    """`Prefix#value`: a typed literal (INT#5) or an enumerator (Color#Red); semantics decides."""
+
+    prefix: tuple[str, ...]
+    rooted: bool
+    text: str
+    span: Span = _span()
+
+
+@dataclass(frozen=True)
+class Name(Expr):
+    parts: tuple[str, ...]
+    rooted: bool = False
+    span: Span = _span()
+
+    @property
+    def text(self) -> str:
+        return ("\\\\" if self.rooted else "") + "\\".join(self.parts)
+
+
+@dataclass(frozen=True)
+class Member(Expr):
+    base: Expr
+    name: str
+    span: Span = _span()
+
+
+@dataclass(frozen=True)
+class BitAccess(Expr):
+    base: Expr
+    bit: int
+    span: Span = _span()
+
+
+@dataclass(frozen=True)
+class Index(Expr):
+    base: Expr
+    indices: tuple[Expr, ...]
+    span: Span = _span()
+
+
+@dataclass(frozen=True)
+class Deref(Expr):
+    base: Expr
+    span: Span = _span()
+
+
+@dataclass(frozen=True)
+class Argument(Node):
+    """One call argument. kind: 'input' (`n := e`), 'output' (`n => v`), 'output_not' (`NOT n => v`), 'positional'."""
+
+    kind: str
+    name: str | None
+    value: Expr
+    span: Span = _span()
+
+
+@dataclass(frozen=True)
+class Call(Expr):
+    callee: Expr
+    args: tuple[Argument, ...]
+    span: Span = _span()
+
+
+@dataclass(frozen=True)
+class Unary(Expr):
+    op: str
+    operand: Expr
+    span: Span = _span()
+
+
+@dataclass(frozen=True)
+class Binary(Expr):
+    op: str
+    left: Expr
+    right: Expr
+    span: Span = _span()
+
+
+# ---- statements ----------------------------------------------------------------------------
+
+class Statement(Node):
+    pass
+
+
+@dataclass(frozen=True)
+class Assign(Statement):
+    target: Expr
+    value: Expr
+    span: Span = _span()
+
+
+@dataclass(frozen=True)
+class CallStatement(Statement):
+    call: Expr
+    span: Span = _span()
+
+
+@dataclass(frozen=True)
+class If(Statement):
+    branches: tuple[tuple[Expr, tuple[Statement, ...]], ...]
+    else_body: tuple[Statement, ...] | None
+    span: Span = _span()
+
+
+@dataclass(frozen=True)
+class CaseLabel(Node):
+    """A case label: a value, or a range when `high` is set. Values are IntLiteral, Name or HashLiteral."""
+
+    low: Expr
+    high: Expr | None = None
+    span: Span = _span()
+
+
+@dataclass(frozen=True)
+class Case(Statement):
+    selector: Expr
+    elements: tuple[tuple[tuple[CaseLabel, ...], tuple[Statement, ...]], ...]
+    else_body: tuple[Statement, ...] | None
+    span: Span = _span()
+
+
+@dataclass(frozen=True)
+class For(Statement):
+    variable: Name
+    start: Expr
+    end: Expr
+    step: Expr | None
+    body: tuple[Statement, ...]
+    span: Span = _span()
+
+
+@dataclass(frozen=True)
+class While(Statement):
+    condition: Expr
+    body: tuple[Statement, ...]
+    span: Span = _span()
+
+
+@dataclass(frozen=True)
+class Repeat(Statement):
+    body: tuple[Statement, ...]
+    condition: Expr
+    span: Span = _span()
+
+
+@dataclass(frozen=True)
+class Exit(Statement):
+    span: Span = _span()
+
+
+@dataclass(frozen=True)
+class Continue(Statement):
+    span: Span = _span()
+
+
+@dataclass(frozen=True)
+class Return(Statement):
+    span: Span = _span()
+
+
+@dataclass(frozen=True)
+class Empty(Statement):
+    span: Span = _span()
+
+
+# ---- type specifications and initialisers --------------------------------------------------
+
+class TypeSpec(Node):
+    pass
+
+
+@dataclass(frozen=True)
+class NamedTypeSpec(TypeSpec):
+    parts: tuple[str, ...]
+    rooted: bool = False
+    span: Span = _span()
+
+    @property
+    def text(self) -> str:
+        return "\\".join(self.parts)
+
+
+@dataclass(frozen=True)
+class StringTypeSpec(TypeSpec):
+    size: Expr
+    wide: bool = False
+    span: Span = _span()
+
+
+@dataclass(frozen=True)
+class ArrayTypeSpec(TypeSpec):
+    ranges: tuple[tuple[Expr, Expr] | None, ...]  # None = `*`
+    element: TypeSpec
+    span: Span = _span()
+
+
+@dataclass(frozen=True)
+class SubrangeTypeSpec(TypeSpec):
+    base: str
+    low: int
+    high: int
+    span: Span = _span()
+
+
+@dataclass(frozen=True)
+class RefTypeSpec(TypeSpec):
+    target: TypeSpec
+    span: Span = _span()
+
+
+class Initializer(Node):
+    pass
+
+
+@dataclass(frozen=True)
+class ExprInit(Initializer):
+    expr: Expr
+    span: Span = _span()
+
+
+@dataclass(frozen=True)
+class ArrayInit(Initializer):
+    items: tuple[tuple[int, Initializer | None], ...]  # (repeat count, value) ; `3()` has value None
+    span: Span = _span()
+
+
+@dataclass(frozen=True)
+class StructInit(Initializer):
+    items: tuple[tuple[str, Initializer], ...]
+    span: Span = _span()
+
+
+# ---- declarations --------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class VarDecl(Node):
+    names: tuple[tuple[str, Span], ...]
+    type_spec: TypeSpec
+    init: Initializer | None
+    span: Span = _span()
+
+
+@dataclass(frozen=True)
+class VarBlock(Node):
+    kind: str  # VAR, VAR_INPUT, VAR_OUTPUT, VAR_IN_OUT, VAR_TEMP, VAR_GLOBAL, VAR_EXTERNAL, VAR_STAT
+    qualifiers: tuple[str, ...]
+    decls: tuple[VarDecl, ...]
+    span: Span = _span()
+
+    @property
+    def constant(self) -> bool:
+        return "CONSTANT" in self.qualifiers
+
+
+@dataclass(frozen=True)
+class StructDecl(Node):
+    fields: tuple[VarDecl, ...]
+    span: Span = _span()
+
+
+@dataclass(frozen=True)
+class EnumDecl(Node):
+    members: tuple[tuple[str, int | None, Span], ...]
+    base: str | None
+    default: str | None
+    span: Span = _span()
+
+
+@dataclass(frozen=True)
+class AliasDecl(Node):
+    type_spec: TypeSpec
+    init: Initializer | None
+    span: Span = _span()
+
+
+@dataclass(frozen=True)
+class TypeDecl(Node):
+    name: str
+    namespace: tuple[str, ...]
+    body: StructDecl | EnumDecl | AliasDecl
+    span: Span = _span()
+
+
+@dataclass(frozen=True)
+class POU(Node):
+    kind: str  # FUNCTION, FUNCTION_BLOCK, PROGRAM
+    name: str
+    namespace: tuple[str, ...]
+    return_type: TypeSpec | None
+    var_blocks: tuple[VarBlock, ...]
+    body: tuple[Statement, ...]
+    pragmas: tuple[str, ...]
+    span: Span = _span()
+    end_span: Span = _span()
+
+
+@dataclass(frozen=True)
+class GlobalVars(Node):
+    block: VarBlock
+    namespace: tuple[str, ...]
+    span: Span = _span()
+
+
+@dataclass(frozen=True)
+class TaskDecl(Node):
+    name: str
+    params: tuple[tuple[str, Expr], ...]
+    span: Span = _span()
+
+
+@dataclass(frozen=True)
+class ProgramConfig(Node):
+    instance: str
+    task: str | None
+    type_name: tuple[str, ...]
+    args: tuple[Argument, ...]
+    span: Span = _span()
+
+
+@dataclass(frozen=True)
+class Resource(Node):
+    name: str
+    globals: tuple[VarBlock, ...]
+    tasks: tuple[TaskDecl, ...]
+    programs: tuple[ProgramConfig, ...]
+    span: Span = _span()
+
+
+@dataclass(frozen=True)
+class Configuration(Node):
+    name: str
+    globals: tuple[VarBlock, ...]
+    resources: tuple[Resource, ...]
+    span: Span = _span()
+
+
+@dataclass(frozen=True)
+class CompilationUnit:
+    path: str
+    types: tuple[TypeDecl, ...]
+    pous: tuple[POU, ...]
+    globals: tuple[GlobalVars, ...]
+    configurations: tuple[Configuration, ...]

@@ -1,0 +1,704 @@
+"""Parse ST text into `CompilationUnit`s (one per file), collecting syntax diagnostics.
+
+Lark builds a parse tree (LALR, contextual lexer, positions on); one Transformer turns it into
+the frozen dataclasses of `nodes`. Literal decoding ($ escapes, T#…, 16#…) happens here, so later
+stages only see values.
+"""
+
+from __future__ import annotations
+
+import calendar
+import re
+from fractions import Fraction
+from functools import lru_cache
+from importlib import resources
+from pathlib import Path
+from typing import Sequence
+
+from lark import Lark, Token, Transformer, Tree, v_args
+from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken
+
+from stvm.diagnostics import Diagnostic
+from stvm.settings import DEFAULT_SETTINGS, SysmacSettings
+from stvm.syntax import nodes as n
+
+_GRAMMAR_FILE = "st.lark"
+
+
+@lru_cache(maxsize=None)
+def _parser(start: str = "start") -> Lark:
+    grammar = resources.files("stvm.syntax").joinpath(_GRAMMAR_FILE).read_text(encoding="utf-8")
+    return Lark(grammar, parser="lalr", lexer="contextual", propagate_positions=True,
+                start=["start", "expression"], maybe_placeholders=True, cache=False)
+
+
+def grammar_text() -> str:
+    return resources.files("stvm.syntax").joinpath(_GRAMMAR_FILE).read_text(encoding="utf-8")
+
+
+# ---- literal decoding ------------------------------------------------------------------------
+
+_ESCAPES = {"$": b"$", "'": b"'", '"': b'"', "L": b"\n", "P": b"\f", "R": b"\r", "T": b"\t"}
+_TIME_UNITS = [("d", 86_400_000_000_000), ("h", 3_600_000_000_000), ("ms", 1_000_000),
+               ("us", 1_000), ("ns", 1), ("m", 60_000_000_000), ("s", 1_000_000_000)]
+_TIME_PART = re.compile(r"([0-9][0-9_]*(?:\.[0-9_]+)?)(d|h|ms|us|ns|m|s)", re.I)
+
+
+class LiteralError(ValueError):
+    """A malformed literal; the message is shown to the user."""
+
+
+def decode_string(token_text: str, settings: SysmacSettings) -> tuple[bytes, list[str]]:
+    """Decode a quoted ST string literal to bytes; returns (value, warnings). Raises LiteralError."""
+    quote = token_text[0]
+    body = token_text[1:-1]
+    out = bytearray()
+    warnings: list[str] = []
+    i = 0
+    hex_digits = 2 if quote == "'" else 4
+    while i < len(body):
+        ch = body[i]
+        if ch != "$":
+            out += ch.encode("utf-8")
+            i += 1
+            continue
+        nxt = body[i + 1] if i + 1 < len(body) else ""
+        if nxt.upper() in _ESCAPES and nxt not in ("'", '"') or nxt == quote:
+            out += _ESCAPES[nxt.upper()]
+            i += 2
+        elif nxt.upper() == "N":
+            # Choice (sysmac.md 3 #7, `dollar_n`): $N is a newline
+            out += b"\n" if settings.dollar_n == "lf" else b"\r\n"
+            i += 2
+        elif re.fullmatch(r"[0-9A-Fa-f]{%d}" % hex_digits, body[i + 1:i + 1 + hex_digits] or "x"):
+            code = int(body[i + 1:i + 1 + hex_digits], 16)
+            out += bytes([code]) if hex_digits == 2 else chr(code).encode("utf-8")
+            i += 1 + hex_digits
+        else:
+            if settings.invalid_dollar_escape == "error":
+                raise LiteralError(f"invalid escape '${nxt}' in string literal (valid: $$ $' $L $N $P $R $T $hh)")
+            out += b"$"
+            i += 1
+    value = bytes(out)
+    if b"\x00" in value:
+        # an Omron STRING ends at its first NUL
+        value = value[: value.index(b"\x00")]
+    return value, warnings
+
+
+def decode_int(text: str) -> int:
+    text = text.replace("_", "")
+    if "#" in text:
+        base, digits = text.split("#", 1)
+        return int(digits, int(base))
+    return int(text)
+
+
+def decode_time(text: str) -> int:
+    """`T#1h2m3s4ms5us6ns` → nanoseconds. Raises LiteralError."""
+    body = text.split("#", 1)[1].replace("_", "")
+    sign = 1
+    if body[:1] in "+-":
+        sign = -1 if body[0] == "-" else 1
+        body = body[1:]
+    pos = 0
+    total = Fraction(0)
+    if not body:
+        raise LiteralError(f"empty duration in {text!r}")
+    # a plain number without unit is not valid; every part needs one
+    for match in _TIME_PART.finditer(body):
+        if match.start() != pos:
+            break
+        total += Fraction(match.group(1)) * dict(_TIME_UNITS)[match.group(2).lower()]
+        pos = match.end()
+    if pos != len(body):
+        raise LiteralError(f"malformed duration literal {text!r}")
+    return sign * int(total)
+
+
+def _date_ns(y: int, mo: int, d: int) -> int:
+    if not (1 <= mo <= 12 and 1 <= d <= calendar.monthrange(y, mo)[1]):
+        raise LiteralError(f"invalid date {y:04d}-{mo:02d}-{d:02d}")
+    return calendar.timegm((y, mo, d, 0, 0, 0)) * 1_000_000_000
+
+
+def _tod_ns(text: str) -> int:
+    parts = text.split(":")
+    h, m = int(parts[0]), int(parts[1])
+    sec = Fraction(parts[2]) if len(parts) > 2 else Fraction(0)
+    if h > 23 or m > 59 or sec >= 60:
+        raise LiteralError(f"invalid time of day {text}")
+    return int((h * 3600 + m * 60 + sec) * 1_000_000_000)
+
+
+def decode_date(text: str) -> int:
+    y, mo, d = (int(x) for x in text.split("#", 1)[1].split("-"))
+    return _date_ns(y, mo, d)
+
+
+def decode_tod(text: str) -> int:
+    return _tod_ns(text.split("#", 1)[1])
+
+
+def decode_dt(text: str) -> int:
+    body = text.split("#", 1)[1]
+    y, mo, d, rest = body.split("-", 3)
+    return _date_ns(int(y), int(mo), int(d)) + _tod_ns(rest)
+
+
+# ---- parse tree → nodes ------------------------------------------------------------------------
+
+def _span_of(file: str, meta) -> n.Span:
+    if getattr(meta, "empty", False) or not hasattr(meta, "line"):
+        return n.Span(file, 0, 0, 0, 0)
+    return n.Span(file, meta.line, meta.column, meta.end_line, meta.end_column)
+
+
+def _tok_span(file: str, tok: Token) -> n.Span:
+    return n.Span(file, tok.line, tok.column, tok.end_line or tok.line, tok.end_column or tok.column + len(tok))
+
+
+class _ToNodes(Transformer):
+    """Turns the Lark tree into nodes; literal errors become diagnostics, not exceptions."""
+
+    def __init__(self, file: str, settings: SysmacSettings, diagnostics: list[Diagnostic]) -> None:
+        super().__init__(visit_tokens=False)
+        self.file = file
+        self.settings = settings
+        self.diagnostics = diagnostics
+
+    def _s(self, meta) -> n.Span:
+        return _span_of(self.file, meta)
+
+    def _ts(self, tok: Token) -> n.Span:
+        return _tok_span(self.file, tok)
+
+    # -- top level
+    @v_args(meta=True)
+    def start(self, meta, items):
+        return list(items)
+
+    @v_args(meta=True)
+    def namespace(self, meta, items):
+        path = tuple(items[0])
+        return ("namespace", path, items[1:])
+
+    def name_path(self, items):
+        return [str(t) for t in items]
+
+    def pragmas(self, items):
+        return tuple(str(t)[1:-1].strip() for t in items)
+
+    @v_args(meta=True)
+    def pou(self, meta, items):
+        pragmas, kind, name, ret, *rest = items
+        end = rest[-1]
+        body = rest[-2]
+        blocks = tuple(rest[:-2])
+        return n.POU(kind, str(name), (), ret, blocks, body, pragmas, self._s(meta), end)
+
+    def pou_kind(self, items):
+        return str(items[0].type)
+
+    def return_type(self, items):
+        return items[0]
+
+    @v_args(meta=True)
+    def end_pou(self, meta, items):
+        return self._s(meta)
+
+    @v_args(meta=True)
+    def var_block(self, meta, items):
+        kind = items[0]
+        quals = tuple(q for q in items[1:] if isinstance(q, str))
+        decls = tuple(d for d in items[1:] if isinstance(d, n.VarDecl))
+        return n.VarBlock(kind, quals, decls, self._s(meta))
+
+    def var_kind(self, items):
+        return str(items[0].type)
+
+    def var_qualifier(self, items):
+        return str(items[0]).upper()
+
+    @v_args(meta=True)
+    def var_decl(self, meta, items):
+        names = items[0]
+        rest = [x for x in items[1:] if x is not None and not (isinstance(x, tuple) and x and x[0] == "location")]
+        type_spec = rest[0]
+        init = rest[1] if len(rest) > 1 else None
+        return n.VarDecl(names, type_spec, init, self._s(meta))
+
+    def ident_list(self, items):
+        return tuple((str(t), self._ts(t)) for t in items)
+
+    def location(self, items):
+        return ("location", str(items[0]))
+
+    @v_args(meta=True)
+    def global_block(self, meta, items):
+        return n.GlobalVars(items[0], (), self._s(meta))
+
+    # -- types
+    @v_args(meta=True)
+    def type_block(self, meta, items):
+        return ("types", list(items))
+
+    @v_args(meta=True)
+    def type_decl(self, meta, items):
+        return n.TypeDecl(str(items[0]), (), items[1], self._s(meta))
+
+    @v_args(meta=True)
+    def struct_spec(self, meta, items):
+        return n.StructDecl(tuple(items), self._s(meta))
+
+    @v_args(meta=True)
+    def field_decl(self, meta, items):
+        return n.VarDecl(items[0], items[1], items[2], self._s(meta))
+
+    @v_args(meta=True)
+    def enum_spec(self, meta, items):
+        base = None
+        default = None
+        members = []
+        for item in items:
+            if isinstance(item, tuple) and item and item[0] == "member":
+                members.append(item[1:])
+            elif isinstance(item, tuple) and item and item[0] == "elem":
+                base = item[1]
+            elif isinstance(item, Token):
+                default = str(item)
+        return n.EnumDecl(tuple(members), base, default, self._s(meta))
+
+    def enum_member(self, items):
+        value = items[1] if len(items) > 1 else None
+        return ("member", str(items[0]), value, self._ts(items[0]))
+
+    def signed_int(self, items):
+        sign = -1 if len(items) == 2 and str(items[0]) == "-" else 1
+        lit = items[-1]
+        return sign * lit.value
+
+    def elementary_name(self, items):
+        return ("elem", str(items[0]))
+
+    @v_args(meta=True)
+    def alias_spec(self, meta, items):
+        return n.AliasDecl(items[0], items[1] if len(items) > 1 else None, self._s(meta))
+
+    @v_args(meta=True)
+    def type_name(self, meta, items):
+        name = items[0]
+        return n.NamedTypeSpec(name.parts, name.rooted, name.span)
+
+    @v_args(meta=True)
+    def string_spec(self, meta, items):
+        wide = str(items[0]).upper().startswith("W")
+        return n.StringTypeSpec(items[1], wide, self._s(meta))
+
+    @v_args(meta=True)
+    def array_spec(self, meta, items):
+        return n.ArrayTypeSpec(tuple(items[:-1]), items[-1], self._s(meta))
+
+    def bounds(self, items):
+        return (items[0], items[1])
+
+    def any_bounds(self, items):
+        return None
+
+    @v_args(meta=True)
+    def subrange_spec(self, meta, items):
+        return n.SubrangeTypeSpec(items[0][1], items[1], items[2], self._s(meta))
+
+    @v_args(meta=True)
+    def ref_spec(self, meta, items):
+        return n.RefTypeSpec(items[-1], self._s(meta))
+
+    @v_args(meta=True)
+    def initializer(self, meta, items):
+        return n.ExprInit(items[0], self._s(meta))
+
+    @v_args(meta=True)
+    def array_init(self, meta, items):
+        return n.ArrayInit(tuple(items), self._s(meta))
+
+    @v_args(meta=True)
+    def array_init_item(self, meta, items):
+        return (1, items[0])
+
+    @v_args(meta=True)
+    def repeat_init(self, meta, items):
+        return (decode_int(str(items[0])), items[1] if len(items) > 1 else None)
+
+    @v_args(meta=True)
+    def struct_init(self, meta, items):
+        return n.StructInit(tuple(items), self._s(meta))
+
+    def struct_init_item(self, items):
+        return (str(items[0]), items[1])
+
+    # -- configuration
+    @v_args(meta=True)
+    def configuration(self, meta, items):
+        name = str(items[0])
+        globals_ = [x.block for x in items[1:] if isinstance(x, n.GlobalVars)]
+        resources_ = [x for x in items[1:] if isinstance(x, n.Resource)]
+        loose_tasks = tuple(x for x in items[1:] if isinstance(x, n.TaskDecl))
+        loose_programs = tuple(x for x in items[1:] if isinstance(x, n.ProgramConfig))
+        if loose_tasks or loose_programs:
+            resources_.insert(0, n.Resource(name, (), loose_tasks, loose_programs, self._s(meta)))
+        return n.Configuration(name, tuple(globals_), tuple(resources_), self._s(meta))
+
+    @v_args(meta=True)
+    def resource(self, meta, items):
+        name = str(items[0])
+        rest = [x for x in items[1:] if not isinstance(x, Token) and x is not None]
+        return n.Resource(name, tuple(x.block for x in rest if isinstance(x, n.GlobalVars)),
+                          tuple(x for x in rest if isinstance(x, n.TaskDecl)),
+                          tuple(x for x in rest if isinstance(x, n.ProgramConfig)), self._s(meta))
+
+    @v_args(meta=True)
+    def task_decl(self, meta, items):
+        return n.TaskDecl(str(items[0]), tuple(items[1:]), self._s(meta))
+
+    def task_param(self, items):
+        return (str(items[0]).upper(), items[1])
+
+    @v_args(meta=True)
+    def program_config(self, meta, items):
+        instance = str(items[0])
+        task = str(items[1]) if items[1] is not None else None
+        type_name = items[2].parts
+        args = tuple(a for a in items[3:] if isinstance(a, n.Argument))
+        return n.ProgramConfig(instance, task, type_name, args, self._s(meta))
+
+    # -- statements
+    def statement_list(self, items):
+        return tuple(s for s in items if not isinstance(s, n.Empty))
+
+    @v_args(meta=True)
+    def assignment(self, meta, items):
+        return n.Assign(items[0], items[1], self._s(meta))
+
+    @v_args(meta=True)
+    def call_statement(self, meta, items):
+        return n.CallStatement(items[0], self._s(meta))
+
+    @v_args(meta=True)
+    def exit_statement(self, meta, items):
+        return n.Exit(self._s(meta))
+
+    @v_args(meta=True)
+    def continue_statement(self, meta, items):
+        return n.Continue(self._s(meta))
+
+    @v_args(meta=True)
+    def return_statement(self, meta, items):
+        return n.Return(self._s(meta))
+
+    @v_args(meta=True)
+    def empty_statement(self, meta, items):
+        return n.Empty(self._s(meta))
+
+    @v_args(meta=True)
+    def if_statement(self, meta, items):
+        branches = [(items[0], items[1])]
+        else_body = None
+        for item in items[2:]:
+            if isinstance(item, tuple) and len(item) == 3 and item[0] == "elsif":
+                branches.append((item[1], item[2]))
+            elif isinstance(item, tuple) and len(item) == 2 and item[0] == "else":
+                else_body = item[1]
+        return n.If(tuple(branches), else_body, self._s(meta))
+
+    def elsif_clause(self, items):
+        return ("elsif", items[0], items[1])
+
+    def else_clause(self, items):
+        return ("else", items[0])
+
+    @v_args(meta=True)
+    def case_statement(self, meta, items):
+        selector = items[0]
+        elements = []
+        else_body = None
+        for item in items[1:]:
+            if isinstance(item, tuple) and item[0] == "else":
+                else_body = item[1]
+            elif item is not None:
+                elements.append(item)
+        return n.Case(selector, tuple(elements), else_body, self._s(meta))
+
+    def case_element(self, items):
+        return (tuple(items[:-1]), items[-1])
+
+    @v_args(meta=True)
+    def case_label(self, meta, items):
+        return n.CaseLabel(self._label_value(items[0], meta), None, self._s(meta))
+
+    @v_args(meta=True)
+    def case_range(self, meta, items):
+        return n.CaseLabel(self._label_value(items[0], meta), self._label_value(items[1], meta), self._s(meta))
+
+    def _label_value(self, value, meta):
+        if isinstance(value, int):
+            return n.IntLiteral(value, self._s(meta))
+        return value
+
+    def case_name(self, items):
+        tok = items[0]
+        return n.Name((str(tok),), False, self._ts(tok))
+
+    def case_hash(self, items):
+        return self._hash(items[0])
+
+    @v_args(meta=True)
+    def for_statement(self, meta, items):
+        var_tok, start, end, step, body = items
+        return n.For(n.Name((str(var_tok),), False, self._ts(var_tok)), start, end, step, body, self._s(meta))
+
+    @v_args(meta=True)
+    def while_statement(self, meta, items):
+        return n.While(items[0], items[1], self._s(meta))
+
+    @v_args(meta=True)
+    def repeat_statement(self, meta, items):
+        return n.Repeat(items[0], items[1], self._s(meta))
+
+    # -- expressions
+    @v_args(meta=True)
+    def binary(self, meta, items):
+        left, op, right = items
+        return n.Binary(str(op.type), left, right, self._s(meta))
+
+    @v_args(meta=True)
+    def unary(self, meta, items):
+        op, operand = items
+        return n.Unary(str(op.type), operand, self._s(meta))
+
+    @v_args(meta=True)
+    def name(self, meta, items):
+        return items[0]
+
+    @v_args(meta=True)
+    def qualified_name(self, meta, items):
+        rooted = bool(items) and isinstance(items[0], Token) and items[0].type == "ROOT_SEP"
+        parts = tuple(str(t) for t in items if isinstance(t, Token) and t.type == "IDENT")
+        return n.Name(parts, rooted, self._s(meta))
+
+    @v_args(meta=True)
+    def member(self, meta, items):
+        return n.Member(items[0], str(items[1]), self._s(meta))
+
+    @v_args(meta=True)
+    def bit_access(self, meta, items):
+        return n.BitAccess(items[0], int(str(items[1]).replace("_", "")), self._s(meta))
+
+    @v_args(meta=True)
+    def index(self, meta, items):
+        return n.Index(items[0], tuple(items[1:]), self._s(meta))
+
+    @v_args(meta=True)
+    def call(self, meta, items):
+        args = tuple(a for a in items[1:] if a is not None)
+        return n.Call(items[0], args, self._s(meta))
+
+    @v_args(meta=True)
+    def deref(self, meta, items):
+        return n.Deref(items[0], self._s(meta))
+
+    @v_args(meta=True)
+    def formal_input(self, meta, items):
+        return n.Argument("input", str(items[0]), items[1], self._s(meta))
+
+    @v_args(meta=True)
+    def formal_output(self, meta, items):
+        return n.Argument("output", str(items[0]), items[1], self._s(meta))
+
+    @v_args(meta=True)
+    def formal_output_not(self, meta, items):
+        return n.Argument("output_not", str(items[1]), items[2], self._s(meta))
+
+    @v_args(meta=True)
+    def positional(self, meta, items):
+        return n.Argument("positional", None, items[0], self._s(meta))
+
+    # -- literals
+    def _error(self, message: str, span: n.Span):
+        self.diagnostics.append(Diagnostic.error(message, span))
+
+    @v_args(meta=True)
+    def int_literal(self, meta, items):
+        return n.IntLiteral(decode_int(str(items[0])), self._s(meta))
+
+    @v_args(meta=True)
+    def based_literal(self, meta, items):
+        return n.IntLiteral(decode_int(str(items[0])), self._s(meta))
+
+    @v_args(meta=True)
+    def real_literal(self, meta, items):
+        text = str(items[0]).replace("_", "")
+        return n.RealLiteral(float(text), text, self._s(meta))
+
+    @v_args(meta=True)
+    def true_literal(self, meta, items):
+        return n.BoolLiteral(True, self._s(meta))
+
+    @v_args(meta=True)
+    def false_literal(self, meta, items):
+        return n.BoolLiteral(False, self._s(meta))
+
+    def _literal(self, meta, items, type_name, decoder):
+        text = str(items[0])
+        try:
+            return n.TimeLiteral(type_name, decoder(text), self._s(meta))
+        except (LiteralError, ValueError) as exc:
+            self._error(str(exc) if isinstance(exc, LiteralError) else f"malformed literal {text!r}", self._s(meta))
+            return n.TimeLiteral(type_name, 0, self._s(meta))
+
+    @v_args(meta=True)
+    def time_literal(self, meta, items):
+        return self._literal(meta, items, "TIME", decode_time)
+
+    @v_args(meta=True)
+    def date_literal(self, meta, items):
+        return self._literal(meta, items, "DATE", decode_date)
+
+    @v_args(meta=True)
+    def tod_literal(self, meta, items):
+        return self._literal(meta, items, "TIME_OF_DAY", decode_tod)
+
+    @v_args(meta=True)
+    def dt_literal(self, meta, items):
+        return self._literal(meta, items, "DATE_AND_TIME", decode_dt)
+
+    @v_args(meta=True)
+    def hash_literal(self, meta, items):
+        return self._hash(items[0])
+
+    def _hash(self, tok: Token) -> n.HashLiteral:
+        text = str(tok)
+        prefix, _, value = text.rpartition("#") if text.count("#") == 1 else (text.split("#", 1)[0], "#", text.split("#", 1)[1])
+        rooted = prefix.startswith("\\\\")
+        parts = tuple(p for p in prefix.lstrip("\\").split("\\") if p)
+        return n.HashLiteral(parts, rooted, value, self._ts(tok))
+
+    @v_args(meta=True)
+    def string_literal(self, meta, items):
+        text = str(items[0])
+        span = self._s(meta)
+        try:
+            value, _ = decode_string(text, self.settings)
+        except LiteralError as exc:
+            self._error(str(exc), span)
+            value = b""
+        double = text.startswith('"')
+        if double:
+            if self.settings.double_quote_strings == "error":
+                self._error('double-quoted text is a WSTRING; write STRING literals in single quotes', span)
+            else:
+                self.diagnostics.append(Diagnostic.warning(
+                    "double-quoted string literal accepted as STRING (Sysmac `double_quote_strings`)", span))
+        return n.StringLiteral(value, double, span)
+
+
+def _collect(file: str, items: list, namespace: tuple[str, ...], out: dict[str, list]) -> None:
+    for item in items:
+        if isinstance(item, n.POU):
+            out["pous"].append(n.POU(item.kind, item.name, namespace, item.return_type, item.var_blocks,
+                                     item.body, item.pragmas, item.span, item.end_span))
+        elif isinstance(item, n.GlobalVars):
+            out["globals"].append(n.GlobalVars(item.block, namespace, item.span))
+        elif isinstance(item, n.Configuration):
+            out["configurations"].append(item)
+        elif isinstance(item, tuple) and item[0] == "types":
+            for decl in item[1]:
+                out["types"].append(n.TypeDecl(decl.name, namespace, decl.body, decl.span))
+        elif isinstance(item, tuple) and item[0] == "namespace":
+            _collect(file, item[2], namespace + tuple(item[1]), out)
+
+
+_FRIENDLY = {
+    "SEMICOLON": "';'", "IDENT": "a name", "COLON": "':'", "LPAR": "'('", "RPAR": "')'",
+    "LSQB": "'['", "RSQB": "']'", "COMMA": "','", "DOT": "'.'", "EQ": "'='", "__ANON_0": "':='",
+}
+
+
+def _expected_text(expected: set[str]) -> str:
+    names = []
+    for term in sorted(expected):
+        if term.startswith("__") and term not in _FRIENDLY:
+            continue
+        names.append(_FRIENDLY.get(term, term if not term.isupper() or len(term) > 12 else term))
+    if not names:
+        return ""
+    if len(names) > 8:
+        names = names[:8] + ["…"]
+    return "; expected " + ", ".join(names)
+
+
+def _syntax_diagnostic(file: str, exc: UnexpectedInput) -> Diagnostic:
+    if isinstance(exc, UnexpectedToken):
+        tok = exc.token
+        if tok.type == "$END":
+            span = n.Span(file, exc.line if exc.line > 0 else 1, max(exc.column, 1), exc.line, exc.column + 1)
+            return Diagnostic.error("unexpected end of file" + _expected_text(exc.expected), span, "E001")
+        span = _tok_span(file, tok)
+        return Diagnostic.error(f"syntax error: unexpected '{tok}'" + _expected_text(exc.expected), span, "E001")
+    if isinstance(exc, UnexpectedCharacters):
+        span = n.Span(file, exc.line, exc.column, exc.line, exc.column + 1)
+        char = exc.char
+        if char in "'\"":
+            return Diagnostic.error("unterminated or malformed string literal", span, "E002")
+        return Diagnostic.error(f"syntax error: unexpected character {char!r}", span, "E001")
+    if isinstance(exc, UnexpectedEOF):
+        return Diagnostic.error("unexpected end of file", n.Span(file, 1, 1, 1, 2), "E001")
+    return Diagnostic.error(f"syntax error: {exc}", n.Span(file, 1, 1, 1, 2), "E001")
+
+
+def parse_text(text: str, file: str, settings: SysmacSettings = DEFAULT_SETTINGS) -> tuple[n.CompilationUnit, list[Diagnostic]]:
+    """Parse one ST file. On a syntax error the unit is empty and the error is a diagnostic."""
+    diagnostics: list[Diagnostic] = []
+    try:
+        tree = _parser().parse(text, start="start")
+    except UnexpectedInput as exc:
+        diagnostics.append(_syntax_diagnostic(file, exc))
+        return n.CompilationUnit(file, (), (), (), ()), diagnostics
+    items = _ToNodes(file, settings, diagnostics).transform(tree)
+    out: dict[str, list] = {"types": [], "pous": [], "globals": [], "configurations": []}
+    _collect(file, items, (), out)
+    unit = n.CompilationUnit(file, tuple(out["types"]), tuple(out["pous"]), tuple(out["globals"]),
+                             tuple(out["configurations"]))
+    return unit, diagnostics
+
+
+def parse_expression(text: str, file: str = "<expr>", settings: SysmacSettings = DEFAULT_SETTINGS) -> tuple[n.Expr | None, list[Diagnostic]]:
+    """Parse a lone ST expression (used by `--set`, the debugger's `print`, scenarios)."""
+    diagnostics: list[Diagnostic] = []
+    try:
+        tree = _parser().parse(text, start="expression")
+    except UnexpectedInput as exc:
+        return None, [_syntax_diagnostic(file, exc)]
+    expr = _ToNodes(file, settings, diagnostics).transform(tree)
+    return expr, diagnostics
+
+
+def read_source(path: Path) -> str:
+    data = path.read_bytes()
+    if data.startswith(b"\xef\xbb\xbf"):
+        data = data[3:]
+    return data.decode("utf-8", errors="replace")
+
+
+def parse_files(paths: Sequence[Path], settings: SysmacSettings = DEFAULT_SETTINGS) -> tuple[list[n.CompilationUnit], list[Diagnostic], dict[str, str]]:
+    """Parse every file; returns units, diagnostics and the source texts (for excerpts)."""
+    units: list[n.CompilationUnit] = []
+    diagnostics: list[Diagnostic] = []
+    sources: dict[str, str] = {}
+    for path in paths:
+        text = read_source(Path(path))
+        name = str(path)
+        sources[name] = text
+        unit, diags = parse_text(text, name, settings)
+        units.append(unit)
+        diagnostics += diags
+    return units, diagnostics, sources
