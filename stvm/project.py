@@ -123,9 +123,25 @@ def _cache_dir() -> Path:
     return Path(os.environ.get("XDG_CACHE_HOME", Path.home() / ".cache")) / "stvm"
 
 
+_CODE_DIGEST: list[str] = []
+
+
+def _stvm_code_digest() -> str:
+    """Hash of stvm's own sources: a cache entry is only valid for the code that generated it."""
+    if not _CODE_DIGEST:
+        digest = hashlib.sha256()
+        package = Path(__file__).resolve().parent
+        for path in sorted(package.rglob("*")):
+            if path.suffix in (".py", ".lark", ".st") and "__pycache__" not in path.parts:
+                digest.update(path.relative_to(package).as_posix().encode() + b"\0" + path.read_bytes())
+        _CODE_DIGEST.append(digest.hexdigest())
+    return _CODE_DIGEST[0]
+
+
 def _cache_key(texts: list[tuple[str, str]], settings: SysmacSettings) -> str:
     digest = hashlib.sha256()
     digest.update(__version__.encode())
+    digest.update(_stvm_code_digest().encode())
     digest.update(repr(settings).encode())
     for name, text in texts:
         digest.update(name.encode() + b"\0" + text.encode("utf-8", "replace") + b"\0")
@@ -151,14 +167,46 @@ def check(paths: Sequence[str | Path], settings: SysmacSettings = DEFAULT_SETTIN
     return _check_texts(texts, diags, settings)
 
 
+_STDLIB_UNITS: dict[str, tuple[list, list[Diagnostic]]] = {}
+
+
+def _stdlib_units(settings: SysmacSettings) -> tuple[list, list[Diagnostic], dict[str, str]]:
+    """The parsed stdlib, memoised in-process and pickled in the cache dir (it never changes
+    between runs of one stvm version, and parsing it is most of a cold start)."""
+    texts = _stdlib()
+    key = _cache_key(texts, settings)
+    sources = dict(texts)
+    if key in _STDLIB_UNITS:
+        units, diags = _STDLIB_UNITS[key]
+        return units, list(diags), sources
+    path = _cache_dir() / f"stdlib-{key}.ast"
+    try:
+        with path.open("rb") as fh:
+            units, diags = pickle.load(fh)
+    except Exception:  # missing or unreadable: parse again
+        units, diags = [], []
+        for name, text in texts:
+            unit, d = parse_text(text, name, settings)
+            units.append(unit)
+            diags += d
+        try:
+            path.parent.mkdir(parents=True, exist_ok=True)
+            tmp = path.with_suffix(".tmp%d" % os.getpid())
+            with tmp.open("wb") as fh:
+                pickle.dump((units, diags), fh, protocol=pickle.HIGHEST_PROTOCOL)
+            tmp.replace(path)
+        except OSError:
+            pass
+    _STDLIB_UNITS[key] = (units, diags)
+    return units, list(diags), sources
+
+
 def _check_texts(texts, diags, settings):
     sources = dict(texts)
-    units = []
-    for name, text in _stdlib():
-        unit, d = parse_text(text, name, settings)
-        units.append(unit)
-        diags += d
-        sources[name] = text
+    units, stdlib_diags, stdlib_sources = _stdlib_units(settings)
+    units = list(units)
+    diags += stdlib_diags
+    sources.update(stdlib_sources)
     for name, text in texts:
         unit, d = parse_text(text, name, settings)
         units.append(unit)

@@ -105,6 +105,13 @@ class _Writer:
     def blank_span(self) -> None:
         self.span = None
 
+    def append(self, other: "_Writer") -> None:
+        """Append a body generated separately, shifting its line map."""
+        offset = len(self.lines)
+        self.lines.extend(other.lines)
+        for line, span in zip(other.line_map.lines, other.line_map.spans):
+            self.line_map.add(line + offset, span)
+
 
 class Lowerer:
     def __init__(self, analysis: Analysis, settings) -> None:
@@ -123,6 +130,15 @@ class Lowerer:
         self.pou: POUInfo | None = None
         self.owner = "self"
         self.loops: list[tuple[str, list[str]]] = []   # (kind, continue-code lines)
+        # Variables held in Python locals during a call (see `cached_vars`): key → Variable,
+        # and which of them the body used / assigned (for the prologue and the write-back).
+        self.cached: dict[str, Variable] = {}
+        self.used: set[str] = set()
+        self.assigned: set[str] = set()
+        self.cache_locals = getattr(settings, "cache_locals", True)
+        # loop variables of range-FORs in scope: key → (step, constant start or None, type)
+        self.range_vars: dict[str, tuple[int, int | None, t.IntType]] = {}
+        self.unchecked: set[str] = set()   # range-FOR variables whose array accesses were hoisted
 
     # ---- names
     def assign_names(self) -> None:
@@ -145,6 +161,10 @@ class Lowerer:
                 return f"_T[{i}]"
         self.types.append(ty)
         return f"_T[{len(self.types) - 1}]"
+
+    def types_const(self, types_: tuple[t.Type, ...]) -> str:
+        """A tuple of types in `_T` (for `typed` natives)."""
+        return "(" + "".join(self.type_const(ty) + ", " for ty in types_) + ")"
 
     def new_tmp(self, stem: str) -> str:
         self.tmp += 1
@@ -309,13 +329,11 @@ class Lowerer:
         if pou.native:
             w.line("self._impl.call(self, _ctx)")
         else:
-            for var in own:
-                if var.section == TEMP:
-                    w.line(f"self.{var_attr(var.name)} = {self.var_default(var)}")
             assert node is not None
-            self.body(node.body)
-            if not node.body and not any(v.section == TEMP for v in own):
-                w.line("pass")
+            cached = self.cached_vars(pou, node)
+            temps_reset = [f"self.{var_attr(v.name)} = {self.var_default(v)}" for v in own
+                           if v.section == TEMP and v.key not in cached]
+            self.cached_body(pou, node, temps_reset, [])
         w.indent -= 2
         w.blank_span()
 
@@ -329,16 +347,20 @@ class Lowerer:
         w.indent += 1
         self.pou = pou
         self.owner = "_f"
-        w.line("_f = _Frame()")
+        assert node is not None and pou.return_type is not None
+        cached = self.cached_vars(pou, node)
+        # parameters arrive as Python locals; the frame holds only what is passed by reference
+        prologue = ["_f = _Frame()"]
         for p in params:
-            w.line(f"_f.{var_attr(p.name)} = {var_attr(p.name)}")
+            if p.key not in cached:
+                prologue.append(f"_f.{var_attr(p.name)} = {var_attr(p.name)}")
+            else:
+                prologue.append(f"_f.{var_attr(p.name)} = {var_attr(p.name)}")
         for var in pou.variables.values():
             if var.section not in (INPUT, IN_OUT, EXTERNAL):
-                w.line(f"_f.{var_attr(var.name)} = {self.var_default(var)}")
-        assert pou.return_type is not None
-        w.line(f"_r = {self.default_expr(pou.return_type)}")
-        assert node is not None
-        self.body(node.body)
+                prologue.append(f"_f.{var_attr(var.name)} = {self.var_default(var)}")
+        prologue.append(f"_r = {self.default_expr(pou.return_type)}")
+        self.cached_body(pou, node, prologue, [])
         w.blank_span()
         w.line("return _r")
         w.indent -= 1
@@ -441,10 +463,13 @@ class Lowerer:
     def st_For(self, s: n.For) -> None:
         var_type = self.facts.types[id(s.variable)]
         assert isinstance(var_type, t.IntType)
+        step_const = self.facts.consts.get(id(s.step)) if s.step is not None else 1
+        if self.range_for_ok(s, step_const):
+            self.range_for(s, var_type, step_const)  # type: ignore[arg-type]
+            return
         self.store(s.variable, self.expr_as(s.start, var_type), var_type)
         end = self.new_tmp("end")
         self.w.line(f"{end} = {self.expr_as(s.end, var_type)}")
-        step_const = self.facts.consts.get(id(s.step)) if s.step is not None else 1
         read = self.expr(s.variable)
         if isinstance(step_const, int):
             step = _lit(step_const)
@@ -454,6 +479,8 @@ class Lowerer:
             self.w.line(f"{step} = {self.expr_as(s.step, var_type)}")  # type: ignore[arg-type]
             cond = f"({read} <= {end} if {step} > 0 else {read} >= {end})"
         increment = self.store_code(s.variable, _wrap(f"{read} + {step}", var_type), var_type)
+        if self.settings.for_end_eval == "each":
+            cond = cond.replace(end, f"({self.expr_as(s.end, var_type)})")
         self.w.line(f"while {cond}:")
         self.w.indent += 1
         self.loops.append(("for", increment))
@@ -463,6 +490,110 @@ class Lowerer:
         for line in increment:
             self.w.line(line)
         self.w.indent -= 1
+
+    def range_for_ok(self, s: n.For, step: object) -> bool:
+        """Can this FOR become a Python `for … in range()` (same semantics, much faster)?
+
+        Needs: a constant non-zero step, the end evaluated once, a loop variable held in a local
+        that the body never assigns, and no EXIT/RETURN (so a wrap-around at the type's limit
+        is a genuinely endless loop, reported as a fault instead of hanging)."""
+        if not isinstance(step, int) or isinstance(step, bool) or step == 0:
+            return False
+        if self.settings.for_end_eval != "once":
+            return False
+        ref = self.facts.names.get(id(s.variable))
+        if ref is None or ref.kind != "var" or ref.variable is None or ref.variable.key not in self.cached:
+            return False
+        key = ref.variable.key
+        for node in _walk(s.body):
+            if isinstance(node, (n.Exit, n.Return)):
+                return False
+            if isinstance(node, n.Assign) and _root_name(node.target) == key:
+                return False
+            if isinstance(node, n.For) and node.variable.parts[0].lower() == key:
+                return False
+            if isinstance(node, n.Argument) and node.kind != "input" and node.kind != "positional" \
+                    and _root_name(node.value) == key:
+                return False
+        return True
+
+    def range_for(self, s: n.For, var_type: t.IntType, step: int) -> None:
+        var = self.expr(s.variable)
+        key = s.variable.parts[0].lower()
+        start = self.new_tmp("start")
+        end = self.new_tmp("end")
+        self.w.line(f"{start} = {self.expr_as(s.start, var_type)}")
+        self.w.line(f"{end} = {self.expr_as(s.end, var_type)}")
+        limit = var_type.hi - step if step > 0 else var_type.lo - step
+        # the loop variable would wrap before passing `end`: an endless loop on the controller
+        guard = f"{end} > {limit}" if step > 0 else f"{end} < {limit}"
+        self.w.line(f"if {guard}: _endless_for({end}, {step}, {var_type.name!r})")
+        stop = f"{end} + 1" if step > 0 else f"{end} - 1"
+        rng = self.new_tmp("range")
+        self.w.line(f"{rng} = range({start}, {stop}, {step})")
+        self.assigned.add(key)
+        start_const = self.facts.consts.get(id(s.start))
+        accesses = self.hoistable_accesses(s.body, key)
+        if accesses:
+            # Bounds checks hoisted out of the loop: if every `a[i + c]` stays inside its array
+            # for the whole range, run a copy of the loop without per-access checks; otherwise
+            # the checked copy faults at exactly the iteration the controller would.
+            first, last = (start, end) if step > 0 else (end, start)
+            conds = [f"{first} + {c} >= {lo} and {last} + {c} <= {hi}" for c, lo, hi in sorted(accesses)]
+            self.w.line(f"if {' and '.join(conds)}:")
+            self.w.indent += 1
+            self.unchecked.add(key)
+            self.range_loop(s, var, key, rng, start, step, start_const, var_type)
+            self.unchecked.discard(key)
+            self.w.indent -= 1
+            self.w.line("else:")
+            self.w.indent += 1
+            self.range_loop(s, var, key, rng, start, step, start_const, var_type)
+            self.w.indent -= 1
+        else:
+            self.range_loop(s, var, key, rng, start, step, start_const, var_type)
+
+    def range_loop(self, s: n.For, var: str, key: str, rng: str, start: str, step: int,
+                   start_const: object, var_type: t.IntType) -> None:
+        self.w.span = s.span
+        self.w.line(f"for {var} in {rng}:")
+        self.w.indent += 1
+        self.range_vars[key] = (step, start_const if isinstance(start_const, int) else None, var_type)
+        self.loops.append(("range", []))
+        self.body(s.body)
+        self.loops.pop()
+        del self.range_vars[key]
+        self.w.indent -= 1
+        self.w.span = s.span
+        self.w.line("else:")
+        self.w.indent += 1
+        # IEC: after the loop the variable holds the first value past `end`
+        self.w.line(f"{var} = {start} + {step} * len({rng})")
+        self.w.indent -= 1
+
+    def loop_offset(self, ix: n.Expr, key: str) -> int | None:
+        """c when `ix` is `key`, `key + c` or `key - c` (constant c), else None."""
+        if isinstance(ix, n.Name) and len(ix.parts) == 1 and ix.parts[0].lower() == key:
+            return 0
+        if isinstance(ix, n.Binary) and ix.op in ("PLUS", "MINUS") and isinstance(ix.left, n.Name) \
+                and len(ix.left.parts) == 1 and ix.left.parts[0].lower() == key:
+            c = self.facts.consts.get(id(ix.right))
+            if isinstance(c, int) and not isinstance(c, bool) and id(ix.right) in self.facts.untyped:
+                return c if ix.op == "PLUS" else -c
+        return None
+
+    def hoistable_accesses(self, body, key: str) -> set[tuple[int, int, int]]:
+        """(offset, lo, hi) of every 1-D array access indexed by the loop variable (+/- const)."""
+        found: set[tuple[int, int, int]] = set()
+        for node in _walk(body):
+            if isinstance(node, n.Index) and len(node.indices) == 1:
+                base_type = self.facts.types.get(id(node.base))
+                if isinstance(base_type, t.ArrayType) and base_type.dims and len(base_type.dims) == 1:
+                    c = self.loop_offset(node.indices[0], key)
+                    if c is not None:
+                        lo, hi = base_type.dims[0]
+                        found.add((c, lo, hi))
+        return found
 
     def st_While(self, s: n.While) -> None:
         self.w.line(f"while {self.expr(s.condition)}:")
@@ -513,6 +644,8 @@ class Lowerer:
             var = ref.variable
             assert var is not None
             place = self.var_place(var, ref.kind == "global")
+            if var.key in self.cached and ref.kind != "global":
+                self.assigned.add(var.key)
             if var.section == IN_OUT and not aggregate:
                 return [f"{place}.set({value})"]
             return [self.assign_into(place, value, ty)]
@@ -549,7 +682,80 @@ class Lowerer:
     def var_place(self, var: Variable, is_global: bool) -> str:
         if is_global or var.section in (GLOBAL, EXTERNAL):
             return f"_G.{var_attr(var.name)}"
+        if var.key in self.cached:
+            self.used.add(var.key)
+            return var_attr(var.name)
         return f"{self.owner}.{var_attr(var.name)}"
+
+    def cached_vars(self, pou: POUInfo, node: n.POU) -> dict[str, Variable]:
+        """Variables a call may keep in Python locals (LOAD_FAST instead of attribute access).
+
+        Safe for every variable of the POU's own instance/frame that is never passed by reference
+        (as a scalar in-out argument): nothing else can observe it during the call. Aggregates
+        (arrays, structs, FB instances) are never rebound, so a local alias is always safe; scalars
+        are written back in a `finally`, so values survive RETURN and faults.
+        """
+        if not self.cache_locals:
+            return {}
+        referenced: set[str] = set()
+        for call in _calls_in(node.body):
+            info = self.facts.calls.get(id(call))
+            if info is None:
+                continue
+            for var, value in info.inputs:
+                if var.section == IN_OUT and isinstance(value, n.Name):
+                    referenced.add(value.parts[0].lower())
+        out = {}
+        for var in pou.variables.values():
+            if var.section in (EXTERNAL, GLOBAL) or var.key in referenced:
+                continue
+            if var.section == IN_OUT and not isinstance(var.type, (t.StructType, t.ArrayType, t.FBType)):
+                continue  # a scalar in-out is a reference object; keep it on the instance
+            out[var.key] = var
+        return out
+
+    def cached_body(self, pou: POUInfo, node: n.POU, prologue_extra: list[str], epilogue_extra: list[str]) -> None:
+        """Emit the body of a call with cached locals: prologue, try/body/finally write-back."""
+        outer = self.w
+        self.cached = self.cached_vars(pou, node)
+        self.used, self.assigned = set(), set()
+        body_writer = _Writer()
+        body_writer.indent = outer.indent + (1 if self.cached else 0)
+        self.w = body_writer
+        self.body(node.body)
+        self.w = outer
+        outer.blank_span()
+        for line in prologue_extra:
+            outer.line(line)
+        temps = {v.key for v in pou.variables.values() if v.section == TEMP}
+        for key in sorted(self.used):
+            var = self.cached[key]
+            attr = var_attr(var.name)
+            if key in temps:
+                outer.line(f"{attr} = {self.var_default(var)}")
+            else:
+                outer.line(f"{attr} = {self.owner}.{attr}")
+        write_back = [k for k in sorted(self.assigned & self.used)
+                      if not isinstance(self.cached[k].type, (t.StructType, t.ArrayType, t.FBType))]
+        if self.cached:
+            outer.line("try:")
+        outer.append(body_writer)
+        outer.blank_span()
+        if self.cached:
+            outer.line("finally:")
+            outer.indent += 1
+            for key in write_back:
+                attr = var_attr(self.cached[key].name)
+                outer.line(f"{self.owner}.{attr} = {attr}")
+            for line in epilogue_extra:
+                outer.line(line)
+            if not write_back and not epilogue_extra:
+                outer.line("pass")
+            outer.indent -= 1
+        else:
+            for line in epilogue_extra:
+                outer.line(line)
+        self.cached, self.used, self.assigned = {}, set(), set()
 
     # ---- expressions
     def expr_as(self, e: n.Expr, ty: t.Type | None) -> str:
@@ -636,6 +842,14 @@ class Lowerer:
         if base_type.dims is None:
             return code, self.expr(e.indices[0])
         subscripts = []
+        if len(e.indices) == 1 and len(base_type.dims) == 1:
+            for key in self.unchecked:
+                c = self.loop_offset(e.indices[0], key)
+                if c is not None:
+                    offset = c - base_type.dims[0][0]
+                    ix = e.indices[0]
+                    name = self.expr(ix if isinstance(ix, n.Name) else ix.left)  # type: ignore[attr-defined]
+                    return code, name if offset == 0 else f"{name} + {offset}" if offset > 0 else f"{name} - {-offset}"
         for ix, (lo, hi) in zip(e.indices, base_type.dims):
             const = self.facts.consts.get(id(ix))
             if isinstance(const, int):
@@ -697,6 +911,8 @@ class Lowerer:
                 mod = "_imod" if self.settings.int_div_zero == "fault" else "_imod0"
                 return f"{mod}({left}, {right})"
             pyop = {"PLUS": "+", "MINUS": "-", "STAR": "*"}[op]
+            if self.in_range_without_wrap(e, ty):
+                return f"({left} {pyop} {right})"
             return _wrap(f"{left} {pyop} {right}", ty)
         assert isinstance(ty, t.RealType)
         if op == "SLASH":
@@ -704,6 +920,24 @@ class Lowerer:
         else:
             code = f"({left} {({'PLUS': '+', 'MINUS': '-', 'STAR': '*'})[op]} {right})"
         return f"_f32({code})" if ty.bits == 32 else code
+
+    def in_range_without_wrap(self, e: n.Binary, ty: t.IntType) -> bool:
+        """`i + k` / `i - k` on a range-FOR variable that provably stays inside `ty` (no wrap code).
+
+        The loop guard ensures i <= hi - step (step > 0), so i + k <= hi for 0 <= k <= step;
+        with a constant start s, i >= s, so i - k >= lo when s - k >= lo."""
+        if not isinstance(e.left, n.Name) or e.op not in ("PLUS", "MINUS"):
+            return False
+        info = self.range_vars.get(e.left.parts[0].lower())
+        k = self.facts.consts.get(id(e.right))
+        if info is None or not isinstance(k, int) or isinstance(k, bool) or k < 0:
+            return False
+        step, start, var_type = info
+        if not _contains(ty, var_type):
+            return False
+        if e.op == "PLUS":
+            return step > 0 and k <= step and var_type.hi <= ty.hi
+        return step > 0 and start is not None and start - k >= ty.lo
 
     def time_binary(self, e: n.Binary, ty: t.Type) -> str:
         lt = self.facts.types[id(e.left)]
@@ -793,6 +1027,8 @@ class Lowerer:
             lead = ["_ctx"]
             if pou.generic:
                 lead.append(self.type_const(info.generic_type) if info.generic_type is not None else "None")
+            if pou.typed:
+                lead.append(self.types_const(info.arg_types))
             return f"{name}({', '.join(lead + args)})"
         return f"{name}({', '.join(args)})"
 
@@ -821,6 +1057,48 @@ class Lowerer:
             elif target_type is not None:
                 value = self.coerce(value, var.type, target_type)
             self.store(target, value, target_type)
+
+
+def _walk(body):
+    """Every node under a statement list (statements, expressions, arguments)."""
+    stack: list = list(body)
+    while stack:
+        node = stack.pop()
+        if isinstance(node, tuple):
+            stack.extend(node)
+            continue
+        yield node
+        for name in getattr(node, "__dataclass_fields__", ()):
+            if name != "span":
+                value = getattr(node, name)
+                if isinstance(value, tuple) or hasattr(value, "__dataclass_fields__"):
+                    stack.append(value)
+
+
+def _root_name(expr) -> str | None:
+    """The variable at the root of an access path (`a` in `a.b[1]`), lower case."""
+    while isinstance(expr, (n.Member, n.Index, n.BitAccess)):
+        expr = expr.base
+    return expr.parts[0].lower() if isinstance(expr, n.Name) and len(expr.parts) == 1 else None
+
+
+def _calls_in(body) -> list[n.Call]:
+    """Every Call node in a statement list (for the by-reference analysis)."""
+    found: list[n.Call] = []
+    stack: list = list(body)
+    while stack:
+        node = stack.pop()
+        if isinstance(node, n.Call):
+            found.append(node)
+        if isinstance(node, tuple):
+            stack.extend(node)
+            continue
+        for name in getattr(node, "__dataclass_fields__", ()):
+            if name != "span":
+                value = getattr(node, name)
+                if isinstance(value, (tuple, n.Node)) or hasattr(value, "__dataclass_fields__"):
+                    stack.append(value)
+    return found
 
 
 def lower_project(analysis: Analysis, settings) -> LoweredProject:

@@ -78,6 +78,11 @@ def _oob(index: int, lo: int, hi: int) -> int:
     raise STFault(f"array index {index} out of bounds {lo}..{hi}")
 
 
+def _endless_for(end: int, step: int, type_name: str) -> None:
+    raise STFault(f"FOR loop cannot end: the {type_name} loop variable wraps before passing {end} "
+                  f"(step {step}); a controller's watchdog would stop the task")
+
+
 def _strfit(value: bytes, max_bytes: int) -> bytes:
     """Store into STRING[n]: truncate to n-1 bytes (Omron), never inside a UTF-8 sequence."""
     if len(value) <= max_bytes:
@@ -128,7 +133,7 @@ class _Frame:
 
 HELPERS = {
     "_f32": _f32, "_idiv": _idiv, "_idiv0": _idiv0, "_imod": _imod, "_imod0": _imod0, "_fdiv": _fdiv,
-    "_expt": _expt, "_oob": _oob, "_strfit": _strfit, "_copy_value": _copy_value,
+    "_expt": _expt, "_oob": _oob, "_endless_for": _endless_for, "_strfit": _strfit, "_copy_value": _copy_value,
     "_assign_array": _assign_array, "_setbit": _setbit, "_with": _with, "_Frame": _Frame,
     "_AttrRef": AttrRef, "_ItemRef": ItemRef, "_ArrayRef": ArrayRef, "_FunctionError": FunctionError,
     "_STFault": STFault,

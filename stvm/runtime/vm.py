@@ -105,6 +105,7 @@ class VM:
         self.scan_durations_ns = array("q")
         self.overruns = 0
         self.fault: RuntimeFault | None = None
+        self.collect_stats = True   # per-scan durations (for --stats); benchmarks switch it off
         self.on_scan_end: list[Callable[["VM"], None]] = []
         self._rt_start: float | None = None
         self.jitter_ns = array("q")
@@ -152,7 +153,7 @@ class VM:
         ctx = self.ctx
         ctx.now_ns = self.now_ns
         ctx.scan = tick
-        started = time.perf_counter_ns()
+        started = time.perf_counter_ns() if self.collect_stats else 0
         for task in self.tasks:
             if tick % task.every:
                 continue
@@ -168,9 +169,11 @@ class VM:
                 self._raise_fault(f"instruction error: {exc}", exc.__traceback__, task.name)
             except Exception as exc:  # an stvm bug: still report the ST location, not a traceback
                 self._raise_fault(f"internal error in stvm ({type(exc).__name__}: {exc})", exc.__traceback__, task.name)
-        self.scan_durations_ns.append(time.perf_counter_ns() - started)
-        for hook in self.on_scan_end:
-            hook(self)
+        if self.collect_stats:
+            self.scan_durations_ns.append(time.perf_counter_ns() - started)
+        if self.on_scan_end:
+            for hook in self.on_scan_end:
+                hook(self)
         self.scan_count += 1
         self.now_ns += self.base_ns
         if self.realtime:

@@ -92,6 +92,15 @@ def conversion_hint(src: t.Type, dst: t.Type) -> str:
     return ""
 
 
+def native_result_rule(pou: POUInfo):
+    """The stdlib's result-type rule for a generic native (SHL, MUX, TRUNC, …), if it has one."""
+    if not pou.native or pou.kind != "FUNCTION":
+        return None
+    from stvm.stdlib.registry import NATIVE_FUNCTIONS
+    native = NATIVE_FUNCTIONS.get(pou.qualname.split("\\")[-1].upper())
+    return native.result_rule if native is not None else None
+
+
 class _BodyChecker:
     def __init__(self, checker: "Checker", pou: POUInfo, node: n.POU) -> None:
         self.c = checker
@@ -780,7 +789,19 @@ class _BodyChecker:
                     self.error(f"in-out '{p.name}' of {pou.name} is not bound", e.span, "E048")
                 else:
                     self.error(f"in-out '{p.name}' of {pou.name} is not bound", e.span, "E048")
-        if generic_types:
+        # static argument types in parameter order (omitted inputs: their declared type), extras last
+        given = {var.key: value for var, value in info.inputs}
+        arg_types = [self.facts.types.get(id(given[p.key]), p.type) if p.key in given else p.type
+                     for p in params if not (pou.variadic and p is params[-1] and info.extra and p.key not in given)]
+        arg_types += [self.facts.types.get(id(x), params[-1].type) for x in info.extra]
+        info.arg_types = tuple(arg_types)
+        rule = native_result_rule(pou)
+        if rule is not None:
+            try:
+                info.generic_type = rule(info.arg_types)
+            except Exception as exc:  # a rule rejecting its arguments is a type error in the user's call
+                self.error(f"{pou.name}: {exc}", e.span, "E046")
+        elif generic_types:
             typed = [ty for ty, untyped in generic_types if not untyped]
             info.generic_type = self.common_generic(typed or [ty for ty, _ in generic_types], e)
 

@@ -48,6 +48,7 @@ class CallInfo:
     outputs: list[tuple[Variable, n.Expr, bool]] = field(default_factory=list)   # (pin, target, negate)
     extra: list[n.Expr] = field(default_factory=list)     # variadic extras, in order
     generic_type: t.Type | None = None
+    arg_types: tuple[t.Type, ...] = ()                    # per parameter (+ extras), for typed natives
 
 
 @dataclass
@@ -164,7 +165,8 @@ class Checker:
         words = " ".join(pou.pragmas).lower().split()
         native = "native" in words
         info = POUInfo(pou.name, qual, pou.kind, None, native=native, generic="generic" in words,
-                       variadic="variadic" in words, file=pou.span.file, span=pou.span)
+                       variadic="variadic" in words, typed="typed" in words, file=pou.span.file,
+                       span=pou.span)
         for word in words:
             if word.startswith("alias:") or (word.count("=") == 1 and "alias" in words):
                 alias, _, pin = word.split(":", 1)[-1].partition("=")

@@ -40,6 +40,7 @@ class POUInfo:
     native: bool = False
     generic: bool = False
     variadic: bool = False
+    typed: bool = False       # native wants the static argument types (`{native typed}`)
     aliases: dict[str, str] = field(default_factory=dict)         # pin alias key → pin key
     file: str = ""
     span: n.Span = n.NO_SPAN

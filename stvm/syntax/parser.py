@@ -28,8 +28,10 @@ _GRAMMAR_FILE = "st.lark"
 @lru_cache(maxsize=None)
 def _parser(start: str = "start") -> Lark:
     grammar = resources.files("stvm.syntax").joinpath(_GRAMMAR_FILE).read_text(encoding="utf-8")
+    # cache=True: Lark stores the built LALR tables in the temp dir, keyed by a hash of the
+    # grammar, the options and Lark's version; building them takes most of a second.
     return Lark(grammar, parser="lalr", lexer="contextual", propagate_positions=True,
-                start=["start", "expression"], maybe_placeholders=True, cache=False)
+                start=["start", "expression"], maybe_placeholders=True, cache=True)
 
 
 def grammar_text() -> str:

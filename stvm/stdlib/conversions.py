@@ -1,0 +1,367 @@
+"""The `<SRC>_TO_<DST>` conversion functions between elementary types (IEC 61131-3 2.5.1.5.1,
+Omron W502 "Data Type Conversion Instructions"), generated from one table.
+
+Which pairs exist:
+* BOOL, integers, bit strings and reals: every pair.
+* every elementary type to STRING and back.
+* DT_TO_DATE and DT_TO_TOD (IEC), each date/time conversion also under the long type names
+  (DATE_AND_TIME_TO_…, TIME_OF_DAY_TO_…).
+
+Rules:
+* integer/bit string to integer/bit string: the value wraps into the target (sysmac.md 2);
+* real to integer/bit string: nearest, ties to even (W502 2-248, 2-250: 2.5 → 2, -1.6 → 16#FFFE);
+  NaN/inf give 0 (Choice: W502 says "illegal value");
+* to BOOL: non-zero is TRUE; from BOOL: 1/0;
+* to STRING: integers decimal (sysmac.md 6), bit strings per `byte_to_string_format`
+  (sysmac.md 6), reals in C `%e` notation (Choice), times/dates as IEC literals (Choice);
+* from STRING: integers as STRING_TO_UINT (W502 2-271, sysmac.md 6), reals as W502 2-275, bit
+  strings in the format their *_TO_STRING writes, times/dates as IEC literals. A text that is not a
+  number, or out of range, is an instruction error (ENO FALSE, Out unchanged).
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+import math
+import re
+
+from stvm.runtime.values import FunctionError
+from stvm.semantics.types import ELEMENTARY, BoolType, IntType, RealType, StringType, TimeType, Type
+from stvm.stdlib.registry import native_function
+from stvm.stdlib.typeops import STRING_MAX_BYTES, coerce, real_to_integer, to_real32
+
+NUMERIC_TYPES = ["BOOL", "SINT", "INT", "DINT", "LINT", "USINT", "UINT", "UDINT", "ULINT",
+                 "BYTE", "WORD", "DWORD", "LWORD", "REAL", "LREAL"]
+TIME_TYPES = ["TIME", "DATE", "TOD", "DT"]
+LONG_NAMES = {"TOD": "TIME_OF_DAY", "DT": "DATE_AND_TIME"}
+
+NS_PER_S = 1_000_000_000
+NS_PER_DAY = 86_400 * NS_PER_S
+DATE_LAST_NS = 49_710 * NS_PER_DAY - 1
+"""2106-02-06-23:59:59.999999999, the last DATE/DT Omron allows (sysmac.md 2)."""
+
+
+# --- to STRING --------------------------------------------------------------------------------
+
+def bits_to_text(ctx, value: int, bits: int) -> bytes:
+    """BYTE/WORD/DWORD/LWORD_TO_STRING (sysmac.md 6, `byte_to_string_format`)."""
+    style = ctx.settings.byte_to_string_format
+    if style == "decimal":
+        return str(value).encode()
+    if style == "hex_pad2":
+        # Choice: `hex_pad2` pads to two digits per byte of the type ('0A', '00FF')
+        return f"{value:0{bits // 4}X}".encode()
+    return f"{value:X}".encode()
+
+
+def real_to_text(value: float, bits: int) -> bytes:
+    # Choice (no primary source): C `%e` with the digits the type carries (7 significant for REAL,
+    # 15 for LREAL), e.g. REAL#-123.45 -> '-1.234500e+02'.
+    if math.isnan(value):
+        return b"nan"
+    if math.isinf(value):
+        return b"inf" if value > 0 else b"-inf"
+    return (f"{value:.6e}" if bits == 32 else f"{value:.14e}").encode()
+
+
+def _fraction_text(ns: int) -> str:
+    return f".{ns:09d}".rstrip("0") if ns else ""
+
+
+TIME_UNITS_NS = [("d", NS_PER_DAY), ("h", 3_600 * NS_PER_S), ("m", 60 * NS_PER_S),
+                 ("s", NS_PER_S), ("ms", 1_000_000), ("us", 1_000), ("ns", 1)]
+
+
+def time_to_text(ns: int) -> bytes:
+    # Choice: the IEC literal, units from days to ns, zero units left out: T#1h30m, T#-250ms, T#0s.
+    if ns == 0:
+        return b"T#0s"
+    sign, rest = ("-", -ns) if ns < 0 else ("", ns)
+    parts = []
+    for unit, size in TIME_UNITS_NS:
+        count, rest = divmod(rest, size)
+        if count:
+            parts.append(f"{count}{unit}")
+    return f"T#{sign}{''.join(parts)}".encode()
+
+
+_EPOCH = _dt.datetime(1970, 1, 1)
+
+
+def _calendar(ns: int) -> tuple[_dt.datetime, int]:
+    seconds, fraction = divmod(ns, NS_PER_S)
+    return _EPOCH + _dt.timedelta(seconds=seconds), fraction
+
+
+def date_to_text(ns: int) -> bytes:
+    when, _ = _calendar(ns)
+    return f"D#{when:%Y-%m-%d}".encode()
+
+
+def tod_to_text(ns: int) -> bytes:
+    when, fraction = _calendar(ns % NS_PER_DAY)
+    return f"TOD#{when:%H:%M:%S}{_fraction_text(fraction)}".encode()
+
+
+def dt_to_text(ns: int) -> bytes:
+    when, fraction = _calendar(ns)
+    return f"DT#{when:%Y-%m-%d-%H:%M:%S}{_fraction_text(fraction)}".encode()
+
+
+def to_text(ctx, value, source: Type) -> bytes:
+    if isinstance(source, BoolType):
+        return b"TRUE" if value else b"FALSE"  # Choice: the ST literal spelling
+    if isinstance(source, IntType):
+        if source.bitstring:
+            return bits_to_text(ctx, value, source.bits)
+        return str(value).encode()  # sysmac.md 6: plain decimal, '-' if negative, no '+'
+    if isinstance(source, RealType):
+        return real_to_text(value, source.bits)
+    return TIME_TEXT_WRITERS[source.name](value)
+
+
+TIME_TEXT_WRITERS = {"TIME": time_to_text, "DATE": date_to_text, "TIME_OF_DAY": tod_to_text,
+                     "DATE_AND_TIME": dt_to_text}
+
+
+# --- from STRING ------------------------------------------------------------------------------
+
+def _strip_trailing(ctx, what: str, text: str, end: int) -> None:
+    """Characters after the number (sysmac.md 6, `stou_trailing`): an error, or blanks allowed."""
+    rest = text[end:]
+    if not rest:
+        return
+    if ctx.settings.stou_trailing == "ignore_blanks" and not rest.strip(" "):
+        return
+    raise FunctionError(f"{what}: unexpected characters {rest!r} after the number")
+
+
+_INTEGER_TEXT = re.compile(r" *([+-]?)([0-9_]*[0-9][0-9_]*)")
+_HEX_TEXT = re.compile(r" *(?:16#)?([0-9A-Fa-f_]*[0-9A-Fa-f][0-9A-Fa-f_]*)")
+
+
+def text_to_integer(ctx, text: bytes, target: IntType, what: str) -> int:
+    """STRING_TO_UINT and its siblings (W502 2-271, sysmac.md 6): leading blanks, a sign, digits
+    with leading zeros and `_`; the value must fit the target."""
+    chars = text.decode("latin-1")
+    if target.bitstring and ctx.settings.byte_to_string_format != "decimal":
+        match = _HEX_TEXT.match(chars)
+        if match is None:
+            raise FunctionError(f"{what}: {text!r} is not a hexadecimal number")
+        value = int(match.group(1).replace("_", ""), 16)
+    else:
+        match = _INTEGER_TEXT.match(chars)
+        if match is None:
+            raise FunctionError(f"{what}: {text!r} is not a number")
+        sign = match.group(1)
+        if sign == "+" and ctx.settings.stou_plus == "error":
+            raise FunctionError(f"{what}: a leading '+' is not accepted")
+        value = int(match.group(2).replace("_", ""))
+        if sign == "-":
+            value = -value  # '-0' is 0, also for unsigned targets
+    _strip_trailing(ctx, what, chars, match.end())
+    if not target.lo <= value <= target.hi:
+        raise FunctionError(f"{what}: {value} is outside {target.lo}..{target.hi}")
+    return value
+
+
+# W502 2-275: blanks, sign, blanks, integer part (required), '.', fraction, exponent.
+_REAL_TEXT = re.compile(r" *([+-]?) *([0-9]+)(?:\.([0-9]*))?(?:[eE]([+-]?[0-9]+))?")
+
+
+def text_to_real(ctx, text: bytes, target: RealType, what: str) -> float:
+    chars = text.decode("latin-1")
+    match = _REAL_TEXT.match(chars)
+    if match is None:
+        raise FunctionError(f"{what}: {text!r} is not a real number")
+    _strip_trailing(ctx, what, chars, match.end())
+    sign, whole, fraction, exponent = match.groups()
+    value = float(f"{sign}{whole}.{fraction or '0'}e{exponent or '0'}")
+    result = coerce(value, target)
+    if math.isinf(result):
+        raise FunctionError(f"{what}: {text!r} is outside the {target.name} range")
+    return result
+
+
+def text_to_bool(ctx, text: bytes, what: str) -> bool:
+    # Choice: TRUE/FALSE in any case, or 1/0, after leading blanks.
+    chars = text.decode("latin-1").lstrip(" ")
+    for spelling, value in (("TRUE", True), ("FALSE", False), ("1", True), ("0", False)):
+        if chars.upper().startswith(spelling):
+            _strip_trailing(ctx, what, chars, len(spelling))
+            return value
+    raise FunctionError(f"{what}: {text!r} is not TRUE or FALSE")
+
+
+_TIME_PART = re.compile(r"([0-9][0-9_]*(?:\.[0-9_]+)?)(d|h|ms|m|s|us|ns)", re.IGNORECASE)
+_UNIT_NS = {unit: size for unit, size in TIME_UNITS_NS}
+
+
+def _strip_prefix(chars: str, prefixes: tuple[str, ...]) -> str:
+    upper = chars.upper()
+    for prefix in prefixes:
+        if upper.startswith(prefix):
+            return chars[len(prefix):]
+    return chars
+
+
+def text_to_time(ctx, text: bytes, what: str) -> int:
+    chars = _strip_prefix(text.decode("latin-1").strip(" "), ("TIME#", "T#"))
+    negative = chars.startswith("-")
+    body = chars[1:] if negative else chars
+    total, position = 0, 0
+    while position < len(body):
+        match = _TIME_PART.match(body, position)
+        if match is None:
+            raise FunctionError(f"{what}: {text!r} is not a duration")
+        number = match.group(1).replace("_", "")
+        unit_ns = _UNIT_NS[match.group(2).lower()]
+        whole, _, fraction = number.partition(".")
+        total += int(whole) * unit_ns + (int(fraction) * unit_ns // 10 ** len(fraction) if fraction else 0)
+        position = match.end()
+        if position < len(body) and body[position] == "_":
+            position += 1
+    if position == 0:
+        raise FunctionError(f"{what}: {text!r} is not a duration")
+    total = -total if negative else total
+    if not -(1 << 63) <= total < (1 << 63):
+        raise FunctionError(f"{what}: {text!r} is outside the TIME range")
+    return total
+
+
+_DATE_TEXT = re.compile(r"([0-9]{4})-([0-9]{1,2})-([0-9]{1,2})$")
+_TOD_TEXT = re.compile(r"([0-9]{1,2}):([0-9]{1,2}):([0-9]{1,2})(?:\.([0-9]{1,9}))?$")
+
+
+def _date_ns(what: str, text: bytes, year: str, month: str, day: str) -> int:
+    try:
+        when = _dt.datetime(int(year), int(month), int(day))
+    except ValueError:
+        raise FunctionError(f"{what}: {text!r} is not a valid date") from None
+    ns = int((when - _EPOCH).total_seconds()) * NS_PER_S
+    if not 0 <= ns <= DATE_LAST_NS:
+        raise FunctionError(f"{what}: {text!r} is outside 1970-01-01…2106-02-06")
+    return ns
+
+
+def _tod_ns(what: str, text: bytes, hour: str, minute: str, second: str, fraction: str | None) -> int:
+    hours, minutes, seconds = int(hour), int(minute), int(second)
+    if hours > 23 or minutes > 59 or seconds > 59:
+        raise FunctionError(f"{what}: {text!r} is not a valid time of day")
+    fraction_ns = int((fraction or "").ljust(9, "0"))
+    return ((hours * 60 + minutes) * 60 + seconds) * NS_PER_S + fraction_ns
+
+
+def text_to_date(ctx, text: bytes, what: str) -> int:
+    chars = _strip_prefix(text.decode("latin-1").strip(" "), ("DATE#", "D#"))
+    match = _DATE_TEXT.match(chars)
+    if match is None:
+        raise FunctionError(f"{what}: {text!r} is not a date")
+    return _date_ns(what, text, *match.groups())
+
+
+def text_to_tod(ctx, text: bytes, what: str) -> int:
+    chars = _strip_prefix(text.decode("latin-1").strip(" "), ("TIME_OF_DAY#", "TOD#"))
+    match = _TOD_TEXT.match(chars)
+    if match is None:
+        raise FunctionError(f"{what}: {text!r} is not a time of day")
+    return _tod_ns(what, text, *match.groups())
+
+
+def text_to_dt(ctx, text: bytes, what: str) -> int:
+    chars = _strip_prefix(text.decode("latin-1").strip(" "), ("DATE_AND_TIME#", "DT#"))
+    date_part, dash, time_part = chars[:10], chars[10:11], chars[11:]
+    date_match, time_match = _DATE_TEXT.match(date_part), _TOD_TEXT.match(time_part)
+    if dash != "-" or date_match is None or time_match is None:
+        raise FunctionError(f"{what}: {text!r} is not a date and time")
+    return _date_ns(what, text, *date_match.groups()) + _tod_ns(what, text, *time_match.groups())
+
+
+def from_text(ctx, text: bytes, target: Type, what: str):
+    if isinstance(target, BoolType):
+        return text_to_bool(ctx, text, what)
+    if isinstance(target, IntType):
+        return text_to_integer(ctx, text, target, what)
+    if isinstance(target, RealType):
+        return text_to_real(ctx, text, target, what)
+    return TIME_TEXT_READERS[target.name](ctx, text, what)
+
+
+TIME_TEXT_READERS = {"TIME": text_to_time, "DATE": text_to_date, "TIME_OF_DAY": text_to_tod,
+                     "DATE_AND_TIME": text_to_dt}
+
+
+# --- numeric to numeric -----------------------------------------------------------------------
+
+def numeric_to_numeric(value, source: Type, target: Type):
+    if isinstance(target, BoolType):
+        return value != 0
+    if isinstance(source, BoolType):
+        value = int(value)
+    if isinstance(target, IntType) and isinstance(source, RealType):
+        return target.wrap(real_to_integer(value))
+    return coerce(value, target)
+
+
+# --- the table --------------------------------------------------------------------------------
+
+def _make_converter(what: str, source_name: str, target_name: str):
+    source, target = ELEMENTARY[source_name], ELEMENTARY[target_name]
+    if isinstance(target, StringType):
+        def convert(ctx, value):
+            return to_text(ctx, value, source)
+    elif isinstance(source, StringType):
+        def convert(ctx, text):
+            return from_text(ctx, text, target, what)
+    elif isinstance(source, TimeType):
+        # DT_TO_DATE / DT_TO_TOD: the date part, or the time of day (IEC 2.5.1.5.1)
+        def convert(ctx, value):
+            return value - value % NS_PER_DAY if target.name == "DATE" else value % NS_PER_DAY
+    else:
+        def convert(ctx, value):
+            return numeric_to_numeric(value, source, target)
+    convert.__name__ = what.lower()
+    return convert
+
+
+def conversion_pairs() -> list[tuple[str, str]]:
+    """(source, target) type names of every conversion function, short type names."""
+    pairs = [(a, b) for a in NUMERIC_TYPES for b in NUMERIC_TYPES if a != b]
+    for name in NUMERIC_TYPES + TIME_TYPES:
+        pairs += [(name, "STRING"), ("STRING", name)]
+    pairs += [("DT", "DATE"), ("DT", "TOD")]
+    return pairs
+
+
+def _spellings(name: str) -> list[str]:
+    return [name] + ([LONG_NAMES[name]] if name in LONG_NAMES else [])
+
+
+def conversion_functions() -> list[tuple[str, str, str]]:
+    """(function name, input type, result type) for every conversion, long names included."""
+    functions = []
+    for source, target in conversion_pairs():
+        for source_spelling in _spellings(source):
+            for target_spelling in _spellings(target):
+                functions.append((f"{source_spelling}_TO_{target_spelling}", source, target))
+    return functions
+
+
+def conversion_declarations() -> str:
+    """The ST declarations of all conversion functions (part of `stdlib_sources()`)."""
+    lines = ["(* Generated by stvm.stdlib.conversions: the *_TO_* conversion functions. *)", ""]
+    for name, source, target in conversion_functions():
+        lines += ["{native}", f"FUNCTION {name} : {target}",
+                  f"VAR_INPUT In : {source}; END_VAR", "END_FUNCTION", ""]
+    return "\n".join(lines)
+
+
+def _register_all() -> None:
+    for name, source, target in conversion_functions():
+        native_function(name)(_make_converter(name, source, target))
+
+
+_register_all()
+
+__all__ = ["conversion_declarations", "conversion_functions", "conversion_pairs", "to_text",
+           "from_text", "bits_to_text", "real_to_text", "STRING_MAX_BYTES", "to_real32"]

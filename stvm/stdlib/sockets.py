@@ -1,0 +1,689 @@
+"""Omron TCP socket instructions on a pluggable transport (sysmac.md 4 and 5).
+
+Three layers:
+
+* `Link`: one byte-stream connection, polled, never blocking. `TcpLink` is a non-blocking Python
+  socket; an in-process robot emulator provides its own (lockstep runs).
+* `SocketTable`: what the controller's socket service keeps per handle, the same whatever the link:
+  handle numbers 1, 2, 3, … (never reused, so a stale handle is always "closed"), at most 16 open
+  sockets, a 9,000-byte receive buffer whose overflow is discarded, the TCP state. It implements the
+  `Transport` interface the FBs use; `RealTcpTransport` is a `SocketTable` of `TcpLink`s.
+* the six FBs (`SktTCPConnect`, `SktTCPSend`, `SktTCPRcv`, `SktClearBuf`, `SktGetTCPStatus`,
+  `SktClose`) with the Execute/Done/Busy/Error protocol of section 4, one poll per call: a scan never
+  blocks. Every failure becomes Error + ErrorID (`skt_error_codes`), never a Python exception.
+
+The FBs use `ctx.transport`, creating `make_default_transport()` there when it is None; the VM calls
+`ctx.transport.close_all()` at the end of a run. The 75 s connect limit and receive timeouts run on
+the VM clock (`ctx.now_ns`).
+"""
+
+from __future__ import annotations
+
+import errno
+import ipaddress
+import select
+import socket
+from dataclasses import dataclass, field
+from typing import Callable, Protocol
+
+from stvm.runtime.values import FunctionError
+from stvm.stdlib.omron import as_array_ref
+from stvm.stdlib.registry import native_fb
+
+MAX_SOCKETS = 16                       # sysmac.md 5, CONFIRMED
+RECEIVE_BUFFER_BYTES = 9_000           # per socket, overflow discarded (CONFIRMED)
+RECEIVE_MAX_BYTES = 2_000              # per SktTCPRcv (CONFIRMED)
+CONNECT_TIMEOUT_NS = 75 * 1_000_000_000  # SYN resent up to 4 times, error 75 s after start
+
+# Link states (what the connection is doing; mapped to `_eCONNECTION_STATE` names below)
+CONNECTING = "connecting"
+ESTABLISHED = "established"
+PEER_CLOSED = "peer_closed"   # FIN received: _CLOSE_WAIT until SktClose
+RESET = "reset"               # RST received (or the connection broke): _CLOSED
+FAILED = "failed"             # the connect did not succeed (`Link.failure` says why)
+
+STATE_NAMES = {CONNECTING: "_SYN_SENT", ESTABLISHED: "_ESTABLISHED", PEER_CLOSED: "_CLOSE_WAIT",
+               RESET: "_CLOSED", FAILED: "_CLOSED"}
+
+
+class SocketError(Exception):
+    """A socket request failed; `kind` is a key of `SysmacSettings.skt_error_codes`."""
+
+    def __init__(self, kind: str, detail: str = "") -> None:
+        super().__init__(f"{kind}: {detail}" if detail else kind)
+        self.kind = kind
+
+
+# --- links ------------------------------------------------------------------------------------
+
+class Link(Protocol):
+    """One TCP connection as the socket service sees it.
+
+    `state` is one of the link states above; `failure` the error kind once FAILED;
+    `local_address`/`remote_address` are (ip, port) once established.
+    """
+
+    state: str
+    failure: str | None
+    local_address: tuple[str, int]
+    remote_address: tuple[str, int]
+
+    def poll(self, now_ns: int) -> bytes:
+        """Advance the connection (connect progress, flush queued sends) and return the bytes
+        received since the last poll. Never blocks."""
+
+    def send(self, data: bytes) -> None:
+        """Queue `data` for sending; raise SocketError('wrong_state') if the connection broke."""
+
+    def close(self) -> None:
+        """Discard what is buffered and close gracefully (FIN)."""
+
+
+LinkFactory = Callable[[int, str, int, int], Link]
+"""`open_link(src_port, host, port, now_ns)`: start connecting; raise SocketError for
+`port_in_use`, `unresolvable` or `wrong_state` when that is known at once."""
+
+
+def resolve_ipv4(host: str) -> str:
+    """A dotted IPv4 address for DstAdr; host names go through the resolver.
+
+    Choice: a name lookup may block briefly (DNS); dotted addresses never do.
+    """
+    try:
+        return str(ipaddress.IPv4Address(host))
+    except ValueError:
+        pass
+    if not host:
+        raise SocketError("unresolvable", "empty destination address")
+    try:
+        return socket.getaddrinfo(host, None, socket.AF_INET, socket.SOCK_STREAM)[0][4][0]
+    except (OSError, UnicodeError) as error:
+        raise SocketError("unresolvable", f"{host!r}: {error}") from None
+
+
+_IN_PROGRESS = {0, errno.EINPROGRESS, errno.EWOULDBLOCK, errno.EALREADY, errno.EAGAIN}
+_READ_LIMIT_PER_POLL = 1 << 20  # bytes read from the OS per poll; beyond 9,000 they are discarded
+
+
+def _failure_kind(code: int) -> str:
+    return "timeout" if code == errno.ETIMEDOUT else "wrong_state"
+
+
+class TcpLink:
+    """A non-blocking client socket, advanced by `poll`."""
+
+    def __init__(self, src_port: int, host: str, port: int, now_ns: int) -> None:
+        address = resolve_ipv4(host)
+        self.state = CONNECTING
+        self.failure: str | None = None
+        self.local_address = ("", 0)
+        self.remote_address = (address, port)
+        self._unsent = bytearray()
+        self._sock: socket.socket | None = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
+        try:
+            self._sock.setblocking(False)
+            if src_port:
+                try:
+                    self._sock.bind(("", src_port))
+                except OSError as error:
+                    kind = "port_in_use" if error.errno == errno.EADDRINUSE else "wrong_state"
+                    raise SocketError(kind, f"bind to port {src_port}: {error}") from None
+            code = self._sock.connect_ex((address, port))
+        except BaseException:
+            self._release()
+            raise
+        if code not in _IN_PROGRESS:
+            self._fail(_failure_kind(code))
+        elif code == 0:
+            self._established()
+
+    # connection progress
+
+    def _established(self) -> None:
+        self.state = ESTABLISHED
+        try:
+            self.local_address = self._sock.getsockname()[:2]
+        except OSError:
+            pass
+
+    def _fail(self, kind: str) -> None:
+        self.state, self.failure = FAILED, kind
+        self._release()
+
+    def _reset(self) -> None:
+        # RFC 793: on RST "all segment queues should be flushed"
+        self.state = RESET
+        self._unsent.clear()
+        self._release()
+
+    def _release(self) -> None:
+        if self._sock is not None:
+            try:
+                self._sock.close()
+            except OSError:
+                pass
+            self._sock = None
+
+    def poll(self, now_ns: int) -> bytes:
+        if self.state == CONNECTING:
+            _, writable, broken = select.select([], [self._sock], [self._sock], 0)
+            if not (writable or broken):
+                return b""
+            code = self._sock.getsockopt(socket.SOL_SOCKET, socket.SO_ERROR)
+            if code:
+                self._fail(_failure_kind(code))
+                return b""
+            self._established()
+        if self.state not in (ESTABLISHED, PEER_CLOSED):
+            return b""
+        self._flush()
+        if self.state != ESTABLISHED:
+            return b""  # after FIN nothing more arrives; after RST nothing is kept
+        received = bytearray()
+        while len(received) < _READ_LIMIT_PER_POLL:
+            try:
+                chunk = self._sock.recv(65_536)
+            except (BlockingIOError, InterruptedError):
+                break
+            except OSError:
+                self._reset()
+                return b""
+            if not chunk:
+                self.state = PEER_CLOSED
+                break
+            received += chunk
+        return bytes(received)
+
+    def _flush(self) -> None:
+        while self._unsent and self._sock is not None:
+            try:
+                sent = self._sock.send(self._unsent)
+            except (BlockingIOError, InterruptedError):
+                return
+            except OSError:
+                self._reset()
+                return
+            del self._unsent[:sent]
+
+    def send(self, data: bytes) -> None:
+        if self.state not in (ESTABLISHED, PEER_CLOSED):
+            raise SocketError("wrong_state", f"send while {self.state}")
+        # Choice: the send buffer is unbounded; Omron's fills up and keeps SktTCPSend Busy
+        self._unsent += data
+        self._flush()
+        if self.state == RESET:
+            raise SocketError("wrong_state", "connection reset by peer")
+
+    def close(self) -> None:
+        if self._sock is None:
+            return
+        self._unsent.clear()  # sysmac.md 5: SktClose discards buffered send/receive data
+        try:
+            # read what is left, so that the OS closes with FIN rather than RST
+            while True:
+                if not self._sock.recv(65_536):
+                    break
+        except OSError:
+            pass
+        try:
+            self._sock.shutdown(socket.SHUT_WR)
+        except OSError:
+            pass
+        self._release()
+
+
+# --- the socket service -----------------------------------------------------------------------
+
+class Transport(Protocol):
+    """The socket service the FBs talk to (one per VM run, `ctx.transport`).
+
+    Handles are ints ≥ 1. `open_connection` starts a connect; `poll` advances one handle and
+    returns its link state; data arrives in the handle's receive buffer. Unknown handles, handles
+    released after a failed connect and handles closed by `close` raise SocketError('bad_handle')
+    (`was_closed` tells the last apart).
+    """
+
+    def open_connection(self, src_port: int, host: str, port: int, now_ns: int) -> int: ...
+    def poll(self, handle: int, now_ns: int) -> str: ...
+    def failure(self, handle: int) -> str | None: ...
+    def addresses(self, handle: int) -> tuple[tuple[str, int], tuple[str, int]]: ...
+    def pending(self, handle: int) -> int: ...
+    def receive(self, handle: int, max_bytes: int) -> bytes: ...
+    def clear(self, handle: int) -> None: ...
+    def send(self, handle: int, data: bytes) -> None: ...
+    def close(self, handle: int) -> None: ...
+    def release(self, handle: int) -> None: ...
+    def was_closed(self, handle: int) -> bool: ...
+    def poll_all(self, now_ns: int) -> None: ...
+    def close_all(self) -> None: ...
+
+
+@dataclass
+class _OpenSocket:
+    link: Link
+    received: bytearray = field(default_factory=bytearray)
+    discarded_bytes: int = 0
+
+
+class SocketTable:
+    """Handles, limits and receive buffers over any `LinkFactory` (implements `Transport`)."""
+
+    def __init__(self, open_link: LinkFactory, max_sockets: int = MAX_SOCKETS,
+                 receive_buffer_bytes: int = RECEIVE_BUFFER_BYTES) -> None:
+        self._open_link = open_link
+        self.max_sockets = max_sockets
+        self.receive_buffer_bytes = receive_buffer_bytes
+        self._sockets: dict[int, _OpenSocket] = {}
+        self._closed: set[int] = set()
+        self._next_handle = 1
+
+    def _get(self, handle: int) -> _OpenSocket:
+        entry = self._sockets.get(handle)
+        if entry is None:
+            detail = "closed by SktClose" if handle in self._closed else "not a socket handle"
+            raise SocketError("bad_handle", f"handle {handle}: {detail}")
+        return entry
+
+    @property
+    def open_count(self) -> int:
+        return len(self._sockets)
+
+    def open_connection(self, src_port: int, host: str, port: int, now_ns: int) -> int:
+        if len(self._sockets) >= self.max_sockets:
+            raise SocketError("too_many_sockets", f"{self.max_sockets} sockets are open")
+        link = self._open_link(src_port, host, port, now_ns)
+        handle = self._next_handle
+        self._next_handle += 1
+        self._sockets[handle] = _OpenSocket(link)
+        return handle
+
+    def poll(self, handle: int, now_ns: int) -> str:
+        entry = self._get(handle)
+        data = entry.link.poll(now_ns)
+        if entry.link.state == RESET:
+            entry.received.clear()  # RFC 793: a reset flushes the queues
+        elif data:
+            room = self.receive_buffer_bytes - len(entry.received)
+            entry.received += data[:max(room, 0)]
+            entry.discarded_bytes += max(len(data) - max(room, 0), 0)  # sysmac.md 5: discarded
+        return entry.link.state
+
+    def failure(self, handle: int) -> str | None:
+        return self._get(handle).link.failure
+
+    def addresses(self, handle: int) -> tuple[tuple[str, int], tuple[str, int]]:
+        link = self._get(handle).link
+        return link.local_address, link.remote_address
+
+    def pending(self, handle: int) -> int:
+        return len(self._get(handle).received)
+
+    def discarded(self, handle: int) -> int:
+        return self._get(handle).discarded_bytes
+
+    def receive(self, handle: int, max_bytes: int) -> bytes:
+        entry = self._get(handle)
+        data = bytes(entry.received[:max_bytes])
+        del entry.received[:max_bytes]
+        return data
+
+    def clear(self, handle: int) -> None:
+        self._get(handle).received.clear()
+
+    def send(self, handle: int, data: bytes) -> None:
+        self._get(handle).link.send(data)
+
+    def close(self, handle: int) -> None:
+        entry = self._get(handle)
+        del self._sockets[handle]
+        self._closed.add(handle)
+        entry.link.close()
+
+    def release(self, handle: int) -> None:
+        """Forget a handle whose connect failed or was abandoned (it was never valid to ST)."""
+        entry = self._sockets.pop(handle, None)
+        if entry is not None:
+            entry.link.close()
+
+    def was_closed(self, handle: int) -> bool:
+        return handle in self._closed
+
+    def poll_all(self, now_ns: int) -> None:
+        """Advance every socket (the VM may call this once per scan; the FBs poll on their own)."""
+        for handle in list(self._sockets):
+            self.poll(handle, now_ns)
+
+    def close_all(self) -> None:
+        for handle in list(self._sockets):
+            self.close(handle)
+
+
+class RealTcpTransport(SocketTable):
+    """The socket service on the host's TCP stack."""
+
+    def __init__(self, max_sockets: int = MAX_SOCKETS,
+                 receive_buffer_bytes: int = RECEIVE_BUFFER_BYTES) -> None:
+        super().__init__(TcpLink, max_sockets, receive_buffer_bytes)
+
+
+def make_default_transport() -> Transport:
+    return RealTcpTransport()
+
+
+def transport_of(ctx) -> Transport:
+    if ctx.transport is None:
+        ctx.transport = make_default_transport()
+    return ctx.transport
+
+
+# --- the Execute protocol (sysmac.md 4) --------------------------------------------------------
+
+IDLE, BUSY, HELD, SHOWN_ONCE = "idle", "busy", "held", "shown_once"
+DONE = "done"
+
+
+class SocketRequestFB:
+    """Execute/Done/Busy/Error across calls, exactly as sysmac.md 4 says.
+
+    Per call: an edge (Execute TRUE now, FALSE at this instance's previous call) while idle latches
+    the inputs and starts the request (Busy TRUE, Done/Error FALSE, ErrorID 0). While busy, edges
+    are ignored; completion is possible at a call at least `skt_min_latency_calls` after the
+    starting call. Completed with Execute TRUE: Done/Error held until a call with Execute FALSE
+    clears them; with Execute already FALSE: TRUE for that one call only.
+
+    Subclasses implement `_start` (latch inputs, start the work; raise SocketError for errors found
+    at once, reported at completion) and `_progress` (None while waiting, DONE, or an error kind).
+    """
+
+    def __init__(self) -> None:
+        self._previous_execute = False
+        self._phase = IDLE
+        self._calls_since_start = 0
+        self._start_error: str | None = None
+        self._last_scan: int | None = None
+
+    def call(self, inst, ctx) -> None:
+        settings = ctx.settings
+        execute = bool(inst.v_execute)
+        edge = execute and not self._previous_execute
+        self._previous_execute = execute
+        if (self._phase == HELD and not execute) or self._phase == SHOWN_ONCE:
+            self._clear_outputs(inst, settings)
+        if (self._phase == BUSY and settings.skt_progress_without_call == "cancel"
+                and self._last_scan is not None and ctx.scan > self._last_scan + 1):
+            # `skt_progress_without_call = cancel`: a request not called in some scan is dropped
+            self._guarded(self._cancel, inst, ctx)
+            inst.v_busy = False
+            self._phase = IDLE
+        self._last_scan = ctx.scan
+        if self._phase == IDLE and edge:
+            inst.v_busy = True
+            inst.v_done = inst.v_error = False
+            inst.v_errorid = 0
+            self._phase = BUSY
+            self._calls_since_start = 0
+            self._start_error = self._guarded(self._start, inst, ctx)
+        elif self._phase == BUSY:
+            self._calls_since_start += 1
+        if self._phase == BUSY and self._calls_since_start >= settings.skt_min_latency_calls:
+            outcome = self._start_error or self._guarded(self._progress, inst, ctx)
+            if outcome is not None:
+                self._complete(inst, ctx, outcome, execute)
+
+    def _guarded(self, step, inst, ctx) -> str | None:
+        """Run a step; a failure becomes an error kind, never an exception out of the FB."""
+        try:
+            return step(inst, ctx, transport_of(ctx))
+        except SocketError as error:
+            return error.kind
+        except FunctionError:
+            return "too_few_elements"  # the array passed is shorter than the data
+        except OSError:
+            return "wrong_state"
+
+    def _complete(self, inst, ctx, outcome: str, execute: bool) -> None:
+        inst.v_busy = False
+        if outcome == DONE:
+            inst.v_done = True
+        else:
+            inst.v_error = True
+            inst.v_errorid = ctx.settings.skt_error_codes[outcome]
+        self._phase = HELD if execute else SHOWN_ONCE
+
+    def _clear_outputs(self, inst, settings) -> None:
+        inst.v_done = False
+        if inst.v_error and settings.skt_errorid_reset == "start_and_clear":
+            inst.v_errorid = 0
+        inst.v_error = False
+        self._phase = IDLE
+
+    # subclass hooks
+
+    def _start(self, inst, ctx, transport: Transport) -> None:
+        raise NotImplementedError
+
+    def _progress(self, inst, ctx, transport: Transport) -> str | None:
+        raise NotImplementedError
+
+    def _cancel(self, inst, ctx, transport: Transport) -> None:
+        return None
+
+
+def _handle_of(inst) -> int:
+    return inst.v_socket.v_handle
+
+
+def _require_open(transport: Transport, handle: int, now_ns: int) -> str:
+    """The handle's link state; bad_handle for 0, unknown or closed handles."""
+    if handle == 0:
+        raise SocketError("bad_handle", "handle 0")
+    return transport.poll(handle, now_ns)
+
+
+def _require_connected(transport: Transport, handle: int, now_ns: int) -> None:
+    state = _require_open(transport, handle, now_ns)
+    if state not in (ESTABLISHED, PEER_CLOSED):
+        raise SocketError("wrong_state", f"socket is {state}")
+
+
+@native_fb("SktTCPConnect")
+class SktTCPConnect(SocketRequestFB):
+    """Active open; Done when established, with the Socket output filled (sysmac.md 5)."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self._handle = 0
+        self._start_ns = 0
+        self._published_handle = 0
+
+    def call(self, inst, ctx) -> None:
+        super().call(inst, ctx)
+        if (ctx.settings.skt_socket_after_close == "zeroed" and self._published_handle
+                and inst.v_socket.v_handle == self._published_handle
+                and self._transport_closed(ctx, self._published_handle)):
+            _write_socket(inst.v_socket, 0, ("", 0), ("", 0))
+            self._published_handle = 0
+
+    @staticmethod
+    def _transport_closed(ctx, handle: int) -> bool:
+        return ctx.transport is not None and ctx.transport.was_closed(handle)
+
+    def _start(self, inst, ctx, transport: Transport) -> None:
+        self._handle = 0
+        self._start_ns = ctx.now_ns
+        if inst.v_dsttcpport == 0:
+            raise SocketError("out_of_range", "DstTcpPort 0")
+        if inst.v_srctcpport == 0 and ctx.settings.skt_connect_srcport0 == "error":
+            raise SocketError("out_of_range", "SrcTcpPort 0")
+        host = inst.v_dstadr.decode("latin-1").strip()
+        self._handle = transport.open_connection(inst.v_srctcpport, host, inst.v_dsttcpport,
+                                                 ctx.now_ns)
+
+    def _progress(self, inst, ctx, transport: Transport) -> str | None:
+        state = transport.poll(self._handle, ctx.now_ns)
+        if state in (ESTABLISHED, PEER_CLOSED):
+            local, remote = transport.addresses(self._handle)
+            _write_socket(inst.v_socket, self._handle, local, remote)
+            self._published_handle = self._handle
+            return DONE
+        if state == CONNECTING and ctx.now_ns - self._start_ns < CONNECT_TIMEOUT_NS:
+            return None
+        kind = transport.failure(self._handle) if state == FAILED else None
+        if state == CONNECTING:
+            kind = "timeout"  # 75 s after start (CONFIRMED), on the VM clock
+        transport.release(self._handle)
+        return kind or "wrong_state"
+
+    def _guarded(self, step, inst, ctx) -> str | None:
+        outcome = super()._guarded(step, inst, ctx)
+        if outcome not in (None, DONE) and self._handle:
+            # every failed connect gives its socket back (issue 4: "the socket is released")
+            transport_of(ctx).release(self._handle)
+            self._handle = 0
+        return outcome
+
+    def _cancel(self, inst, ctx, transport: Transport) -> None:
+        if self._handle:
+            transport.release(self._handle)
+            self._handle = 0
+
+
+def _write_socket(socket_value, handle: int, local: tuple[str, int], remote: tuple[str, int]) -> None:
+    socket_value.v_handle = handle
+    socket_value.v_srcadr.v_ipadr = local[0].encode()
+    socket_value.v_srcadr.v_portno = local[1]
+    socket_value.v_dstadr.v_ipadr = remote[0].encode()
+    socket_value.v_dstadr.v_portno = remote[1]
+
+
+@native_fb("SktClearBuf")
+class SktClearBuf(SocketRequestFB):
+    """Discard the received, unread bytes; later bytes are kept (sysmac.md 5).
+
+    Choice: the service clears when the request starts (as the controller's system service does,
+    between calls); the result shows at completion.
+    """
+
+    def _start(self, inst, ctx, transport: Transport) -> None:
+        handle = _handle_of(inst)
+        _require_open(transport, handle, ctx.now_ns)  # pulls in what has arrived so far
+        transport.clear(handle)
+
+    def _progress(self, inst, ctx, transport: Transport) -> str | None:
+        return DONE
+
+
+@native_fb("SktGetTCPStatus")
+class SktGetTCPStatus(SocketRequestFB):
+    """TCP state and DatRcvFlag, as a snapshot at completion (sysmac.md 5)."""
+
+    def _start(self, inst, ctx, transport: Transport) -> None:
+        self._handle = _handle_of(inst)
+
+    def _progress(self, inst, ctx, transport: Transport) -> str | None:
+        names = ctx.settings.connection_state_values
+        if transport.was_closed(self._handle):
+            # a handle once valid, now closed (`skt_status_closed_handle`)
+            if ctx.settings.skt_status_closed_handle == "error":
+                return "bad_handle"
+            inst.v_tcpstatus = names["_CLOSED"]
+            inst.v_datrcvflag = False
+            return DONE
+        state = _require_open(transport, self._handle, ctx.now_ns)
+        inst.v_tcpstatus = names[STATE_NAMES[state]]
+        inst.v_datrcvflag = transport.pending(self._handle) > 0
+        return DONE
+
+
+@native_fb("SktTCPSend")
+class SktTCPSend(SocketRequestFB):
+    """Send Size bytes from SendDat; Done once they are in the send buffer (sysmac.md 5)."""
+
+    def _start(self, inst, ctx, transport: Transport) -> None:
+        settings = ctx.settings
+        self._handle = _handle_of(inst)
+        self._size = inst.v_size
+        self._data: bytes | None = None
+        if self._size > settings.skt_send_max:
+            raise SocketError("out_of_range", f"Size {self._size} > {settings.skt_send_max}")
+        if self._size == 0 and settings.skt_send_size0 == "error":
+            raise SocketError("out_of_range", "Size 0")
+        source = as_array_ref(inst.v_senddat)
+        if self._size > len(source):
+            raise SocketError("too_few_elements", f"Size {self._size} > {len(source)} elements")
+        _require_connected(transport, self._handle, ctx.now_ns)
+        if settings.skt_send_copy == "at_start":
+            self._data = bytes(source.read(self._size))
+            self._send(transport)
+
+    def _send(self, transport: Transport) -> None:
+        if self._data:  # Size 0: Done, nothing sent (`skt_send_size0 = done`)
+            transport.send(self._handle, self._data)
+
+    def _progress(self, inst, ctx, transport: Transport) -> str | None:
+        if self._data is None:  # `skt_send_copy = at_service`: the bytes as they are now
+            source = as_array_ref(inst.v_senddat)
+            if self._size > len(source):
+                return "too_few_elements"
+            self._data = bytes(source.read(self._size))
+            _require_connected(transport, self._handle, ctx.now_ns)
+            self._send(transport)
+        return DONE
+
+
+@native_fb("SktTCPRcv")
+class SktTCPRcv(SocketRequestFB):
+    """Take min(available, Size, 2000) bytes once at least one is buffered (sysmac.md 5)."""
+
+    def _start(self, inst, ctx, transport: Transport) -> None:
+        self._handle = _handle_of(inst)
+        self._size = inst.v_size
+        self._timeout_ns = inst.v_timeout * ctx.settings.skt_rcv_timeout_unit_ns
+        self._start_ns = ctx.now_ns
+        if not 0 < self._size <= RECEIVE_MAX_BYTES:
+            raise SocketError("out_of_range", f"Size {self._size} not in 1..{RECEIVE_MAX_BYTES}")
+        if self._size > len(as_array_ref(inst.v_rcvdat)):
+            raise SocketError("too_few_elements", f"Size {self._size} > elements passed")
+        _require_open(transport, self._handle, ctx.now_ns)
+
+    def _progress(self, inst, ctx, transport: Transport) -> str | None:
+        settings = ctx.settings
+        state = _require_open(transport, self._handle, ctx.now_ns)
+        available = transport.pending(self._handle)
+        if available:
+            count = min(available, self._size, RECEIVE_MAX_BYTES)
+            target = as_array_ref(inst.v_rcvdat)
+            if count > len(target):
+                return "too_few_elements"
+            target.write(transport.receive(self._handle, count))  # later elements untouched
+            inst.v_rcvsize = count
+            return DONE
+        if state == PEER_CLOSED:
+            if settings.skt_rcv_peer_closed == "error":
+                return "wrong_state"
+            inst.v_rcvsize = 0  # `skt_rcv_peer_closed = done_zero`
+            return DONE
+        if state in (RESET, FAILED):
+            return "wrong_state"
+        if self._timeout_ns == 0:
+            return "timeout" if settings.skt_rcv_timeout0 == "error_if_empty" else None
+        if ctx.now_ns - self._start_ns >= self._timeout_ns:
+            return "timeout"
+        return None
+
+
+@native_fb("SktClose")
+class SktClose(SocketRequestFB):
+    """Discard buffered data, send FIN; the handle is invalid afterwards (sysmac.md 5).
+
+    Choice: Done at the first completion call (the FIN's ACK is not observable without blocking).
+    """
+
+    def _start(self, inst, ctx, transport: Transport) -> None:
+        handle = _handle_of(inst)
+        if handle == 0:
+            raise SocketError("bad_handle", "handle 0")
+        transport.close(handle)
+
+    def _progress(self, inst, ctx, transport: Transport) -> str | None:
+        return DONE
