@@ -124,7 +124,10 @@ def cmd_run(args) -> int:
         print(f"{sum(d.is_error for d in exc.diagnostics)} error(s)", file=sys.stderr)
         return EXIT_COMPILE
     _print_diagnostics(project.warnings, project.sources)
-    vm = project.start(scan=scan_ns, realtime=args.realtime)
+    demo_mode = "demo" in project.manifest and not args.no_demo
+    # the demo talks to a robot that moves in wall-clock time: run on the real-time clock
+    realtime = args.realtime or (demo_mode and not args.virtual_clock)
+    vm = project.start(scan=scan_ns, realtime=realtime)
     # validate --print names before running, so a typo is a usage error, not a lost run
     for name in args.print or []:
         try:
@@ -140,12 +143,35 @@ def cmd_run(args) -> int:
             raise _UsageError(str(exc)) from exc
         except ValueError as exc:
             raise _UsageError(f"--set {name}: {exc}") from exc
+    demo = None
+    try:
+        if demo_mode:
+            from stvm.demo import Demo
+            demo = Demo(project, vm, args)
+            demo.start()
+        elif args.scenario:
+            from stvm.scenario import ScenarioDriver, load_scenario
+            driver = ScenarioDriver(load_scenario(args.scenario), vm)
+            driver.apply_initial()
+            vm.on_scan_end.append(driver.after_scan)
+    except (ValueError, KeyError) as exc:
+        if demo is not None:
+            demo.stop()
+        raise _UsageError(str(exc)) from exc
     status = EXIT_OK
     interrupted = False
     previous = signal.getsignal(signal.SIGINT)
+
+    def run_scans() -> None:
+        vm.run(cycles=args.cycles, duration_ns=duration_ns, until=demo.done if demo else None)
+
     try:
         try:
-            vm.run(cycles=args.cycles, duration_ns=duration_ns)
+            if demo is not None:
+                from stvm.demo import run_with_status
+                run_with_status(demo, run_scans)
+            else:
+                run_scans()
         except KeyboardInterrupt:
             interrupted = True
         except RuntimeFault as fault:
@@ -154,6 +180,10 @@ def cmd_run(args) -> int:
     finally:
         signal.signal(signal.SIGINT, previous)
         vm.close()
+        if demo is not None:
+            demo.stop()
+            print(f"PnP cycles completed: {demo.state.cycles}; VM time {vm.now_ns / 1e9:.3f} s; "
+                  f"scans {vm.scan_count}; overruns {vm.overruns}", file=sys.stderr)
     for name in args.print or []:
         print(f"{name} = {vm.format(name)}")
     if args.stats:
@@ -199,6 +229,13 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--realtime", action="store_true", help="sleep to each deadline (default: virtual clock)")
     run.add_argument("--stats", action="store_true", help="print scan-time statistics")
     run.add_argument("--no-cache", action="store_true", help="do not use the compile cache")
+    run.add_argument("--scenario", help="scenario TOML applied to the run (see README)")
+    demo = run.add_argument_group("demo (projects whose stvm.toml has [demo], e.g. st_src/)")
+    demo.add_argument("--robot", metavar="HOST:PORT", help="talk to this robot instead of the bundled emulator")
+    demo.add_argument("--emulator-log", metavar="FILE", help="write the emulator's frame log (JSON lines)")
+    demo.add_argument("--pnp-cycles", type=int, metavar="N", help="stop after N complete PnP cycles")
+    demo.add_argument("--no-demo", action="store_true", help="run the project without the demo driver")
+    demo.add_argument("--virtual-clock", action="store_true", help="demo on the virtual clock (default: real time)")
     run.add_argument("--sysmac", action="append", metavar="NAME=VALUE", help=sysmac_help)
     run.set_defaults(func=cmd_run)
     _register_extensions(sub)

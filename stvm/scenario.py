@@ -1,0 +1,178 @@
+"""Scenario files: documented TOML (read with the standard library's tomllib) that drive a run.
+
+    description = "PnP demo against the bundled emulator"
+
+    [set]                                  # applied before the first scan
+    Connect_Time_Out = 100                 # TOML numbers/booleans, or IEC literals as strings:
+    Connect_AddressIP = "'127.0.0.1'"      #   "'text'", "T#2s", "eType#Value", "16#FF"
+
+    [robot]                                # where the robot's address goes (demo / lockstep)
+    address = "Connect_AddressIP"          # STRING variable that receives the host
+    port = "Connect_Dest_PortIP"           # integer variable that receives the port
+
+    [[at]]                                 # timed events, in any order
+    time = "50ms"                          # or: scan = 50, or: when = "Cobot.Connected"
+    set = { PnP_Example_Execute = true }
+    fault = "drop"                         # an emulator fault (lockstep runs), as `tm-emulator --fault`
+
+    [record]
+    watch = ["PnP_Example_Instance.Prg_Step", "Cobot.*"]
+
+`when` events fire once, at the end of the first scan in which the BOOL variable is TRUE.
+"""
+
+from __future__ import annotations
+
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+
+class ScenarioError(ValueError):
+    """A scenario file that cannot be used; the message names the file and the entry."""
+
+
+@dataclass
+class Event:
+    scan: int | None = None
+    time_ns: int | None = None
+    when: str | None = None
+    assignments: dict[str, Any] = field(default_factory=dict)
+    faults: list[str] = field(default_factory=list)
+    fired: bool = False
+
+
+@dataclass
+class Scenario:
+    path: str = "<none>"
+    description: str = ""
+    initial: dict[str, Any] = field(default_factory=dict)
+    events: list[Event] = field(default_factory=list)
+    robot_address: str | None = None
+    robot_port: str | None = None
+    watch: list[str] = field(default_factory=list)
+    raw: dict = field(default_factory=dict)
+
+
+def load_scenario(path: str | Path) -> Scenario:
+    path = Path(path)
+    try:
+        with path.open("rb") as fh:
+            data = tomllib.load(fh)
+    except OSError as exc:
+        raise ScenarioError(f"{path}: cannot read scenario: {exc.strerror or exc}") from exc
+    except tomllib.TOMLDecodeError as exc:
+        raise ScenarioError(f"{path}: not valid TOML: {exc}") from exc
+    return parse_scenario(data, str(path))
+
+
+def parse_scenario(data: dict, name: str = "<scenario>") -> Scenario:
+    from stvm.project import parse_duration
+    known = {"description", "set", "robot", "at", "record", "run"}
+    unknown = set(data) - known
+    if unknown:
+        raise ScenarioError(f"{name}: unknown section(s) {', '.join(sorted(unknown))}; known: {', '.join(sorted(known))}")
+    scenario = Scenario(path=name, description=str(data.get("description", "")), raw=data)
+    initial = data.get("set", {})
+    if not isinstance(initial, dict):
+        raise ScenarioError(f"{name}: [set] must be a table of NAME = VALUE")
+    scenario.initial = dict(initial)
+    robot = data.get("robot", {})
+    scenario.robot_address = robot.get("address")
+    scenario.robot_port = robot.get("port")
+    for i, entry in enumerate(data.get("at", [])):
+        where = f"{name}: [[at]] #{i + 1}"
+        if not isinstance(entry, dict):
+            raise ScenarioError(f"{where}: must be a table")
+        keys = [k for k in ("scan", "time", "when") if k in entry]
+        if len(keys) != 1:
+            raise ScenarioError(f"{where}: give exactly one of scan, time, when")
+        event = Event(assignments=dict(entry.get("set", {})))
+        fault = entry.get("fault", [])
+        event.faults = [fault] if isinstance(fault, str) else list(fault)
+        if "scan" in entry:
+            if not isinstance(entry["scan"], int) or entry["scan"] < 0:
+                raise ScenarioError(f"{where}: scan must be a non-negative integer")
+            event.scan = entry["scan"]
+        elif "time" in entry:
+            try:
+                event.time_ns = parse_duration(str(entry["time"]))
+            except ValueError as exc:
+                raise ScenarioError(f"{where}: {exc}") from exc
+        else:
+            event.when = str(entry["when"])
+        scenario.events.append(event)
+    record = data.get("record", {})
+    watch = record.get("watch", [])
+    scenario.watch = [watch] if isinstance(watch, str) else list(watch)
+    return scenario
+
+
+def to_st_value(raw: Any, vm, path: str) -> Any:
+    """A scenario value (TOML scalar or IEC literal string) converted for variable `path`."""
+    from stvm.cli import literal_value
+    from stvm.semantics import types as t
+    ty = vm.type_of(path)
+    if isinstance(raw, bool) or isinstance(raw, (int, float)):
+        if isinstance(ty, t.RealType):
+            return float(raw)
+        return raw
+    if isinstance(raw, str):
+        if isinstance(ty, t.StringType) and not raw.startswith("'"):
+            return raw  # plain TOML text for a STRING
+        return literal_value(raw, ty)
+    raise ScenarioError(f"{path}: unsupported value {raw!r}")
+
+
+class ScenarioDriver:
+    """Applies a scenario to a running VM: initial values now, events at the end of each scan."""
+
+    def __init__(self, scenario: Scenario, vm, fault_sink=None) -> None:
+        self.scenario = scenario
+        self.vm = vm
+        self.fault_sink = fault_sink   # callable(fault text) for emulator faults, or None
+
+    def apply_initial(self, overrides: dict[str, Any] | None = None) -> None:
+        values = dict(self.scenario.initial)
+        values.update(overrides or {})
+        for path, raw in values.items():
+            self._assign(path, raw, "[set]")
+        self._fire_due(before_first=True)
+
+    def _assign(self, path: str, raw: Any, where: str) -> None:
+        try:
+            self.vm.set(path, to_st_value(raw, self.vm, path))
+        except (KeyError, ValueError) as exc:
+            raise ScenarioError(f"{self.scenario.path}: {where}: {path}: {exc}") from exc
+
+    def _fire(self, event: Event) -> None:
+        event.fired = True
+        for path, raw in event.assignments.items():
+            self._assign(path, raw, "[[at]]")
+        for fault in event.faults:
+            if self.fault_sink is None:
+                raise ScenarioError(f"{self.scenario.path}: fault {fault!r} needs an emulator (lockstep or bundled)")
+            self.fault_sink(fault)
+
+    def _fire_due(self, before_first: bool = False) -> None:
+        vm = self.vm
+        for event in self.scenario.events:
+            if event.fired:
+                continue
+            if event.scan is not None and event.scan <= vm.scan_count:
+                self._fire(event)
+            elif event.time_ns is not None and event.time_ns <= vm.now_ns:
+                self._fire(event)
+            elif event.when is not None and not before_first and bool(vm.get(event.when)):
+                self._fire(event)
+
+    def after_scan(self, vm) -> None:
+        """VM hook: runs at the end of every scan (the VM has not advanced its clock yet)."""
+        # scan_count/now_ns still name the scan that just ran: events for the next scan fire now
+        saved = vm.scan_count, vm.now_ns
+        vm.scan_count, vm.now_ns = saved[0] + 1, saved[1] + vm.base_ns
+        try:
+            self._fire_due()
+        finally:
+            vm.scan_count, vm.now_ns = saved
