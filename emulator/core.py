@@ -1,0 +1,176 @@
+"""Connection core shared by both transports: robot + one framer per connection + byte-level
+faults + frame log.  Pure: no sockets, no clock; the transport passes ``now_ns`` in.
+
+Outgoing bytes are queued as :class:`Delivery` items with the instant they may go on the wire
+(``pop_ready``).  Each item is one whole frame, to be written with a single write (spec §2: some
+clients cannot reassemble a frame split over two reads) unless the ``split`` fault is active.
+"""
+
+from __future__ import annotations
+
+import heapq
+from dataclasses import dataclass
+from typing import Callable
+
+from .faults import NO_FAULTS, FaultPlan, corrupt_checksum
+from .framing import ListenNodeFramer
+from .motion import NS_PER_MS
+from .robot import Action, Close, Robot, Send
+from .settings import DEFAULT_SETTINGS, EmulatorSettings
+
+FrameLog = Callable[[int, str, bytes, int], None]  # (t_ns, "rx"/"tx", frame bytes, conn)
+
+
+@dataclass(frozen=True)
+class Delivery:
+    """Bytes for a connection (``data``), or its closing (``data is None``)."""
+
+    conn: int
+    data: bytes | None
+    at_ns: int
+
+
+class EmulatorCore:
+    def __init__(self, settings: EmulatorSettings = DEFAULT_SETTINGS, faults: FaultPlan = NO_FAULTS,
+                 frame_log: FrameLog | None = None, now_ns: int = 0) -> None:
+        self.settings = settings
+        self.faults = faults
+        self.robot = Robot(settings, faults, now_ns)
+        self.frame_log = frame_log
+        self.framers: dict[int, ListenNodeFramer] = {}
+        self.rx_buffers: dict[int, bytes] = {}
+        self._next_conn = 1
+        self._refused = 0
+        self._tx_count = 0
+        self._pending: list[tuple[int, int, Delivery]] = []
+        self._seq = 0
+        self._was_moving = False
+        self._drop_at_ns: int | None = None
+        self.now_ns = now_ns
+
+    # ------------------------------------------------------------------ connections
+
+    @property
+    def accepting(self) -> bool:
+        return self.robot.accepting
+
+    def open(self, now_ns: int) -> int | None:
+        """A client connects; return its connection id, or None if refused."""
+        self._tick(now_ns)
+        refuse = self.faults.refuse_connections
+        if not self.robot.accepting or refuse == -1 or self._refused < refuse:
+            self._refused += 1
+            return None
+        conn = self._next_conn
+        self._next_conn += 1
+        self.framers[conn] = ListenNodeFramer(self.settings)
+        self.rx_buffers[conn] = b""
+        self._absorb(self.robot.connect(conn, now_ns))
+        return conn
+
+    def close(self, conn: int, now_ns: int) -> None:
+        """The client closed (or lost) the connection."""
+        self._tick(now_ns)
+        self.framers.pop(conn, None)
+        self.rx_buffers.pop(conn, None)
+        self._absorb(self.robot.disconnect(conn, now_ns))
+
+    def receive(self, conn: int, data: bytes, now_ns: int) -> None:
+        """Bytes arrived from ``conn``: decode every complete frame and answer it."""
+        self._tick(now_ns)
+        framer = self.framers.get(conn)
+        if framer is None:
+            return
+        buf = self.rx_buffers[conn] + data
+        pos = 0
+        while pos < len(buf) and conn in self.framers:
+            used, result = framer.decode(buf[pos:])
+            if used == 0:
+                break
+            pos += used
+            if result is None:
+                continue  # garbage before "$" skipped (spec §2 [U])
+            if self.frame_log is not None:
+                self.frame_log(now_ns, "rx", result.raw, conn)
+            self._absorb(self.robot.handle(conn, result, now_ns))
+        if conn in self.rx_buffers:
+            self.rx_buffers[conn] = buf[pos:]
+
+    # ------------------------------------------------------------------ time
+
+    def advance(self, now_ns: int) -> None:
+        self._tick(now_ns)
+
+    def next_deadline_ns(self) -> int | None:
+        times = [t for t in (self.robot.next_deadline_ns(), self._drop_at_ns) if t is not None]
+        if self._pending:
+            times.append(self._pending[0][0])
+        return min(times) if times else None
+
+    def pop_ready(self, now_ns: int) -> list[Delivery]:
+        """Deliveries due at ``now_ns``, in order."""
+        self._tick(now_ns)
+        ready: list[Delivery] = []
+        while self._pending and self._pending[0][0] <= now_ns:
+            ready.append(heapq.heappop(self._pending)[2])
+        for item in ready:
+            if item.data is not None and self.frame_log is not None:
+                self.frame_log(item.at_ns, "tx", item.data, item.conn)
+        return ready
+
+    def _tick(self, now_ns: int) -> None:
+        now_ns = max(now_ns, self.now_ns)
+        if self._drop_at_ns is not None and now_ns >= self._drop_at_ns:
+            self._absorb(self.robot.advance(self._drop_at_ns))
+            self._drop_all(self._drop_at_ns)
+            self._drop_at_ns = None
+        self._absorb(self.robot.advance(now_ns))
+        self.now_ns = now_ns
+        moving = self.robot.executor.moving
+        if moving and not self._was_moving and self.faults.drop_after_motion_ms is not None:
+            self._drop_at_ns = now_ns + self.faults.drop_after_motion_ms * NS_PER_MS
+        self._was_moving = moving
+        if self._drop_at_ns is not None and now_ns >= self._drop_at_ns:
+            self._drop_all(now_ns)
+            self._drop_at_ns = None
+
+    def _drop_all(self, at_ns: int) -> None:
+        """Fault ``drop``: close every connection in the middle of a motion."""
+        for conn in list(self.framers):
+            self._push(Delivery(conn, None, at_ns))
+            self.framers.pop(conn, None)
+            self.rx_buffers.pop(conn, None)
+            self._absorb(self.robot.disconnect(conn, at_ns))
+
+    # ------------------------------------------------------------------ robot output
+
+    def _push(self, delivery: Delivery) -> None:
+        self._seq += 1
+        heapq.heappush(self._pending, (delivery.at_ns, self._seq, delivery))
+
+    def _absorb(self, actions: list[Action]) -> None:
+        delay = self.faults.reply_delay_ms * NS_PER_MS
+        for action in actions:
+            if isinstance(action, Close):
+                targets = list(self.framers) if action.conn is None else [action.conn]
+                for conn in targets:
+                    self._push(Delivery(conn, None, action.at_ns))
+                    self.framers.pop(conn, None)
+                    self.rx_buffers.pop(conn, None)
+                continue
+            assert isinstance(action, Send)
+            if action.conn not in self.framers:
+                continue
+            data = action.data
+            self._tx_count += 1
+            every = self.faults.corrupt_checksum_every
+            if every and self._tx_count % every == 0:
+                data = corrupt_checksum(data)
+            at = action.at_ns + delay
+            split = self.faults.split_frames_at
+            if split is not None and len(data) > 1:
+                cut = split if 0 < split < len(data) else len(data) // 2
+                self._push(Delivery(action.conn, data[:cut], at))
+                self._push(Delivery(action.conn, data[cut:], at))
+            else:
+                self._push(Delivery(action.conn, data, at))

@@ -1,0 +1,540 @@
+"""Motion model: kinematics, trapezoidal timing, blending and the FIFO motion queue (spec §8).
+
+Pure and deterministic: time is an integer count of nanoseconds of *motion time*, which the robot
+advances only while the project is not paused (spec §8 Pause: the motion holds, the queue is kept,
+and Resume completes the interrupted motion).
+
+Timing model (spec §8 [U], §11 #11; every constant is an :class:`EmulatorSettings` field):
+
+* Trapezoid over a distance ``D`` with top speed ``v`` and acceleration time ``ta`` (the TM
+  ``accel_ms``: time from rest to top speed): if ``D >= v*ta`` the duration is ``D/v + ta``,
+  otherwise the profile is a triangle of duration ``2*sqrt(D*ta/v)``.
+* PTP (``JPP``/``CPP``): joint space; each joint's top speed is ``speed% * max_joint_speed``; all
+  joints are synchronised to the slowest one.  ``CPP`` targets are converted with inverse kinematics.
+* Line/Circle/PLine: Cartesian; path length (line or arc) at ``speed% * max_tcp_speed`` (``P``
+  formats) or the given mm/s (``A``/``D``), and the orientation change at the same fraction of
+  ``max_tcp_rot_speed``; the slower of the two sets the duration.
+* Blending ``b`` % (or a radius): the motion hands over to the next queued motion when
+  ``b% * ta_decel`` remains, so the deceleration and the next acceleration overlap; the pose is the
+  superposition of both.  A tag queued right after a blended motion is reached at the hand-over.
+  If nothing is queued at the hand-over instant the motion stops at its target.
+* Precise positioning (``disablePrecise`` false) adds ``precise_settle_ms`` at the end.
+* Every duration is multiplied by ``time_scale`` and rounded to whole nanoseconds.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import deque
+from dataclasses import dataclass, field
+from typing import Any, Sequence
+
+import numpy as np
+
+from .settings import DEFAULT_SETTINGS, EmulatorSettings
+
+NS_PER_S = 1_000_000_000
+NS_PER_MS = 1_000_000
+
+# --------------------------------------------------------------------------- rotations
+
+
+def euler_to_matrix(rx: float, ry: float, rz: float) -> np.ndarray:
+    """TM orientation (degrees): fixed X-Y-Z angles, R = Rz @ Ry @ Rx."""
+    a, b, c = np.radians([rx, ry, rz])
+    ca, sa, cb, sb, cc, sc = math.cos(a), math.sin(a), math.cos(b), math.sin(b), math.cos(c), math.sin(c)
+    return np.array([
+        [cc * cb, cc * sb * sa - sc * ca, cc * sb * ca + sc * sa],
+        [sc * cb, sc * sb * sa + cc * ca, sc * sb * ca - cc * sa],
+        [-sb, cb * sa, cb * ca],
+    ])
+
+
+def matrix_to_euler(rot: np.ndarray) -> np.ndarray:
+    sy = -float(rot[2, 0])
+    ry = math.asin(max(-1.0, min(1.0, sy)))
+    if abs(sy) < 1.0 - 1e-9:
+        rx = math.atan2(rot[2, 1], rot[2, 2])
+        rz = math.atan2(rot[1, 0], rot[0, 0])
+    else:  # gimbal lock: put everything into rz
+        rx = 0.0
+        rz = math.atan2(-rot[0, 1], rot[1, 1])
+    return np.degrees([rx, ry, rz])
+
+
+def pose_to_matrix(pose: Sequence[float]) -> np.ndarray:
+    out = np.eye(4)
+    out[:3, :3] = euler_to_matrix(pose[3], pose[4], pose[5])
+    out[:3, 3] = pose[:3]
+    return out
+
+
+def matrix_to_pose(mat: np.ndarray) -> np.ndarray:
+    return np.concatenate([mat[:3, 3], matrix_to_euler(mat[:3, :3])])
+
+
+def rotation_angle_deg(r_a: np.ndarray, r_b: np.ndarray) -> float:
+    """Angle of the rotation taking ``r_a`` to ``r_b``."""
+    cos_angle = (np.trace(r_a.T @ r_b) - 1.0) / 2.0
+    return math.degrees(math.acos(max(-1.0, min(1.0, cos_angle))))
+
+
+def _quat_from_matrix(rot: np.ndarray) -> np.ndarray:
+    w = math.sqrt(max(0.0, 1.0 + rot[0, 0] + rot[1, 1] + rot[2, 2])) / 2.0
+    x = math.sqrt(max(0.0, 1.0 + rot[0, 0] - rot[1, 1] - rot[2, 2])) / 2.0
+    y = math.sqrt(max(0.0, 1.0 - rot[0, 0] + rot[1, 1] - rot[2, 2])) / 2.0
+    z = math.sqrt(max(0.0, 1.0 - rot[0, 0] - rot[1, 1] + rot[2, 2])) / 2.0
+    x = math.copysign(x, rot[2, 1] - rot[1, 2])
+    y = math.copysign(y, rot[0, 2] - rot[2, 0])
+    z = math.copysign(z, rot[1, 0] - rot[0, 1])
+    return np.array([w, x, y, z])
+
+
+def _matrix_from_quat(q: np.ndarray) -> np.ndarray:
+    w, x, y, z = q / np.linalg.norm(q)
+    return np.array([
+        [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+        [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+        [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
+    ])
+
+
+def slerp_matrix(r_a: np.ndarray, r_b: np.ndarray, s: float) -> np.ndarray:
+    qa, qb = _quat_from_matrix(r_a), _quat_from_matrix(r_b)
+    dot = float(qa @ qb)
+    if dot < 0:
+        qb, dot = -qb, -dot
+    if dot > 0.9995:
+        return _matrix_from_quat(qa + s * (qb - qa))
+    theta = math.acos(dot)
+    return _matrix_from_quat((math.sin((1 - s) * theta) * qa + math.sin(s * theta) * qb) / math.sin(theta))
+
+
+# --------------------------------------------------------------------------- kinematics
+
+# Standard DH of a TM5-700 (alpha deg, a mm, d mm, theta offset deg).  Home (0,0,90,0,90,0) gives
+# the flange pose (417.5, -122.3, 360.9, 180, 0, 90).
+TM5_700_DH = ((-90.0, 0.0, 145.1, 0.0), (0.0, 329.0, 0.0, -90.0), (0.0, 311.5, 0.0, 0.0),
+              (90.0, 0.0, -122.3, 90.0), (90.0, 0.0, 106.0, 0.0), (0.0, 0.0, 113.2, 0.0))
+
+
+class Kinematics:
+    """Forward kinematics by DH and damped-least-squares inverse kinematics (numpy)."""
+
+    def __init__(self, settings: EmulatorSettings = DEFAULT_SETTINGS, dh: Sequence[Sequence[float]] = TM5_700_DH):
+        self.dh = np.array(dh, dtype=float)
+        self.limits = np.array(settings.joint_limits_deg, dtype=float)
+
+    def fk(self, joints_deg: Sequence[float], tool: np.ndarray | None = None) -> np.ndarray:
+        """4x4 pose of the TCP in the robot base (``tool`` = flange -> TCP transform)."""
+        out = np.eye(4)
+        for (alpha, a, d, offset), q in zip(self.dh, joints_deg):
+            th, al = math.radians(q + offset), math.radians(alpha)
+            ct, st, ca, sa = math.cos(th), math.sin(th), math.cos(al), math.sin(al)
+            out = out @ np.array([[ct, -st * ca, st * sa, a * ct], [st, ct * ca, -ct * sa, a * st],
+                                  [0.0, sa, ca, d], [0.0, 0.0, 0.0, 1.0]])
+        return out @ tool if tool is not None else out
+
+    def within_limits(self, joints_deg: Sequence[float]) -> bool:
+        q = np.asarray(joints_deg)
+        return bool(np.all(q >= self.limits[:, 0] - 1e-9) and np.all(q <= self.limits[:, 1] + 1e-9))
+
+    def ik(self, target: np.ndarray, seed_deg: Sequence[float], tool: np.ndarray | None = None,
+           max_iterations: int = 100) -> np.ndarray | None:
+        """Joint angles (deg) whose TCP pose is ``target`` (4x4, robot base), starting from
+        ``seed_deg``; None if it does not converge within 0.01 mm / 0.01 deg or leaves the joint
+        limits (the target is then unreachable)."""
+        q = np.radians(np.asarray(seed_deg, dtype=float))
+        damping = 1.0
+        for _ in range(max_iterations):
+            err = self._pose_error(target, np.degrees(q), tool)
+            if np.linalg.norm(err[:3]) < 1e-2 and np.linalg.norm(err[3:]) < math.radians(1e-2):
+                result = np.degrees(q)
+                # Keep angles near the seed (joints rotate more than 360 deg on a TM).
+                result = np.asarray(seed_deg) + (result - np.asarray(seed_deg) + 180.0) % 360.0 - 180.0
+                return result if self.within_limits(result) else None
+            jac = self._jacobian(np.degrees(q), tool)
+            scaled = err.copy()
+            scaled[3:] *= 300.0  # weight rotation like ~300 mm of lever arm
+            jac_s = jac.copy()
+            jac_s[3:] *= 300.0
+            step = jac_s.T @ np.linalg.solve(jac_s @ jac_s.T + damping * np.eye(6), scaled)
+            q = q + step
+        return None
+
+    def _pose_error(self, target: np.ndarray, q_deg: np.ndarray, tool: np.ndarray | None) -> np.ndarray:
+        cur = self.fk(q_deg, tool)
+        dp = target[:3, 3] - cur[:3, 3]
+        r_err = target[:3, :3] @ cur[:3, :3].T
+        angle = math.acos(max(-1.0, min(1.0, (np.trace(r_err) - 1) / 2)))
+        if angle < 1e-12:
+            dr = np.zeros(3)
+        else:
+            axis = np.array([r_err[2, 1] - r_err[1, 2], r_err[0, 2] - r_err[2, 0], r_err[1, 0] - r_err[0, 1]])
+            norm = np.linalg.norm(axis)
+            dr = axis / norm * angle if norm > 1e-12 else np.zeros(3)
+        return np.concatenate([dp, dr])
+
+    def _jacobian(self, q_deg: np.ndarray, tool: np.ndarray | None) -> np.ndarray:
+        """Geometric Jacobian per radian (numeric differences of fk)."""
+        base = self.fk(q_deg, tool)
+        jac = np.zeros((6, 6))
+        h = 1e-6
+        for i in range(6):
+            dq = np.array(q_deg, dtype=float)
+            dq[i] += math.degrees(h)
+            moved = self.fk(dq, tool)
+            jac[:3, i] = (moved[:3, 3] - base[:3, 3]) / h
+            r_d = moved[:3, :3] @ base[:3, :3].T
+            jac[3:, i] = np.array([r_d[2, 1] - r_d[1, 2], r_d[0, 2] - r_d[2, 0], r_d[1, 0] - r_d[0, 1]]) / (2 * h)
+        return jac
+
+
+# --------------------------------------------------------------------------- timing
+
+
+def trapezoid_duration_s(distance: float, top_speed: float, accel_s: float) -> float:
+    """Duration of a rest-to-rest trapezoid (see module docstring)."""
+    if distance <= 0.0:
+        return 0.0
+    if top_speed <= 0.0:
+        raise ValueError("top speed must be positive")
+    if accel_s <= 0.0:
+        return distance / top_speed
+    if distance >= top_speed * accel_s:
+        return distance / top_speed + accel_s
+    return 2.0 * math.sqrt(distance * accel_s / top_speed)
+
+
+def trapezoid_fraction(t_s: float, duration_s: float, accel_s: float) -> float:
+    """Fraction of the distance covered at ``t_s`` of a trapezoid of ``duration_s``."""
+    if duration_s <= 0.0 or t_s >= duration_s:
+        return 1.0
+    if t_s <= 0.0:
+        return 0.0
+    ta = min(accel_s, duration_s / 2.0)
+    if ta <= 0.0:
+        return t_s / duration_s
+    cruise = duration_s - 2.0 * ta
+    total = ta + cruise  # distance in units of top speed (area under the profile)
+    if t_s < ta:
+        covered = 0.5 * t_s * t_s / ta
+    elif t_s < ta + cruise:
+        covered = 0.5 * ta + (t_s - ta)
+    else:
+        rem = duration_s - t_s
+        covered = total - 0.5 * rem * rem / ta
+    return covered / total
+
+
+# --------------------------------------------------------------------------- segments
+
+
+@dataclass
+class Segment:
+    """One planned motion.  ``space`` is ``joint`` (interpolate joints) or ``cart`` (interpolate the
+    TCP pose in the robot base; ``circle`` adds the arc)."""
+
+    space: str
+    start_joints: np.ndarray
+    end_joints: np.ndarray
+    start_tcp: np.ndarray  # 4x4 in robot base
+    end_tcp: np.ndarray
+    duration_ns: int
+    accel_ns: int
+    blend_ns: int = 0  # overlap with the next motion (0 = stop at target)
+    settle_ns: int = 0
+    circle: dict[str, Any] | None = None
+    label: str = ""
+    start_ns: int = 0  # motion time when it started (set by the executor)
+
+    @property
+    def total_ns(self) -> int:
+        return self.duration_ns + self.settle_ns
+
+    @property
+    def handover_ns(self) -> int:
+        """Motion-time offset at which a queued next motion may start."""
+        return self.total_ns - self.blend_ns if self.blend_ns > 0 else self.total_ns
+
+    def fraction(self, now_ns: int) -> float:
+        return trapezoid_fraction((now_ns - self.start_ns) / NS_PER_S, self.duration_ns / NS_PER_S,
+                                  self.accel_ns / NS_PER_S)
+
+    def tcp_at(self, now_ns: int) -> np.ndarray:
+        s = self.fraction(now_ns)
+        out = np.eye(4)
+        if self.circle is not None:
+            c = self.circle
+            angle = c["sweep"] * s
+            out[:3, 3] = c["center"] + c["radius"] * (math.cos(angle) * c["u"] + math.sin(angle) * c["v"])
+        else:
+            out[:3, 3] = self.start_tcp[:3, 3] + s * (self.end_tcp[:3, 3] - self.start_tcp[:3, 3])
+        out[:3, :3] = slerp_matrix(self.start_tcp[:3, :3], self.end_tcp[:3, :3], s)
+        return out
+
+    def joints_at(self, now_ns: int) -> np.ndarray | None:
+        """Joint angles at ``now_ns`` for joint-space motions (None for Cartesian ones)."""
+        if self.space != "joint":
+            return None
+        s = self.fraction(now_ns)
+        return self.start_joints + s * (self.end_joints - self.start_joints)
+
+
+@dataclass
+class Marker:
+    """A non-motion queue item, applied when reached: a QueueTag, base/TCP/load change."""
+
+    kind: str  # "tag" / "base" / "tcp" / "load"
+    value: Any
+    owner: int | None = None  # connection that queued it (tag notifications, spec §5.3)
+
+
+QueueItem = Segment | Marker
+
+
+@dataclass
+class ExecutorEvent:
+    """A marker reached at motion time ``at_ns``."""
+
+    at_ns: int
+    marker: Marker
+
+
+class MotionExecutor:
+    """The FIFO motion queue (spec §8 "two queues", (b)): motions and markers in strict order."""
+
+    def __init__(self, kinematics: Kinematics, joints_deg: Sequence[float], tool: np.ndarray | None = None):
+        self.kin = kinematics
+        self.queue: deque[QueueItem] = deque()
+        self.active: list[Segment] = []  # the current motion last; earlier ones still blending out
+        self.rest_joints = np.array(joints_deg, dtype=float)
+        self.rest_tcp = kinematics.fk(self.rest_joints, tool)
+        self.time_ns = 0
+        self.stalled = False  # fault "busy": motion never progresses
+
+    # -- queries ---------------------------------------------------------------------------------
+
+    @property
+    def idle(self) -> bool:
+        return not self.queue and not self.active
+
+    @property
+    def moving(self) -> bool:
+        return bool(self.active)
+
+    def next_event_ns(self) -> int | None:
+        """Motion time of the next state change (a queue item starting or the motion ending)."""
+        if self.stalled:
+            return None
+        times = [t for t in (self._head_start_ns(),
+                             self.active[-1].start_ns + self.active[-1].total_ns if self.active else None)
+                 if t is not None]
+        return min(times) if times else None
+
+    def current_tcp(self) -> np.ndarray:
+        if not self.active:
+            return self.rest_tcp
+        current = self.active[-1]
+        tcp = current.tcp_at(self.time_ns).copy()
+        for older in self.active[:-1]:  # superposition of what is left of blended motions
+            tcp[:3, 3] += older.tcp_at(self.time_ns)[:3, 3] - older.end_tcp[:3, 3]
+        return tcp
+
+    def current_joints(self, tool: np.ndarray | None = None) -> np.ndarray:
+        if not self.active:
+            return self.rest_joints
+        current = self.active[-1]
+        joints = current.joints_at(self.time_ns)
+        if joints is not None:
+            for older in self.active[:-1]:
+                older_j = older.joints_at(self.time_ns)
+                if older_j is not None:
+                    joints = joints + older_j - older.end_joints
+            return joints
+        solved = self.kin.ik(self.current_tcp(), current.start_joints, tool)
+        return solved if solved is not None else current.start_joints
+
+    # -- changes ---------------------------------------------------------------------------------
+
+    def enqueue(self, item: QueueItem) -> None:
+        self.queue.append(item)
+
+    def advance(self, now_ns: int) -> list[ExecutorEvent]:
+        """Run the queue up to motion time ``now_ns``; return the markers reached, in order, each
+        with the exact motion time at which it was reached.  Events are processed in time order, so
+        the outcome does not depend on how finely time is stepped."""
+        events: list[ExecutorEvent] = []
+        if self.stalled:
+            return events
+        while True:
+            start_at = self._head_start_ns()
+            end_at = self.active[-1].start_ns + self.active[-1].total_ns if self.active else None
+            if start_at is not None and start_at <= now_ns and (end_at is None or start_at <= end_at):
+                item = self.queue.popleft()
+                self.time_ns = max(self.time_ns, start_at)
+                if isinstance(item, Marker):
+                    events.append(ExecutorEvent(self.time_ns, item))
+                    continue
+                item.start_ns = self.time_ns
+                self.active = [seg for seg in self.active
+                               if seg.blend_ns > 0 and seg.start_ns + seg.total_ns > item.start_ns]
+                self.active.append(item)
+            elif end_at is not None and end_at <= now_ns:
+                current = self.active[-1]
+                self.time_ns = max(self.time_ns, end_at)
+                self.rest_joints, self.rest_tcp = current.end_joints, current.end_tcp
+                self.active = []
+            else:
+                break
+        self.time_ns = max(self.time_ns, now_ns)
+        return events
+
+    def _head_start_ns(self) -> int | None:
+        """Motion time at which the queue head can start (None: queue empty)."""
+        if not self.queue:
+            return None
+        if not self.active:
+            return self.time_ns
+        current = self.active[-1]
+        if current.blend_ns > 0 and self._motion_follows():
+            # Blending: the next motion (and any marker before it) starts at the hand-over.
+            return max(self.time_ns, current.start_ns + current.handover_ns)
+        return max(self.time_ns, current.start_ns + current.total_ns)
+
+    def _motion_follows(self) -> bool:
+        return any(isinstance(item, Segment) for item in self.queue)
+
+    def stop_and_clear(self, tool: np.ndarray | None = None) -> list[Marker]:
+        """Stop at the current pose now (Choice §8: deceleration time not modelled) and drop every
+        queued item; return the dropped markers."""
+        if self.active:
+            self.rest_tcp = self.current_tcp()
+            self.rest_joints = self.current_joints(tool)
+        self.active = []
+        dropped = [item for item in self.queue if isinstance(item, Marker)]
+        self.queue.clear()
+        return dropped
+
+
+# --------------------------------------------------------------------------- planning
+
+
+class PlanError(Exception):
+    """A motion the robot rejects: unreachable target, joint limit, bad argument value."""
+
+
+@dataclass
+class PlannedState:
+    """Where the robot will be once everything queued so far has run: planning starts here."""
+
+    joints: np.ndarray
+    tcp: np.ndarray  # 4x4 TCP in robot base
+    base: np.ndarray = field(default_factory=lambda: np.eye(4))
+    tool: np.ndarray = field(default_factory=lambda: np.eye(4))
+
+    def copy(self) -> "PlannedState":
+        return PlannedState(self.joints.copy(), self.tcp.copy(), self.base.copy(), self.tool.copy())
+
+
+class Planner:
+    """Turns validated motion calls into :class:`Segment` objects (see module docstring)."""
+
+    def __init__(self, kinematics: Kinematics, settings: EmulatorSettings = DEFAULT_SETTINGS):
+        self.kin = kinematics
+        self.settings = settings
+
+    def _ns(self, seconds: float) -> int:
+        return int(round(seconds * self.settings.time_scale * NS_PER_S))
+
+    def _accel_s(self, accel_ms: float) -> float:
+        return max(float(accel_ms), float(self.settings.min_accel_ms)) / 1000.0
+
+    def _blend_ns(self, duration_s: float, accel_s: float, blend: float, blend_is_radius: bool,
+                  top_speed: float) -> int:
+        if blend <= 0:
+            return 0
+        decel = min(accel_s, duration_s / 2.0)
+        if blend_is_radius:
+            # Choice: a radius r overlaps the time the motion needs for its last r mm.
+            fraction = min(1.0, blend / max(top_speed * decel / 2.0, 1e-9))
+        else:
+            fraction = min(1.0, blend / 100.0)
+        return self._ns(fraction * decel)
+
+    def joint_motion(self, state: PlannedState, target_joints: np.ndarray, speed_pct: float, accel_ms: float,
+                     blend_pct: float, precise: bool, label: str) -> Segment:
+        if not self.kin.within_limits(target_joints):
+            raise PlanError("joint target outside the joint limits")
+        accel_s = self._accel_s(accel_ms)
+        top = np.array(self.settings.max_joint_speed_deg_s) * (speed_pct / 100.0)
+        distances = np.abs(target_joints - state.joints)
+        duration = max(trapezoid_duration_s(float(d), float(v), accel_s) for d, v in zip(distances, top))
+        end_tcp = self.kin.fk(target_joints, state.tool)
+        seg = Segment("joint", state.joints.copy(), target_joints.copy(), state.tcp.copy(), end_tcp,
+                      self._ns(duration), self._ns(min(accel_s, duration / 2.0)),
+                      self._blend_ns(duration, accel_s, blend_pct, False, 1.0),
+                      self._ns(self.settings.precise_settle_ms / 1000.0) if precise else 0, label=label)
+        state.joints, state.tcp = target_joints.copy(), end_tcp
+        return seg
+
+    def solve(self, state: PlannedState, tcp_target: np.ndarray) -> np.ndarray:
+        joints = self.kin.ik(tcp_target, state.joints, state.tool)
+        if joints is None:
+            raise PlanError("target not reachable")
+        return joints
+
+    def cart_motion(self, state: PlannedState, tcp_target: np.ndarray, speed: float, speed_is_pct: bool,
+                    accel_ms: float, blend: float, blend_is_radius: bool, precise: bool, label: str,
+                    circle: dict[str, Any] | None = None, path_length: float | None = None) -> Segment:
+        joints = self.solve(state, tcp_target)
+        accel_s = self._accel_s(accel_ms)
+        if speed_is_pct:
+            fraction = speed / 100.0
+        else:
+            fraction = speed / self.settings.max_tcp_speed_mm_s
+        v = fraction * self.settings.max_tcp_speed_mm_s
+        w = fraction * self.settings.max_tcp_rot_speed_deg_s
+        length = path_length if path_length is not None else float(np.linalg.norm(tcp_target[:3, 3] - state.tcp[:3, 3]))
+        rot = rotation_angle_deg(state.tcp[:3, :3], tcp_target[:3, :3])
+        duration = max(trapezoid_duration_s(length, v, accel_s), trapezoid_duration_s(rot, w, accel_s))
+        seg = Segment("cart", state.joints.copy(), joints, state.tcp.copy(), tcp_target.copy(),
+                      self._ns(duration), self._ns(min(accel_s, duration / 2.0)),
+                      self._blend_ns(duration, accel_s, blend, blend_is_radius, v),
+                      self._ns(self.settings.precise_settle_ms / 1000.0) if precise else 0,
+                      circle=circle, label=label)
+        state.joints, state.tcp = joints, tcp_target.copy()
+        return seg
+
+    def circle_motion(self, state: PlannedState, via: np.ndarray, end: np.ndarray, arc_angle_deg: float,
+                      speed: float, speed_is_pct: bool, accel_ms: float, blend: float, precise: bool,
+                      label: str) -> Segment:
+        """Circle through start, ``via`` and ``end`` (4x4, robot base).  ``arc_angle_deg`` != 0:
+        sweep that angle keeping the start orientation; 0: stop at ``end`` (spec §7)."""
+        p0, p1, p2 = state.tcp[:3, 3], via[:3, 3], end[:3, 3]
+        a, b = p1 - p0, p2 - p0
+        normal = np.cross(a, b)
+        if np.linalg.norm(normal) < 1e-6:
+            raise PlanError("circle points are collinear")
+        normal /= np.linalg.norm(normal)
+        # Circumcentre of the three points.
+        center = p0 + (np.dot(b, b) * np.cross(np.cross(a, b), a) + np.dot(a, a) * np.cross(b, np.cross(a, b))) \
+            / (2.0 * np.dot(np.cross(a, b), np.cross(a, b)))
+        radius = float(np.linalg.norm(p0 - center))
+        u = (p0 - center) / radius
+        v = np.cross(normal, u)
+
+        def angle_of(p: np.ndarray) -> float:
+            return math.atan2(float(np.dot(p - center, v)), float(np.dot(p - center, u))) % (2 * math.pi)
+
+        if arc_angle_deg:
+            sweep = math.radians(arc_angle_deg)
+            target = np.eye(4)
+            target[:3, :3] = state.tcp[:3, :3]
+            target[:3, 3] = center + radius * (math.cos(sweep) * u + math.sin(sweep) * v)
+        else:
+            sweep = angle_of(p2)  # via lies between start and end by construction of v
+            target = end
+        circle = {"center": center, "radius": radius, "u": u, "v": v, "sweep": sweep}
+        return self.cart_motion(state, target, speed, speed_is_pct, accel_ms, blend, False, precise, label,
+                                circle=circle, path_length=abs(sweep) * radius)

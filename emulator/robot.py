@@ -1,0 +1,1212 @@
+"""The emulated TM robot in Listen Node mode: frames in, replies out, no I/O (spec §1, §4-§8).
+
+:class:`Robot` is pure and deterministic.  Every public method takes ``now_ns`` (integer
+nanoseconds on whatever clock the caller uses; it must never go backwards) and returns the
+:class:`Send`/:class:`Close` actions produced, each stamped with the exact instant it was produced,
+which may lie between two calls (e.g. a QueueTag reached in the middle of a step).
+
+Connections are identified by integers chosen by the caller.  Replies go to the connection that
+sent the request (spec §1.4).
+
+Reply table (spec §2.1, §4, §5, §6; robot-level part; 01/02/03 come from ``framing.py``):
+
+==============================================  ====================================  ========
+condition                                       reply                                 spec
+==============================================  ====================================  ========
+DATA not UTF-8                                  ``CPERR 04``                          Choice
+TMSCT without ``ID,``, ID not alphanumeric      ``CPERR 04``                          §2.1
+TMSTA SubCmd not 00/01 (incl. 90-99)            ``CPERR 04``                          §5.5
+TMSCT outside the node or while exiting         ``CPERR F1``                          §4.4
+script syntax/type/name errors                  ``ID,ERROR;<lines>``, nothing runs    §4.2
+invalid argument values (reject_invalid_args)   ``ID,ERROR;<lines>``, nothing runs    §7 [U]
+otherwise                                       ``ID,OK`` when the script has run     §4.3
+==============================================  ====================================  ========
+"""
+
+from __future__ import annotations
+
+import math
+import struct
+from collections import OrderedDict, deque
+from dataclasses import dataclass, field
+from enum import Enum
+from functools import lru_cache
+from typing import Any, Callable
+
+import numpy as np
+
+from . import script as sc
+from .faults import NO_FAULTS, FaultPlan
+from .framing import Cperr, Frame, FrameError, encode, encode_cperr
+from .motion import (NS_PER_MS, Kinematics, Marker, MotionExecutor, PlanError, PlannedState, Planner,
+                     matrix_to_pose, pose_to_matrix)
+from .settings import DEFAULT_SETTINGS, EmulatorSettings
+
+_ID_CHARS = frozenset("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789")
+MAX_TAG = 15  # §7 QueueTag: tag 1-15
+
+
+@lru_cache(maxsize=2048)
+def _parse_cached(script: str, session: tuple[tuple[str, tuple[str, bool]], ...]) -> sc.ParsedScript:
+    """Parsing is pure and the result immutable; clients repeat the same scripts a lot."""
+    return sc.parse_script(script, dict(session))
+
+
+class NodeState(str, Enum):
+    """Spec §1 state machine."""
+
+    STOPPED = "STOPPED"    # project not running: port closed
+    RUNNING = "RUNNING"    # project running, flow outside the Listen node
+    IN_NODE = "IN_NODE"
+    EXITING = "EXITING"    # ScriptExit() waiting for the motion queue to drain
+
+
+@dataclass(frozen=True)
+class Send:
+    conn: int
+    data: bytes
+    at_ns: int
+
+
+@dataclass(frozen=True)
+class Close:
+    conn: int | None  # None = every connection (project stopped)
+    at_ns: int
+
+
+Action = Send | Close
+
+
+class ArgError(Exception):
+    """A function call with invalid argument values: the function fails (spec §7)."""
+
+
+@dataclass
+class Wait:
+    kind: str  # "tag" / "delay" / "waittag" / "drain"
+    tag: int = 0
+    until_ns: int | None = None
+
+
+@dataclass
+class ScriptJob:
+    conn: int
+    script_id: str
+    parsed: sc.ParsedScript
+    pc: int = 0
+    wait: Wait | None = None
+    forced_error: bool = False
+    exiting: bool = False
+    deferred: list[tuple[int, bytes]] = field(default_factory=list)  # notify_before_ok=False
+
+
+@dataclass
+class _Ctx:
+    """Evaluation context: the real session or a dry-run copy of it."""
+
+    dry: bool
+    conn: int
+    variables: dict[str, list[Any]]  # name -> [type, is_array, value]
+    plan: PlannedState
+    line: int = 0
+    errors: list[int] = field(default_factory=list)
+
+
+class Robot:
+    """A TM robot running a project whose flow sits in a Listen node."""
+
+    def __init__(self, settings: EmulatorSettings = DEFAULT_SETTINGS, faults: FaultPlan = NO_FAULTS,
+                 now_ns: int = 0) -> None:
+        self.settings = settings
+        self.faults = faults
+        self.kin = Kinematics(settings)
+        self.planner = Planner(self.kin, settings)
+        self.executor = MotionExecutor(self.kin, settings.home_joints_deg)
+        self.executor.stalled = faults.stay_busy
+        self.plan = PlannedState(self.executor.rest_joints.copy(), self.executor.rest_tcp.copy())
+        self.base = np.eye(4)
+        self.base_name = "RobotBase"
+        self.tool = np.eye(4)
+        self.tcp_name = "NOTOOL"
+        self.payload_kg = 0.0
+        self.now_ns = now_ns
+        self.start_ns = now_ns
+        self.motion_ns = 0
+        self.paused = False
+        self.state = NodeState.RUNNING
+        self.connections: list[int] = []
+        self.buffer: deque[ScriptJob] = deque()  # §4.3 TMSCT receive buffer, FIFO
+        self.current: ScriptJob | None = None
+        self.variables: dict[str, list[Any]] = {}  # session-local (§4.1)
+        self.tags: OrderedDict[int, str] = OrderedDict()  # tag -> "true"/"false" (§5.2)
+        self.tag_owner: dict[int, int] = {}
+        self.enter_at_ns: int | None = now_ns + settings.enter_node_delay_ms * NS_PER_MS \
+            if settings.start_in_node else None
+        self.node_entered_ns = 0
+        self.last_packet_ns = now_ns
+        self.tmsct_count = 0
+        self.next_unsolicited_ns = now_ns + faults.unsolicited_every_ms * NS_PER_MS \
+            if faults.unsolicited_every_ms else None
+        self.stop_at_ns = now_ns + faults.stop_project_at_ms * NS_PER_MS \
+            if faults.stop_project_at_ms is not None else None
+        self.exit_path = ""
+        self.log: deque[str] = deque(maxlen=200)  # human-readable events (live view, debugging)
+        self._out: list[Action] = []
+        self._process_due()
+
+    # ================================================================ public API
+
+    @property
+    def accepting(self) -> bool:
+        """Whether the listener exists (spec §1.2: only while the project runs)."""
+        return self.state != NodeState.STOPPED
+
+    def connect(self, conn: int, now_ns: int) -> list[Action]:
+        self._run_until(now_ns)
+        self.connections.append(conn)
+        if self.settings.entry_message_on_connect and self.state == NodeState.IN_NODE:
+            self._send(conn, encode("TMSCT", "0," + self.settings.send_message))
+        return self._take()
+
+    def disconnect(self, conn: int, now_ns: int) -> list[Action]:
+        """Forget a connection.  Choice: its scripts already received still run (their replies
+        are dropped) and its motions continue, as nothing in the spec aborts them."""
+        self._run_until(now_ns)
+        if conn in self.connections:
+            self.connections.remove(conn)
+        return self._take()
+
+    def handle(self, conn: int, result: Frame | FrameError, now_ns: int) -> list[Action]:
+        """Answer one decoded frame (or framing error) from ``conn``."""
+        self._run_until(now_ns)
+        self.last_packet_ns = self.now_ns
+        if isinstance(result, FrameError):
+            self._send(conn, encode_cperr(result.code))
+        elif result.header == "TMSTA":
+            self._handle_tmsta(conn, result.data)
+        else:
+            self._handle_tmsct(conn, result.data)
+        self._process_due()
+        return self._take()
+
+    def advance(self, now_ns: int) -> list[Action]:
+        """Let time pass up to ``now_ns``."""
+        self._run_until(now_ns)
+        return self._take()
+
+    def next_deadline_ns(self) -> int | None:
+        """The next instant at which something happens by itself (None: nothing pending)."""
+        return self._next_internal_ns()
+
+    def start_project(self, now_ns: int) -> list[Action]:
+        """Start the project again after a stop (flow enters the node after the entry delay)."""
+        self._run_until(now_ns)
+        if self.state == NodeState.STOPPED:
+            self.state = NodeState.RUNNING
+            self.enter_at_ns = self.now_ns + self.settings.enter_node_delay_ms * NS_PER_MS
+            self._process_due()
+        return self._take()
+
+    def stop_project(self, now_ns: int) -> list[Action]:
+        """Project stop (operator, fault): motion stops, every socket closed (spec §1.2, §8)."""
+        self._run_until(now_ns)
+        self._stop_project()
+        return self._take()
+
+    def enter_node(self, now_ns: int) -> list[Action]:
+        """Make the flow reach the Listen node now (if the project runs and it is not in it)."""
+        self._run_until(now_ns)
+        if self.state == NodeState.RUNNING:
+            self._enter_node()
+        return self._take()
+
+    def snapshot(self) -> dict[str, Any]:
+        """Plain-data view of the robot for the live terminal view and tests."""
+        tcp = self.executor.current_tcp()
+        return {
+            "t_s": (self.now_ns - self.start_ns) / 1e9,
+            "state": self.state.value,
+            "paused": self.paused,
+            "connections": list(self.connections),
+            "moving": self.executor.moving,
+            "queue_length": len(self.executor.queue),
+            "scripts_buffered": len(self.buffer) + (1 if self.current else 0),
+            "pose": [round(float(v), 3) for v in self._pose_in_base(tcp)],
+            "joints": [round(float(v), 3) for v in self.executor.current_joints(self.tool)],
+            "base": self.base_name,
+            "tcp": self.tcp_name,
+            "tags": dict(self.tags),
+        }
+
+    # ================================================================ time
+
+    def _take(self) -> list[Action]:
+        out, self._out = self._out, []
+        return out
+
+    def _send(self, conn: int, data: bytes) -> None:
+        self._out.append(Send(conn, data, self.now_ns))
+
+    def _motion_to_wall(self, motion_ns: int) -> int:
+        return self.now_ns + max(0, motion_ns - self.motion_ns)
+
+    def _next_internal_ns(self) -> int | None:
+        times: list[int] = []
+        if not self.paused and self.state != NodeState.STOPPED:
+            ev = self.executor.next_event_ns()
+            if ev is not None:
+                times.append(self._motion_to_wall(ev))
+        job = self.current
+        if job is not None and job.wait is not None and job.wait.until_ns is not None:
+            times.append(job.wait.until_ns)
+        for t in (self.enter_at_ns, self.next_unsolicited_ns, self.stop_at_ns):
+            if t is not None:
+                times.append(t)
+        if self.state == NodeState.IN_NODE:
+            if self.settings.data_timeout_ms > 0:
+                times.append(max(self.last_packet_ns, self.node_entered_ns)
+                             + self.settings.data_timeout_ms * NS_PER_MS)
+            if self.settings.connection_timeout_ms > 0 and not self.connections:
+                times.append(self.node_entered_ns + self.settings.connection_timeout_ms * NS_PER_MS)
+        return min(times) if times else None
+
+    def _set_clock(self, t_ns: int) -> None:
+        if t_ns <= self.now_ns:
+            return
+        if not self.paused and self.state != NodeState.STOPPED:
+            self.motion_ns += t_ns - self.now_ns
+        self.now_ns = t_ns
+
+    def _run_until(self, now_ns: int) -> None:
+        for _ in range(1_000_000):
+            nxt = self._next_internal_ns()
+            if nxt is None or nxt > now_ns:
+                break
+            self._set_clock(nxt)
+            if not self._process_due():
+                # Nothing changed at this instant; step past it to avoid spinning.
+                if nxt >= now_ns:
+                    break
+                self._set_clock(nxt + 1)
+        # Everything due up to now_ns was handled in the loop; only the clocks move on (the
+        # executor's too, as the reported pose is sampled at its time).
+        self._set_clock(now_ns)
+        if not self.paused and self.state != NodeState.STOPPED and not self.executor.idle:
+            for event in self.executor.advance(self.motion_ns):  # none due: see the loop above
+                self._marker_reached(event.marker)
+
+    def _process_due(self) -> bool:
+        """Handle everything due at ``self.now_ns``; return whether anything happened."""
+        progressed = False
+        for _ in range(10_000):
+            changed = False
+            if self.stop_at_ns is not None and self.now_ns >= self.stop_at_ns:
+                self.stop_at_ns = None
+                self._stop_project()
+                changed = True
+            if self.enter_at_ns is not None and self.now_ns >= self.enter_at_ns:
+                self.enter_at_ns = None
+                if self.state == NodeState.RUNNING:
+                    self._enter_node()
+                changed = True
+            if self.next_unsolicited_ns is not None and self.now_ns >= self.next_unsolicited_ns:
+                self.next_unsolicited_ns = self.now_ns + self.faults.unsolicited_every_ms * NS_PER_MS
+                for conn in self.connections:
+                    self._send(conn, encode("TMSTA", "90,unsolicited"))
+                changed = True
+            if self.state == NodeState.IN_NODE and self._timed_out():
+                changed = True
+            if not self.paused and self.state != NodeState.STOPPED:
+                for event in self.executor.advance(self.motion_ns):
+                    self._marker_reached(event.marker)
+                    changed = True
+            if self._run_scripts():
+                changed = True
+            if not changed:
+                break
+            progressed = True
+        return progressed
+
+    def _timed_out(self) -> bool:
+        s = self.settings
+        if s.data_timeout_ms > 0 and \
+                self.now_ns >= max(self.last_packet_ns, self.node_entered_ns) + s.data_timeout_ms * NS_PER_MS:
+            self._note("data timeout: Fail path")  # §1.6
+            self._leave_node("Fail")
+            return True
+        if s.connection_timeout_ms > 0 and not self.connections and \
+                self.now_ns >= self.node_entered_ns + s.connection_timeout_ms * NS_PER_MS:
+            self._note("connection timeout: Fail path")
+            self._leave_node("Fail")
+            return True
+        return False
+
+    def _note(self, text: str) -> None:
+        self.log.append(f"{(self.now_ns - self.start_ns) / 1e9:9.3f} {text}")
+
+    # ================================================================ node lifecycle
+
+    def _enter_node(self) -> None:
+        """§1.5: the flow reaches the node: entry message to every open connection."""
+        self.state = NodeState.IN_NODE
+        self.node_entered_ns = self.now_ns
+        self.last_packet_ns = self.now_ns
+        self.exit_path = ""
+        self._note("entered Listen node")
+        for conn in self.connections:
+            self._send(conn, encode("TMSCT", "0," + self.settings.send_message))
+
+    def _leave_node(self, path: str) -> None:
+        """§1.7: leave via Pass/Fail.  Session variables are dropped; the TCP connections stay."""
+        self.state = NodeState.RUNNING
+        self.exit_path = path
+        self.variables.clear()
+        self._note(f"left Listen node ({path})")
+        after = self.settings.after_exit
+        if after == "reenter":
+            self.enter_at_ns = self.now_ns + self.settings.reenter_delay_ms * NS_PER_MS
+        elif after == "stop":
+            self._stop_project()
+
+    def _stop_project(self) -> None:
+        self._note("project stopped")
+        self.executor.stop_and_clear(self.tool)
+        self.plan = PlannedState(self.executor.rest_joints.copy(), self.executor.rest_tcp.copy(),
+                                 self.plan.base, self.plan.tool)
+        self.buffer.clear()
+        self.current = None
+        self.variables.clear()
+        self.state = NodeState.STOPPED
+        self.enter_at_ns = None
+        self.paused = False
+        self._out.append(Close(None, self.now_ns))
+        self.connections.clear()
+
+    # ================================================================ TMSTA (§5)
+
+    def _handle_tmsta(self, conn: int, data: bytes) -> None:
+        try:
+            text = data.decode("utf-8")
+        except UnicodeDecodeError:
+            self._send(conn, encode_cperr(Cperr.DATA))
+            return
+        parts = text.split(",")
+        sub = parts[0]
+        if sub == "00":
+            # §5.1: extra params (tmr_ros2 sends "00,") are ignored.
+            if self.state == NodeState.IN_NODE:
+                self._send(conn, encode("TMSTA", f"00,true,{self.settings.send_message}"))
+            else:
+                self._send(conn, encode("TMSTA", "00,false,"))
+            return
+        if sub == "01" and len(parts) >= 2 and parts[1] != "":
+            tag_text = parts[1]
+            state = "none"
+            if tag_text.isascii() and tag_text.isdigit():
+                state = self.tags.get(int(tag_text), "none")
+            shown = tag_text if self.settings.tag_reply_echo_text else \
+                (f"{int(tag_text):02d}" if tag_text.isascii() and tag_text.isdigit() else tag_text)
+            self._send(conn, encode("TMSTA", f"01,{shown},{state}"))
+            return
+        # §5.5 unknown SubCmd; §5.4/§11 #12 a client sending 90-99; Choice: "01" without a tag.
+        self._send(conn, encode_cperr(Cperr.DATA))
+
+    # ================================================================ TMSCT (§4)
+
+    def _handle_tmsct(self, conn: int, data: bytes) -> None:
+        try:
+            text = data.decode("utf-8")
+        except UnicodeDecodeError:
+            self._send(conn, encode_cperr(Cperr.DATA))
+            return
+        script_id, sep, script = text.partition(",")
+        if not sep or not script_id or not all(c in _ID_CHARS for c in script_id):
+            self._send(conn, encode_cperr(Cperr.DATA))  # §4.1 ID rule
+            return
+        if self.state != NodeState.IN_NODE:
+            self._send(conn, encode_cperr(Cperr.NOT_IN_NODE))  # §4.4, §4.6 (exiting)
+            return
+        self.tmsct_count += 1
+        session = tuple(sorted((name, (v[0], v[1])) for name, v in self.variables.items()))
+        parsed = _parse_cached(script, session)
+        job = ScriptJob(conn, script_id, parsed)
+        every = self.faults.answer_error_every
+        if every and self.tmsct_count % every == 0:
+            job.forced_error = True
+        elif parsed.priority is not None and not parsed.error_lines:
+            self._run_priority(job, parsed.priority)
+            return
+        self.buffer.append(job)
+
+    def _reply(self, job: ScriptJob, status: str) -> None:
+        if job.conn in self.connections:
+            self._send(job.conn, encode("TMSCT", f"{job.script_id},{status}"))
+        for conn, frame in job.deferred:
+            if conn in self.connections:
+                self._send(conn, frame)
+        job.deferred.clear()
+
+    def _run_priority(self, job: ScriptJob, command: sc.PriorityCommand) -> None:
+        """§4.5: handled at once, even while another script blocks.  The interrupted script gets
+        its OK first, then this packet's OK."""
+        self._note(f"priority {command.name}({command.mode})")
+        self._stop_and_clear()
+        interrupted = self.current
+        if command.name == "ScriptExit" or command.mode >= 1:
+            if interrupted is not None:
+                self.current = None
+                self._reply(interrupted, "OK")
+            if command.name == "ScriptExit" or command.mode == 2:
+                # Choice: ScriptExit(n) clears the script buffer like StopAndClearBuffer(2); the
+                # discarded scripts never get a reply (§4.5 table).
+                self.buffer.clear()
+        self._reply(job, "OK")
+        if command.name == "ScriptExit":
+            self._leave_node("Pass" if command.mode == 1 else "Fail")
+
+    def _stop_and_clear(self) -> None:
+        self.executor.stop_and_clear(self.tool)
+        # §8 / §11 #7: dropped tags stay "false", no notification.
+        self.plan = PlannedState(self.executor.rest_joints.copy(), self.executor.rest_tcp.copy(),
+                                 self.plan.base.copy(), self.plan.tool.copy())
+        self.base, self.tool = self.plan.base.copy(), self.plan.tool.copy()
+
+    # ---------------------------------------------------------------- script runner
+
+    def _run_scripts(self) -> bool:
+        """Run buffered scripts one at a time (§4.3); return whether anything happened."""
+        progressed = False
+        while True:
+            job = self.current
+            if job is None:
+                if not self.buffer or self.state not in (NodeState.IN_NODE, NodeState.EXITING):
+                    return progressed
+                job = self.current = self.buffer.popleft()
+                progressed = True
+                if not self._start_job(job):
+                    self.current = None
+                    continue
+            if job.wait is not None:
+                if not self._wait_over(job):
+                    return progressed
+                job.wait = None
+                progressed = True
+                if job.exiting:
+                    self._finish_exit(job)
+                    continue
+            self._resume(job)
+            progressed = True
+            if job.wait is None and self.current is job:
+                self.current = None
+                self._reply(job, "OK")
+
+    def _start_job(self, job: ScriptJob) -> bool:
+        """Static and dry-run checks; False if the script was answered ERROR (nothing runs)."""
+        if job.forced_error:
+            self._reply(job, "ERROR;1")  # fault "error"
+            return False
+        errors = list(job.parsed.error_lines)
+        if not errors and self.settings.reject_invalid_args:
+            ctx = _Ctx(True, job.conn, {k: list(v) for k, v in self.variables.items()}, self.plan.copy())
+            self._execute_lines(job, ctx, dry=True)
+            errors = ctx.errors
+        if errors:
+            self._reply(job, "ERROR;" + ";".join(str(n) for n in sorted(set(errors))))
+            return False
+        return True
+
+    def _resume(self, job: ScriptJob) -> None:
+        ctx = _Ctx(False, job.conn, self.variables, self.plan)
+        self._execute_lines(job, ctx, dry=False)
+
+    def _execute_lines(self, job: ScriptJob, ctx: _Ctx, dry: bool) -> None:
+        lines = job.parsed.lines
+        pc = 0 if dry else job.pc
+        while pc < len(lines):
+            line = lines[pc]
+            pc += 1
+            ctx.line = line.number
+            try:
+                stop = self._exec_statement(job, line.statement, ctx)
+            except ArgError as exc:
+                if dry:
+                    ctx.errors.append(line.number)
+                else:
+                    self._note(f"{job.script_id} line {line.number}: {exc} (function returns false)")
+                continue
+            if stop and not dry:
+                job.pc = pc
+                return
+            if stop == "exit":
+                break  # §4.6 statements after ScriptExit() are not executed
+        if not dry:
+            job.pc = len(lines)
+
+    def _wait_over(self, job: ScriptJob) -> bool:
+        wait = job.wait
+        assert wait is not None
+        if wait.kind == "tag":
+            return self.tags.get(wait.tag) == "true" or wait.tag not in self.tags
+        if wait.kind == "delay":
+            return wait.until_ns is not None and self.now_ns >= wait.until_ns
+        if wait.kind == "waittag":
+            done = self.tags.get(wait.tag) == "true" or wait.tag not in self.tags
+            return done or (wait.until_ns is not None and self.now_ns >= wait.until_ns)
+        if wait.kind == "drain":
+            return self.executor.idle
+        return True  # pragma: no cover
+
+    def _finish_exit(self, job: ScriptJob) -> None:
+        """§4.6: the motion queue drained after ScriptExit(): leave via Pass, then the OK."""
+        self.current = None
+        self._leave_node("Pass")
+        if self.settings.script_exit_ok_after_drain:
+            self._reply(job, "OK")
+
+    # ---------------------------------------------------------------- statements
+
+    def _exec_statement(self, job: ScriptJob, stmt: sc.Statement, ctx: _Ctx) -> str | None:
+        """Execute one statement; return "block"/"exit" if the script must stop here."""
+        if isinstance(stmt, sc.Empty):
+            return None
+        if isinstance(stmt, sc.Declare):
+            value = self._eval(stmt.init, ctx) if stmt.init is not None else (
+                [] if stmt.is_array else _default_value(stmt.type_name))
+            ctx.variables[stmt.name.lower()] = [stmt.type_name, stmt.is_array,
+                                                _coerce(stmt.type_name, stmt.is_array, value)]
+            return None
+        if isinstance(stmt, sc.Assign):
+            self._assign(stmt, ctx)
+            return None
+        assert isinstance(stmt, sc.ExprStmt)
+        expr = stmt.expr
+        if isinstance(expr, sc.Call) and expr.name in _BLOCKING_STATEMENTS:
+            return _BLOCKING_STATEMENTS[expr.name](self, job, expr, ctx)
+        self._eval(expr, ctx)
+        return None
+
+    def _assign(self, stmt: sc.Assign, ctx: _Ctx) -> None:
+        value = self._eval(stmt.value, ctx)
+        target = stmt.target
+        if isinstance(target, sc.Name):
+            entry = ctx.variables[target.name.lower()]
+            if stmt.op != "=":
+                value = _arith(stmt.op[0], entry[2], value)
+            entry[2] = _coerce(entry[0], entry[1], value)
+        elif isinstance(target, sc.Index) and isinstance(target.target, sc.Name):
+            entry = ctx.variables[target.target.name.lower()]
+            idx = int(self._eval(target.index, ctx))
+            if not 0 <= idx < len(entry[2]):
+                raise ArgError("index out of range")
+            if stmt.op != "=":
+                value = _arith(stmt.op[0], entry[2][idx], value)
+            entry[2] = list(entry[2])
+            entry[2][idx] = _coerce(entry[0], False, value)
+        else:
+            raise ArgError("cannot assign")
+
+    # ---------------------------------------------------------------- expressions
+
+    def _eval(self, expr: sc.Expr, ctx: _Ctx) -> Any:
+        if isinstance(expr, sc.Num):
+            return expr.value
+        if isinstance(expr, (sc.Str, sc.Bool)):
+            return expr.value
+        if isinstance(expr, sc.ArrayLit):
+            return [self._eval(item, ctx) for item in expr.items]
+        if isinstance(expr, sc.Name):
+            return ctx.variables[expr.name.lower()][2]
+        if isinstance(expr, sc.Attr):
+            return self._robot_member(expr.name)
+        if isinstance(expr, sc.Index):
+            seq = self._eval(expr.target, ctx)
+            idx = self._eval(expr.index, ctx)
+            if isinstance(expr.target, sc.Name) and expr.target.name.lower() == "robot":
+                return None  # Robot[0] itself; members are read through Attr
+            if not isinstance(seq, (list, tuple)) or not isinstance(idx, (int, float)) \
+                    or not 0 <= int(idx) < len(seq):
+                raise ArgError("index out of range")
+            return seq[int(idx)]
+        if isinstance(expr, sc.Unary):
+            value = self._eval(expr.operand, ctx)
+            if expr.op == "!":
+                return not value
+            return -value if expr.op == "-" else +value
+        if isinstance(expr, sc.Binary):
+            left, right = self._eval(expr.left, ctx), self._eval(expr.right, ctx)
+            return _binary(expr.op, left, right)
+        if isinstance(expr, sc.Postfix):
+            target = expr.target
+            if isinstance(target, sc.Name):
+                entry = ctx.variables[target.name.lower()]
+                old = entry[2]
+                entry[2] = _coerce(entry[0], entry[1], old + (1 if expr.op == "++" else -1))
+                return old
+            raise ArgError("++/-- on element")
+        if isinstance(expr, sc.Call):
+            args = [self._eval(a, ctx) for a in expr.args]
+            return _FUNCTIONS[expr.name](self, args, ctx)
+        raise ArgError("unsupported expression")  # pragma: no cover
+
+    def _robot_member(self, name: str) -> Any:
+        """Robot[0].<member> (read-only robot variables that clients read)."""
+        key = name.lower()
+        tcp = self.executor.current_tcp()
+        if key == "coordrobot":
+            return [float(v) for v in matrix_to_pose(tcp)]
+        if key == "coordbase":
+            return [float(v) for v in self._pose_in_base(tcp)]
+        if key == "joint":
+            return [float(v) for v in self.executor.current_joints(self.tool)]
+        if key == "tcpspeed3d":
+            return self._tcp_speed_mm_s()
+        if key == "tcpforce3d":
+            return 0.0  # no force model
+        if key == "basename":
+            return self.base_name
+        if key == "tcpname":
+            return self.tcp_name
+        if key == "payload":
+            return self.payload_kg
+        raise ArgError(f"unknown member {name}")  # pragma: no cover - checked statically
+
+    def _pose_in_base(self, tcp: np.ndarray) -> np.ndarray:
+        return matrix_to_pose(np.linalg.inv(self.base) @ tcp)
+
+    def _tcp_speed_mm_s(self) -> float:
+        if not self.executor.active:
+            return 0.0
+        seg = self.executor.active[-1]
+        dt = NS_PER_MS
+        t = self.executor.time_ns
+        a = seg.tcp_at(max(seg.start_ns, t - dt))[:3, 3]
+        b = seg.tcp_at(t)[:3, 3]
+        return float(np.linalg.norm(b - a) / (dt / 1e9))
+
+    # ================================================================ motion functions (§7)
+
+    def _queue(self, ctx: _Ctx, item: Any) -> None:
+        if not ctx.dry:
+            self.executor.enqueue(item)
+
+    def _marker_reached(self, marker: Marker) -> None:
+        if marker.kind == "tag":
+            tag = int(marker.value)
+            state = "false" if self.faults.tag_false else "true"
+            if tag in self.tags:
+                self.tags[tag] = state
+            self._note(f"QueueTag {tag} reached")
+            # §5.3: "01,<nn>,true" with nn zero-padded to two digits.
+            frame = encode("TMSTA", f"01,{tag:02d},{state}")
+            owner = marker.owner
+            targets = self.connections if self.settings.tag_notify_broadcast else \
+                [owner] if owner in self.connections else []
+            job = self.current
+            defer = (not self.settings.notify_before_ok and job is not None and job.wait is not None
+                     and job.wait.kind == "tag" and job.wait.tag == tag)
+            for conn in targets:
+                if defer:
+                    job.deferred.append((conn, frame))  # §11 #4 alternative: OK first
+                else:
+                    self._send(conn, frame)
+        elif marker.kind == "base":
+            self.base_name, self.base = marker.value
+        elif marker.kind == "tcp":
+            self.tcp_name, self.tool = marker.value
+        elif marker.kind == "load":
+            self.payload_kg = float(marker.value)
+
+
+def _flatten(args: list[Any]) -> list[Any]:
+    flat: list[Any] = []
+    for arg in args:
+        if isinstance(arg, (list, tuple)):
+            flat.extend(arg)
+        else:
+            flat.append(arg)
+    return flat
+
+
+def _num(value: Any, what: str) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        raise ArgError(f"{what} must be a number")
+    return float(value)
+
+
+def _boolean(value: Any, what: str) -> bool:
+    if not isinstance(value, bool):
+        raise ArgError(f"{what} must be true/false")
+    return value
+
+
+def _check_format(fmt: Any, allowed: set[str], settings: EmulatorSettings) -> str:
+    if not isinstance(fmt, str):
+        raise ArgError("format must be a string")
+    allowed_now = set(allowed)
+    if settings.accept_tmflow2_formats:
+        allowed_now |= {f.replace("A", "D", 1) for f in allowed if len(f) == 3 and f[1] == "A"}
+    if fmt not in allowed_now:
+        raise ArgError(f"format {fmt!r} not valid here")
+    return fmt
+
+
+def _motion_values(args: list[Any], counts: tuple[int, ...]) -> list[Any]:
+    flat = _flatten(args)
+    if len(flat) not in counts:
+        raise ArgError("wrong number of values (array length?)")
+    return flat
+
+
+def _speed(value: Any, is_pct: bool, settings: EmulatorSettings) -> float:
+    speed = _num(value, "speed")
+    # Choice (§7 [U]): percent in (0, 100], mm/s in (0, max_tcp_speed].
+    limit = 100.0 if is_pct else settings.max_tcp_speed_mm_s
+    if not 0.0 < speed <= limit:
+        raise ArgError("speed out of range")
+    return speed
+
+
+def _accel(value: Any) -> float:
+    accel = _num(value, "acceleration time")
+    if accel < 0:
+        raise ArgError("negative acceleration time")
+    return accel
+
+
+def _blend(value: Any, is_pct: bool) -> float:
+    blend = _num(value, "blend")
+    if blend < 0 or (is_pct and blend > 100):
+        raise ArgError("blend out of range")
+    return blend
+
+
+def _pose6(values: list[Any]) -> np.ndarray:
+    return np.array([_num(v, "coordinate") for v in values], dtype=float)
+
+
+def fn_ptp(robot: Robot, args: list[Any], ctx: _Ctx) -> bool:
+    v = _motion_values(args, (11, 14))
+    fmt = _check_format(v[0], {"JPP", "CPP"}, robot.settings)
+    target = _pose6(v[1:7])
+    speed, accel, blend = _speed(v[7], True, robot.settings), _accel(v[8]), _blend(v[9], True)
+    precise = not _boolean(v[10], "disablePrecise")
+    if len(v) == 14:
+        # §7: pose configuration only with "CPP": Config1 0/1, Config2 2/3, Config3 4/5.
+        config = [_num(x, "pose") for x in v[11:14]]
+        if fmt != "CPP" or config[0] not in (0, 1) or config[1] not in (2, 3) or config[2] not in (4, 5):
+            raise ArgError("invalid pose configuration")
+    try:
+        if fmt == "JPP":
+            joints = target
+        else:
+            joints = robot.planner.solve(ctx.plan, ctx.plan.base @ pose_to_matrix(target))
+        seg = robot.planner.joint_motion(ctx.plan, joints, speed, accel, blend, precise, f"PTP {fmt}")
+    except PlanError as exc:
+        raise ArgError(str(exc)) from None
+    robot._queue(ctx, seg)
+    return True
+
+
+def _line_like(robot: Robot, ctx: _Ctx, fmt: str, target_tcp: np.ndarray, v: list[Any], label: str) -> bool:
+    speed_is_pct = fmt[1] == "P"
+    blend_is_radius = fmt[2] == "R"
+    speed = _speed(v[7], speed_is_pct, robot.settings)
+    accel, blend = _accel(v[8]), _blend(v[9], not blend_is_radius)
+    precise = not _boolean(v[10], "disablePrecise") if len(v) > 10 else False
+    try:
+        seg = robot.planner.cart_motion(ctx.plan, target_tcp, speed, speed_is_pct, accel, blend,
+                                        blend_is_radius, precise, label)
+    except PlanError as exc:
+        raise ArgError(str(exc)) from None
+    robot._queue(ctx, seg)
+    return True
+
+
+LINE_FORMATS = {"CPP", "CPR", "CAP", "CAR"}
+
+
+def fn_line(robot: Robot, args: list[Any], ctx: _Ctx) -> bool:
+    v = _motion_values(args, (11,))
+    fmt = _check_format(v[0], LINE_FORMATS, robot.settings)
+    return _line_like(robot, ctx, fmt, ctx.plan.base @ pose_to_matrix(_pose6(v[1:7])), v, f"Line {fmt}")
+
+
+def _relative_tcp(plan: PlannedState, frame: str, delta: np.ndarray) -> np.ndarray:
+    """Target of a relative motion: ``C`` = in the current base, ``T`` = in the tool frame."""
+    if frame == "T":
+        return plan.tcp @ pose_to_matrix(delta)
+    # Choice (§7 Move_*): base-relative adds the translation and the three angles.
+    current = matrix_to_pose(np.linalg.inv(plan.base) @ plan.tcp)
+    return plan.base @ pose_to_matrix(current + delta)
+
+
+def fn_move_ptp(robot: Robot, args: list[Any], ctx: _Ctx) -> bool:
+    v = _motion_values(args, (11,))
+    fmt = _check_format(v[0], {"CPP", "TPP", "JPP"}, robot.settings)
+    delta = _pose6(v[1:7])
+    speed, accel, blend = _speed(v[7], True, robot.settings), _accel(v[8]), _blend(v[9], True)
+    precise = not _boolean(v[10], "disablePrecise")
+    try:
+        if fmt == "JPP":
+            joints = ctx.plan.joints + delta
+        else:
+            joints = robot.planner.solve(ctx.plan, _relative_tcp(ctx.plan, fmt[0], delta))
+        seg = robot.planner.joint_motion(ctx.plan, joints, speed, accel, blend, precise, f"Move_PTP {fmt}")
+    except PlanError as exc:
+        raise ArgError(str(exc)) from None
+    robot._queue(ctx, seg)
+    return True
+
+
+def fn_move_line(robot: Robot, args: list[Any], ctx: _Ctx) -> bool:
+    v = _motion_values(args, (11,))
+    fmt = _check_format(v[0], LINE_FORMATS | {"TPP", "TPR", "TAP", "TAR"}, robot.settings)
+    target = _relative_tcp(ctx.plan, fmt[0], _pose6(v[1:7]))
+    return _line_like(robot, ctx, fmt, target, v, f"Move_Line {fmt}")
+
+
+def fn_circle(robot: Robot, args: list[Any], ctx: _Ctx) -> bool:
+    v = _motion_values(args, (18,))
+    fmt = _check_format(v[0], {"CPP", "CAP"}, robot.settings)
+    via = ctx.plan.base @ pose_to_matrix(_pose6(v[1:7]))
+    end = ctx.plan.base @ pose_to_matrix(_pose6(v[7:13]))
+    speed_is_pct = fmt[1] == "P"
+    speed, accel, blend = _speed(v[13], speed_is_pct, robot.settings), _accel(v[14]), _blend(v[15], True)
+    arc = _num(v[16], "arc angle")
+    precise = not _boolean(v[17], "disablePrecise")
+    try:
+        seg = robot.planner.circle_motion(ctx.plan, via, end, arc, speed, speed_is_pct, accel, blend,
+                                          precise, f"Circle {fmt}")
+    except PlanError as exc:
+        raise ArgError(str(exc)) from None
+    robot._queue(ctx, seg)
+    return True
+
+
+def _pline(robot: Robot, args: list[Any], ctx: _Ctx, relative: bool) -> bool:
+    v = _motion_values(args, (10,))
+    allowed = {"JAP", "CAP", "TAP"} if relative else {"JAP", "CAP"}
+    fmt = _check_format(v[0], allowed, robot.settings)
+    values = _pose6(v[1:7])
+    speed, accel, blend = _speed(v[7], False, robot.settings), _accel(v[8]), _blend(v[9], True)
+    try:
+        if fmt[0] == "J":
+            # Choice: PLine "JAP" moves in joint space at speed/max_tcp_speed of full joint speed.
+            joints = ctx.plan.joints + values if relative else values
+            pct = 100.0 * speed / robot.settings.max_tcp_speed_mm_s
+            seg = robot.planner.joint_motion(ctx.plan, joints, pct, accel, blend, False, f"PLine {fmt}")
+        else:
+            target = _relative_tcp(ctx.plan, fmt[0], values) if relative else ctx.plan.base @ pose_to_matrix(values)
+            seg = robot.planner.cart_motion(ctx.plan, target, speed, False, accel, blend, False, False,
+                                            f"PLine {fmt}")
+    except PlanError as exc:
+        raise ArgError(str(exc)) from None
+    robot._queue(ctx, seg)
+    return True
+
+
+def fn_pline(robot: Robot, args: list[Any], ctx: _Ctx) -> bool:
+    return _pline(robot, args, ctx, relative=False)
+
+
+def fn_move_pline(robot: Robot, args: list[Any], ctx: _Ctx) -> bool:
+    return _pline(robot, args, ctx, relative=True)
+
+
+def fn_change_base(robot: Robot, args: list[Any], ctx: _Ctx) -> bool:
+    if len(args) == 1 and isinstance(args[0], str):
+        if args[0] not in robot.settings.known_bases:
+            raise ArgError(f"unknown base {args[0]!r}")
+        name, base = args[0], np.eye(4)  # Choice: every named base is the robot base
+    else:
+        values = _flatten(args)
+        if len(values) != 6:
+            raise ArgError("ChangeBase needs 6 values")
+        name, base = "custom", pose_to_matrix(_pose6(values))
+    ctx.plan.base = base
+    robot._queue(ctx, Marker("base", (name, base)))
+    return True
+
+
+def fn_change_tcp(robot: Robot, args: list[Any], ctx: _Ctx) -> bool:
+    if len(args) == 1 and isinstance(args[0], str):
+        if args[0] not in robot.settings.known_tcps:
+            raise ArgError(f"unknown TCP {args[0]!r}")
+        name, tool = args[0], np.eye(4)
+    else:
+        values = _flatten(args)
+        if len(values) not in (6, 7, 16):
+            raise ArgError("ChangeTCP needs 6, 7 or 16 values")
+        numbers = [_num(x, "TCP value") for x in values]
+        if len(numbers) >= 7 and numbers[6] < 0:
+            raise ArgError("negative TCP mass")
+        name, tool = "custom", pose_to_matrix(numbers[:6])
+    ctx.plan.tool = tool
+    # The TCP moves with the tool even though the joints do not.
+    ctx.plan.tcp = robot.kin.fk(ctx.plan.joints, tool)
+    robot._queue(ctx, Marker("tcp", (name, tool)))
+    return True
+
+
+def fn_change_load(robot: Robot, args: list[Any], ctx: _Ctx) -> bool:
+    kg = _num(args[0], "load")
+    if kg < 0:
+        raise ArgError("negative load")
+    robot._queue(ctx, Marker("load", kg))
+    return True
+
+
+def _tag_number(value: Any) -> int:
+    tag = _num(value, "tag")
+    if tag != int(tag) or not 1 <= tag <= MAX_TAG:
+        raise ArgError("tag outside 1-15")  # §7 QueueTag
+    return int(tag)
+
+
+def fn_queue_tag(robot: Robot, args: list[Any], ctx: _Ctx) -> bool:
+    tag = _tag_number(args[0])
+    if len(args) == 2 and _num(args[1], "wait") not in (0, 1):
+        raise ArgError("wait must be 0 or 1")
+    if not ctx.dry:
+        # §5.2: re-queuing resets the tag to false; only the most recent tags are remembered.
+        robot.tags.pop(tag, None)
+        robot.tags[tag] = "false"
+        while len(robot.tags) > robot.settings.tag_memory:
+            robot.tags.popitem(last=False)
+        robot.executor.enqueue(Marker("tag", tag, owner=ctx.conn))
+    return True
+
+
+def fn_wait_queue_tag(robot: Robot, args: list[Any], ctx: _Ctx) -> int:
+    """Expression use (not a whole statement): check once (Choice)."""
+    tag = int(_num(args[0], "tag"))
+    if tag == 0:
+        return 0
+    state = robot.tags.get(tag)
+    return -1 if state is None else (1 if state == "true" else 0)
+
+
+def fn_stop_and_clear(robot: Robot, args: list[Any], ctx: _Ctx) -> bool:
+    if args:
+        # A non-literal or out-of-range priority argument is rejected by the parser; here only
+        # the literal priority form can arrive, which the robot runs before buffering.
+        raise ArgError("priority form inside a normal script")
+    if not ctx.dry:
+        robot._stop_and_clear()
+    return True
+
+
+def fn_pause(robot: Robot, args: list[Any], ctx: _Ctx) -> bool:
+    if not ctx.dry and not robot.paused:  # §8: Pause while paused: OK, no effect
+        robot.paused = True
+        robot._note("paused")
+    return True
+
+
+def fn_resume(robot: Robot, args: list[Any], ctx: _Ctx) -> bool:
+    if not ctx.dry and robot.paused:
+        robot.paused = False
+        robot._note("resumed")
+    return True
+
+
+def fn_listen_send(robot: Robot, args: list[Any], ctx: _Ctx) -> int:
+    """§5.4: TMSTA <subcmd>,<payload> to the script's connection.  Returns 0, or -2 for a subcmd
+    outside 90-99."""
+    sub = _num(args[0], "subcmd")
+    if sub != int(sub) or not 90 <= sub <= 99:
+        return -2
+    if not ctx.dry and ctx.conn in robot.connections:
+        robot._send(ctx.conn, encode("TMSTA", f"{int(sub)},".encode("ascii") + _listen_payload(args[1])))
+    return 0
+
+
+def _listen_payload(value: Any) -> bytes:
+    """Strings as text; numbers and arrays as little-endian binary (spec §5.4 [M?]): int32 for
+    integers, float32 for floats (Choice)."""
+    if isinstance(value, str):
+        return value.encode("utf-8")
+    if isinstance(value, bool):
+        return bytes([1 if value else 0])
+    if isinstance(value, (list, tuple)):
+        return b"".join(_listen_payload(v) for v in value)
+    if isinstance(value, int):
+        return struct.pack("<i", value)
+    return struct.pack("<f", float(value))
+
+
+def format_value(value: Any) -> str:
+    """GetString formatting.  Choice: up to 7 significant digits (float32 precision), no
+    exponent for ordinary magnitudes, arrays as ``{a,b,c}``, bools as ``true``/``false``."""
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, (list, tuple)):
+        return "{" + ",".join(format_value(v) for v in value) + "}"
+    if isinstance(value, int):
+        return str(value)
+    if isinstance(value, float):
+        if value == 0:
+            return "0"
+        text = f"{value:.7g}"
+        if "e" in text and 1e-4 <= abs(value) < 1e15:
+            text = f"{value:.7f}".rstrip("0").rstrip(".")
+        return text
+    return str(value)
+
+
+def fn_get_string(robot: Robot, args: list[Any], ctx: _Ctx) -> str:
+    return format_value(args[0])
+
+
+def fn_length(robot: Robot, args: list[Any], ctx: _Ctx) -> int:
+    value = args[0]
+    if isinstance(value, str):
+        return len(value.encode("utf-8"))
+    if isinstance(value, (list, tuple)):
+        return len(value)
+    raise ArgError("Length of a number")
+
+
+def fn_not_in_expression(robot: Robot, args: list[Any], ctx: _Ctx) -> bool:
+    raise ArgError("blocking function inside an expression")
+
+
+_FUNCTIONS: dict[str, Callable[[Robot, list[Any], _Ctx], Any]] = {
+    "PTP": fn_ptp, "Line": fn_line, "Move_PTP": fn_move_ptp, "Move_Line": fn_move_line,
+    "Circle": fn_circle, "PLine": fn_pline, "Move_PLine": fn_move_pline,
+    "ChangeBase": fn_change_base, "ChangeTCP": fn_change_tcp, "ChangeLoad": fn_change_load,
+    "QueueTag": fn_queue_tag, "WaitQueueTag": fn_wait_queue_tag,
+    "StopAndClearBuffer": fn_stop_and_clear, "Pause": fn_pause, "Resume": fn_resume,
+    "ScriptExit": fn_not_in_expression, "Sleep": fn_not_in_expression,
+    "ListenSend": fn_listen_send, "GetString": fn_get_string, "Length": fn_length,
+}
+
+
+# ---------------------------------------------------------------- blocking statements (§4.3)
+
+
+def st_queue_tag(robot: Robot, job: ScriptJob, call: sc.Call, ctx: _Ctx) -> str | None:
+    args = [robot._eval(a, ctx) for a in call.args]
+    fn_queue_tag(robot, args, ctx)
+    if len(args) == 2 and int(args[1]) == 1 and not ctx.dry:
+        job.wait = Wait("tag", tag=_tag_number(args[0]))
+        return "block"
+    return None
+
+
+def st_wait_queue_tag(robot: Robot, job: ScriptJob, call: sc.Call, ctx: _Ctx) -> str | None:
+    args = [robot._eval(a, ctx) for a in call.args]
+    tag = int(_num(args[0], "tag"))
+    timeout_ms = int(_num(args[1], "timeout")) if len(args) == 2 else -1
+    if ctx.dry:
+        return None
+    until = None if timeout_ms < 0 else robot.now_ns + timeout_ms * NS_PER_MS
+    if tag == 0:  # §7: tag 0 = no tag, a plain delay
+        if until is None:
+            job.wait = Wait("delay", until_ns=None)  # forever (until a priority command)
+            return "block"
+        job.wait = Wait("delay", until_ns=until)
+        return "block"
+    if timeout_ms == 0:
+        return None
+    job.wait = Wait("waittag", tag=tag, until_ns=until)
+    return "block"
+
+
+def st_sleep(robot: Robot, job: ScriptJob, call: sc.Call, ctx: _Ctx) -> str | None:
+    ms = _num(robot._eval(call.args[0], ctx), "time")
+    if ms < 0:
+        raise ArgError("negative sleep")
+    if ctx.dry:
+        return None
+    job.wait = Wait("delay", until_ns=robot.now_ns + int(ms * NS_PER_MS))
+    return "block"
+
+
+def st_script_exit(robot: Robot, job: ScriptJob, call: sc.Call, ctx: _Ctx) -> str | None:
+    """§4.6 normal ScriptExit(): wait for the motion queue to drain, then leave via Pass."""
+    if ctx.dry:
+        return "exit"
+    robot.state = NodeState.EXITING
+    robot._note("ScriptExit(): draining motion queue")
+    job.exiting = True
+    job.wait = Wait("drain")
+    if not robot.settings.script_exit_ok_after_drain:
+        robot._reply(job, "OK")  # _finish_exit sends no second OK with this setting
+    return "block"
+
+
+_BLOCKING_STATEMENTS: dict[str, Callable[[Robot, ScriptJob, sc.Call, _Ctx], str | None]] = {
+    "QueueTag": st_queue_tag, "WaitQueueTag": st_wait_queue_tag, "Sleep": st_sleep,
+    "ScriptExit": st_script_exit,
+}
+
+
+# ---------------------------------------------------------------- values
+
+
+def _default_value(type_name: str) -> Any:
+    return {"string": "", "bool": False, "float": 0.0, "double": 0.0}.get(type_name, 0)
+
+
+def _coerce(type_name: str, is_array: bool, value: Any) -> Any:
+    if is_array:
+        if not isinstance(value, (list, tuple)):
+            raise ArgError("array expected")
+        return [_coerce(type_name, False, v) for v in value]
+    try:
+        if type_name in ("int", "byte"):
+            if isinstance(value, str):
+                value = float(value)
+            number = int(value)
+            return number & 0xFF if type_name == "byte" else number
+        if type_name in ("float", "double"):
+            return float(value)
+        if type_name == "string":
+            return format_value(value)
+        if type_name == "bool":
+            if isinstance(value, str):
+                return value.lower() == "true"
+            return bool(value)
+    except (TypeError, ValueError, OverflowError):
+        raise ArgError(f"cannot convert {value!r} to {type_name}") from None
+    return value
+
+
+def _arith(op: str, left: Any, right: Any) -> Any:
+    return _binary(op, left, right)
+
+
+def _binary(op: str, left: Any, right: Any) -> Any:
+    if op == "+" and (isinstance(left, str) or isinstance(right, str)):
+        return format_value(left) + format_value(right)
+    if op in ("&&", "||"):
+        return (bool(left) and bool(right)) if op == "&&" else (bool(left) or bool(right))
+    if op in ("==", "!="):
+        return (left == right) if op == "==" else (left != right)
+    if isinstance(left, (list, tuple)) or isinstance(right, (list, tuple)) \
+            or isinstance(left, str) or isinstance(right, str):
+        raise ArgError(f"operator {op} on these values")
+    if op == "<":
+        return left < right
+    if op == ">":
+        return left > right
+    if op == "<=":
+        return left <= right
+    if op == ">=":
+        return left >= right
+    if op == "+":
+        return left + right
+    if op == "-":
+        return left - right
+    if op == "*":
+        return left * right
+    if op in ("/", "%"):
+        if right == 0:
+            raise ArgError("division by zero")
+        if op == "%":
+            return left % right
+        if isinstance(left, int) and isinstance(right, int) and not isinstance(left, bool):
+            return int(left / right)  # integer division truncates toward zero
+        return left / right
+    raise ArgError(f"unknown operator {op}")  # pragma: no cover

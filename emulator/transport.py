@@ -1,0 +1,486 @@
+"""Transports for the emulated robot: a real TCP server, and an in-process link on a virtual clock.
+
+Both drive the same pure :class:`~emulator.core.EmulatorCore`; only this module touches sockets
+or the wall clock.
+
+TCP server
+==========
+
+``TcpServer(host, port, settings, faults, log_path).start()`` runs a ``selectors`` loop in one
+background thread.  ``.port`` is the bound port (pass ``port=0`` for a free one), ``.stop()`` closes
+every socket and joins the thread.  While the project is stopped the listening socket is closed, so
+clients get "connection refused" as from a real robot (spec §1.2).  Each outgoing frame is written
+with its own ``send`` call and ``TCP_NODELAY`` (spec §2: one frame per write).
+
+In-process link (deterministic lockstep)
+========================================
+
+No threads, no sockets, no wall clock.  Time is an integer number of nanoseconds that only moves
+when the owner calls :meth:`InProcessLink.advance_to` (or :meth:`InProcessLink.step`).  Bytes take
+``latency_ns`` in each direction; a connection attempt takes one latency to reach the robot and one
+to come back.  Events at the same instant are processed in the order they were created, so a
+scenario gives bit-identical results on every run::
+
+    from emulator.transport import InProcessLink
+
+    link = InProcessLink(latency_ns=1_000_000)        # 1 ms each way
+    client = link.endpoint()                          # one client socket
+    client.connect()                                  # status -> "connecting"
+    link.step(2_000_000)                              # status -> "connected"
+    client.send(b"$TMSTA,2,00,*41\\r\\n")
+    link.step(2_000_000)
+    client.recv(4096)                                 # b"$TMSTA,15,00,true,Listen1,*79\\r\\n"
+    client.close()
+
+:class:`ClientEndpoint` (what a PLC socket function block polls once per scan):
+
+* ``connect(host=None, port=None)``: start connecting (address ignored); never blocks.
+* ``status``: ``"closed"`` (new or after ``close()``), ``"connecting"``, ``"connected"``,
+  ``"refused"`` (the robot's listener is closed or a ``refuse`` fault), ``"peer_closed"`` (the
+  robot closed the connection: project stop, ``drop`` fault; unread bytes can still be read).
+* ``send(data) -> int``: bytes accepted (all of them while connected, else 0).  They reach the
+  robot ``latency_ns`` later, as one segment.
+* ``recv(max_bytes) -> bytes``: up to ``max_bytes`` already arrived; ``b""`` if none.
+* ``available``: number of bytes ready to read.
+* ``close()``: close our side (the robot learns it one latency later).
+
+The link also exposes ``now_ns``, ``robot`` (the :class:`~emulator.robot.Robot`) and ``core``.
+"""
+
+from __future__ import annotations
+
+import heapq
+import json
+import selectors
+import socket
+import threading
+import time
+from collections import deque
+from dataclasses import dataclass, field
+from typing import IO, Any, Callable
+
+from .core import Delivery, EmulatorCore
+from .faults import NO_FAULTS, FaultPlan
+from .settings import DEFAULT_SETTINGS, EmulatorSettings
+
+# ============================================================================ frame log
+
+
+class JsonFrameLog:
+    """``--log FILE``: one JSON object per frame, flushed per frame:
+    ``{"t": seconds since start, "dir": "rx"|"tx", "data": "<frame text>", "conn": id}``."""
+
+    def __init__(self, path: str | None, start_ns: int = 0, keep_last: int = 12) -> None:
+        self._file: IO[str] | None = open(path, "a", encoding="utf-8") if path else None
+        self.start_ns = start_ns
+        self.recent: deque[tuple[float, str, str, int]] = deque(maxlen=keep_last)
+        self.count = {"rx": 0, "tx": 0}
+        self._lock = threading.Lock()
+
+    def __call__(self, t_ns: int, direction: str, data: bytes, conn: int) -> None:
+        t_s = (t_ns - self.start_ns) / 1e9
+        text = data.decode("utf-8", errors="backslashreplace")
+        with self._lock:
+            self.count[direction] += 1
+            self.recent.append((t_s, direction, text, conn))
+            if self._file is not None:
+                self._file.write(json.dumps({"t": round(t_s, 9), "dir": direction, "data": text,
+                                             "conn": conn}) + "\n")
+                self._file.flush()
+
+    def close(self) -> None:
+        if self._file is not None:
+            self._file.close()
+            self._file = None
+
+
+# ============================================================================ TCP server
+
+
+@dataclass
+class _Conn:
+    sock: socket.socket
+    conn_id: int
+    out: deque[bytes] = field(default_factory=deque)
+    closing: bool = False
+
+
+class TcpServer:
+    """The emulator on a real TCP port, served from one background thread."""
+
+    def __init__(self, host: str = "127.0.0.1", port: int = 5890,
+                 settings: EmulatorSettings = DEFAULT_SETTINGS, faults: FaultPlan = NO_FAULTS,
+                 log_path: str | None = None) -> None:
+        self.host = host
+        self.requested_port = port
+        self.port = port
+        self._t0 = time.monotonic_ns()
+        self.frame_log = JsonFrameLog(log_path)
+        self.core = EmulatorCore(settings, faults, self.frame_log, now_ns=0)
+        self.lock = threading.RLock()
+        self._sel = selectors.DefaultSelector()
+        self._listener: socket.socket | None = None
+        self._conns: dict[int, _Conn] = {}
+        self._by_sock: dict[socket.socket, _Conn] = {}
+        self._wake_r, self._wake_w = socket.socketpair()
+        self._wake_r.setblocking(False)
+        self._stop = threading.Event()
+        self._thread: threading.Thread | None = None
+        self.error: BaseException | None = None
+
+    # ------------------------------------------------------------------ lifecycle
+
+    def start(self) -> "TcpServer":
+        self._open_listener()
+        self._sel.register(self._wake_r, selectors.EVENT_READ, "wake")
+        self._thread = threading.Thread(target=self._serve, name=f"tm-emulator:{self.port}", daemon=True)
+        self._thread.start()
+        return self
+
+    def stop(self, timeout_s: float = 5.0) -> None:
+        """Close every socket and end the server thread."""
+        self._stop.set()
+        try:
+            self._wake_w.send(b"x")
+        except OSError:
+            pass
+        if self._thread is not None:
+            self._thread.join(timeout_s)
+        self._cleanup()
+
+    def __enter__(self) -> "TcpServer":
+        return self
+
+    def __exit__(self, *exc: Any) -> None:
+        self.stop()
+
+    def now_ns(self) -> int:
+        return time.monotonic_ns() - self._t0
+
+    @property
+    def listening(self) -> bool:
+        """Whether the port is open (False while the project is stopped: connection refused)."""
+        return self._listener is not None
+
+    def snapshot(self) -> dict[str, Any]:
+        with self.lock:
+            snap = self.core.robot.snapshot()
+            snap["log"] = list(self.core.robot.log)[-8:]
+        snap["recent_frames"] = list(self.frame_log.recent)
+        snap["frames"] = dict(self.frame_log.count)
+        snap["address"] = f"{self.host}:{self.port}"
+        return snap
+
+    def call(self, fn: Callable[[EmulatorCore, int], Any]) -> Any:
+        """Run ``fn(core, now_ns)`` in the server's lock (e.g. ``robot.stop_project``) and wake
+        the loop so that its output goes out."""
+        with self.lock:
+            result = fn(self.core, self.now_ns())
+        self._wake_w.send(b"x")
+        return result
+
+    # ------------------------------------------------------------------ internals
+
+    def _open_listener(self) -> None:
+        sock = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
+        sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+        sock.bind((self.host, self.port))
+        sock.listen(16)
+        sock.setblocking(False)
+        self.port = sock.getsockname()[1]
+        self._listener = sock
+        self._sel.register(sock, selectors.EVENT_READ, "listen")
+
+    def _close_listener(self) -> None:
+        if self._listener is not None:
+            self._sel.unregister(self._listener)
+            self._listener.close()
+            self._listener = None
+
+    def _serve(self) -> None:
+        try:
+            while not self._stop.is_set():
+                with self.lock:
+                    deadline = self.core.next_deadline_ns()
+                    now = self.now_ns()
+                timeout = None if deadline is None else max(0.0, (deadline - now) / 1e9)
+                if timeout is not None:
+                    timeout = min(timeout, 1.0)
+                for key, mask in self._sel.select(timeout if timeout is not None else 1.0):
+                    with self.lock:
+                        self._on_event(key, mask)
+                with self.lock:
+                    self._flush(self.now_ns())
+        except BaseException as exc:  # surfaced through .error; the thread must not die silently
+            self.error = exc
+            raise
+
+    def _on_event(self, key: selectors.SelectorKey, mask: int) -> None:
+        now = self.now_ns()
+        if key.data == "wake":
+            try:
+                self._wake_r.recv(4096)
+            except OSError:
+                pass
+            return
+        if key.data == "listen":
+            assert self._listener is not None
+            try:
+                sock, _ = self._listener.accept()
+            except OSError:
+                return
+            conn_id = self.core.open(now)
+            if conn_id is None:
+                # Refuse: reset the connection at once (SO_LINGER 0 sends RST).
+                sock.setsockopt(socket.SOL_SOCKET, socket.SO_LINGER, b"\x01\x00\x00\x00\x00\x00\x00\x00")
+                sock.close()
+                return
+            sock.setblocking(False)
+            sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+            conn = _Conn(sock, conn_id)
+            self._conns[conn_id] = conn
+            self._by_sock[sock] = conn
+            self._sel.register(sock, selectors.EVENT_READ, conn)
+            return
+        conn = key.data
+        if mask & selectors.EVENT_WRITE:
+            self._write(conn)
+        if mask & selectors.EVENT_READ:
+            try:
+                data = conn.sock.recv(65536)
+            except (BlockingIOError, InterruptedError):
+                return
+            except OSError:
+                data = b""
+            if data:
+                self.core.receive(conn.conn_id, data, now)
+            else:
+                self.core.close(conn.conn_id, now)
+                self._drop(conn)
+
+    def _flush(self, now: int) -> None:
+        for delivery in self.core.pop_ready(now):
+            self._deliver(delivery)
+        # Project stopped -> listener closed (connection refused); started again -> reopened.
+        if self.core.accepting and self._listener is None and not self._stop.is_set():
+            try:
+                self._open_listener()
+            except OSError:
+                pass
+        elif not self.core.accepting and self._listener is not None:
+            self._close_listener()
+
+    def _deliver(self, delivery: Delivery) -> None:
+        conn = self._conns.get(delivery.conn)
+        if conn is None:
+            return
+        if delivery.data is None:
+            conn.closing = True
+            if not conn.out:
+                self._drop(conn)
+            return
+        conn.out.append(delivery.data)
+        self._write(conn)
+
+    def _write(self, conn: _Conn) -> None:
+        while conn.out:
+            chunk = conn.out[0]
+            try:
+                sent = conn.sock.send(chunk)  # one frame per send (spec §2)
+            except (BlockingIOError, InterruptedError):
+                sent = 0
+            except OSError:
+                self.core.close(conn.conn_id, self.now_ns())
+                self._drop(conn)
+                return
+            if sent < len(chunk):
+                conn.out[0] = chunk[sent:]
+                self._sel.modify(conn.sock, selectors.EVENT_READ | selectors.EVENT_WRITE, conn)
+                return
+            conn.out.popleft()
+        if conn.closing:
+            self._drop(conn)
+            return
+        try:
+            self._sel.modify(conn.sock, selectors.EVENT_READ, conn)
+        except (KeyError, ValueError):
+            pass
+
+    def _drop(self, conn: _Conn) -> None:
+        if self._conns.pop(conn.conn_id, None) is None:
+            return
+        self._by_sock.pop(conn.sock, None)
+        try:
+            self._sel.unregister(conn.sock)
+        except (KeyError, ValueError):
+            pass
+        conn.sock.close()
+
+    def _cleanup(self) -> None:
+        for conn in list(self._conns.values()):
+            self._drop(conn)
+        if self._listener is not None:
+            self._close_listener()
+        for sock in (self._wake_r, self._wake_w):
+            try:
+                self._sel.unregister(sock)
+            except (KeyError, ValueError):
+                pass
+            sock.close()
+        self._sel.close()
+        self.frame_log.close()
+
+
+def start_server(host: str = "127.0.0.1", port: int = 5890, log_path: str | None = None,
+                 faults: FaultPlan | None = None, settings: EmulatorSettings | None = None) -> TcpServer:
+    """Start the emulator on ``host:port`` in a background thread and return the running server
+    (``.port`` is the bound port; ``port=0`` picks a free one; ``.stop()`` shuts it down)."""
+    return TcpServer(host, port, settings or DEFAULT_SETTINGS, faults or NO_FAULTS, log_path).start()
+
+
+# ============================================================================ in-process link
+
+
+class ClientEndpoint:
+    """Client side of one in-process connection (see the module docstring)."""
+
+    def __init__(self, link: "InProcessLink") -> None:
+        self._link = link
+        self.status = "closed"
+        self.conn_id: int | None = None
+        self._rx = bytearray()
+        self._generation = 0  # ignores events of an earlier connection after close/reconnect
+
+    def connect(self, host: str | None = None, port: int | None = None) -> None:
+        if self.status in ("connecting", "connected"):
+            return
+        self._generation += 1
+        self._rx.clear()
+        self.status = "connecting"
+        self._link._schedule(self._link.latency_ns, "syn", self, None)
+
+    def send(self, data: bytes) -> int:
+        if self.status != "connected" or not data:
+            return 0
+        self._link._schedule(self._link.latency_ns, "c2s", self, bytes(data))
+        return len(data)
+
+    def recv(self, max_bytes: int = 65536) -> bytes:
+        chunk = bytes(self._rx[:max_bytes])
+        del self._rx[:max_bytes]
+        return chunk
+
+    @property
+    def available(self) -> int:
+        return len(self._rx)
+
+    def close(self) -> None:
+        if self.status in ("connected", "connecting") and self.conn_id is not None:
+            self._link._schedule(self._link.latency_ns, "cfin", self, self.conn_id)
+        self._generation += 1
+        self.status = "closed"
+        self.conn_id = None
+
+
+class InProcessLink:
+    """The emulator and its clients on one virtual clock (integer ns), stepped by the caller."""
+
+    def __init__(self, settings: EmulatorSettings = DEFAULT_SETTINGS, faults: FaultPlan = NO_FAULTS,
+                 latency_ns: int = 1_000_000, start_ns: int = 0, log_path: str | None = None) -> None:
+        if latency_ns < 0:
+            raise ValueError("latency must not be negative")
+        self.latency_ns = int(latency_ns)
+        self.now_ns = int(start_ns)
+        self.frame_log = JsonFrameLog(log_path, start_ns)
+        self.core = EmulatorCore(settings, faults, self.frame_log, now_ns=self.now_ns)
+        self._events: list[tuple[int, int, str, ClientEndpoint, Any, int]] = []
+        self._seq = 0
+        self._by_conn: dict[int, ClientEndpoint] = {}
+
+    @property
+    def robot(self):  # -> Robot (not imported for typing to keep the import graph flat)
+        return self.core.robot
+
+    def endpoint(self) -> ClientEndpoint:
+        return ClientEndpoint(self)
+
+    def step(self, dt_ns: int) -> None:
+        self.advance_to(self.now_ns + int(dt_ns))
+
+    def advance_to(self, now_ns: int) -> None:
+        """Process everything up to and including ``now_ns``, in time order."""
+        target = int(now_ns)
+        if target < self.now_ns:
+            raise ValueError("time cannot go backwards")
+        for _ in range(10_000_000):
+            t_event = self._events[0][0] if self._events else None
+            t_core = self.core.next_deadline_ns()
+            candidates = [t for t in (t_event, t_core) if t is not None and t <= target]
+            if not candidates:
+                break
+            t = max(min(candidates), self.now_ns)
+            self.now_ns = t
+            if t_event is not None and t_event <= t:
+                _, _, kind, ep, payload, gen = heapq.heappop(self._events)
+                self._process(kind, ep, payload, gen, t)
+            else:
+                before = self.core.next_deadline_ns()
+                self.core.advance(t)
+                self._collect(t)
+                if self.core.next_deadline_ns() == before and before is not None and before <= t:
+                    break  # nothing consumed the deadline; do not spin
+        self.now_ns = target
+        self.core.advance(target)
+        self._collect(target)
+
+    def close(self) -> None:
+        self.frame_log.close()
+
+    # ------------------------------------------------------------------ internals
+
+    def _schedule(self, delay_ns: int, kind: str, ep: ClientEndpoint, payload: Any) -> None:
+        self._seq += 1
+        heapq.heappush(self._events, (self.now_ns + delay_ns, self._seq, kind, ep, payload, ep._generation))
+
+    def _process(self, kind: str, ep: ClientEndpoint, payload: Any, gen: int, t: int) -> None:
+        if kind == "syn":
+            if gen != ep._generation:
+                return
+            conn = self.core.open(t)
+            if conn is None:
+                self._schedule(self.latency_ns, "refused", ep, None)
+            else:
+                ep.conn_id = conn
+                self._by_conn[conn] = ep
+                self._schedule(self.latency_ns, "established", ep, conn)
+        elif kind == "established":
+            if gen == ep._generation and ep.status == "connecting":
+                ep.status = "connected"
+        elif kind == "refused":
+            if gen == ep._generation and ep.status == "connecting":
+                ep.status = "refused"
+        elif kind == "c2s":
+            if gen == ep._generation and ep.conn_id is not None:
+                self.core.receive(ep.conn_id, payload, t)
+        elif kind == "cfin":
+            self._by_conn.pop(payload, None)
+            self.core.close(payload, t)
+        elif kind == "s2c":
+            if gen == ep._generation:
+                ep._rx.extend(payload)
+        elif kind == "fin":
+            if gen == ep._generation and ep.status in ("connected", "connecting"):
+                ep.status = "peer_closed"
+                ep.conn_id = None
+        self._collect(t)
+
+    def _collect(self, t: int) -> None:
+        for delivery in self.core.pop_ready(t):
+            ep = self._by_conn.get(delivery.conn)
+            if ep is None:
+                continue
+            if delivery.data is None:
+                self._by_conn.pop(delivery.conn, None)
+                self._schedule(self.latency_ns, "fin", ep, None)
+            else:
+                self._schedule(self.latency_ns, "s2c", ep, delivery.data)
