@@ -188,9 +188,21 @@ def cmd_run(args) -> int:
         print(f"{name} = {vm.format(name)}")
     if args.stats:
         _print_stats(vm)
+    elif vm.realtime and vm.scan_count:
+        _print_realtime(vm)
     if interrupted:
         print(f"stopped after {vm.scan_count} scans", file=sys.stderr)
     return status
+
+
+def _print_realtime(vm) -> None:
+    """`--realtime` always reports how well the deadlines were kept (stderr)."""
+    import numpy as np
+    jitter = np.frombuffer(vm.jitter_ns, dtype=np.int64) / 1000.0
+    if len(jitter):
+        print(f"realtime: {vm.scan_count} scans, {vm.overruns} overruns, start jitter us: "
+              f"p50 {np.percentile(jitter, 50):.0f}  p99 {np.percentile(jitter, 99):.0f}  max {jitter.max():.0f}",
+              file=sys.stderr)
 
 
 def _print_stats(vm) -> None:

@@ -342,7 +342,8 @@ class Lowerer:
         w.blank_span()
         name = self.classes[pou.key]
         params = pou.params()
-        args = ", ".join(var_attr(p.name) for p in params)
+        outputs = [v for v in pou.variables.values() if v.section == OUTPUT]
+        args = ", ".join([var_attr(p.name) for p in params] + [f"o_{var_attr(o.name)}=None" for o in outputs])
         w.line(f"def {name}({args}):")
         w.indent += 1
         self.pou = pou
@@ -360,7 +361,10 @@ class Lowerer:
             if var.section not in (INPUT, IN_OUT, EXTERNAL):
                 prologue.append(f"_f.{var_attr(var.name)} = {self.var_default(var)}")
         prologue.append(f"_r = {self.default_expr(pou.return_type)}")
-        self.cached_body(pou, node, prologue, [])
+        # VAR_OUTPUT of a function: written through the caller's references when it returns
+        epilogue = [f"if o_{var_attr(o.name)} is not None: o_{var_attr(o.name)}.set(_f.{var_attr(o.name)})"
+                    for o in outputs]
+        self.cached_body(pou, node, prologue, epilogue)
         w.blank_span()
         w.line("return _r")
         w.indent -= 1
@@ -705,6 +709,13 @@ class Lowerer:
             for var, value in info.inputs:
                 if var.section == IN_OUT and isinstance(value, n.Name):
                     referenced.add(value.parts[0].lower())
+            if not info.is_fb:
+                # a function writes its outputs through references at its end
+                for var, target, _ in info.outputs:
+                    if isinstance(target, n.Name):
+                        referenced.add(target.parts[0].lower())
+        if pou.kind == "FUNCTION":
+            referenced |= {v.key for v in pou.variables.values() if v.section == OUTPUT}
         out = {}
         for var in pou.variables.values():
             if var.section in (EXTERNAL, GLOBAL) or var.key in referenced:
@@ -719,8 +730,9 @@ class Lowerer:
         outer = self.w
         self.cached = self.cached_vars(pou, node)
         self.used, self.assigned = set(), set()
+        guarded = bool(self.cached) or bool(epilogue_extra)
         body_writer = _Writer()
-        body_writer.indent = outer.indent + (1 if self.cached else 0)
+        body_writer.indent = outer.indent + (1 if guarded else 0)
         self.w = body_writer
         self.body(node.body)
         self.w = outer
@@ -737,11 +749,11 @@ class Lowerer:
                 outer.line(f"{attr} = {self.owner}.{attr}")
         write_back = [k for k in sorted(self.assigned & self.used)
                       if not isinstance(self.cached[k].type, (t.StructType, t.ArrayType, t.FBType))]
-        if self.cached:
+        if guarded:
             outer.line("try:")
         outer.append(body_writer)
         outer.blank_span()
-        if self.cached:
+        if guarded:
             outer.line("finally:")
             outer.indent += 1
             for key in write_back:
@@ -1023,6 +1035,13 @@ class Lowerer:
         for extra in info.extra:
             last = pou.params()[-1]
             args.append(self.arg_code(last, extra))
+        for var, target, negate in info.outputs:
+            ref = self.ref_code(target)
+            target_type = self.facts.types.get(id(target))
+            convert = "(not v)" if negate else self.coerce("v", var.type, target_type) if target_type is not None else "v"
+            if convert != "v":
+                ref = f"_MapRef({ref}, lambda v: {convert})"
+            args.append(f"o_{var_attr(var.name)}={ref}")
         if pou.native:
             lead = ["_ctx"]
             if pou.generic:

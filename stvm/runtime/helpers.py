@@ -8,7 +8,7 @@ from __future__ import annotations
 import math
 import struct
 
-from stvm.runtime.values import ArrayRef, AttrRef, FunctionError, ItemRef, STFault
+from stvm.runtime.values import ArrayRef, AttrRef, FunctionError, ItemRef, MapRef, STFault
 
 _pack_f = struct.Struct("<f")
 
@@ -135,6 +135,6 @@ HELPERS = {
     "_f32": _f32, "_idiv": _idiv, "_idiv0": _idiv0, "_imod": _imod, "_imod0": _imod0, "_fdiv": _fdiv,
     "_expt": _expt, "_oob": _oob, "_endless_for": _endless_for, "_strfit": _strfit, "_copy_value": _copy_value,
     "_assign_array": _assign_array, "_setbit": _setbit, "_with": _with, "_Frame": _Frame,
-    "_AttrRef": AttrRef, "_ItemRef": ItemRef, "_ArrayRef": ArrayRef, "_FunctionError": FunctionError,
+    "_AttrRef": AttrRef, "_MapRef": MapRef, "_ItemRef": ItemRef, "_ArrayRef": ArrayRef, "_FunctionError": FunctionError,
     "_STFault": STFault,
 }

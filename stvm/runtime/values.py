@@ -86,3 +86,20 @@ class ItemRef:
 
     def set(self, value) -> None:
         self.lst[self.index] = value
+
+
+class MapRef:
+    """A reference that converts what is stored through it (a function output bound with `=>`
+    to a variable of a wider type)."""
+
+    __slots__ = ("ref", "convert")
+
+    def __init__(self, ref, convert) -> None:
+        self.ref = ref
+        self.convert = convert
+
+    def get(self):
+        return self.ref.get()
+
+    def set(self, value) -> None:
+        self.ref.set(self.convert(value))

@@ -123,29 +123,40 @@ class Checker:
                     continue
                 self.index.pou_nodes[key] = pou
                 self.index.short_pous.setdefault(pou.name.lower(), []).append(key)
-        # types first (enumerators must be known before POU signatures resolve initial values)
+        # Order matters only inside this method: global constants of elementary types first (array
+        # bounds and STRING sizes may use them), then types (enumerators must be known before
+        # initial values resolve), then the other globals, then POU signatures.
+        blocks = []
+        for unit in self.units:
+            blocks += [(g.block, g.namespace) for g in unit.globals]
+            for conf in unit.configurations:
+                blocks += [(b, ()) for b in conf.globals]
+                for res in conf.resources:
+                    blocks += [(b, ()) for b in res.globals]
+        for block, namespace in blocks:
+            if block.constant:
+                self.declare_globals(block, namespace, elementary_only=True)
         for key, decl in self.index.type_decls.items():
             self.resolve_declared_type(key)
+        for block, namespace in blocks:
+            self.declare_globals(block, namespace, elementary_only=False if block.constant else None)
         for key, pou in self.index.pou_nodes.items():
             self.pous[key] = self.declare_pou(pou)
-        for unit in self.units:
-            for g in unit.globals:
-                self.declare_globals(g.block, g.namespace)
-            for conf in unit.configurations:
-                for block in conf.globals:
-                    self.declare_globals(block, ())
-                for res in conf.resources:
-                    for block in res.globals:
-                        self.declare_globals(block, ())
 
     def check_identifier(self, name: str, span: n.Span) -> None:
         if name.lower() in _RESERVED:
             self.error(f"'{name}' is a reserved word and cannot be used as a name", span, "E011")
 
-    def declare_globals(self, block: n.VarBlock, namespace: tuple[str, ...]) -> None:
-        if block.kind != GLOBAL:
+    def declare_globals(self, block: n.VarBlock, namespace: tuple[str, ...], elementary_only: bool | None = None) -> None:
+        """Declare a VAR_GLOBAL block. `elementary_only` True: only its elementary-typed entries
+        (the early pass for constants); False: only the others; None: all."""
+        if block.kind != GLOBAL and elementary_only is not True:
             self.error(f"only VAR_GLOBAL is allowed outside a POU, not {block.kind}", block.span, "E012")
         for decl in block.decls:
+            elementary = isinstance(decl.type_spec, n.NamedTypeSpec) and len(decl.type_spec.parts) == 1 \
+                and decl.type_spec.parts[0].upper() in t.ELEMENTARY
+            if elementary_only is not None and elementary != elementary_only:
+                continue
             vtype = self.resolve_type_spec(decl.type_spec, namespace)
             for name, span in decl.names:
                 self.check_identifier(name, span)

@@ -219,8 +219,9 @@ class TcpLink:
             return
         self._unsent.clear()  # sysmac.md 5: SktClose discards buffered send/receive data
         try:
-            # read what is left, so that the OS closes with FIN rather than RST
-            while True:
+            # read what is left, so that the OS closes with FIN rather than RST (bounded: a peer
+            # that keeps sending cannot hold the scan)
+            for _ in range(_READ_LIMIT_PER_POLL // 65_536):
                 if not self._sock.recv(65_536):
                     break
         except OSError:
@@ -447,7 +448,8 @@ class SocketRequestFB:
             inst.v_done = True
         else:
             inst.v_error = True
-            inst.v_errorid = ctx.settings.skt_error_codes[outcome]
+            # Choice: a kind missing from a user-supplied table reports 16#2003 (wrong state)
+            inst.v_errorid = ctx.settings.skt_error_codes.get(outcome, 0x2003)
         self._phase = HELD if execute else SHOWN_ONCE
 
     def _clear_outputs(self, inst, settings) -> None:
@@ -586,11 +588,12 @@ class SktGetTCPStatus(SocketRequestFB):
             # a handle once valid, now closed (`skt_status_closed_handle`)
             if ctx.settings.skt_status_closed_handle == "error":
                 return "bad_handle"
-            inst.v_tcpstatus = names["_CLOSED"]
+            inst.v_tcpstatus = names.get("_CLOSED", 0)
             inst.v_datrcvflag = False
             return DONE
         state = _require_open(transport, self._handle, ctx.now_ns)
-        inst.v_tcpstatus = names[STATE_NAMES[state]]
+        # a state missing from a user-supplied table shows as _CLOSED
+        inst.v_tcpstatus = names.get(STATE_NAMES[state], names.get("_CLOSED", 0))
         inst.v_datrcvflag = transport.pending(self._handle) > 0
         return DONE
 

@@ -621,31 +621,53 @@ def _collect(file: str, items: list, namespace: tuple[str, ...], out: dict[str, 
 
 _FRIENDLY = {
     "SEMICOLON": "';'", "IDENT": "a name", "COLON": "':'", "LPAR": "'('", "RPAR": "')'",
-    "LSQB": "'['", "RSQB": "']'", "COMMA": "','", "DOT": "'.'", "EQ": "'='", "__ANON_0": "':='",
+    "LSQB": "'['", "RSQB": "']'", "COMMA": "','", "DOT": "'.'", "EQ": "'='", "INTEGER": "a number",
+    "STRING_LITERAL": "a string", "CASE_NAME": "a case label",
 }
+# tokens that may continue an expression: noise in "expected …" lists when a ';' or keyword fits
+_CONTINUATIONS = {"PLUS", "MINUS", "STAR", "SLASH", "MOD", "POW", "AND", "AMP", "OR", "XOR", "EQ", "NE",
+                  "LT", "GT", "LE", "GE", "DOT", "LSQB", "LPAR", "CIRCUMFLEX", "NS_SEP"}
 
 
 def _expected_text(expected: set[str]) -> str:
+    """A short, readable "; expected …" for a syntax error."""
+    terms = set(expected)
+    if terms - _CONTINUATIONS:
+        dropped = bool(terms & _CONTINUATIONS)
+        terms -= _CONTINUATIONS
+    else:
+        dropped = False
     names = []
-    for term in sorted(expected):
-        if term.startswith("__") and term not in _FRIENDLY:
+    for term in sorted(terms, key=lambda x: (x != "SEMICOLON", x)):
+        if term.startswith("__ANON"):
+            names.append("':='" if term == "__ANON_0" else term)
             continue
-        names.append(_FRIENDLY.get(term, term if not term.isupper() or len(term) > 12 else term))
+        if term.startswith("_") or term == "$END":
+            continue
+        names.append(_FRIENDLY.get(term, term))
     if not names:
         return ""
-    if len(names) > 8:
-        names = names[:8] + ["…"]
-    return "; expected " + ", ".join(names)
+    if len(names) > 6:
+        names = names[:6] + ["…"]
+    return "; expected " + ", ".join(names) + (" or an operator" if dropped else "")
 
 
 def _syntax_diagnostic(file: str, exc: UnexpectedInput) -> Diagnostic:
     if isinstance(exc, UnexpectedToken):
         tok = exc.token
+        expected = set(exc.expected)
+        parser_state = getattr(exc, "interactive_parser", None)
+        if parser_state is not None:
+            # LALR lookahead sets are merged across contexts; ask the parser what really fits here
+            try:
+                expected = set(parser_state.accepts()) or expected
+            except Exception:  # accepts() replays the parser; never let it hide the real error
+                pass
         if tok.type == "$END":
             span = n.Span(file, exc.line if exc.line > 0 else 1, max(exc.column, 1), exc.line, exc.column + 1)
-            return Diagnostic.error("unexpected end of file" + _expected_text(exc.expected), span, "E001")
+            return Diagnostic.error("unexpected end of file" + _expected_text(expected), span, "E001")
         span = _tok_span(file, tok)
-        return Diagnostic.error(f"syntax error: unexpected '{tok}'" + _expected_text(exc.expected), span, "E001")
+        return Diagnostic.error(f"syntax error: unexpected '{tok}'" + _expected_text(expected), span, "E001")
     if isinstance(exc, UnexpectedCharacters):
         span = n.Span(file, exc.line, exc.column, exc.line, exc.column + 1)
         char = exc.char

@@ -1,0 +1,228 @@
+"""Lockstep mode: the TM emulator in-process, behind the socket FBs, on the VM's virtual clock.
+
+`LockstepTransport` is a `stvm.stdlib.sockets.SocketTable` whose links are `ClientEndpoint`s of
+one `emulator.InProcessLink`. Nothing here reads the wall clock, opens a socket or starts a thread,
+so the same project, scenario and latency give the same bytes at the same nanosecond on every run
+and every machine.
+
+Timeline of one scan `k` (period `P`, VM time `k*P` at its start)::
+
+    scan k runs         the FBs poll their links: bytes that reached the PLC by k*P are readable;
+                        what they send is stamped k*P and reaches the robot at k*P + latency
+    on_scan_end hooks   the scenario fires its events for scan k+1 (and faults), then
+    advance             the emulator processes everything up to (k+1)*P: the robot reads, moves,
+                        answers; answers reach the PLC `latency` after the robot sent them
+
+The modelled latency is one way; the default is one scan period, so a request sent in scan k is
+read by the robot at the end of scan k and its answer can be read in scan k+2 (the thesis FBs poll
+once more before they look, sysmac.md 8.8, so the first reaction shows in scan k+3 or later).
+
+Use::
+
+    from stvm.lockstep import LockstepTransport
+    transport = LockstepTransport(latency_scans=1)
+    vm = project.start(scan="1ms", transport=transport)
+    transport.attach(vm)                 # registers the clock hook; sets the latency
+    vm.run(cycles=5000)
+    transport.link.robot.snapshot()      # the robot's state
+    transport.frames                     # every frame, as `FrameRecord`s
+
+Any host and port connect to the one emulated robot (the address is not checked); a scenario's
+`[robot]` globals receive `LOCKSTEP_HOST` and `LOCKSTEP_PORT`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+from typing import Callable
+
+from emulator import DEFAULT_SETTINGS, NO_FAULTS, EmulatorSettings, FaultPlan, InProcessLink, parse_fault
+from emulator.motion import NS_PER_MS
+from stvm.stdlib.sockets import (CONNECTING, ESTABLISHED, FAILED, PEER_CLOSED, RESET, SocketError,
+                                 SocketTable)
+
+LOCKSTEP_HOST = "127.0.0.1"
+LOCKSTEP_PORT = 5890   # the TM Listen Node's default port (tm_protocol.md 1.2)
+
+# ClientEndpoint.status -> Link state (sockets.py)
+_STATES = {"connecting": CONNECTING, "connected": ESTABLISHED, "peer_closed": PEER_CLOSED,
+           "refused": FAILED, "closed": RESET}
+
+
+@dataclass(frozen=True)
+class FrameRecord:
+    """One Listen Node frame as the robot saw it: `direction` "rx" (robot received, i.e. the PLC
+    sent it) or "tx" (robot sent); `t_ns` the emulator time; `conn` the robot's connection id."""
+
+    t_ns: int
+    direction: str
+    data: bytes
+    conn: int
+
+
+class EmulatorLink:
+    """One socket of the PLC, as a `sockets.Link` over an in-process `ClientEndpoint`."""
+
+    def __init__(self, transport: "LockstepTransport", src_port: int, host: str, port: int) -> None:
+        self._endpoint = transport.link.endpoint()
+        self.failure: str | None = None
+        self.local_address = ("", 0)
+        self.remote_address = (host, port)
+        self._src_port = src_port
+        self._transport = transport
+        self._closed = False
+        self._endpoint.connect(host, port)
+        self.state = CONNECTING
+
+    def _update(self) -> None:
+        if self._closed:
+            return
+        state = _STATES[self._endpoint.status]
+        if state == FAILED and self.state == CONNECTING:
+            self.failure = "wrong_state"  # RST answer to the SYN: "refused" (sysmac.md 5: 16#2003)
+        if state == ESTABLISHED and self.state == CONNECTING:
+            # Choice: a deterministic local address; ephemeral ports count up per connection
+            self.local_address = (LOCKSTEP_HOST, self._src_port or self._transport._next_ephemeral())
+        self.state = state
+
+    def poll(self, now_ns: int) -> bytes:
+        self._update()
+        if self.state in (ESTABLISHED, PEER_CLOSED):
+            # after the robot's FIN the bytes it sent before are still readable
+            return self._endpoint.recv(1 << 20)
+        return b""
+
+    def send(self, data: bytes) -> None:
+        self._update()
+        if self.state == PEER_CLOSED:
+            return  # half-closed: the robot discards what arrives (no RST is modelled)
+        if self.state != ESTABLISHED:
+            raise SocketError("wrong_state", f"send while {self.state}")
+        self._endpoint.send(data)
+
+    def close(self) -> None:
+        if not self._closed:
+            self._endpoint.close()
+            self._closed = True
+            self.state = RESET
+
+
+class LockstepTransport(SocketTable):
+    """The socket service of the VM wired to an in-process emulated TM robot.
+
+    `latency_ns` (one way) wins over `latency_scans` (a multiple of the VM's base period, known
+    at `attach`). `faults` is the initial fault plan; `inject_fault` changes it during the run.
+    `on_frame(record)` callbacks see every frame (the trace recorder uses them).
+    """
+
+    def __init__(self, latency_scans: int = 1, latency_ns: int | None = None,
+                 settings: EmulatorSettings = DEFAULT_SETTINGS, faults: FaultPlan = NO_FAULTS,
+                 log_path: str | None = None) -> None:
+        super().__init__(self._open_link)
+        if latency_scans < 0 or (latency_ns is not None and latency_ns < 0):
+            raise ValueError("latency must not be negative")
+        self.latency_scans = latency_scans
+        self.link = InProcessLink(settings=settings, faults=faults,
+                                  latency_ns=latency_ns if latency_ns is not None else 0,
+                                  log_path=log_path)
+        self._explicit_latency = latency_ns is not None
+        self.frames: list[FrameRecord] = []
+        self.on_frame: list[Callable[[FrameRecord], None]] = []
+        self._ephemeral = 49152   # IANA dynamic range start (Choice: deterministic, counts up)
+        original_log = self.link.core.frame_log
+        self._original_log = original_log
+
+        def frame_log(t_ns: int, direction: str, data: bytes, conn: int) -> None:
+            if original_log is not None:
+                original_log(t_ns, direction, data, conn)
+            record = FrameRecord(t_ns, direction, bytes(data), conn)
+            self.frames.append(record)
+            for callback in self.on_frame:
+                callback(record)
+
+        self.link.core.frame_log = frame_log
+        self.vm = None
+
+    # --- wiring -----------------------------------------------------------------------------
+
+    def attach(self, vm) -> "LockstepTransport":
+        """Step the emulator with `vm` (call once, right after `project.start(transport=self)`)."""
+        if vm.ctx.transport is not self:
+            raise ValueError("attach: the VM was started with another transport")
+        if self.vm is not None:
+            raise ValueError("attach: already attached to a VM")
+        self.vm = vm
+        if not self._explicit_latency:
+            self.link.latency_ns = self.latency_scans * vm.base_ns
+        if self.link.now_ns < vm.now_ns:
+            self.link.advance_to(vm.now_ns)
+        vm.on_scan_end.append(self.after_scan)
+        return self
+
+    def after_scan(self, vm) -> None:
+        """VM hook: advance the emulator to the start of the next scan."""
+        self.link.advance_to(vm.now_ns + vm.base_ns)
+
+    @property
+    def latency_ns(self) -> int:
+        return self.link.latency_ns
+
+    def _next_ephemeral(self) -> int:
+        port = self._ephemeral
+        self._ephemeral += 1
+        return port
+
+    def _open_link(self, src_port: int, host: str, port: int, now_ns: int) -> EmulatorLink:
+        if self.link.now_ns < now_ns:
+            self.link.advance_to(now_ns)  # a VM used without attach: keep the clocks together
+        return EmulatorLink(self, src_port, host, port)
+
+    # --- faults -----------------------------------------------------------------------------
+
+    def inject_fault(self, text: str) -> FaultPlan:
+        """Apply one `tm-emulator --fault` text (e.g. "drop:50", "error:1") from now on.
+
+        Timed faults count from the injection: `stop:MS` stops the project MS ms after it,
+        `unsolicited:MS` sends the first frame MS ms after it, and `drop:MS` during a motion
+        drops the connections MS ms after the injection (otherwise MS ms after the next motion
+        starts, as with the fault given at start-up). Returns the new plan.
+        """
+        core, robot = self.link.core, self.link.robot
+        plan = parse_fault(text, core.faults)
+        now = self.link.now_ns
+        core.faults = plan
+        robot.faults = plan
+        robot.executor.stalled = plan.stay_busy
+        name = text.strip().partition(":")[0].lower().replace("-", "_")
+        if name == "stop" and plan.stop_project_at_ms is not None:
+            robot.stop_at_ns = now + plan.stop_project_at_ms * NS_PER_MS
+        if name == "unsolicited":
+            robot.next_unsolicited_ns = now + plan.unsolicited_every_ms * NS_PER_MS
+        if name == "drop" and robot.executor.moving:
+            # Choice: the plan arms only on the next "motion starts"; mid-motion injection means now+MS
+            core._drop_at_ns = now + (plan.drop_after_motion_ms or 0) * NS_PER_MS
+        return plan
+
+    def clear_faults(self) -> None:
+        """Back to a robot without faults (timers armed by faults are disarmed)."""
+        core, robot = self.link.core, self.link.robot
+        core.faults = robot.faults = replace(NO_FAULTS)
+        robot.executor.stalled = False
+        robot.next_unsolicited_ns = None
+        robot.stop_at_ns = None
+        core._drop_at_ns = None
+
+    def close_all(self) -> None:
+        super().close_all()
+        self.link.close()
+
+
+def start_lockstep(project, scan: str | int = "1ms", latency_scans: int = 1, latency_ns: int | None = None,
+                   faults: FaultPlan = NO_FAULTS, settings: EmulatorSettings = DEFAULT_SETTINGS,
+                   start_dt_ns: int = 0):
+    """A fresh VM of `project` wired to a fresh emulated robot: returns (vm, transport)."""
+    transport = LockstepTransport(latency_scans=latency_scans, latency_ns=latency_ns,
+                                  settings=settings, faults=faults)
+    vm = project.start(scan=scan, transport=transport, start_dt_ns=start_dt_ns)
+    transport.attach(vm)
+    return vm, transport

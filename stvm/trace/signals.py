@@ -1,0 +1,256 @@
+"""Watched variables: glob patterns over variable paths, and a fast per-scan sampler.
+
+A *path* names one variable the way `vm.get` does: a global (`Cobot.Connected`), a program
+variable (`PnP_Example_Instance.Prg_Step`), an FB member (`PnP_Example_Instance.Timer_1.Q`), a
+struct field or an array element (`PnP_MoveParameters[2].TargetPosition.Z`). Only elementary
+values (the leaves) are recorded; a pattern naming a struct, FB or array records every leaf in it.
+
+Pattern syntax (case-insensitive, like ST names):
+
+=========  ===============================================================================
+``*``      any characters within one name or index: ``Cobot.*``, ``PnP_MoveParameters[*].Speed``
+``**``     any characters across levels: ``PnP_Example_Instance.**.Busy``
+``?``      one character of a name
+``[``      literal: ``[`` and ``]`` are the index brackets (``Data[1*]`` = indices 1, 10..19, 1xx)
+=========  ===============================================================================
+
+A pattern without a wildcard is resolved exactly as `vm.resolve` does, so it may also name
+VAR_IN_OUT and VAR_EXTERNAL members (which globs skip: they alias the variable they refer to).
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+from typing import Any, Callable, Iterator
+
+from stvm.semantics import types as t
+
+_SAFE_ATTR = re.compile(r"v_[a-z_][a-z0-9_]*")
+_SKIPPED_SECTIONS = ("VAR_IN_OUT", "VAR_EXTERNAL", "VAR_TEMP")
+
+
+class WatchError(ValueError):
+    """A watch pattern that matches nothing or a path that does not resolve."""
+
+
+@dataclass(frozen=True)
+class Signal:
+    """One recorded leaf: its path, type, and how to reach it from a root object.
+
+    `root` is a program instance or the globals object; `steps` the attribute names (`v_…`) and
+    list indices that lead from it to the value. Walking the steps each scan (instead of keeping
+    the final container) stays right when an array of structs is assigned as a whole (the element
+    objects are replaced by copies).
+    """
+
+    name: str
+    type: t.Type
+    root: Any
+    steps: tuple[str | int, ...]
+
+    @property
+    def kind(self) -> str:
+        return value_kind(self.type)
+
+
+def value_kind(ty: t.Type) -> str:
+    """bool, int, real, time, string, enum; anything else is not recordable."""
+    return ty.kind
+
+
+def type_text(ty: t.Type) -> str:
+    if isinstance(ty, t.StringType):
+        return f"STRING[{ty.max_bytes}]" if ty.size != 1986 else "STRING"
+    if isinstance(ty, t.EnumType):
+        return ty.qualname or ty.name
+    return ty.name
+
+
+def compile_pattern(pattern: str) -> re.Pattern[str]:
+    out = []
+    i = 0
+    while i < len(pattern):
+        ch = pattern[i]
+        if pattern.startswith("**", i):
+            out.append(".*")
+            i += 2
+            continue
+        if ch == "*":
+            out.append(r"[^.\[\]]*")
+        elif ch == "?":
+            out.append(r"[^.\[\]]")
+        else:
+            out.append(re.escape(ch))
+        i += 1
+    return re.compile("".join(out), re.IGNORECASE)
+
+
+def _leaves(vm, name: str, ty: t.Type, root: Any, steps: tuple, depth: int = 0) -> Iterator[tuple[str, t.Type, Any, tuple]]:
+    """Every elementary leaf below (name, ty), in declaration order."""
+    yield name, ty, root, steps   # the node itself (aggregates are expanded by the caller)
+    if depth > 16:
+        return
+    if isinstance(ty, t.StructType):
+        for field_name, field_type in ty.fields:
+            yield from _leaves(vm, f"{name}.{field_name}", field_type, root, steps + ("v_" + field_name.lower(),), depth + 1)
+    elif isinstance(ty, t.FBType):
+        pou = vm.model.pous.get(ty.qualname.lower())
+        if pou is None:
+            return
+        for var in pou.variables.values():
+            if var.section in _SKIPPED_SECTIONS:
+                continue
+            yield from _leaves(vm, f"{name}.{var.name}", var.type, root, steps + ("v_" + var.key,), depth + 1)
+    elif isinstance(ty, t.ArrayType) and ty.dims:
+        yield from _array_leaves(vm, name, ty, list(ty.dims), root, steps, depth)
+
+
+def _array_leaves(vm, name, ty, dims, root, steps, depth, indices=()):
+    (lo, hi), rest = dims[0], dims[1:]
+    for index in range(lo, hi + 1):
+        if rest:   # nested lists, one per dimension; named `a[i,j]` as ST writes it
+            yield from _array_leaves(vm, name, ty, rest, root, steps + (index - lo,), depth, indices + (index,))
+        else:
+            label = ",".join(str(i) for i in indices + (index,))
+            yield from _leaves(vm, f"{name}[{label}]", ty.element, root, steps + (index - lo,), depth + 1)
+
+
+def all_nodes(vm) -> Iterator[tuple[str, t.Type, Any, tuple]]:
+    """Every variable node of a running VM (globals first, then the program instances)."""
+    for var in vm.model.globals.values():
+        yield from _leaves(vm, var.name, var.type, vm.globals, ("v_" + var.key,))
+    for inst_name, inst, qualname in vm.instances.values():
+        pou = vm.model.pous[qualname.lower()]
+        for var in pou.variables.values():
+            if var.section in _SKIPPED_SECTIONS:
+                continue
+            yield from _leaves(vm, f"{inst_name}.{var.name}", var.type, inst, ("v_" + var.key,))
+
+
+_ELEMENTARY = ("bool", "int", "real", "time", "string", "enum")
+
+
+def select_signals(vm, patterns: list[str]) -> list[Signal]:
+    """The leaves the patterns name, in pattern order then declaration order, without repeats.
+
+    Raises WatchError for a pattern that matches nothing (with close names as a hint).
+    """
+    nodes = None
+    chosen: dict[str, Signal] = {}
+    for pattern in patterns:
+        pattern = pattern.strip()
+        if not pattern:
+            continue
+        found: list[Signal] = []
+        if not any(ch in pattern for ch in "*?"):
+            found = _exact(vm, pattern)
+        else:
+            if nodes is None:
+                nodes = list(all_nodes(vm))
+            regex = compile_pattern(pattern)
+            matched_prefixes: list[str] = []
+            for name, ty, root, steps in nodes:
+                lowered = name.lower()
+                inside = any(lowered.startswith(p) for p in matched_prefixes)
+                if not inside and regex.fullmatch(name):
+                    if ty.kind not in _ELEMENTARY:
+                        matched_prefixes.append(lowered + ".")
+                        matched_prefixes.append(lowered + "[")
+                        continue
+                    inside = True
+                if inside and ty.kind in _ELEMENTARY:
+                    found.append(Signal(name, ty, root, steps))
+        if not found:
+            raise WatchError(f"--watch {pattern!r} matches no variable{_hint(vm, pattern)}")
+        for signal in found:
+            chosen.setdefault(signal.name.lower(), signal)
+    return list(chosen.values())
+
+
+def _exact(vm, path: str) -> list[Signal]:
+    from stvm.runtime.vm import PathError
+    try:
+        container, key, ty = vm.resolve(path)
+    except PathError as exc:
+        raise WatchError(f"--watch {path!r}: {exc}") from exc
+    root, steps = container, (key,)
+    name = _canonical_name(vm, path)
+    if ty.kind in _ELEMENTARY:
+        return [Signal(name, ty, root, steps)]
+    # an aggregate: every leaf below it
+    return [Signal(n, lt, r, s) for n, lt, r, s in _leaves(vm, name, ty, root, steps)
+            if lt.kind in _ELEMENTARY]
+
+
+def _canonical_name(vm, path: str) -> str:
+    """The path with the declared spelling of each name where the globs would give it."""
+    for name, _ty, _root, _steps in _iter_prefix(vm, path):
+        return name
+    return re.sub(r"\s+", "", path)
+
+
+def _iter_prefix(vm, path: str):
+    compact = re.sub(r"\s+", "", path).lower()
+    first = re.split(r"[.\[]", compact, maxsplit=1)[0]
+    for var in vm.model.globals.values():
+        if var.key == first:
+            for node in _leaves(vm, var.name, var.type, vm.globals, ("v_" + var.key,)):
+                if node[0].lower() == compact:
+                    yield node
+                    return
+    for inst_name, inst, qualname in vm.instances.values():
+        if inst_name.lower() != first:
+            continue
+        pou = vm.model.pous[qualname.lower()]
+        for var in pou.variables.values():
+            if var.section in _SKIPPED_SECTIONS:
+                continue
+            for node in _leaves(vm, f"{inst_name}.{var.name}", var.type, inst, ("v_" + var.key,)):
+                if node[0].lower() == compact:
+                    yield node
+                    return
+
+
+def _hint(vm, pattern: str) -> str:
+    import difflib
+    head = re.split(r"[.\[*?]", pattern, maxsplit=1)[0]
+    names = [var.name for var in vm.model.globals.values()] + [n for n, _, _ in vm.instances.values()]
+    close = difflib.get_close_matches(head, names, n=3, cutoff=0.6)
+    return f" (did you mean {', '.join(close)}?)" if close else ""
+
+
+def _expression(root_name: str, steps: tuple) -> str:
+    parts = [root_name]
+    for step in steps:
+        if isinstance(step, int):
+            parts.append(f"[{int(step)}]")
+        elif _SAFE_ATTR.fullmatch(step):
+            parts.append("." + step)
+        else:  # resolved containers may hand us a mangled key we did not make: stvm bug if so
+            raise AssertionError(f"unsafe attribute {step!r}")
+    return "".join(parts)
+
+
+def make_sampler(signals: list[Signal]) -> Callable[[], tuple]:
+    """A compiled function returning the current values of `signals` as one tuple.
+
+    Generated code (`return (r0.v_a, r1.v_b[3].v_c, …)`) costs one attribute or item access per
+    step and no interpretation; only validated `v_` names and integer indices go into it.
+    """
+    roots: list[Any] = []
+    root_ids: dict[int, int] = {}
+    exprs = []
+    for signal in signals:
+        index = root_ids.get(id(signal.root))
+        if index is None:
+            index = root_ids[id(signal.root)] = len(roots)
+            roots.append(signal.root)
+        exprs.append(_expression(f"r{index}", signal.steps))
+    params = ", ".join(f"r{i}=r{i}" for i in range(len(roots)))
+    body = ", ".join(exprs) + ("," if len(exprs) == 1 else "")
+    source = f"def make({', '.join(f'r{i}' for i in range(len(roots)))}):\n" \
+             f"    def sample({params}):\n        return ({body})\n    return sample\n"
+    namespace: dict[str, Any] = {}
+    exec(compile(source, "<stvm-trace-sampler>", "exec"), namespace)
+    return namespace["make"](*roots)
