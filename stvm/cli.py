@@ -165,13 +165,15 @@ def cmd_run(args) -> int:
     def run_scans() -> None:
         vm.run(cycles=args.cycles, duration_ns=duration_ns, until=demo.done if demo else None)
 
+    from stvm.runtime.watchdog import Watchdog
     try:
         try:
-            if demo is not None:
-                from stvm.demo import run_with_status
-                run_with_status(demo, run_scans)
-            else:
-                run_scans()
+            with Watchdog(vm, args.watchdog):
+                if demo is not None:
+                    from stvm.demo import run_with_status
+                    run_with_status(demo, run_scans)
+                else:
+                    run_scans()
         except KeyboardInterrupt:
             interrupted = True
         except RuntimeFault as fault:
@@ -242,6 +244,8 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--stats", action="store_true", help="print scan-time statistics")
     run.add_argument("--no-cache", action="store_true", help="do not use the compile cache")
     run.add_argument("--scenario", help="scenario TOML applied to the run (see README)")
+    run.add_argument("--watchdog", type=float, default=5.0, metavar="SECONDS",
+                     help="fault when one scan runs longer than this wall-clock time (default 5)")
     demo = run.add_argument_group("demo (projects whose stvm.toml has [demo], e.g. st_src/)")
     demo.add_argument("--robot", metavar="HOST:PORT", help="talk to this robot instead of the bundled emulator")
     demo.add_argument("--emulator-log", metavar="FILE", help="write the emulator's frame log (JSON lines)")

@@ -164,7 +164,8 @@ class VM:
             except RecursionError as exc:
                 self._raise_fault(f"stack overflow ({exc})", exc.__traceback__, task.name)
             except STFault as exc:
-                self._raise_fault(str(exc), exc.__traceback__, task.name)
+                message = str(exc) if str(exc) else type(exc).__doc__ or type(exc).__name__
+                self._raise_fault(message, exc.__traceback__, task.name)
             except FunctionError as exc:
                 self._raise_fault(f"instruction error: {exc}", exc.__traceback__, task.name)
             except Exception as exc:  # an stvm bug: still report the ST location, not a traceback
