@@ -18,7 +18,20 @@
     [record]
     watch = ["PnP_Example_Instance.Prg_Step", "Cobot.*"]
 
+    [run]                                  # defaults for `stvm trace` and golden tests
+    cycles = 9000                          # scans to run (the command line wins)
+    scan = "1ms"                           # period of the default task (projects with a
+                                           #   CONFIGURATION use their task intervals)
+
+    [emulator]                             # the in-process robot of lockstep runs
+    latency_scans = 1                      # one-way network latency in scans (default 1), or
+    # latency = "500us"                    #   as a duration
+    faults = ["delay:5"]                   # faults active from the start
+    settings = { time_scale = 0.1 }        # EmulatorSettings fields (docs/emulator.md)
+
 `when` events fire once, at the end of the first scan in which the BOOL variable is TRUE.
+Events fire at the end of the scan before the one they name (`scan = 50` is visible to the ST
+code of scan 50); a fault takes effect in the emulator step that follows.
 """
 
 from __future__ import annotations
@@ -42,6 +55,21 @@ class Event:
     faults: list[str] = field(default_factory=list)
     fired: bool = False
 
+    def describe(self) -> str:
+        """One line for traces: `set A=1, B=TRUE; fault drop:50`."""
+        parts = []
+        if self.assignments:
+            parts.append("set " + ", ".join(f"{k}={_show(v)}" for k, v in self.assignments.items()))
+        if self.faults:
+            parts.append("fault " + ", ".join(self.faults))
+        return "; ".join(parts) or "(nothing)"
+
+
+def _show(value: Any) -> str:
+    if isinstance(value, bool):
+        return "TRUE" if value else "FALSE"
+    return str(value)
+
 
 @dataclass
 class Scenario:
@@ -53,6 +81,26 @@ class Scenario:
     robot_port: str | None = None
     watch: list[str] = field(default_factory=list)
     raw: dict = field(default_factory=dict)
+    cycles: int | None = None                 # [run]
+    scan: str | None = None
+    latency_scans: int | None = None          # [emulator]
+    latency_ns: int | None = None
+    faults: list[str] = field(default_factory=list)
+    emulator_settings: dict[str, Any] = field(default_factory=dict)
+
+    def emulator_plan(self):
+        """The emulator's (settings, initial fault plan) for this scenario."""
+        from dataclasses import fields as dc_fields, replace
+        from emulator import DEFAULT_SETTINGS, parse_faults
+        known = {f.name for f in dc_fields(DEFAULT_SETTINGS)}
+        unknown = set(self.emulator_settings) - known
+        if unknown:
+            raise ScenarioError(f"{self.path}: [emulator] settings: unknown {', '.join(sorted(unknown))}")
+        values = {k: tuple(v) if isinstance(v, list) else v for k, v in self.emulator_settings.items()}
+        try:
+            return replace(DEFAULT_SETTINGS, **values), parse_faults(self.faults)
+        except (TypeError, ValueError) as exc:
+            raise ScenarioError(f"{self.path}: [emulator]: {exc}") from exc
 
 
 def load_scenario(path: str | Path) -> Scenario:
@@ -69,7 +117,7 @@ def load_scenario(path: str | Path) -> Scenario:
 
 def parse_scenario(data: dict, name: str = "<scenario>") -> Scenario:
     from stvm.project import parse_duration
-    known = {"description", "set", "robot", "at", "record", "run"}
+    known = {"description", "set", "robot", "at", "record", "run", "emulator"}
     unknown = set(data) - known
     if unknown:
         raise ScenarioError(f"{name}: unknown section(s) {', '.join(sorted(unknown))}; known: {', '.join(sorted(known))}")
@@ -106,7 +154,48 @@ def parse_scenario(data: dict, name: str = "<scenario>") -> Scenario:
     record = data.get("record", {})
     watch = record.get("watch", [])
     scenario.watch = [watch] if isinstance(watch, str) else list(watch)
+    _parse_run(scenario, data.get("run", {}), name)
+    _parse_emulator(scenario, data.get("emulator", {}), name)
     return scenario
+
+
+def _parse_run(scenario: Scenario, run: Any, name: str) -> None:
+    if not isinstance(run, dict):
+        raise ScenarioError(f"{name}: [run] must be a table")
+    unknown = set(run) - {"cycles", "scan"}
+    if unknown:
+        raise ScenarioError(f"{name}: [run]: unknown key(s) {', '.join(sorted(unknown))}; known: cycles, scan")
+    if "cycles" in run:
+        if not isinstance(run["cycles"], int) or isinstance(run["cycles"], bool) or run["cycles"] < 0:
+            raise ScenarioError(f"{name}: [run] cycles must be a non-negative integer")
+        scenario.cycles = run["cycles"]
+    if "scan" in run:
+        scenario.scan = str(run["scan"])
+
+
+def _parse_emulator(scenario: Scenario, emu: Any, name: str) -> None:
+    from stvm.project import parse_duration
+    if not isinstance(emu, dict):
+        raise ScenarioError(f"{name}: [emulator] must be a table")
+    unknown = set(emu) - {"latency_scans", "latency", "faults", "settings"}
+    if unknown:
+        raise ScenarioError(f"{name}: [emulator]: unknown key(s) {', '.join(sorted(unknown))}; "
+                            "known: latency_scans, latency, faults, settings")
+    if "latency_scans" in emu:
+        if not isinstance(emu["latency_scans"], int) or emu["latency_scans"] < 0:
+            raise ScenarioError(f"{name}: [emulator] latency_scans must be a non-negative integer")
+        scenario.latency_scans = emu["latency_scans"]
+    if "latency" in emu:
+        try:
+            scenario.latency_ns = parse_duration(str(emu["latency"]))
+        except ValueError as exc:
+            raise ScenarioError(f"{name}: [emulator] latency: {exc}") from exc
+    faults = emu.get("faults", [])
+    scenario.faults = [faults] if isinstance(faults, str) else [str(f) for f in faults]
+    settings = emu.get("settings", {})
+    if not isinstance(settings, dict):
+        raise ScenarioError(f"{name}: [emulator] settings must be a table")
+    scenario.emulator_settings = dict(settings)
 
 
 def to_st_value(raw: Any, vm, path: str) -> Any:
@@ -128,10 +217,11 @@ def to_st_value(raw: Any, vm, path: str) -> Any:
 class ScenarioDriver:
     """Applies a scenario to a running VM: initial values now, events at the end of each scan."""
 
-    def __init__(self, scenario: Scenario, vm, fault_sink=None) -> None:
+    def __init__(self, scenario: Scenario, vm, fault_sink=None, on_event=None) -> None:
         self.scenario = scenario
         self.vm = vm
         self.fault_sink = fault_sink   # callable(fault text) for emulator faults, or None
+        self.on_event = on_event       # callable(event, scan it is for), e.g. a trace recorder
 
     def apply_initial(self, overrides: dict[str, Any] | None = None) -> None:
         values = dict(self.scenario.initial)
@@ -154,6 +244,8 @@ class ScenarioDriver:
             if self.fault_sink is None:
                 raise ScenarioError(f"{self.scenario.path}: fault {fault!r} needs an emulator (lockstep or bundled)")
             self.fault_sink(fault)
+        if self.on_event is not None:
+            self.on_event(event, self.vm.scan_count)
 
     def _fire_due(self, before_first: bool = False) -> None:
         vm = self.vm

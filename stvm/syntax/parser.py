@@ -15,7 +15,7 @@ from importlib import resources
 from pathlib import Path
 from typing import Sequence
 
-from lark import Lark, Token, Transformer, Tree, v_args
+from lark import Lark, Token, Transformer
 from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken
 
 from stvm.diagnostics import Diagnostic
@@ -160,14 +160,32 @@ def _tok_span(file: str, tok: Token) -> n.Span:
     return n.Span(file, tok.line, tok.column, tok.end_line or tok.line, tok.end_column or tok.column + len(tok))
 
 
+# binding strength of each binary operator token (higher binds tighter)
+_PRECEDENCE = {"OR": 1, "XOR": 2, "AND": 3, "AMP": 3, "EQ": 4, "NE": 4, "LT": 5, "GT": 5, "LE": 5, "GE": 5,
+               "PLUS": 6, "MINUS": 6, "STAR": 7, "SLASH": 7, "MOD": 7, "POW": 8}
+
+
 class _ToNodes(Transformer):
     """Turns the Lark tree into nodes; literal errors become diagnostics, not exceptions."""
 
     def __init__(self, file: str, settings: SysmacSettings, diagnostics: list[Diagnostic]) -> None:
         super().__init__(visit_tokens=False)
+        self._methods: dict[str, object] = {}
         self.file = file
         self.settings = settings
         self.diagnostics = diagnostics
+
+    def _call_userfunc(self, tree, new_children=None):
+        # Every method takes (meta, items). Calling them directly avoids Lark's per-call
+        # `v_args` wrapper objects, a large share of the transform time.
+        children = new_children if new_children is not None else tree.children
+        method = self._methods.get(tree.data)
+        if method is None:
+            method = getattr(self, tree.data, None)
+            if method is None:
+                return self.__default__(tree.data, children, tree.meta)
+            self._methods[tree.data] = method
+        return method(tree.meta, children)
 
     def _s(self, meta) -> n.Span:
         return _span_of(self.file, meta)
@@ -176,22 +194,19 @@ class _ToNodes(Transformer):
         return _tok_span(self.file, tok)
 
     # -- top level
-    @v_args(meta=True)
     def start(self, meta, items):
         return list(items)
 
-    @v_args(meta=True)
     def namespace(self, meta, items):
         path = tuple(items[0])
         return ("namespace", path, items[1:])
 
-    def name_path(self, items):
+    def name_path(self, meta, items):
         return [str(t) for t in items]
 
-    def pragmas(self, items):
+    def pragmas(self, meta, items):
         return tuple(str(t)[1:-1].strip() for t in items)
 
-    @v_args(meta=True)
     def pou(self, meta, items):
         pragmas, kind, name, ret, *rest = items
         end = rest[-1]
@@ -199,30 +214,27 @@ class _ToNodes(Transformer):
         blocks = tuple(rest[:-2])
         return n.POU(kind, str(name), (), ret, blocks, body, pragmas, self._s(meta), end)
 
-    def pou_kind(self, items):
+    def pou_kind(self, meta, items):
         return str(items[0].type)
 
-    def return_type(self, items):
+    def return_type(self, meta, items):
         return items[0]
 
-    @v_args(meta=True)
     def end_pou(self, meta, items):
         return self._s(meta)
 
-    @v_args(meta=True)
     def var_block(self, meta, items):
         kind = items[0]
         quals = tuple(q for q in items[1:] if isinstance(q, str))
         decls = tuple(d for d in items[1:] if isinstance(d, n.VarDecl))
         return n.VarBlock(kind, quals, decls, self._s(meta))
 
-    def var_kind(self, items):
+    def var_kind(self, meta, items):
         return str(items[0].type)
 
-    def var_qualifier(self, items):
+    def var_qualifier(self, meta, items):
         return str(items[0]).upper()
 
-    @v_args(meta=True)
     def var_decl(self, meta, items):
         names = items[0]
         rest = [x for x in items[1:] if x is not None and not (isinstance(x, tuple) and x and x[0] == "location")]
@@ -230,34 +242,28 @@ class _ToNodes(Transformer):
         init = rest[1] if len(rest) > 1 else None
         return n.VarDecl(names, type_spec, init, self._s(meta))
 
-    def ident_list(self, items):
+    def ident_list(self, meta, items):
         return tuple((str(t), self._ts(t)) for t in items)
 
-    def location(self, items):
+    def location(self, meta, items):
         return ("location", str(items[0]))
 
-    @v_args(meta=True)
     def global_block(self, meta, items):
         return n.GlobalVars(items[0], (), self._s(meta))
 
     # -- types
-    @v_args(meta=True)
     def type_block(self, meta, items):
         return ("types", list(items))
 
-    @v_args(meta=True)
     def type_decl(self, meta, items):
         return n.TypeDecl(str(items[0]), (), items[1], self._s(meta))
 
-    @v_args(meta=True)
     def struct_spec(self, meta, items):
         return n.StructDecl(tuple(items), self._s(meta))
 
-    @v_args(meta=True)
     def field_decl(self, meta, items):
         return n.VarDecl(items[0], items[1], items[2], self._s(meta))
 
-    @v_args(meta=True)
     def enum_spec(self, meta, items):
         base = None
         default = None
@@ -271,75 +277,63 @@ class _ToNodes(Transformer):
                 default = str(item)
         return n.EnumDecl(tuple(members), base, default, self._s(meta))
 
-    def enum_member(self, items):
+    def enum_member(self, meta, items):
         value = items[1] if len(items) > 1 else None
         return ("member", str(items[0]), value, self._ts(items[0]))
 
-    def signed_int(self, items):
+    def signed_int(self, meta, items):
         sign = -1 if len(items) == 2 and str(items[0]) == "-" else 1
         lit = items[-1]
         return sign * lit.value
 
-    def elementary_name(self, items):
+    def elementary_name(self, meta, items):
         return ("elem", str(items[0]))
 
-    @v_args(meta=True)
     def alias_spec(self, meta, items):
         return n.AliasDecl(items[0], items[1] if len(items) > 1 else None, self._s(meta))
 
-    @v_args(meta=True)
     def type_name(self, meta, items):
         name = items[0]
         return n.NamedTypeSpec(name.parts, name.rooted, name.span)
 
-    @v_args(meta=True)
     def string_spec(self, meta, items):
         wide = str(items[0]).upper().startswith("W")
         return n.StringTypeSpec(items[1], wide, self._s(meta))
 
-    @v_args(meta=True)
     def array_spec(self, meta, items):
         return n.ArrayTypeSpec(tuple(items[:-1]), items[-1], self._s(meta))
 
-    def bounds(self, items):
+    def bounds(self, meta, items):
         return (items[0], items[1])
 
-    def any_bounds(self, items):
+    def any_bounds(self, meta, items):
         return None
 
-    @v_args(meta=True)
     def subrange_spec(self, meta, items):
         return n.SubrangeTypeSpec(items[0][1], items[1], items[2], self._s(meta))
 
-    @v_args(meta=True)
     def ref_spec(self, meta, items):
         return n.RefTypeSpec(items[-1], self._s(meta))
 
-    @v_args(meta=True)
     def initializer(self, meta, items):
         return n.ExprInit(items[0], self._s(meta))
 
-    @v_args(meta=True)
     def array_init(self, meta, items):
         return n.ArrayInit(tuple(items), self._s(meta))
 
-    @v_args(meta=True)
     def array_init_item(self, meta, items):
         return (1, items[0])
 
-    @v_args(meta=True)
     def repeat_init(self, meta, items):
         return (decode_int(str(items[0])), items[1] if len(items) > 1 else None)
 
-    @v_args(meta=True)
     def struct_init(self, meta, items):
         return n.StructInit(tuple(items), self._s(meta))
 
-    def struct_init_item(self, items):
+    def struct_init_item(self, meta, items):
         return (str(items[0]), items[1])
 
     # -- configuration
-    @v_args(meta=True)
     def configuration(self, meta, items):
         name = str(items[0])
         globals_ = [x.block for x in items[1:] if isinstance(x, n.GlobalVars)]
@@ -350,7 +344,6 @@ class _ToNodes(Transformer):
             resources_.insert(0, n.Resource(name, (), loose_tasks, loose_programs, self._s(meta)))
         return n.Configuration(name, tuple(globals_), tuple(resources_), self._s(meta))
 
-    @v_args(meta=True)
     def resource(self, meta, items):
         name = str(items[0])
         rest = [x for x in items[1:] if not isinstance(x, Token) and x is not None]
@@ -358,14 +351,12 @@ class _ToNodes(Transformer):
                           tuple(x for x in rest if isinstance(x, n.TaskDecl)),
                           tuple(x for x in rest if isinstance(x, n.ProgramConfig)), self._s(meta))
 
-    @v_args(meta=True)
     def task_decl(self, meta, items):
         return n.TaskDecl(str(items[0]), tuple(items[1:]), self._s(meta))
 
-    def task_param(self, items):
+    def task_param(self, meta, items):
         return (str(items[0]).upper(), items[1])
 
-    @v_args(meta=True)
     def program_config(self, meta, items):
         instance = str(items[0])
         task = str(items[1]) if items[1] is not None else None
@@ -374,34 +365,27 @@ class _ToNodes(Transformer):
         return n.ProgramConfig(instance, task, type_name, args, self._s(meta))
 
     # -- statements
-    def statement_list(self, items):
+    def statement_list(self, meta, items):
         return tuple(s for s in items if not isinstance(s, n.Empty))
 
-    @v_args(meta=True)
     def assignment(self, meta, items):
         return n.Assign(items[0], items[1], self._s(meta))
 
-    @v_args(meta=True)
     def call_statement(self, meta, items):
         return n.CallStatement(items[0], self._s(meta))
 
-    @v_args(meta=True)
     def exit_statement(self, meta, items):
         return n.Exit(self._s(meta))
 
-    @v_args(meta=True)
     def continue_statement(self, meta, items):
         return n.Continue(self._s(meta))
 
-    @v_args(meta=True)
     def return_statement(self, meta, items):
         return n.Return(self._s(meta))
 
-    @v_args(meta=True)
     def empty_statement(self, meta, items):
         return n.Empty(self._s(meta))
 
-    @v_args(meta=True)
     def if_statement(self, meta, items):
         branches = [(items[0], items[1])]
         else_body = None
@@ -412,13 +396,12 @@ class _ToNodes(Transformer):
                 else_body = item[1]
         return n.If(tuple(branches), else_body, self._s(meta))
 
-    def elsif_clause(self, items):
+    def elsif_clause(self, meta, items):
         return ("elsif", items[0], items[1])
 
-    def else_clause(self, items):
+    def else_clause(self, meta, items):
         return ("else", items[0])
 
-    @v_args(meta=True)
     def case_statement(self, meta, items):
         selector = items[0]
         elements = []
@@ -430,14 +413,12 @@ class _ToNodes(Transformer):
                 elements.append(item)
         return n.Case(selector, tuple(elements), else_body, self._s(meta))
 
-    def case_element(self, items):
+    def case_element(self, meta, items):
         return (tuple(items[:-1]), items[-1])
 
-    @v_args(meta=True)
     def case_label(self, meta, items):
         return n.CaseLabel(self._label_value(items[0], meta), None, self._s(meta))
 
-    @v_args(meta=True)
     def case_range(self, meta, items):
         return n.CaseLabel(self._label_value(items[0], meta), self._label_value(items[1], meta), self._s(meta))
 
@@ -446,81 +427,84 @@ class _ToNodes(Transformer):
             return n.IntLiteral(value, self._s(meta))
         return value
 
-    def case_name(self, items):
+    def case_name(self, meta, items):
         tok = items[0]
         return n.Name((str(tok),), False, self._ts(tok))
 
-    def case_hash(self, items):
+    def case_hash(self, meta, items):
         return self._hash(items[0])
 
-    @v_args(meta=True)
     def for_statement(self, meta, items):
         var_tok, start, end, step, body = items
         return n.For(n.Name((str(var_tok),), False, self._ts(var_tok)), start, end, step, body, self._s(meta))
 
-    @v_args(meta=True)
     def while_statement(self, meta, items):
         return n.While(items[0], items[1], self._s(meta))
 
-    @v_args(meta=True)
     def repeat_statement(self, meta, items):
         return n.Repeat(items[0], items[1], self._s(meta))
 
     # -- expressions
-    @v_args(meta=True)
-    def binary(self, meta, items):
-        left, op, right = items
-        return n.Binary(str(op.type), left, right, self._s(meta))
+    def binary_op(self, meta, items):
+        return items[0]
 
-    @v_args(meta=True)
+    def expression(self, meta, items):
+        """Precedence climbing over the flat chain [operand, op, operand, …]."""
+        operands = items[0::2]
+        ops = items[1::2]
+        pos = 0
+
+        def climb(min_level: int):
+            nonlocal pos
+            left = operands[pos]
+            while pos < len(ops) and _PRECEDENCE[ops[pos].type] >= min_level:
+                op = ops[pos]
+                level = _PRECEDENCE[op.type]
+                pos += 1
+                right = climb(level + 1)   # left-associative: the right side binds tighter
+                span = n.Span(self.file, left.span.line, left.span.column, right.span.end_line, right.span.end_column)
+                left = n.Binary(str(op.type), left, right, span)
+            return left
+
+        return climb(0)
+
     def unary(self, meta, items):
         op, operand = items
         return n.Unary(str(op.type), operand, self._s(meta))
 
-    @v_args(meta=True)
     def name(self, meta, items):
         return items[0]
 
-    @v_args(meta=True)
     def qualified_name(self, meta, items):
         rooted = bool(items) and isinstance(items[0], Token) and items[0].type == "ROOT_SEP"
         parts = tuple(str(t) for t in items if isinstance(t, Token) and t.type == "IDENT")
         return n.Name(parts, rooted, self._s(meta))
 
-    @v_args(meta=True)
     def member(self, meta, items):
         return n.Member(items[0], str(items[1]), self._s(meta))
 
-    @v_args(meta=True)
     def bit_access(self, meta, items):
         return n.BitAccess(items[0], int(str(items[1]).replace("_", "")), self._s(meta))
 
-    @v_args(meta=True)
     def index(self, meta, items):
         return n.Index(items[0], tuple(items[1:]), self._s(meta))
 
-    @v_args(meta=True)
     def call(self, meta, items):
         args = tuple(a for a in items[1:] if a is not None)
         return n.Call(items[0], args, self._s(meta))
 
-    @v_args(meta=True)
     def deref(self, meta, items):
         return n.Deref(items[0], self._s(meta))
 
-    @v_args(meta=True)
     def formal_input(self, meta, items):
         return n.Argument("input", str(items[0]), items[1], self._s(meta))
 
-    @v_args(meta=True)
     def formal_output(self, meta, items):
         return n.Argument("output", str(items[0]), items[1], self._s(meta))
 
-    @v_args(meta=True)
     def formal_output_not(self, meta, items):
         return n.Argument("output_not", str(items[1]), items[2], self._s(meta))
 
-    @v_args(meta=True)
     def positional(self, meta, items):
         return n.Argument("positional", None, items[0], self._s(meta))
 
@@ -528,24 +512,19 @@ class _ToNodes(Transformer):
     def _error(self, message: str, span: n.Span):
         self.diagnostics.append(Diagnostic.error(message, span))
 
-    @v_args(meta=True)
     def int_literal(self, meta, items):
         return n.IntLiteral(decode_int(str(items[0])), self._s(meta))
 
-    @v_args(meta=True)
     def based_literal(self, meta, items):
         return n.IntLiteral(decode_int(str(items[0])), self._s(meta))
 
-    @v_args(meta=True)
     def real_literal(self, meta, items):
         text = str(items[0]).replace("_", "")
         return n.RealLiteral(float(text), text, self._s(meta))
 
-    @v_args(meta=True)
     def true_literal(self, meta, items):
         return n.BoolLiteral(True, self._s(meta))
 
-    @v_args(meta=True)
     def false_literal(self, meta, items):
         return n.BoolLiteral(False, self._s(meta))
 
@@ -557,23 +536,18 @@ class _ToNodes(Transformer):
             self._error(str(exc) if isinstance(exc, LiteralError) else f"malformed literal {text!r}", self._s(meta))
             return n.TimeLiteral(type_name, 0, self._s(meta))
 
-    @v_args(meta=True)
     def time_literal(self, meta, items):
         return self._literal(meta, items, "TIME", decode_time)
 
-    @v_args(meta=True)
     def date_literal(self, meta, items):
         return self._literal(meta, items, "DATE", decode_date)
 
-    @v_args(meta=True)
     def tod_literal(self, meta, items):
         return self._literal(meta, items, "TIME_OF_DAY", decode_tod)
 
-    @v_args(meta=True)
     def dt_literal(self, meta, items):
         return self._literal(meta, items, "DATE_AND_TIME", decode_dt)
 
-    @v_args(meta=True)
     def hash_literal(self, meta, items):
         return self._hash(items[0])
 
@@ -584,7 +558,6 @@ class _ToNodes(Transformer):
         parts = tuple(p for p in prefix.lstrip("\\").split("\\") if p)
         return n.HashLiteral(parts, rooted, value, self._ts(tok))
 
-    @v_args(meta=True)
     def string_literal(self, meta, items):
         text = str(items[0])
         span = self._s(meta)

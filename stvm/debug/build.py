@@ -1,0 +1,164 @@
+"""The debug build of a project, and where each ST statement starts in the generated code.
+
+A debug build is the normal pipeline (parse, check, lower, compile) with one lowering switch
+changed: `cache_locals` off. The normal build keeps a POU's variables in Python locals during a
+call and writes them back in a `finally`; a debugger stopped in the middle of that call would read
+stale values from the instance and its writes would be lost. Without the cache every variable
+lives on its instance (FB/PROGRAM) or call frame (`_f`, FUNCTION), so what the debugger reads and
+writes is the storage the code itself uses. The switch is read by `Lowerer` as
+`getattr(settings, "cache_locals", True)`, so the debug build passes a settings view instead of
+changing the code generator; the VM still gets the user's real settings.
+
+The build is never written to the compile cache (its code differs from the normal build's), and
+it keeps the `Checker`, whose project index types the debugger's expressions.
+"""
+
+from __future__ import annotations
+
+import bisect
+import os
+from dataclasses import dataclass, field
+from typing import Sequence
+
+from stvm.diagnostics import has_errors, sort_key
+from stvm.lower.codegen import Lowerer
+from stvm.project import LoadError, Project, _read_all, _stdlib_units, expand_paths
+from stvm.runtime.vm import GENERATED_FILENAME
+from stvm.semantics.checker import Analysis, Checker
+from stvm.semantics.model import POUInfo
+from stvm.settings import DEFAULT_SETTINGS, SysmacSettings
+from stvm.syntax import nodes as n
+
+
+class DebugLowering:
+    """The settings the code generator sees in a debug build: the user's Sysmac settings with the
+    local-variable cache switched off (see the module docstring)."""
+
+    cache_locals = False
+
+    def __init__(self, settings: SysmacSettings) -> None:
+        self._settings = settings
+
+    def __getattr__(self, name: str):
+        return getattr(self._settings, name)
+
+    def __repr__(self) -> str:
+        return f"DebugLowering({self._settings!r})"
+
+
+def is_library_file(file: str) -> bool:
+    """Files of the stdlib (`<stdlib>/…`) and other built-in text: stepping never stops there."""
+    return file.startswith("<")
+
+
+@dataclass
+class StatementMap:
+    """Where ST statements start in the generated module.
+
+    `stops` holds each generated line that begins the code of an ST statement (or of an ELSIF
+    condition, or of a loop's test or increment, which run again on every iteration): the line's
+    span differs from the span of the line before it. A line event on one of them is a statement
+    entry, where stepping and breakpoints stop. Lines of library files are not stops (stepping
+    steps over the stdlib's ST blocks, as a controller's debugger steps over system FBs).
+    """
+
+    spans: dict[int, n.Span] = field(default_factory=dict)          # generated line → ST span
+    stops: set[int] = field(default_factory=set)
+    by_st_line: dict[tuple[str, int], list[int]] = field(default_factory=dict)  # (file, ST line) → stops
+    st_lines: dict[str, list[int]] = field(default_factory=dict)     # file → sorted ST lines with a stop
+
+    @classmethod
+    def build(cls, line_map) -> "StatementMap":
+        out = cls()
+        previous: n.Span | None = None
+        previous_line = 0
+        for gen_line, span in zip(line_map.lines, line_map.spans):
+            out.spans[gen_line] = span
+            starts = previous is None or gen_line != previous_line + 1 or span != previous
+            if starts and not is_library_file(span.file):
+                out.stops.add(gen_line)
+                out.by_st_line.setdefault((span.file, span.line), []).append(gen_line)
+            previous, previous_line = span, gen_line
+        for file, line in out.by_st_line:
+            out.st_lines.setdefault(file, []).append(line)
+        for lines in out.st_lines.values():
+            lines.sort()
+        return out
+
+    def next_st_line(self, file: str, line: int, last: int | None = None) -> int | None:
+        """The first ST line >= `line` (and <= `last`) where a statement starts, or None."""
+        lines = self.st_lines.get(file, [])
+        i = bisect.bisect_left(lines, line)
+        if i == len(lines) or (last is not None and lines[i] > last):
+            return None
+        return lines[i]
+
+
+@dataclass
+class DebugBuild:
+    project: Project
+    analysis: Analysis
+    checker: Checker
+    statements: StatementMap
+    unit_pous: dict[str, POUInfo]        # generated class/function name → POU
+    files: dict[str, str]                # absolute path → the file name spans use
+
+    def pou_at(self, file: str, line: int) -> tuple[POUInfo, n.POU] | None:
+        """The user POU whose text contains `file:line`."""
+        for key, node in self.analysis.pou_nodes.items():
+            span = node.span
+            if span.file == file and span.line <= line <= max(span.end_line, node.end_span.line):
+                return self.analysis.model.pous[key], node
+        return None
+
+    def span_file(self, name: str) -> str | None:
+        """The span file name for a path as a user or an editor writes it: the name given to
+        `load`, an absolute or relative path, a base name (`CBT_MoveAbsolute.st`) or a stem
+        (`CBT_MoveAbsolute`) when it is unique."""
+        if name in self.statements.st_lines or name in self.project.sources:
+            return name
+        absolute = os.path.normcase(os.path.abspath(name))
+        if absolute in self.files:
+            return self.files[absolute]
+        lowered = name.lower()
+        matches = [f for f in self.files.values()
+                   if os.path.basename(f).lower() == lowered or os.path.splitext(os.path.basename(f))[0].lower() == lowered]
+        return matches[0] if len(matches) == 1 else None
+
+    def absolute_path(self, file: str) -> str | None:
+        """The absolute path of a user file (None for library text, which has no file)."""
+        if is_library_file(file):
+            return None
+        return os.path.abspath(file)
+
+
+def load_debug(paths: Sequence[str | os.PathLike], settings: SysmacSettings = DEFAULT_SETTINGS) -> DebugBuild:
+    """Parse, check and lower `paths` for debugging (raises LoadError with every diagnostic)."""
+    from stvm import project as pipeline
+    files, manifest, root = expand_paths(paths)
+    texts, read_diags = _read_all(files)
+    if read_diags:
+        raise LoadError(read_diags, {})
+    units, diags, sources = _stdlib_units(settings)
+    units = list(units)
+    sources = dict(sources)
+    for name, text in texts:
+        sources[name] = text
+        unit, unit_diags = pipeline.parse_text(text, name, settings)
+        units.append(unit)
+        diags += unit_diags
+    checker = None
+    if not has_errors(diags):
+        checker = Checker(units, settings)
+        analysis = checker.run()
+        diags += analysis.diagnostics
+    diags.sort(key=sort_key)
+    if checker is None or has_errors(diags):
+        raise LoadError(diags, sources)
+    lowered = Lowerer(analysis, DebugLowering(settings)).lower()
+    code = compile(lowered.source, GENERATED_FILENAME, "exec")
+    warnings = [d for d in diags if not d.is_error]
+    project = Project(analysis.model, lowered, code, sources, settings, warnings, False, manifest, root)
+    unit_pous = {lowered.classes[key]: pou for key, pou in analysis.model.pous.items() if key in lowered.classes}
+    user_files = {os.path.normcase(os.path.abspath(name)): name for name, _ in texts}
+    return DebugBuild(project, analysis, checker, StatementMap.build(lowered.line_map), unit_pous, user_files)

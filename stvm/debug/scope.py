@@ -1,0 +1,354 @@
+"""ST expressions and assignments for the debugger, in the scope of one POU instance.
+
+`print`, `watch`, `set`, `force` and breakpoint conditions are ST text. Each is parsed with
+`parse_expression`, typed by the project's own body checker in the scope of the POU the debugger
+stands in, and lowered by the project's own code generator, so it means exactly what the same text
+would mean in that POU's body (integer wrap, REAL rounding, enum literals, function calls).
+
+Debugger scope rules, wider than a POU body's on purpose:
+
+* every variable of an FB instance is readable and assignable from outside (`fb.Step`, not only
+  its inputs and outputs), since inspecting internals is what a debugger is for;
+* program instances are names everywhere (`Program_Example_Instance.Connect_Done`), after the
+  POU's own variables and the globals;
+* outside any POU (stopped between scans) only globals, program instances and enumerators are
+  in scope.
+"""
+
+from __future__ import annotations
+
+import threading
+from dataclasses import dataclass, field
+from types import CodeType, SimpleNamespace
+from typing import Any
+
+from stvm.lower.codegen import Lowerer, _Writer
+from stvm.lower.names import var_attr
+from stvm.semantics import types as t
+from stvm.semantics.body import _BodyChecker
+from stvm.semantics.checker import Facts, NameRef
+from stvm.semantics.model import EXTERNAL, GLOBAL, IN_OUT, POUInfo, Variable
+from stvm.syntax import nodes as n
+
+EXPR_FILENAME = "<stvm-debug>"   # never GENERATED_FILENAME: the tracer must not step into these
+
+
+class DebugError(Exception):
+    """A debugger command that cannot be done; the message is for the user."""
+
+
+def is_scalar_ref(var: Variable) -> bool:
+    """A scalar VAR_IN_OUT: the instance holds a reference object (`get()`/`set()`)."""
+    return var.section == IN_OUT and not isinstance(var.type, (t.StructType, t.ArrayType, t.FBType))
+
+
+class GlobalsView:
+    """What `_G` is for debugger code: the globals, plus the program instances by name."""
+
+    __slots__ = ("_globals", "_programs")
+
+    def __init__(self, globals_obj: Any, programs: dict[str, Any]) -> None:
+        object.__setattr__(self, "_globals", globals_obj)
+        object.__setattr__(self, "_programs", programs)
+
+    def __getattr__(self, attr: str) -> Any:
+        programs = object.__getattribute__(self, "_programs")
+        if attr in programs:
+            return programs[attr]
+        return getattr(object.__getattribute__(self, "_globals"), attr)
+
+    def __setattr__(self, attr: str, value: Any) -> None:
+        setattr(object.__getattribute__(self, "_globals"), attr, value)
+
+
+@dataclass
+class Scope:
+    """Where an expression is evaluated: a POU instance (FB/PROGRAM: `instance`), a FUNCTION call
+    (`frame` holds its variables, `result` its return value so far), or nowhere (pou None)."""
+
+    pou: POUInfo | None = None
+    node: n.POU | None = None
+    instance: Any = None
+    frame: Any = None
+    result: Any = None
+    path: str = ""                 # instance path (`Program_Example_Instance.CBT_MoveAbsolute_Instance`)
+
+    @property
+    def owner(self) -> str:
+        return "_f" if self.pou is not None and self.pou.kind == "FUNCTION" else "self"
+
+    def key(self) -> str:
+        return self.pou.key if self.pou is not None else ""
+
+
+@dataclass
+class Compiled:
+    """An expression lowered for one POU (reusable for every instance of it)."""
+
+    text: str
+    code: CodeType
+    type: t.Type
+    pou_key: str
+
+
+@dataclass
+class CompiledStore:
+    """`target := value` lowered for one POU: `value_code` computes the value (converted to the
+    target's type), `store_code` stores the local `_value` into the target."""
+
+    target_text: str
+    value_code: CodeType
+    store_code: CodeType
+    type: t.Type
+    root_is_local: bool            # the target is a variable of the POU (not a global/program)
+    canonical: str                 # normalised target text, for matching `unforce`
+
+
+_GLOBAL_POU = POUInfo("<debugger>", "<debugger>", "PROGRAM", None)
+_GLOBAL_NODE = n.POU("PROGRAM", "<debugger>", (), None, (), (), ())
+
+
+class _ScopeChecker(_BodyChecker):
+    """The body checker with the debugger's wider scope rules (module docstring)."""
+
+    def __init__(self, checker, pou: POUInfo, node: n.POU, programs: dict[str, tuple[str, str]]) -> None:
+        super().__init__(checker, pou, node)
+        self.programs = programs            # lower-case instance name → (name, program qualname)
+
+    def resolve_name(self, name: n.Name) -> object:
+        ref = super().resolve_name(name)
+        if ref is None and len(name.parts) == 1 and not name.rooted:
+            found = self.programs.get(name.parts[0].lower())
+            if found is not None:
+                inst_name, qual = found
+                fbt = t.FBType(qual.split("\\")[-1], qual, True)
+                return NameRef("global", Variable(inst_name, GLOBAL, fbt))
+        return ref
+
+    def expr_Member(self, e: n.Member, expected) -> t.Type | None:
+        base = self.expr(e.base)
+        if isinstance(base, t.FBType):
+            fb = self.c.pous.get(base.qualname.lower())
+            var = fb.pin(e.name) if fb else None
+            if var is None:
+                self.error(f"{base.name} has no member '{e.name}'", e.span, "E034")
+                return None
+            if var.section == EXTERNAL:
+                self.error(f"'{e.name}' is the global {var.name}; write it without the instance", e.span, "E034")
+                return None
+            return var.type
+        if base is None:
+            return None
+        if isinstance(base, t.StructType):
+            fty = base.field_type(e.name)
+            if fty is None:
+                self.error(f"{base.name} has no member '{e.name}'", e.span, "E034")
+            return fty
+        self.error(f"'{self.describe(e.base)}' is {base.name}, which has no members", e.span, "E034")
+        return None
+
+    def lvalue(self, target: n.Expr) -> t.Type | None:
+        if isinstance(target, n.Member):
+            ty = self.expr(target)
+            if ty is not None and self.is_constant_path(target.base):
+                self.error("cannot assign to a member of a constant", target.span, "E050")
+            if isinstance(ty, t.FBType):
+                self.error("function block instances cannot be assigned", target.span, "E052")
+                return None
+            return ty
+        if isinstance(target, n.Name):
+            ref = self.resolve_name(target)
+            if ref is not None and getattr(ref, "kind", "") == "result":
+                self.error("a FUNCTION's result cannot be changed from the debugger", target.span, "E050")
+                return None
+        return super().lvalue(target)
+
+
+class _ScopeLowerer(Lowerer):
+    """The code generator for debugger text: FB members of every section, scalar in-outs read and
+    written through their reference objects."""
+
+    def fb_member(self, e: n.Member) -> Variable | None:
+        base_type = self.facts.types.get(id(e.base))
+        if isinstance(base_type, t.FBType):
+            pou = self.model.pous.get(base_type.qualname.lower())
+            return pou.pin(e.name) if pou is not None else None
+        return None
+
+    def ex_Member(self, e: n.Member) -> str:
+        var = self.fb_member(e)
+        if var is not None and is_scalar_ref(var):
+            return f"{self.expr(e.base)}.{var_attr(var.name)}.get()"
+        return super().ex_Member(e)
+
+    def store_code(self, target: n.Expr, value: str, ty: t.Type | None) -> list[str]:
+        if isinstance(target, n.Member):
+            var = self.fb_member(target)
+            if var is not None and is_scalar_ref(var):
+                return [f"{self.expr(target.base)}.{var_attr(var.name)}.set({value})"]
+        return super().store_code(target, value, ty)
+
+
+class ScopeCompiler:
+    """Types and lowers debugger text with the project's checker and code generator.
+
+    One instance per debug session; `compile_*` may be called from any thread (one at a time: the
+    checker's fact tables are swapped for each call)."""
+
+    def __init__(self, build) -> None:
+        self.build = build
+        self.checker = build.checker
+        self.model = build.analysis.model
+        self.settings = build.project.settings
+        self.types: list[t.Type] = list(build.project.lowered.types)   # `_T`, extended by expressions
+        self.programs: dict[str, tuple[str, str]] = {}
+        self._lock = threading.Lock()
+
+    def set_programs(self, instances: dict[str, tuple[str, Any, str]]) -> None:
+        self.programs = {key: (name, qual) for key, (name, _, qual) in instances.items()}
+
+    # ---- parsing
+    def parse(self, text: str) -> n.Expr:
+        from stvm.syntax import parse_expression
+        expr, diags = parse_expression(text.strip(), EXPR_FILENAME, self.settings)
+        errors = [d for d in diags if d.is_error]
+        if expr is None or errors:
+            raise DebugError(_messages(errors or diags, text) or f"cannot parse {text!r}")
+        return expr
+
+    # ---- checking and lowering
+    def _session(self, scope: Scope):
+        from stvm.debug.build import DebugLowering
+        pou = scope.pou or _GLOBAL_POU
+        node = scope.node or _GLOBAL_NODE
+        facts = Facts()
+        saved_facts, saved_diags = self.checker.facts, len(self.checker.diags)
+        self.checker.facts = facts
+        checker = _ScopeChecker(self.checker, pou, node, self.programs)
+        lowerer = _ScopeLowerer(SimpleNamespace(model=self.model, facts=facts, pou_nodes={}),
+                                DebugLowering(self.settings))
+        lowerer.assign_names()
+        lowerer.types = self.types
+        lowerer.pou = pou
+        lowerer.owner = scope.owner
+        return checker, lowerer, facts, saved_facts, saved_diags
+
+    def _finish(self, saved_facts, saved_diags, text: str) -> None:
+        errors = self.checker.diags[saved_diags:]
+        del self.checker.diags[saved_diags:]
+        self.checker.facts = saved_facts
+        bad = [d for d in errors if d.is_error]
+        if bad:
+            raise DebugError(_messages(bad, text))
+
+    def compile_expression(self, scope: Scope, text: str) -> Compiled:
+        expr = self.parse(text)
+        with self._lock:
+            checker, lowerer, facts, saved_facts, saved_diags = self._session(scope)
+            try:
+                ty = checker.expr(expr)
+            finally:
+                self._finish(saved_facts, saved_diags, text)
+            if ty is None or isinstance(ty, t.VoidType):
+                raise DebugError(f"{text.strip()!r} has no value")
+            source = lowerer.expr(expr)
+        return Compiled(text.strip(), _compile(source, "eval"), ty, scope.key())
+
+    def compile_condition(self, scope: Scope, text: str) -> Compiled:
+        compiled = self.compile_expression(scope, text)
+        if not isinstance(compiled.type, t.BoolType):
+            raise DebugError(f"a condition must be BOOL, not {compiled.type.name}")
+        return compiled
+
+    def compile_store(self, scope: Scope, target_text: str, value_text: str) -> CompiledStore:
+        target, value = self.parse(target_text), self.parse(value_text)
+        if not isinstance(target, (n.Name, n.Member, n.Index, n.BitAccess)):
+            raise DebugError(f"{target_text.strip()!r} is not a variable")
+        statement = n.Assign(target, value, target.span)
+        with self._lock:
+            checker, lowerer, facts, saved_facts, saved_diags = self._session(scope)
+            try:
+                checker.stmt_Assign(statement)
+            finally:
+                self._finish(saved_facts, saved_diags, f"{target_text} := {value_text}")
+            ty = facts.types.get(id(target))
+            if ty is None:
+                raise DebugError(f"{target_text.strip()!r} cannot be assigned")
+            value_source = lowerer.expr_as(value, ty)
+            if isinstance(ty, (t.StructType, t.ArrayType)):
+                value_source = f"_copy_value({value_source})"
+            store_source = "\n".join(lowerer.store_code(target, "_value", ty))
+            root = target
+            while isinstance(root, (n.Member, n.Index, n.BitAccess)):
+                root = root.base
+            ref = facts.names.get(id(root))
+            local = ref is not None and ref.kind == "var"
+            canonical = unparse(target, facts)
+        return CompiledStore(target_text.strip(), _compile(value_source, "eval"), _compile(store_source, "exec"),
+                             ty, local, canonical)
+
+    # ---- running
+    def namespace(self, vm, scope: Scope) -> dict[str, Any]:
+        """Locals for evaluating compiled text in `scope` (globals are the VM's module namespace)."""
+        programs = {var_attr(name): inst for name, inst, _ in vm.instances.values()}
+        return {"self": scope.instance, "_f": scope.frame, "_r": scope.result, "_T": self.types,
+                "_G": GlobalsView(vm.globals, programs)}
+
+    def evaluate(self, vm, scope: Scope, compiled: Compiled) -> Any:
+        return run_guarded(lambda: eval(compiled.code, vm.namespace, self.namespace(vm, scope)))
+
+    def store(self, vm, scope: Scope, store: CompiledStore, value: Any) -> None:
+        local_ns = self.namespace(vm, scope)
+        local_ns["_value"] = value
+        run_guarded(lambda: exec(store.store_code, vm.namespace, local_ns))
+
+    def value(self, vm, scope: Scope, store: CompiledStore) -> Any:
+        return run_guarded(lambda: eval(store.value_code, vm.namespace, self.namespace(vm, scope)))
+
+
+def run_guarded(fn):
+    """Run debugger code; ST faults and instruction errors become DebugError."""
+    from stvm.runtime.values import FunctionError, STFault
+    try:
+        return fn()
+    except STFault as exc:
+        raise DebugError(f"fault: {exc}") from None
+    except FunctionError as exc:
+        raise DebugError(f"instruction error: {exc}") from None
+    except AttributeError as exc:
+        if "'NoneType'" in str(exc):
+            raise DebugError("an in-out is not bound yet (the block has not been called)") from None
+        raise DebugError(f"cannot evaluate: {exc}") from None
+    except (ArithmeticError, IndexError, TypeError, ValueError) as exc:
+        raise DebugError(f"cannot evaluate: {exc}") from None
+
+
+def unparse(e: n.Expr, facts: Facts | None = None) -> str:
+    """Lower-case canonical text of an access path (`main.fb.arr[3].x`), for matching."""
+    if isinstance(e, n.Name):
+        return "\\".join(p.lower() for p in e.parts)
+    if isinstance(e, n.Member):
+        return f"{unparse(e.base, facts)}.{e.name.lower()}"
+    if isinstance(e, n.BitAccess):
+        return f"{unparse(e.base, facts)}.{e.bit}"
+    if isinstance(e, n.Index):
+        parts = []
+        for ix in e.indices:
+            value = facts.consts.get(id(ix)) if facts is not None else None
+            parts.append(str(value) if isinstance(value, int) else unparse(ix, facts))
+        return f"{unparse(e.base, facts)}[{','.join(parts)}]"
+    if isinstance(e, n.IntLiteral):
+        return str(e.value)
+    return type(e).__name__.lower()
+
+
+def _compile(source: str, mode: str) -> CodeType:
+    return compile(source, EXPR_FILENAME, mode)
+
+
+def _messages(diags, text: str) -> str:
+    out = []
+    for d in diags:
+        col = d.span.column if d.span.file == EXPR_FILENAME and d.span.column > 0 else 0
+        out.append(d.message + (f" (column {col})" if col and len(text.strip()) > 20 else ""))
+    return "; ".join(dict.fromkeys(out))
