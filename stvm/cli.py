@@ -90,7 +90,7 @@ def literal_value(text: str, ty):
         elif "." in text_value or "e" in text_value.lower() and "#" not in text_value:
             value = float(text_value)
         else:
-            from stvm.syntax.parser import decode_int
+            from stvm.syntax.literals import decode_int
             value = decode_int(text_value.lstrip("+-")) * (-1 if text_value.startswith("-") else 1)
     elif isinstance(expr, n.Name) and len(expr.parts) == 1 and isinstance(ty, t.EnumType):
         return expr.parts[0]

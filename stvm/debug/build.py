@@ -134,7 +134,7 @@ class DebugBuild:
 
 def load_debug(paths: Sequence[str | os.PathLike], settings: SysmacSettings = DEFAULT_SETTINGS) -> DebugBuild:
     """Parse, check and lower `paths` for debugging (raises LoadError with every diagnostic)."""
-    from stvm import project as pipeline
+    from stvm.syntax.parser import parse_text
     files, manifest, root = expand_paths(paths)
     texts, read_diags = _read_all(files)
     if read_diags:
@@ -144,7 +144,7 @@ def load_debug(paths: Sequence[str | os.PathLike], settings: SysmacSettings = DE
     sources = dict(sources)
     for name, text in texts:
         sources[name] = text
-        unit, unit_diags = pipeline.parse_text(text, name, settings)
+        unit, unit_diags = parse_text(text, name, settings)
         units.append(unit)
         diags += unit_diags
     checker = None

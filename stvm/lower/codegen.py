@@ -172,6 +172,8 @@ class Lowerer:
 
     # ---- default values
     def enum_default(self, ty: t.EnumType) -> int:
+        if ty.default is not None:
+            return ty.default
         if self.settings.enum_default == "zero" or not ty.members:
             return 0
         return ty.members[0][1]

@@ -5,8 +5,6 @@ from __future__ import annotations
 import calendar
 import math
 
-import numpy as np
-
 from stvm.semantics import types as t
 
 _NS = 1_000_000_000
@@ -88,10 +86,35 @@ def format_real(value: float, bits: int) -> str:
         return "nan"
     if math.isinf(value):
         return "inf" if value > 0 else "-inf"
-    text = str(np.float32(value)) if bits == 32 else repr(float(value))
+    text = _shortest_real32(value) if bits == 32 else repr(float(value))
     if "e" not in text and "." not in text:
         text += ".0"
     return text
+
+
+def _shortest_real32(value: float) -> str:
+    """The shortest decimal that reads back as the same binary32 value; positional for
+    1e-4 <= |x| < 1e6, else scientific (`1.6777216e+07`), as numpy prints float32."""
+    from stvm.runtime.helpers import _f32
+    for digits in range(0, 10):
+        text = f"{value:.{digits}e}"
+        if _f32(float(text)) == value:
+            break
+    mantissa, exponent = text.split("e")
+    mantissa = mantissa.rstrip("0").rstrip(".") if "." in mantissa else mantissa
+    exp = int(exponent)
+    if -4 <= exp < 6:
+        digits_text = mantissa.replace("-", "").replace(".", "")
+        sign = "-" if mantissa.startswith("-") else ""
+        point = exp + 1
+        if point <= 0:
+            text = f"{sign}0.{'0' * -point}{digits_text}"
+        elif point >= len(digits_text):
+            text = f"{sign}{digits_text}{'0' * (point - len(digits_text))}.0"
+        else:
+            text = f"{sign}{digits_text[:point]}.{digits_text[point:]}"
+        return text
+    return f"{mantissa}e{'+' if exp >= 0 else '-'}{abs(exp):02d}"
 
 
 def format_value(value: object, ty: t.Type, pous: dict | None = None) -> str:

@@ -164,12 +164,27 @@ class Checker:
                     self.error(f"duplicate declaration of global '{name}'", span, "E010")
                     continue
                 var = Variable(name, GLOBAL, vtype or t.DINT, block.constant, span)
+                if decl.init is None:
+                    var.init = self.alias_init(decl.type_spec, namespace)
                 if vtype is not None and decl.init is not None:
                     var.init = self.initial_value(decl.init, vtype, namespace, None)
                 elif block.constant and decl.init is None:
                     self.error(f"constant '{name}' needs an initial value", span, "E013")
                 self.globals[name.lower()] = var
                 self.global_nodes[name.lower()] = decl
+
+    def alias_init(self, spec: n.TypeSpec, namespace: tuple[str, ...]) -> object:
+        """The initial value an alias type declares (`TYPE T : INT := 7;`), for variables of type
+        T that have no initialiser of their own; None if there is none."""
+        if not isinstance(spec, n.NamedTypeSpec):
+            return None
+        key = self.lookup_type_key(spec.parts, spec.rooted, namespace)
+        if key is None or not isinstance(self.index.type_decls[key].body, n.AliasDecl):
+            return None
+        inits = self.type_inits.get(key, {})
+        if "" in inits:
+            return inits[""]
+        return self.alias_init(self.index.type_decls[key].body.type_spec, self.index.type_decls[key].namespace)
 
     def declare_pou(self, pou: n.POU) -> POUInfo:
         qual = "\\".join(pou.namespace + (pou.name,))
@@ -214,6 +229,8 @@ class Checker:
                         self.error(f"'{name}' is the function's own name", span, "E010")
                         continue
                     var = Variable(name, kind, vtype or t.DINT, block.constant, span)
+                    if decl.init is None and kind not in (IN_OUT, EXTERNAL):
+                        var.init = self.alias_init(decl.type_spec, pou.namespace)
                     if block.constant and decl.init is None and kind != EXTERNAL:
                         self.error(f"constant '{name}' needs an initial value", span, "E013")
                     info.variables[key] = var
@@ -282,8 +299,11 @@ class Checker:
                 next_value += 1
             base = t.ELEMENTARY.get((body.base or "INT").upper(), t.INT)
             result = t.EnumType(decl.name, qual, tuple(members), base)
-            if body.default is not None and result.value_of(body.default) is None:
-                self.error(f"'{body.default}' is not an enumerator of {decl.name}", body.span, "E016")
+            if body.default is not None:
+                if result.value_of(body.default) is None:
+                    self.error(f"'{body.default}' is not an enumerator of {decl.name}", body.span, "E016")
+                else:
+                    result = t.EnumType(decl.name, qual, tuple(members), base, result.value_of(body.default))
             for name, value in members:
                 self.enumerators.setdefault(name.lower(), []).append((result, value))
             self.enums[key] = result
@@ -301,6 +321,10 @@ class Checker:
                     fields.append((fname, ftype or t.DINT))
                     if ftype is not None and fdecl.init is not None:
                         inits[fname.lower()] = self.initial_value(fdecl.init, ftype, decl.namespace, None)
+                    elif ftype is not None:
+                        alias_value = self.alias_init(fdecl.type_spec, decl.namespace)
+                        if alias_value is not None:
+                            inits[fname.lower()] = alias_value
             result = t.StructType(decl.name, qual, tuple(fields))
             self.type_inits[key] = inits
             self.structs[key] = result
@@ -659,9 +683,8 @@ _NOT_CONST = object()
 
 def _round_real(value: float, ty: t.Type) -> float:
     if isinstance(ty, t.RealType) and ty.bits == 32:
-        import numpy as np
-        with np.errstate(over="ignore"):
-            return float(np.float32(value))
+        from stvm.runtime.helpers import _f32
+        return _f32(value)
     return float(value)
 
 

@@ -118,6 +118,7 @@ class EnumType(Type):
     qualname: str = ""
     members: tuple[tuple[str, int], ...] = ()
     base: Type | None = None
+    default: int | None = None   # `TYPE E : (A, B) := B;` — the declared initial value
 
     @property
     def kind(self) -> str:

@@ -61,7 +61,7 @@ def value_kind(ty: t.Type) -> str:
 
 def type_text(ty: t.Type) -> str:
     if isinstance(ty, t.StringType):
-        return f"STRING[{ty.max_bytes}]" if ty.size != 1986 else "STRING"
+        return f"STRING[{ty.size}]" if ty.size != 1986 else "STRING"
     if isinstance(ty, t.EnumType):
         return ty.qualname or ty.name
     return ty.name

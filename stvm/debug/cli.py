@@ -1,0 +1,89 @@
+"""`stvm debug` (interactive console) and `stvm dap` (Debug Adapter Protocol over stdio).
+
+    stvm debug FILE... [--scan 1ms] [--scenario S] [--robot lockstep|emulator|HOST:PORT]
+                       [--set NAME=VALUE] [-x COMMANDS] [--sysmac NAME=VALUE]
+    stvm dap [--log FILE]
+
+This module is imported by every `stvm` command (to register the subcommands), so it imports
+nothing heavy at module level: the engine is loaded only when a debug command runs.
+
+Exit codes: 0 ok, 1 compile errors, 2 usage error.
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+EXIT_OK, EXIT_COMPILE, EXIT_USAGE = 0, 1, 2
+
+
+def register(subparsers) -> None:
+    debug = subparsers.add_parser(
+        "debug", help="debug ST interactively: breakpoints, stepping, watch, set and force",
+        description="Run ST programs under the debugger console (type help at the prompt).")
+    debug.add_argument("files", nargs="+", help="ST files (a file of a folder with stvm.toml loads that project)")
+    debug.add_argument("--scan", default=None, help="default task period (default: the scenario's, else 10ms)")
+    debug.add_argument("--scenario", help="scenario TOML: initial values, timed events, robot address")
+    debug.add_argument("--robot", metavar="lockstep|emulator|HOST:PORT",
+                       help="the robot: in-process emulator on the VM clock (default with a scenario "
+                            "[robot]), bundled TCP emulator, or a robot's address")
+    debug.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
+                       help="set a variable before the first scan")
+    debug.add_argument("-x", "--commands", metavar="FILE", help="run the debugger commands in FILE first")
+    debug.add_argument("--realtime", action="store_true", help="sleep to each deadline (default: virtual clock)")
+    debug.add_argument("--sysmac", action="append", default=[], metavar="NAME=VALUE",
+                       help="override a Sysmac UNCERTAIN setting")
+    debug.set_defaults(func=cmd_debug)
+
+    dap = subparsers.add_parser(
+        "dap", help="Debug Adapter Protocol server on stdin/stdout (for VS Code and other editors)",
+        description="Serve one debug session over the Debug Adapter Protocol on stdin/stdout. "
+                    "The launch request names the program; see docs/debugging.md.")
+    dap.add_argument("--log", metavar="FILE", help="append every protocol message to FILE")
+    dap.set_defaults(func=cmd_dap)
+
+
+def _error(message: str, code: int = EXIT_USAGE) -> int:
+    print(f"stvm: error: {message}", file=sys.stderr)
+    return code
+
+
+def cmd_debug(args) -> int:
+    from stvm.debug.console import Console
+    from stvm.debug.session import SessionOptions, open_session
+    from stvm.project import LoadError
+    from stvm.scenario import ScenarioError
+    for f in args.files:
+        if not Path(f).exists():
+            return _error(f"no such file: {f}")
+    commands: list[str] = []
+    if args.commands:
+        try:
+            commands = Path(args.commands).read_text(encoding="utf-8").splitlines()
+        except OSError as exc:
+            return _error(f"cannot read {args.commands}: {exc.strerror or exc}")
+    options = SessionOptions(args.files, scan=args.scan, scenario=args.scenario, sets=args.set,
+                             sysmac=args.sysmac, robot=args.robot, realtime=args.realtime)
+    try:
+        session = open_session(options)
+    except LoadError as exc:
+        sys.stderr.write(exc.render())
+        print(f"{sum(d.is_error for d in exc.diagnostics)} error(s)", file=sys.stderr)
+        return EXIT_COMPILE
+    except (ValueError, KeyError, ScenarioError) as exc:
+        return _error(str(exc))
+    for warning in session.build.project.warnings:
+        from stvm.diagnostics import render
+        sys.stderr.write(render(warning, session.build.project.sources))
+    if session.robot != "none":
+        print(f"robot: {session.robot}" + (f" on port {session.server.port}" if session.server else ""))
+    try:
+        return Console(session.engine).run(commands)
+    finally:
+        session.close()
+
+
+def cmd_dap(args) -> int:
+    from stvm.debug.dap import serve
+    return serve(sys.stdin.buffer, sys.stdout.buffer, log_path=args.log)

@@ -1,0 +1,122 @@
+"""Decoding of ST literal text: $-escaped strings, T#/D#/TOD#/DT# values, based integers.
+
+Separate from the parser so that the command line can read durations (`--scan 1ms`) without
+importing Lark.
+"""
+
+from __future__ import annotations
+
+import calendar
+import re
+from fractions import Fraction
+
+from stvm.settings import SysmacSettings
+
+_ESCAPES = {"$": b"$", "'": b"'", '"': b'"', "L": b"\n", "P": b"\f", "R": b"\r", "T": b"\t"}
+_TIME_UNITS = [("d", 86_400_000_000_000), ("h", 3_600_000_000_000), ("ms", 1_000_000),
+               ("us", 1_000), ("ns", 1), ("m", 60_000_000_000), ("s", 1_000_000_000)]
+_TIME_PART = re.compile(r"([0-9][0-9_]*(?:\.[0-9_]+)?)(d|h|ms|us|ns|m|s)", re.I)
+
+
+class LiteralError(ValueError):
+    """A malformed literal; the message is shown to the user."""
+
+
+def decode_string(token_text: str, settings: SysmacSettings) -> tuple[bytes, list[str]]:
+    """Decode a quoted ST string literal to bytes; returns (value, warnings). Raises LiteralError."""
+    quote = token_text[0]
+    body = token_text[1:-1]
+    out = bytearray()
+    warnings: list[str] = []
+    i = 0
+    hex_digits = 2 if quote == "'" else 4
+    while i < len(body):
+        ch = body[i]
+        if ch != "$":
+            out += ch.encode("utf-8")
+            i += 1
+            continue
+        nxt = body[i + 1] if i + 1 < len(body) else ""
+        if nxt.upper() in _ESCAPES and nxt not in ("'", '"') or nxt == quote:
+            out += _ESCAPES[nxt.upper()]
+            i += 2
+        elif nxt.upper() == "N":
+            # Choice (sysmac.md 3 #7, `dollar_n`): $N is a newline
+            out += b"\n" if settings.dollar_n == "lf" else b"\r\n"
+            i += 2
+        elif re.fullmatch(r"[0-9A-Fa-f]{%d}" % hex_digits, body[i + 1:i + 1 + hex_digits] or "x"):
+            code = int(body[i + 1:i + 1 + hex_digits], 16)
+            out += bytes([code]) if hex_digits == 2 else chr(code).encode("utf-8")
+            i += 1 + hex_digits
+        else:
+            if settings.invalid_dollar_escape == "error":
+                raise LiteralError(f"invalid escape '${nxt}' in string literal (valid: $$ $' $L $N $P $R $T $hh)")
+            out += b"$"
+            i += 1
+    value = bytes(out)
+    if b"\x00" in value:
+        # an Omron STRING ends at its first NUL
+        value = value[: value.index(b"\x00")]
+    return value, warnings
+
+
+def decode_int(text: str) -> int:
+    text = text.replace("_", "")
+    if "#" in text:
+        base, digits = text.split("#", 1)
+        return int(digits, int(base))
+    return int(text)
+
+
+def decode_time(text: str) -> int:
+    """`T#1h2m3s4ms5us6ns` → nanoseconds. Raises LiteralError."""
+    body = text.split("#", 1)[1].replace("_", "")
+    sign = 1
+    if body and body[0] in "+-":
+        sign = -1 if body[0] == "-" else 1
+        body = body[1:]
+    pos = 0
+    total = Fraction(0)
+    if not body:
+        raise LiteralError(f"empty duration in {text!r}")
+    # a plain number without unit is not valid; every part needs one
+    for match in _TIME_PART.finditer(body):
+        if match.start() != pos:
+            break
+        total += Fraction(match.group(1)) * dict(_TIME_UNITS)[match.group(2).lower()]
+        pos = match.end()
+    if pos != len(body):
+        raise LiteralError(f"malformed duration literal {text!r}")
+    return sign * int(total)
+
+
+def _date_ns(y: int, mo: int, d: int) -> int:
+    if not (1 <= mo <= 12 and 1 <= d <= calendar.monthrange(y, mo)[1]):
+        raise LiteralError(f"invalid date {y:04d}-{mo:02d}-{d:02d}")
+    return calendar.timegm((y, mo, d, 0, 0, 0)) * 1_000_000_000
+
+
+def _tod_ns(text: str) -> int:
+    parts = text.split(":")
+    h, m = int(parts[0]), int(parts[1])
+    sec = Fraction(parts[2]) if len(parts) > 2 else Fraction(0)
+    if h > 23 or m > 59 or sec >= 60:
+        raise LiteralError(f"invalid time of day {text}")
+    return int((h * 3600 + m * 60 + sec) * 1_000_000_000)
+
+
+def decode_date(text: str) -> int:
+    y, mo, d = (int(x) for x in text.split("#", 1)[1].split("-"))
+    return _date_ns(y, mo, d)
+
+
+def decode_tod(text: str) -> int:
+    return _tod_ns(text.split("#", 1)[1])
+
+
+def decode_dt(text: str) -> int:
+    body = text.split("#", 1)[1]
+    y, mo, d, rest = body.split("-", 3)
+    return _date_ns(int(y), int(mo), int(d)) + _tod_ns(rest)
+
+
