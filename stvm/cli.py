@@ -42,7 +42,7 @@ def _print_diagnostics(diags, sources) -> None:
 def cmd_check(args) -> int:
     from stvm.project import check
     _require_files(args.files)
-    analysis, diags, sources = check(args.files, _settings(args))
+    analysis, diags, sources = check(args.files, _settings(args), generate=True)
     _print_diagnostics(diags, sources)
     errors = sum(d.is_error for d in diags)
     if errors:
@@ -284,6 +284,10 @@ def main(argv: list[str] | None = None) -> int:
         return EXIT_USAGE
     except BrokenPipeError:
         return EXIT_OK
+    except KeyboardInterrupt:
+        # Ctrl-C before the run started (while loading): nothing ran, nothing to print
+        print("stvm: interrupted", file=sys.stderr)
+        return 130
 
 
 if __name__ == "__main__":

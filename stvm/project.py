@@ -166,11 +166,19 @@ def _read_all(paths: Sequence[Path]) -> tuple[list[tuple[str, str]], list[Diagno
     return texts, diags
 
 
-def check(paths: Sequence[str | Path], settings: SysmacSettings = DEFAULT_SETTINGS):
-    """Parse and check: (analysis or None, diagnostics sorted, sources)."""
+def check(paths: Sequence[str | Path], settings: SysmacSettings = DEFAULT_SETTINGS, generate: bool = False):
+    """Parse and check: (analysis or None, diagnostics sorted, sources). With `generate`, also
+    lower and compile, so limits that only code generation meets are reported too."""
     files, _, _ = expand_paths(paths)
     texts, diags = _read_all(files)
-    return _check_texts(texts, diags, settings)
+    analysis, diags, sources = _check_texts(texts, diags, settings)
+    if generate and analysis is not None:
+        try:
+            _lower_and_compile(analysis, settings, texts, sources)
+        except LoadError as exc:
+            diags = diags + exc.diagnostics
+            analysis = None
+    return analysis, diags, sources
 
 
 _STDLIB_UNITS: dict[str, tuple[list, list[Diagnostic]]] = {}
@@ -222,10 +230,39 @@ def _check_texts(texts, diags, settings):
         diags += d
     analysis = None
     if not has_errors(diags):
-        analysis = analyze(units, settings)
-        diags += analysis.diagnostics
+        try:
+            analysis = analyze(units, settings)
+            diags += analysis.diagnostics
+        except RecursionError:
+            diags.append(_too_deep(units[-1].path if units else "<input>"))
     diags.sort(key=sort_key)
     return (None if has_errors(diags) else analysis), diags, sources
+
+
+def _lower_and_compile(analysis, settings, texts, sources):
+    """Generate and compile the Python module; Python's own limits become diagnostics."""
+    from stvm.lower import lower_project
+    from stvm.syntax.nodes import Span
+    fallback = Span(texts[-1][0] if texts else "<input>", 1, 1, 1, 2)
+    lowered = None
+    try:
+        lowered = lower_project(analysis, settings)
+        code = compile(lowered.source, GENERATED_FILENAME, "exec")
+    except RecursionError:
+        raise LoadError([_too_deep(fallback.file)], sources) from None
+    except SyntaxError as exc:
+        # nesting depth of blocks/parentheses in the generated module
+        span = lowered.line_map.span_at(exc.lineno) if lowered is not None and exc.lineno else None
+        raise LoadError([Diagnostic.error(f"this code is nested too deeply for stvm to compile ({exc.msg}); "
+                                          f"split it into smaller POUs or statements", span or fallback, "E004")],
+                        sources) from None
+    return lowered, code
+
+
+def _too_deep(file: str) -> Diagnostic:
+    from stvm.syntax.nodes import Span
+    return Diagnostic.error("expression or statement nesting too deep for stvm (split it into smaller parts)",
+                            Span(file, 1, 1, 1, 2), "E003")
 
 
 def load(paths: Sequence[str | Path], settings: SysmacSettings = DEFAULT_SETTINGS, use_cache: bool = True) -> Project:
@@ -246,9 +283,7 @@ def load(paths: Sequence[str | Path], settings: SysmacSettings = DEFAULT_SETTING
     analysis, diags, sources = _check_texts(texts, [], settings)
     if analysis is None:
         raise LoadError(diags, sources)
-    from stvm.lower import lower_project
-    lowered = lower_project(analysis, settings)
-    code = compile(lowered.source, GENERATED_FILENAME, "exec")
+    lowered, code = _lower_and_compile(analysis, settings, texts, sources)
     warnings = [d for d in diags if not d.is_error]
     project = Project(analysis.model, lowered, code, sources, settings, warnings, False, manifest, root)
     if use_cache:

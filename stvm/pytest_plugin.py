@@ -86,6 +86,7 @@ class GoldenTrace:
                 fresh.unlink()
             return run
         if not golden.exists():
+            fresh.parent.mkdir(parents=True, exist_ok=True)
             fresh.write_text(to_jsonl(run.trace), encoding="utf-8")
             pytest.fail(f"no golden trace {golden}; review {fresh} and run pytest {UPDATE_OPTION}", pytrace=False)
         expected = read_trace(golden)

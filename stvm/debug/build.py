@@ -117,12 +117,14 @@ class DebugBuild:
         (`CBT_MoveAbsolute`) when it is unique."""
         if name in self.statements.st_lines or name in self.project.sources:
             return name
-        absolute = os.path.normcase(os.path.abspath(name))
-        if absolute in self.files:
-            return self.files[absolute]
+        for candidate in (os.path.abspath(name), os.path.realpath(name)):
+            key = os.path.normcase(candidate)
+            if key in self.files:
+                return self.files[key]
         lowered = name.lower()
-        matches = [f for f in self.files.values()
-                   if os.path.basename(f).lower() == lowered or os.path.splitext(os.path.basename(f))[0].lower() == lowered]
+        matches = sorted({f for f in self.files.values()
+                          if os.path.basename(f).lower() == lowered
+                          or os.path.splitext(os.path.basename(f))[0].lower() == lowered})
         return matches[0] if len(matches) == 1 else None
 
     def absolute_path(self, file: str) -> str | None:
@@ -161,4 +163,5 @@ def load_debug(paths: Sequence[str | os.PathLike], settings: SysmacSettings = DE
     project = Project(analysis.model, lowered, code, sources, settings, warnings, False, manifest, root)
     unit_pous = {lowered.classes[key]: pou for key, pou in analysis.model.pous.items() if key in lowered.classes}
     user_files = {os.path.normcase(os.path.abspath(name)): name for name, _ in texts}
+    user_files.update({os.path.normcase(os.path.realpath(name)): name for name, _ in texts})
     return DebugBuild(project, analysis, checker, StatementMap.build(lowered.line_map), unit_pous, user_files)

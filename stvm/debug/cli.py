@@ -86,4 +86,10 @@ def cmd_debug(args) -> int:
 
 def cmd_dap(args) -> int:
     from stvm.debug.dap import serve
-    return serve(sys.stdin.buffer, sys.stdout.buffer, log_path=args.log)
+    protocol_out = sys.stdout.buffer
+    # stdout carries the protocol only: anything else printed during the session goes to stderr
+    sys.stdout = sys.stderr
+    try:
+        return serve(sys.stdin.buffer, protocol_out, log_path=args.log)
+    finally:
+        sys.stdout = sys.__stdout__

@@ -112,6 +112,9 @@ class Console:
         except DebugError as exc:
             self.write(f"error: {exc}")
             return True
+        except Exception as exc:  # noqa: BLE001 - an stvm bug must not end the user's session
+            self.write(f"internal error in stvm ({type(exc).__name__}: {exc})")
+            return True
 
     # ---- execution control
     def _go(self, mode: str, count: int = 1) -> None:
@@ -170,10 +173,7 @@ class Console:
         location = location.strip()
         file, sep, line_text = location.rpartition(":")
         if not sep:
-            file, line_text = "", location
-            if self.list_line is None:
-                raise DebugError("no current file; write break FILE:LINE")
-            file = self.list_line[0]
+            file, line_text = self._current_file(), location
         if not line_text.strip().isdigit():
             raise DebugError(f"break needs FILE:LINE, got {location!r}")
         bp = self.engine.add_breakpoint(file, int(line_text), condition.strip() or None)
@@ -269,7 +269,7 @@ class Console:
         if rest:
             file, sep, line_text = rest.rpartition(":")
             if not sep:
-                file = self.list_line[0] if self.list_line else ""
+                file = self._current_file()
                 line_text = rest
             file = self.engine.build.span_file(file) or file
             if not line_text.strip().isdigit():
@@ -290,6 +290,15 @@ class Console:
             marker = "=>" if (file == current_file and number == current) else "  "
             self.write(self._source_line(file, number, marker, lines))
         self.list_line = (file, center)
+
+    def _current_file(self) -> str:
+        """The file of the current line, else the project's only ST file."""
+        if self.list_line is not None:
+            return self.list_line[0]
+        files = list(self.engine.build.statements.st_lines)
+        if len(files) == 1:
+            return files[0]
+        raise DebugError("no current file; write FILE:LINE")
 
     def _source_line(self, file: str, number: int, marker: str = "  ", lines: list[str] | None = None) -> str:
         if lines is None:
@@ -330,7 +339,7 @@ class Console:
         try:
             return self.engine.evaluate_text(text, self.frame_index)
         except DebugError as exc:
-            return f"<{exc}>"
+            return "<not in this scope>" if "is not declared" in str(exc) else f"<{exc}>"
 
 
 def _count(text: str, default: int) -> int:

@@ -33,7 +33,7 @@ import queue
 import sys
 import threading
 from dataclasses import dataclass, field
-from types import FrameType
+from types import CodeType, FrameType
 from typing import Any, Callable
 
 from stvm.debug.build import DebugBuild
@@ -177,13 +177,15 @@ class Engine:
         self._mode = CONTINUE
         self._depth = 0                  # call depth a next/finish started from
         self._scans_left = 0
-        self._attention = False          # anything but a plain continue: check every statement
+        self._attention = False          # stepping, pausing or ending: look at every statement
+        self._code_lines: dict[CodeType, frozenset[int] | None] = {}   # None: never traced
         self._pause = False
         self._terminate = False
         self._statement_seen = False
         self._thread: threading.Thread | None = None
         self._stops = self.statements.stops
         self.vm.on_scan_end.insert(0, self._force_all)
+        self._make_tracers()
 
     # ================================================================ front-end API
     def start(self, stop_on_entry: bool = True) -> None:
@@ -191,6 +193,10 @@ class Engine:
         if self._thread is not None:
             raise DebugError("the session has already started")
         self.state = RUNNING
+        # The scan-end hooks (scenario, lockstep emulator) run no ST code: run them untraced, so
+        # the emulator's Python does not pay for the trace function's call events.
+        self.vm.on_scan_end[:] = [hook if hook == self._force_all else _untraced(hook, self._trace_call)
+                                  for hook in self.vm.on_scan_end]
         self._thread = threading.Thread(target=self._worker, args=(stop_on_entry,), name="stvm-debug-vm", daemon=True)
         self._thread.start()
 
@@ -227,13 +233,17 @@ class Engine:
 
     def pause(self) -> None:
         """Ask a running engine to stop at the next statement (or scan end)."""
+        if self.state != RUNNING:
+            return
         self._pause = True
         self._attention = True
+        self._arm_running_frames()
 
     def terminate(self, timeout: float = 5.0) -> None:
         """End the session: the worker unwinds, the VM closes its sockets."""
         self._terminate = True
         self._attention = True
+        self._arm_running_frames()
         if self._thread is None:
             self._finish_session()
             return
@@ -303,15 +313,17 @@ class Engine:
             for gen_line in bp.gen_lines:
                 index.setdefault(gen_line, []).append(bp)
         self._bp_lines = index   # one assignment: the worker sees the old or the new table
+        if self.state == RUNNING:
+            self._arm_running_frames()
 
     # ---- inspection (while stopped)
     def frames(self) -> list[StackFrame]:
         return list(self.stop_event.frames) if self.stop_event else []
 
     def scope(self, frame_index: int = 0) -> Scope:
-        """The scope of a stopped frame (the global scope between scans)."""
+        """The scope of a stopped frame (the global scope between scans, or for index -1)."""
         frames = self.frames()
-        if not frames:
+        if not frames or frame_index < 0:
             return Scope()
         if not 0 <= frame_index < len(frames):
             raise DebugError(f"no frame {frame_index} (0..{len(frames) - 1})")
@@ -438,17 +450,59 @@ class Engine:
         elif mode in (STEP, NEXT) and not self._statement_seen:
             self._stop(STEPPED, None)   # a scan without statements (nothing to step to)
 
-    def _trace_call(self, frame: FrameType, event: str, arg: Any):
-        if frame.f_code.co_filename == GENERATED_FILENAME:
-            return self._trace_line
-        return None
+    # ---- tracing
+    # Only frames that may stop get line events: with a plain `continue`, the frames of POUs
+    # with a breakpoint; while stepping (or asked to pause or end), every POU frame. A frame
+    # already running when that changes is armed by setting its `f_trace` (the thread's global
+    # trace function stays installed, so the interpreter honours it at the next line).
+    def _make_tracers(self) -> None:
+        """`_trace_call` (the thread's trace function) and `_trace_line` (a frame's), as closures
+        over their tables: they run on every call and every traced line."""
+        stops, code_lines, generated, engine = self._stops, self._code_lines, GENERATED_FILENAME, self
 
-    def _trace_line(self, frame: FrameType, event: str, arg: Any):
-        if event == "line":
-            line = frame.f_lineno
-            if line in self._stops and (self._attention or line in self._bp_lines):
-                self._statement(frame, line)
-        return self._trace_line
+        def trace_line(frame: FrameType, event: str, arg: Any):
+            if event == "line":
+                line = frame.f_lineno
+                if line in stops and (engine._attention or line in engine._bp_lines):
+                    engine._statement(frame, line)
+            return trace_line
+
+        def trace_call(frame: FrameType, event: str, arg: Any):
+            code = frame.f_code
+            if code.co_filename != generated:
+                return None
+            lines = code_lines.get(code, ())
+            if lines == ():
+                lines = code_lines[code] = engine._pou_code_lines(code)
+            if lines is None:
+                return None
+            if engine._attention or not lines.isdisjoint(engine._bp_lines):
+                return trace_line
+            return None
+
+        self._trace_call = trace_call
+        self._trace_line = trace_line
+
+    def _pou_code_lines(self, code: CodeType) -> frozenset[int] | None:
+        """Statement lines of a POU body's code object (None for helper code: struct copies,
+        constructors, lambdas of output references, which never stop)."""
+        unit = code.co_qualname.split(".")[0]
+        if unit not in self.build.unit_pous or code.co_name not in ("__call__", unit):
+            return None
+        return frozenset(line for _, _, line in code.co_lines() if line in self._stops)
+
+    def _arm(self, frame: FrameType | None) -> None:
+        """Give `frame` and its ST callers line events (they may have been called untraced)."""
+        while frame is not None:
+            if self._code_lines.get(frame.f_code) or self._pou_code_lines(frame.f_code):
+                frame.f_trace = self._trace_line
+            frame = frame.f_back
+
+    def _arm_running_frames(self) -> None:
+        thread = self._thread
+        if thread is None or thread.ident is None or threading.current_thread() is thread:
+            return
+        self._arm(sys._current_frames().get(thread.ident))
 
     def _statement(self, frame: FrameType, line: int) -> None:
         if self._terminate:
@@ -500,7 +554,9 @@ class Engine:
             mode, count = SCAN, 1
             self._mode = SCAN
         self._scans_left = count if mode == SCAN else 0
-        self._attention = mode != CONTINUE or self._pause or self._terminate
+        self._attention = mode in (STEP, NEXT, FINISH) or self._pause or self._terminate
+        if self._attention:
+            self._arm(frame)
 
     def _publish(self, event: StopEvent, state: str) -> None:
         with self._changed:
@@ -535,11 +591,15 @@ class Engine:
 
     # ---- frames
     def _stack(self, frame: FrameType) -> list[StackFrame]:
-        out = []
+        out: list[StackFrame] = []
         f: FrameType | None = frame
         while f is not None:
             if f.f_code.co_filename == GENERATED_FILENAME:
-                made = self._make_frame(len(out), f, f.f_lineno)
+                try:
+                    made = self._make_frame(len(out), f, f.f_lineno)
+                except Exception as exc:  # noqa: BLE001 - runs in the trace function: never escape
+                    self._warn(f"cannot show a frame ({type(exc).__name__}: {exc}); this is an stvm bug")
+                    made = None
                 if made is not None:
                     out.append(made)
             f = f.f_back
@@ -548,8 +608,8 @@ class Engine:
     def _make_frame(self, index: int, py_frame: FrameType, line: int) -> StackFrame | None:
         unit = py_frame.f_code.co_qualname.split(".")[0]
         pou = self.build.unit_pous.get(unit)
-        if pou is None:
-            return None
+        if pou is None or py_frame.f_code.co_name not in ("__call__", unit):
+            return None   # helper code (struct copies, output-reference lambdas) is not a POU frame
         node = self.build.analysis.pou_nodes[pou.key]
         span = self.statements.spans.get(line) or self.build.project.lowered.line_map.span_at(line) or node.span
         scope = self._frame_scope(py_frame, pou, node)
@@ -592,6 +652,8 @@ class Engine:
 
     # ---- forcing
     def _force_all(self, vm: Any = None) -> None:
+        if not self.forces:
+            return
         for key, forced in list(self.forces.items()):
             try:
                 self.compiler.store(self.vm, forced.scope, forced.store, _copy_value(forced.value))
@@ -604,6 +666,16 @@ class Engine:
             print(f"warning: {message}", file=sys.stderr)
         for sink in list(self.output):
             sink(message)
+
+
+def _untraced(hook: Callable, tracer: Callable) -> Callable:
+    def run_untraced(vm: Any) -> None:
+        sys.settrace(None)
+        try:
+            hook(vm)
+        finally:
+            sys.settrace(tracer)
+    return run_untraced
 
 
 def _depth(frame: FrameType | None) -> int:

@@ -18,11 +18,11 @@ Debugger scope rules, wider than a POU body's on purpose:
 from __future__ import annotations
 
 import threading
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from types import CodeType, SimpleNamespace
 from typing import Any
 
-from stvm.lower.codegen import Lowerer, _Writer
+from stvm.lower.codegen import Lowerer
 from stvm.lower.names import var_attr
 from stvm.semantics import types as t
 from stvm.semantics.body import _BodyChecker
@@ -202,6 +202,7 @@ class ScopeCompiler:
         self.settings = build.project.settings
         self.types: list[t.Type] = list(build.project.lowered.types)   # `_T`, extended by expressions
         self.programs: dict[str, tuple[str, str]] = {}
+        self._views: dict[int, tuple[Any, GlobalsView]] = {}
         self._lock = threading.Lock()
 
     def set_programs(self, instances: dict[str, tuple[str, Any, str]]) -> None:
@@ -242,6 +243,12 @@ class ScopeCompiler:
             raise DebugError(_messages(bad, text))
 
     def compile_expression(self, scope: Scope, text: str) -> Compiled:
+        return _internal_errors_as_debug_errors(self._compile_expression, scope, text)
+
+    def compile_store(self, scope: Scope, target_text: str, value_text: str) -> CompiledStore:
+        return _internal_errors_as_debug_errors(self._compile_store, scope, target_text, value_text)
+
+    def _compile_expression(self, scope: Scope, text: str) -> Compiled:
         expr = self.parse(text)
         with self._lock:
             checker, lowerer, facts, saved_facts, saved_diags = self._session(scope)
@@ -260,7 +267,7 @@ class ScopeCompiler:
             raise DebugError(f"a condition must be BOOL, not {compiled.type.name}")
         return compiled
 
-    def compile_store(self, scope: Scope, target_text: str, value_text: str) -> CompiledStore:
+    def _compile_store(self, scope: Scope, target_text: str, value_text: str) -> CompiledStore:
         target, value = self.parse(target_text), self.parse(value_text)
         if not isinstance(target, (n.Name, n.Member, n.Index, n.BitAccess)):
             raise DebugError(f"{target_text.strip()!r} is not a variable")
@@ -290,9 +297,12 @@ class ScopeCompiler:
     # ---- running
     def namespace(self, vm, scope: Scope) -> dict[str, Any]:
         """Locals for evaluating compiled text in `scope` (globals are the VM's module namespace)."""
-        programs = {var_attr(name): inst for name, inst, _ in vm.instances.values()}
-        return {"self": scope.instance, "_f": scope.frame, "_r": scope.result, "_T": self.types,
-                "_G": GlobalsView(vm.globals, programs)}
+        view = self._views.get(id(vm))
+        if view is None or view[0] is not vm:
+            # program instances never change during a run: one view per VM
+            programs = {var_attr(name): inst for name, inst, _ in vm.instances.values()}
+            view = self._views[id(vm)] = (vm, GlobalsView(vm.globals, programs))
+        return {"self": scope.instance, "_f": scope.frame, "_r": scope.result, "_T": self.types, "_G": view[1]}
 
     def evaluate(self, vm, scope: Scope, compiled: Compiled) -> Any:
         return run_guarded(lambda: eval(compiled.code, vm.namespace, self.namespace(vm, scope)))
@@ -304,6 +314,17 @@ class ScopeCompiler:
 
     def value(self, vm, scope: Scope, store: CompiledStore) -> Any:
         return run_guarded(lambda: eval(store.value_code, vm.namespace, self.namespace(vm, scope)))
+
+
+def _internal_errors_as_debug_errors(fn, *args):
+    """A checker or code-generator exception on debugger text is an stvm bug; the session goes on."""
+    try:
+        return fn(*args)
+    except DebugError:
+        raise
+    except Exception as exc:  # noqa: BLE001 - reported to the user, never fatal to the session
+        raise DebugError(f"stvm cannot handle {' := '.join(a for a in args[1:] if isinstance(a, str))!r} "
+                         f"({type(exc).__name__}: {exc}); this is an stvm bug") from exc
 
 
 def run_guarded(fn):
@@ -319,8 +340,10 @@ def run_guarded(fn):
         if "'NoneType'" in str(exc):
             raise DebugError("an in-out is not bound yet (the block has not been called)") from None
         raise DebugError(f"cannot evaluate: {exc}") from None
-    except (ArithmeticError, IndexError, TypeError, ValueError) as exc:
-        raise DebugError(f"cannot evaluate: {exc}") from None
+    except RecursionError:
+        raise DebugError("cannot evaluate: recursion too deep") from None
+    except Exception as exc:  # noqa: BLE001 - runs inside the trace function too: never escape
+        raise DebugError(f"cannot evaluate: {type(exc).__name__}: {exc}") from None
 
 
 def unparse(e: n.Expr, facts: Facts | None = None) -> str:

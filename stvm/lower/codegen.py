@@ -78,6 +78,9 @@ def _lit(value: object) -> str:
     raise AssertionError(f"not a literal: {type(value).__name__}")
 
 
+_RING_OPS = {"PLUS": "+", "MINUS": "-", "STAR": "*"}
+
+
 def _wrap(code: str, ty: t.IntType) -> str:
     mask = (1 << ty.bits) - 1
     if ty.signed:
@@ -738,7 +741,8 @@ class Lowerer:
         self.w = body_writer
         self.body(node.body)
         self.w = outer
-        outer.blank_span()
+        # prologue and write-back lines belong to the POU itself (a fault there names its header)
+        outer.span = node.span
         for line in prologue_extra:
             outer.line(line)
         temps = {v.key for v in pou.variables.values() if v.section == TEMP}
@@ -754,7 +758,7 @@ class Lowerer:
         if guarded:
             outer.line("try:")
         outer.append(body_writer)
-        outer.blank_span()
+        outer.span = node.span
         if guarded:
             outer.line("finally:")
             outer.indent += 1
@@ -915,6 +919,11 @@ class Lowerer:
         if op == "POW":
             code = f"_expt({self.expr(e.left)}, {self.expr(e.right)})"
             return f"_f32({code})" if isinstance(ty, t.RealType) and ty.bits == 32 else code
+        if isinstance(ty, t.IntType) and op in _RING_OPS and not self.in_range_without_wrap(e, ty) \
+                and id(e) not in self.facts.consts:
+            # A chain of + - * in one integer type wraps once at the end: arithmetic modulo 2^n
+            # gives the same result as wrapping every step, and long sums stay shallow for Python.
+            return _wrap(self.ring_chain(e, ty), ty)
         left = self.expr_as(e.left, ty)
         right = self.expr_as(e.right, ty)
         if isinstance(ty, t.IntType):
@@ -934,6 +943,22 @@ class Lowerer:
         else:
             code = f"({left} {({'PLUS': '+', 'MINUS': '-', 'STAR': '*'})[op]} {right})"
         return f"_f32({code})" if ty.bits == 32 else code
+
+    def ring_chain(self, e: n.Binary, ty: t.IntType) -> str:
+        """Unwrapped Python code of `e` (+, -, * in type `ty`), flattening operands that are
+        themselves + - * chains computed in the same type."""
+        def operand(x: n.Expr) -> tuple[str, str | None]:
+            if isinstance(x, n.Binary) and x.op in _RING_OPS and self.facts.types.get(id(x)) == ty \
+                    and id(x) not in self.facts.consts and not self.in_range_without_wrap(x, ty):
+                return self.ring_chain(x, ty), x.op
+            return self.expr_as(x, ty), None
+        left, left_op = operand(e.left)
+        right, right_op = operand(e.right)
+        if left_op in ("PLUS", "MINUS") and e.op == "STAR":
+            left = f"({left})"
+        if right_op is not None:
+            right = f"({right})"
+        return f"{left} {_RING_OPS[e.op]} {right}"
 
     def in_range_without_wrap(self, e: n.Binary, ty: t.IntType) -> bool:
         """`i + k` / `i - k` on a range-FOR variable that provably stays inside `ty` (no wrap code).

@@ -86,8 +86,16 @@ def format_real(value: float, bits: int) -> str:
         return "nan"
     if math.isinf(value):
         return "inf" if value > 0 else "-inf"
-    text = _shortest_real32(value) if bits == 32 else repr(float(value))
-    if "e" not in text and "." not in text:
+    if bits == 32:
+        return _shortest_real32(value)
+    text = repr(float(value))
+    if "e" in text:
+        mantissa, exponent = text.split("e")
+        if "." not in mantissa:
+            mantissa += ".0"
+        exp = int(exponent)
+        return f"{mantissa}E{'+' if exp >= 0 else '-'}{abs(exp):02d}"
+    if "." not in text:
         text += ".0"
     return text
 
@@ -114,7 +122,9 @@ def _shortest_real32(value: float) -> str:
         else:
             text = f"{sign}{digits_text[:point]}.{digits_text[point:]}"
         return text
-    return f"{mantissa}e{'+' if exp >= 0 else '-'}{abs(exp):02d}"
+    if "." not in mantissa:
+        mantissa += ".0"   # an IEC real literal has digits on both sides of the point
+    return f"{mantissa}E{'+' if exp >= 0 else '-'}{abs(exp):02d}"
 
 
 def format_value(value: object, ty: t.Type, pous: dict | None = None) -> str:

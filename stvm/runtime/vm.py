@@ -352,7 +352,11 @@ def coerce_python_value(value: Any, ty: t.Type) -> Any:
             return value
     elif isinstance(ty, t.RealType):
         if isinstance(value, (int, float)) and not isinstance(value, bool):
-            return _f32(float(value)) if ty.bits == 32 else float(value)
+            try:
+                as_float = float(value)
+            except OverflowError:
+                raise ValueError(f"{value} is out of range for {ty.name}") from None
+            return _f32(as_float) if ty.bits == 32 else as_float
     elif isinstance(ty, t.StringType):
         if isinstance(value, str):
             value = value.encode("utf-8")

@@ -146,6 +146,23 @@ class Checker:
     def check_identifier(self, name: str, span: n.Span) -> None:
         if name.lower() in _RESERVED:
             self.error(f"'{name}' is a reserved word and cannot be used as a name", span, "E011")
+            return
+        if _is_stdlib(span.file):
+            return  # system names (`_sSOCKET`, `_CLOSED`) live in the stdlib
+        # sysmac.md 1 (CONFIRMED, W501): rules for user-defined names
+        problem = None
+        if name.startswith("_"):
+            problem = "may not start with '_' (reserved for system names)"
+        elif name.upper().startswith("P_"):
+            problem = "may not start with 'P_' (reserved for system-defined variables)"
+        elif name.endswith("_"):
+            problem = "may not end with '_'"
+        elif "__" in name:
+            problem = "may not contain '__'"
+        elif len(name.encode("utf-8")) > 127:
+            problem = "is longer than 127 bytes"
+        if problem:
+            self.error(f"name '{name[:40]}{'…' if len(name) > 40 else ''}' {problem}", span, "E011")
 
     def declare_globals(self, block: n.VarBlock, namespace: tuple[str, ...], elementary_only: bool | None = None) -> None:
         """Declare a VAR_GLOBAL block. `elementary_only` True: only its elementary-typed entries
@@ -173,23 +190,28 @@ class Checker:
                 self.globals[name.lower()] = var
                 self.global_nodes[name.lower()] = decl
 
-    def alias_init(self, spec: n.TypeSpec, namespace: tuple[str, ...]) -> object:
+    def alias_init(self, spec: n.TypeSpec, namespace: tuple[str, ...], seen: frozenset = frozenset()) -> object:
         """The initial value an alias type declares (`TYPE T : INT := 7;`), for variables of type
         T that have no initialiser of their own; None if there is none."""
         if not isinstance(spec, n.NamedTypeSpec):
             return None
         key = self.lookup_type_key(spec.parts, spec.rooted, namespace)
-        if key is None or not isinstance(self.index.type_decls[key].body, n.AliasDecl):
-            return None
+        if key is None or key in seen or not isinstance(self.index.type_decls[key].body, n.AliasDecl):
+            return None  # a cycle is reported by resolve_declared_type
         inits = self.type_inits.get(key, {})
         if "" in inits:
             return inits[""]
-        return self.alias_init(self.index.type_decls[key].body.type_spec, self.index.type_decls[key].namespace)
+        decl = self.index.type_decls[key]
+        return self.alias_init(decl.body.type_spec, decl.namespace, seen | {key})  # type: ignore[union-attr]
 
     def declare_pou(self, pou: n.POU) -> POUInfo:
         qual = "\\".join(pou.namespace + (pou.name,))
         words = " ".join(pou.pragmas).lower().split()
         native = "native" in words
+        if native and not _is_stdlib(pou.span.file):
+            # binding to Python implementations is the stdlib's privilege, not user code's
+            self.error("{native} is reserved for the stvm standard library", pou.span, "E025")
+            native = False
         info = POUInfo(pou.name, qual, pou.kind, None, native=native, generic="generic" in words,
                        variadic="variadic" in words, typed="typed" in words, file=pou.span.file,
                        span=pou.span)
@@ -633,9 +655,108 @@ class Checker:
                     self.error(f"native POU '{pou.name}' must not have a body", pou.span, "E025")
                 continue
             _BodyChecker(self, info, pou).check()
+        self.check_containment()
+        self.check_recursion()
         tasks, defaults = self.check_configuration()
         model = ProjectModel(self.pous, self.globals, tasks, defaults, self.structs, self.enums)
         return Analysis(model, self.facts, self.units, dict(self.index.pou_nodes), self.diags, self.type_inits)
+
+    def check_containment(self) -> None:
+        """A FUNCTION_BLOCK or STRUCT may not contain itself, directly or through other members:
+        its instance would be infinitely large."""
+        state: dict[str, str] = {}   # key -> 'open' | 'done'
+
+        def members(key: str) -> list[tuple[str, t.Type]]:
+            if key in self.pous:
+                return [(v.name, v.type) for v in self.pous[key].variables.values()
+                        if v.section not in (IN_OUT, EXTERNAL)]
+            decl = self.index.type_decls.get(key)
+            if decl is not None and isinstance(decl.body, n.StructDecl):
+                out = []
+                for fdecl in decl.body.fields:
+                    if isinstance(fdecl.type_spec, (n.NamedTypeSpec, n.ArrayTypeSpec)):
+                        spec = fdecl.type_spec
+                        while isinstance(spec, n.ArrayTypeSpec):
+                            spec = spec.element
+                        if isinstance(spec, n.NamedTypeSpec):
+                            fkey = self.lookup_type_key(spec.parts, spec.rooted, decl.namespace) \
+                                or self.lookup_pou_key(spec.parts, decl.namespace)
+                            if fkey is not None:
+                                out += [(name, t.StructType(fkey, fkey)) for name, _ in fdecl.names]
+                return out
+            return []
+
+        def key_of(ty: t.Type) -> str | None:
+            while isinstance(ty, t.ArrayType):
+                ty = ty.element
+            if isinstance(ty, (t.FBType, t.StructType)):
+                return ty.qualname.lower()
+            return None
+
+        reported: set[str] = set()
+
+        def display(key: str) -> str:
+            if key in self.pous:
+                return self.pous[key].name
+            decl = self.index.type_decls.get(key)
+            return decl.name if decl is not None else key
+
+        def span_of(key: str) -> n.Span:
+            if key in self.pous:
+                return self.pous[key].span
+            return self.index.type_decls[key].span
+
+        def visit(key: str, keys: list[str], names: list[str]) -> None:
+            if state.get(key) == "done":
+                return
+            if state.get(key) == "open":
+                start = keys.index(key)
+                if key not in reported:
+                    reported.add(key)
+                    self.error(f"'{display(key)}' contains itself (through {'.'.join(names[start:])}): "
+                               f"an instance would be infinitely large", span_of(key), "E026")
+                return
+            state[key] = "open"
+            for name, ty in members(key):
+                inner = key_of(ty)
+                if inner is not None:
+                    visit(inner, keys + [key], names + [name])
+            state[key] = "done"
+
+        for key, pou in self.pous.items():
+            if pou.kind != "FUNCTION":
+                visit(key, [], [])
+        for key, decl in self.index.type_decls.items():
+            if isinstance(decl.body, n.StructDecl):
+                visit(key, [], [])
+
+    def check_recursion(self) -> None:
+        """IEC 61131-3 (and Sysmac) forbid recursive calls of functions and FBs."""
+        from stvm.lower.codegen import _calls_in
+        graph: dict[str, set[str]] = {key: set() for key in self.index.pou_nodes}
+        for key, node in self.index.pou_nodes.items():
+            for call in _calls_in(node.body):
+                info = self.facts.calls.get(id(call))
+                if info is not None and info.pou.kind == "FUNCTION":
+                    graph[key].add(info.pou.key)
+        state: dict[str, str] = {}
+
+        def visit(key: str, chain: list[str]) -> None:
+            if state.get(key) == "done":
+                return
+            if state.get(key) == "open":
+                start = chain.index(key)
+                names = " -> ".join(self.pous[k].name for k in chain[start:] + [key])
+                node = self.index.pou_nodes[key]
+                self.error(f"recursive call {names}: IEC 61131-3 does not allow recursion", node.span, "E027")
+                return
+            state[key] = "open"
+            for callee in sorted(graph.get(key, ())):
+                visit(callee, chain + [key])
+            state[key] = "done"
+
+        for key in graph:
+            visit(key, [])
 
     def check_configuration(self) -> tuple[list[TaskInfo], list[str]]:
         configs = [c for u in self.units for c in u.configurations]
@@ -679,6 +800,10 @@ class Checker:
 
 
 _NOT_CONST = object()
+
+
+def _is_stdlib(file: str) -> bool:
+    return file.startswith("<stdlib")
 
 
 def _round_real(value: float, ty: t.Type) -> float:

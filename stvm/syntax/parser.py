@@ -552,7 +552,13 @@ def parse_text(text: str, file: str, settings: SysmacSettings = DEFAULT_SETTINGS
     except UnexpectedInput as exc:
         diagnostics.append(_syntax_diagnostic(file, exc))
         return n.CompilationUnit(file, (), (), (), ()), diagnostics
-    items = _ToNodes(file, settings, diagnostics).transform(tree)
+    try:
+        items = _ToNodes(file, settings, diagnostics).transform(tree)
+    except RecursionError:
+        diagnostics.append(Diagnostic.error(
+            "expression or statement nesting too deep for stvm (split it into smaller parts)",
+            n.Span(file, 1, 1, 1, 2), "E003"))
+        return n.CompilationUnit(file, (), (), (), ()), diagnostics
     out: dict[str, list] = {"types": [], "pous": [], "globals": [], "configurations": []}
     _collect(file, items, (), out)
     unit = n.CompilationUnit(file, tuple(out["types"]), tuple(out["pous"]), tuple(out["globals"]),

@@ -15,6 +15,7 @@ local when one shadows the variable.
 
 from __future__ import annotations
 
+import bisect
 import sys
 from dataclasses import dataclass, field
 
@@ -316,6 +317,13 @@ class _WriteFinder:
                 if span is not None:
                     self.span = span
             self.last = value
-            if event == "line":
+            if event == "line" and self._owns(frame):
                 self.last_line = frame.f_lineno
         return self.local_trace
+
+    def _owns(self, frame) -> bool:
+        """Whether the line has an ST statement of its own: lines of a native FB's wrapper have
+        none, and `LineMap.span_at` would answer with the previous POU's last statement."""
+        lines = self.line_map.lines
+        i = bisect.bisect_right(lines, frame.f_lineno) - 1
+        return i >= 0 and lines[i] >= frame.f_code.co_firstlineno

@@ -1,11 +1,13 @@
 """The per-scan recorder: watched values into preallocated numpy blocks, kept as changes only.
 
-Each scan costs one compiled sampler call per value group (a tuple of the current values) and one
-row assignment into a preallocated block: integers (BOOL, ANY_INT, TIME/DT, enums) in `int64`,
-REAL/LREAL in `float64` (exact for REAL's float32 values), STRING and 64-bit unsigned values in
-an object array. When a block is full, numpy finds the cells that differ from the row above and
-keeps only those (scan, signal, value) triples; the block is then reused. Memory therefore grows
-with the number of changes, not with the run's length (a 1-hour run at 1 ms is 3.6 M scans).
+Each scan costs one call of a compiled sampler (a tuple of every watched value, walked from the
+program instances and the globals object) and one tuple comparison with the previous scan's. Only
+a scan whose tuple differs writes a row into the preallocated blocks, one per value group:
+integers (BOOL, ANY_INT, TIME/DT, enums) in `int64`, REAL/LREAL in `float64` (exact for REAL's
+float32 values), STRING and 64-bit unsigned values in an object array, plus the row's scan number.
+When the blocks are full, numpy finds the cells that differ from the row before and keeps only
+those (scan, signal, value) triples; the blocks are then reused. Memory therefore grows with the
+number of changes, not with the length of the run (a 1-hour run at 1 ms is 3.6 M scans).
 
 The recorder also keeps the emulator's frames (lockstep runs) and events, and `finish()` turns
 everything into a `Trace` of IEC literal text.
@@ -21,7 +23,7 @@ from stvm.runtime.format import format_value
 from stvm.trace.model import EventEntry, FrameEntry, SignalInfo, Trace
 from stvm.trace.signals import Signal, make_sampler, type_text
 
-BLOCK_SCANS = 2048
+BLOCK_ROWS = 2048
 
 
 def _group_of(signal: Signal) -> str:
@@ -40,29 +42,30 @@ _DTYPES = {"i": np.int64, "f": np.float64, "o": object}
 
 
 class _Group:
-    def __init__(self, code: str, members: list[tuple[int, Signal]], block_scans: int) -> None:
+    """The signals of one dtype: a slice of the sampled tuple and a preallocated block."""
+
+    def __init__(self, code: str, indices: list[int], start: int, block_rows: int) -> None:
         self.code = code
-        self.indices = np.array([i for i, _ in members], dtype=np.int64)
-        self.sample = make_sampler([s for _, s in members])
-        self.block = np.empty((block_scans, len(members)), dtype=_DTYPES[code])
+        self.indices = np.array(indices, dtype=np.int64)   # signal index of each column
+        self.start, self.stop = start, start + len(indices)  # slice of the sampled tuple
+        self.block = np.empty((block_rows, len(indices)), dtype=_DTYPES[code])
         self.previous: np.ndarray | None = None   # last row of the previous block
         self.found: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []   # (scans, signal idx, values)
 
-    def flush(self, rows: int, first_scan: int) -> None:
-        if rows == 0:
-            return
+    def flush(self, rows: int, scans: np.ndarray) -> None:
+        """Keep the cells of rows 0..rows-1 that differ from the row before (`scans` numbers them)."""
         block = self.block[:rows]
         if self.previous is None:
-            stacked, offset = block, 1   # row 0 is the initial state, kept apart
+            stacked, row_scans = block, scans[1:rows]   # row 0 is the initial state, kept apart
         else:
-            stacked, offset = np.concatenate([self.previous[None, :], block]), 0
+            stacked, row_scans = np.concatenate([self.previous[None, :], block]), scans[:rows]
         differ = stacked[1:] != stacked[:-1]
         if self.code == "f":
             differ &= ~(np.isnan(stacked[1:]) & np.isnan(stacked[:-1]))
         rows_changed, cols = np.nonzero(differ)
         if len(rows_changed):
             values = stacked[1:][rows_changed, cols]
-            self.found.append((rows_changed + first_scan + offset, self.indices[cols], values.copy()))
+            self.found.append((row_scans[rows_changed], self.indices[cols], values.copy()))
         self.previous = block[rows - 1].copy()
 
 
@@ -70,16 +73,23 @@ class Recorder:
     """Samples `signals` at the end of every scan of `vm` (call `sample` from an on_scan_end hook,
     or let `attach` register it first in the hook list)."""
 
-    def __init__(self, vm, signals: list[Signal], block_scans: int = BLOCK_SCANS) -> None:
+    def __init__(self, vm, signals: list[Signal], block_rows: int = BLOCK_ROWS) -> None:
         self.vm = vm
         self.signals = signals
-        self.block_scans = block_scans
-        groups: dict[str, list[tuple[int, Signal]]] = {}
+        self.block_rows = block_rows
+        by_code: dict[str, list[int]] = {}
         for i, signal in enumerate(signals):
-            groups.setdefault(_group_of(signal), []).append((i, signal))
-        self._groups = [_Group(code, members, block_scans) for code, members in groups.items()]
+            by_code.setdefault(_group_of(signal), []).append(i)
+        order: list[int] = []
+        self._groups: list[_Group] = []
+        for code, indices in by_code.items():
+            self._groups.append(_Group(code, indices, len(order), block_rows))
+            order += indices
+        # one sampler for all signals, grouped by dtype so that each group is a slice
+        self._sample = make_sampler([signals[i] for i in order]) if signals else (lambda: ())
+        self._scans = np.empty(block_rows, dtype=np.int64)
+        self._last: tuple | None = None
         self._row = 0
-        self._block_first_scan: int | None = None
         self.first_scan: int | None = None
         self.scans = 0
         self.initial: list[Any] = [None] * len(signals)
@@ -96,38 +106,44 @@ class Recorder:
         return self
 
     def sample(self, vm) -> None:
+        values = self._sample()
+        if values == self._last:   # the common case: nothing changed, nothing written
+            self.scans += 1
+            return
+        if self.first_scan is None:
+            self.first_scan = vm.scan_count
         row = self._row
-        if self._block_first_scan is None:
-            self._block_first_scan = vm.scan_count
-            if self.first_scan is None:
-                self.first_scan = vm.scan_count
+        self._scans[row] = vm.scan_count - self.first_scan
         for group in self._groups:
-            group.block[row] = group.sample()
-        row += 1
+            group.block[row] = values[group.start:group.stop]
+        self._last = values
         self.scans += 1
-        if row == self.block_scans:
+        row += 1
+        if row == self.block_rows:
             self._flush(row)
             row = 0
         self._row = row
 
     def _flush(self, rows: int) -> None:
-        first = self._block_first_scan or 0
         for group in self._groups:
             if group.previous is None and rows:
                 for col, index in enumerate(group.indices):
                     self.initial[index] = group.block[0, col]
-            group.flush(rows, first - (self.first_scan or 0))
-        self._block_first_scan = None
+            group.flush(rows, self._scans)
 
     def on_frame(self, record) -> None:
-        self.frames.append(FrameEntry(self.vm.scan_count - (self.first_scan or 0), record.t_ns,
+        self.frames.append(FrameEntry(self.vm.scan_count - self._origin(), record.t_ns,
                                       record.direction, record.conn, record.data.decode("latin-1")))
 
     def event(self, text: str, scan: int | None = None) -> None:
         """Note an event (scenario, fault) at `scan` (default: the scan being recorded)."""
         if scan is None:
             scan = self.vm.scan_count
-        self.events.append(EventEntry(scan - (self.first_scan or 0), text))
+        self.events.append(EventEntry(scan - self._origin(), text))
+
+    def _origin(self) -> int:
+        """The VM scan that is scan 0 of the trace."""
+        return self.first_scan if self.first_scan is not None else self.vm.scan_count
 
     # --- result -----------------------------------------------------------------------------
 
@@ -157,10 +173,13 @@ class Recorder:
             for k in order.tolist():
                 index = int(all_indices[k])
                 raw = value_parts[k]
-                key = (index, raw)
-                text = cache.get(key)
+                # floats are not cached: -0.0 == 0.0 would share one text
+                key = (index, raw) if not isinstance(raw, float) else None
+                text = cache.get(key) if key is not None else None
                 if text is None:
-                    text = cache[key] = format_value(_python(raw, types[index]), types[index], pous)
+                    text = format_value(_python(raw, types[index]), types[index], pous)
+                    if key is not None:
+                        cache[key] = text
                 changes.append((int(all_scans[k]), index, text))
         trace = Trace(signals=infos, scan_ns=self.vm.base_ns, scans=self.scans, initial=initial,
                       changes=changes, frames=list(self.frames),

@@ -51,12 +51,8 @@ class Signal:
 
     @property
     def kind(self) -> str:
-        return value_kind(self.type)
-
-
-def value_kind(ty: t.Type) -> str:
-    """bool, int, real, time, string, enum; anything else is not recordable."""
-    return ty.kind
+        """bool, int, real, time, string or enum (the recordable kinds)."""
+        return self.type.kind
 
 
 def type_text(ty: t.Type) -> str:
@@ -68,6 +64,7 @@ def type_text(ty: t.Type) -> str:
 
 
 def compile_pattern(pattern: str) -> re.Pattern[str]:
+    """The regular expression of a watch pattern (syntax in the module docstring)."""
     out = []
     i = 0
     while i < len(pattern):
@@ -87,8 +84,9 @@ def compile_pattern(pattern: str) -> re.Pattern[str]:
 
 
 def _leaves(vm, name: str, ty: t.Type, root: Any, steps: tuple, depth: int = 0) -> Iterator[tuple[str, t.Type, Any, tuple]]:
-    """Every elementary leaf below (name, ty), in declaration order."""
-    yield name, ty, root, steps   # the node itself (aggregates are expanded by the caller)
+    """(name, type, root, steps) of the node and every node below it, pre-order, in declaration
+    order (callers keep the elementary ones)."""
+    yield name, ty, root, steps
     if depth > 16:
         return
     if isinstance(ty, t.StructType):
@@ -235,22 +233,45 @@ def _expression(root_name: str, steps: tuple) -> str:
 def make_sampler(signals: list[Signal]) -> Callable[[], tuple]:
     """A compiled function returning the current values of `signals` as one tuple.
 
-    Generated code (`return (r0.v_a, r1.v_b[3].v_c, …)`) costs one attribute or item access per
-    step and no interpretation; only validated `v_` names and integer indices go into it.
+    Generated code (`p0 = r0.v_cobot; return (p0.v_connected, p0.v_socket.v_handle, …)`) costs
+    one attribute or item access per step, shared prefixes once per call, and no interpretation;
+    only validated `v_` names and integer indices go into it. Every call walks from the roots
+    again, so replaced objects (an array of structs assigned as a whole) are never stale.
     """
     roots: list[Any] = []
     root_ids: dict[int, int] = {}
-    exprs = []
+    paths: list[tuple] = []
     for signal in signals:
         index = root_ids.get(id(signal.root))
         if index is None:
             index = root_ids[id(signal.root)] = len(roots)
             roots.append(signal.root)
-        exprs.append(_expression(f"r{index}", signal.steps))
+        paths.append((index,) + tuple(signal.steps))
+    uses: dict[tuple, int] = {}
+    for path in paths:
+        for k in range(2, len(path)):        # proper prefixes with at least one step
+            uses[path[:k]] = uses.get(path[:k], 0) + 1
+    shared = sorted((prefix for prefix, count in uses.items() if count > 1), key=len)
+    local_of: dict[tuple, str] = {}
+    body_lines = []
+
+    def expression(path: tuple) -> str:
+        for k in range(len(path) - 1, 1, -1):
+            name = local_of.get(path[:k])
+            if name is not None:
+                return _expression(name, path[k:])
+        return _expression(f"r{path[0]}", path[1:])
+
+    for prefix in shared:
+        name = f"p{len(local_of)}"
+        body_lines.append(f"        {name} = {expression(prefix)}")
+        local_of[prefix] = name
+    exprs = [expression(path) for path in paths]
     params = ", ".join(f"r{i}=r{i}" for i in range(len(roots)))
-    body = ", ".join(exprs) + ("," if len(exprs) == 1 else "")
-    source = f"def make({', '.join(f'r{i}' for i in range(len(roots)))}):\n" \
-             f"    def sample({params}):\n        return ({body})\n    return sample\n"
+    result = ", ".join(exprs) + ("," if len(exprs) == 1 else "")
+    source = (f"def make({', '.join(f'r{i}' for i in range(len(roots)))}):\n"
+              f"    def sample({params}):\n" + "".join(line + "\n" for line in body_lines) +
+              f"        return ({result})\n    return sample\n")
     namespace: dict[str, Any] = {}
     exec(compile(source, "<stvm-trace-sampler>", "exec"), namespace)
     return namespace["make"](*roots)

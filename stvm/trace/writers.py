@@ -319,31 +319,35 @@ def to_wavedrom(trace: Trace, max_columns: int = 120) -> dict:
         lanes.append(lane)
     if trace.frames:
         for direction, title in (("rx", "robot rx"), ("tx", "robot tx")):
-            wave, data = [], []
+            wave, data, idle = [], [], False
             for column in columns:
                 frames = [f for f in frame_scans.get(column, []) if f.direction == direction]
                 if frames:
                     wave.append("=")
                     data.append(" ".join(_frame_label(f) for f in frames))
+                    idle = False
                 else:
-                    wave.append("x" if not wave or wave[-1] != "x" else ".")
+                    wave.append("." if idle else "x")   # "x": no frame in this column
+                    idle = True
             lanes.append({"name": title, "wave": "".join(wave), "data": data})
     last = columns[-1] if columns else 0
     doc = {"signal": lanes,
            "head": {"text": f"stvm trace: scans 0..{last} of {trace.scans}, scan {trace.scan_ns / 1e6:g} ms"},
-           "config": {"hscale": 1}}
+           "config": {"hscale": 2 if len(columns) <= 40 else 1}}
     if truncated:
         doc["foot"] = {"text": f"first {max_columns} change points only"}
     return doc
 
 
 def _frame_label(frame: FrameEntry) -> str:
-    """`TMSCT 2 OK`-style label: header, id and the start of the data."""
-    body = frame.data.strip().lstrip("$")
-    parts = body.split(",")
-    if len(parts) >= 4:
-        return f"{parts[0]} {parts[2]} {parts[3][:12]}"
-    return body[:16]
+    """`TMSCT 2`, `TMSCT 2 OK`, `TMSTA 01`, `CPERR 01`: header, id or code, and a verdict."""
+    parts = frame.data.strip().lstrip("$").split(",")
+    if len(parts) < 3:
+        return parts[0][:8]
+    label = f"{parts[0]} {parts[2]}"
+    if len(parts) > 3 and (parts[3] == "OK" or parts[3].startswith("ERROR")):
+        label += " " + parts[3].split(";")[0]
+    return label
 
 
 def write_svg(trace: Trace, path: str | Path, max_columns: int = 120) -> Path:
@@ -362,13 +366,13 @@ def write_svg(trace: Trace, path: str | Path, max_columns: int = 120) -> Path:
 def read_trace(path: str | Path) -> Trace:
     """A trace file written by `write_trace` (`.jsonl` or `.csv`)."""
     path = Path(path)
+    suffix = path.suffix.lower()
+    if suffix not in (".jsonl", ".csv"):
+        raise TraceFormatError(f"{path}: golden traces are .jsonl or .csv files, not {suffix!r}")
     try:
         text = path.read_text(encoding="utf-8")
     except OSError as exc:
         raise TraceFormatError(f"{path}: cannot read: {exc.strerror or exc}") from exc
-    suffix = path.suffix.lower()
     if suffix == ".jsonl":
         return from_jsonl(text, str(path))
-    if suffix == ".csv":
-        return from_csv(text, str(path))
-    raise TraceFormatError(f"{path}: golden traces are .jsonl or .csv files, not {suffix!r}")
+    return from_csv(text, str(path))
