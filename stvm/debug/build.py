@@ -73,6 +73,9 @@ class StatementMap:
         previous: n.Span | None = None
         previous_line = 0
         for gen_line, span in zip(line_map.lines, line_map.spans):
+            if span is None:   # generated glue (native FB wrappers): no ST statement
+                previous = None
+                continue
             out.spans[gen_line] = span
             starts = previous is None or gen_line != previous_line + 1 or span != previous
             if starts and not is_library_file(span.file):

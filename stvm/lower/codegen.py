@@ -27,9 +27,9 @@ class LineMap:
     """Generated line → ST span; `span_at` finds the statement a generated line belongs to."""
 
     lines: list[int] = field(default_factory=list)
-    spans: list[n.Span] = field(default_factory=list)
+    spans: list[n.Span | None] = field(default_factory=list)   # None: generated glue, no ST line
 
-    def add(self, line: int, span: n.Span) -> None:
+    def add(self, line: int, span: n.Span | None) -> None:
         if self.lines and self.lines[-1] == line:
             self.spans[-1] = span
             return
@@ -37,6 +37,8 @@ class LineMap:
         self.spans.append(span)
 
     def span_at(self, line: int) -> n.Span | None:
+        """The ST statement generated line `line` belongs to; None for glue code (native FB
+        wrappers, class headers), so a fault there is attributed to the calling statement."""
         i = bisect.bisect_right(self.lines, line) - 1
         return self.spans[i] if i >= 0 else None
 
@@ -44,7 +46,7 @@ class LineMap:
         """Generated lines where a statement starting at `file:st_line` begins (for breakpoints)."""
         out = []
         for gen_line, span in zip(self.lines, self.spans):
-            if span.file == file and span.line == st_line:
+            if span is not None and span.file == file and span.line == st_line:
                 out.append(gen_line)
         return out
 
@@ -102,7 +104,8 @@ class _Writer:
 
     def line(self, text: str) -> None:
         self.lines.append("    " * self.indent + text)
-        if self.span is not None:
+        spans = self.line_map.spans
+        if self.span is not None or (spans and spans[-1] is not None):
             self.line_map.add(len(self.lines), self.span)
 
     def blank_span(self) -> None:

@@ -229,7 +229,10 @@ def _number(text: str, kind: str) -> object:
 
 
 def to_vcd(trace: Trace) -> str:
-    from vcd import VCDWriter
+    try:
+        from vcd import VCDWriter
+    except ImportError as exc:
+        raise TraceFormatError(".vcd output needs the pyvcd package (pip install pyvcd)") from exc
     out = io.StringIO()
     # date="" keeps the file reproducible (pyvcd would stamp the current date)
     with VCDWriter(out, timescale="1 ns", date="", version="stvm trace", comment="stvm golden trace") as writer:

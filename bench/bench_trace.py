@@ -1,0 +1,155 @@
+"""Golden-trace benchmarks (issue 7's quality bars).
+
+1. Determinism: N consecutive lockstep runs of the PnP scenario (two full cycles) must write
+   byte-identical trace files (.jsonl and .vcd); prints how many distinct files came out.
+2. Recording overhead: the same run without a recorder and with 50 watched variables; the
+   overhead is the recorder's time per scan relative to the scan time without it (target ≤ 20 %).
+   Measured two ways: the sampling hook's own time (perf_counter around it), and the whole
+   loop with and without the recorder (best of `--repeat`, interleaved, as the machine is shared).
+
+    python bench/bench_trace.py                 # 100 runs + overhead
+    python bench/bench_trace.py --runs 10 --repeat 3
+"""
+
+from __future__ import annotations
+
+import argparse
+import hashlib
+import statistics
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from stvm.project import load  # noqa: E402
+from stvm.trace import Recorder, TraceSpec, run_trace, select_signals, write_trace  # noqa: E402
+from stvm.trace.run import _Prepared  # noqa: E402
+
+SCENARIO = ROOT / "st_src" / "scenarios" / "golden_pnp_cycle.toml"
+FILES = [ROOT / "st_src" / "PnP_Example.st"]
+
+WATCH_50 = [  # a mix of every kind: BOOL, INT/UINT/WORD, REAL, enum, STRING, TIME
+    "PnP_Example_Instance.Prg_Step", "PnP_Example_Execute", "PnP_MoveBusy", "PnP_MoveDone", "PnP_MoveError",
+    "PnP_MoveErrorDescrip", "PnP_Move_CmdID_Ack", "PnP_Example_Instance.MoveExecute",
+    "PnP_Example_Instance.MoveErrorID", "PnP_Example_Instance.Timer_1.*", "Cobot.**", "Connect_*",
+    "PnP_Example_Instance.MoveParameters.**", "PnP_Example_Instance.CBT_MoveAbsolute_Instance.FB_step",
+    "PnP_Example_Instance.CBT_MoveAbsolute_Instance.FB_status", "PnP_MoveParameters[*].Speed",
+]
+
+
+def determinism(runs: int, project) -> tuple[int, float]:
+    spec = TraceSpec(FILES, scenario=SCENARIO)
+    digests: dict[tuple[str, str], int] = {}
+    started = time.perf_counter()
+    with tempfile.TemporaryDirectory() as tmp:
+        for i in range(runs):
+            run = run_trace(spec, project)
+            files = write_trace(run.trace, Path(tmp) / "t.jsonl") + write_trace(run.trace, Path(tmp) / "t.vcd")
+            key = tuple(hashlib.sha256(f.read_bytes()).hexdigest() for f in files)
+            digests[key] = digests.get(key, 0) + 1
+            if (i + 1) % 10 == 0:
+                print(f"  {i + 1} runs, {len(digests)} distinct trace file set(s)", flush=True)
+    return len(digests), time.perf_counter() - started
+
+
+def timed_run(project, watch: list[str] | None, cycles: int) -> tuple[float, float, int, float]:
+    """(loop seconds, seconds inside the sampling hook, signals, program ns per scan)."""
+    prepared = _Prepared(TraceSpec(FILES, scenario=SCENARIO, cycles=cycles), project)
+    vm = prepared.vm
+    hook_time = [0.0]
+    count = 0
+    if watch is not None:
+        signals = select_signals(vm, watch)[:50]
+        count = len(signals)
+        recorder = Recorder(vm, signals)
+        perf = time.perf_counter
+
+        def sample(vm_):
+            t0 = perf()
+            recorder.sample(vm_)
+            hook_time[0] += perf() - t0
+        prepared.wire(sample)
+    else:
+        prepared.wire()
+    started = time.perf_counter()
+    vm.run(cycles=cycles)
+    loop = time.perf_counter() - started
+    program_ns = statistics.fmean(vm.scan_durations_ns) if len(vm.scan_durations_ns) else 0.0
+    if watch is not None:
+        recorder.finish()
+    vm.close()
+    return loop, hook_time[0], count, program_ns
+
+
+def sample_costs(project) -> tuple[float, float, int]:
+    """Microseconds per `Recorder.sample` when nothing changed and when a value changed
+    (tight loops on the state after 100 scans: less noisy than whole runs)."""
+    prepared = _Prepared(TraceSpec(FILES, scenario=SCENARIO, cycles=100), project)
+    prepared.wire()
+    vm = prepared.vm
+    vm.run(cycles=100)
+    signals = select_signals(vm, WATCH_50)[:50]
+    calls = 20_000
+    recorder = Recorder(vm, signals, block_rows=calls + 1)
+    best_idle = best_change = float("inf")
+    for _ in range(5):
+        recorder.sample(vm)
+        started = time.perf_counter()
+        for _ in range(calls):
+            recorder.sample(vm)
+        best_idle = min(best_idle, (time.perf_counter() - started) / calls * 1e6)
+        recorder._row = 0
+        started = time.perf_counter()
+        for _ in range(calls):
+            recorder._last = None    # as if a value had changed: the row is written
+            recorder.sample(vm)
+        best_change = min(best_change, (time.perf_counter() - started) / calls * 1e6)
+        recorder._row = 0
+    vm.close()
+    return best_idle, best_change, len(signals)
+
+
+def overhead(project, repeat: int, cycles: int) -> None:
+    base, recorded, hooks, programs = [], [], [], []
+    count = 0
+    for _ in range(repeat):   # interleaved: drifting machine load hits both sides alike
+        loop, _, _, program_ns = timed_run(project, None, cycles)
+        base.append(loop)
+        programs.append(program_ns)
+        loop, hook, count, _ = timed_run(project, WATCH_50, cycles)
+        recorded.append(loop)
+        hooks.append(hook)
+    best_base, best_rec, best_hook = min(base), min(recorded), min(hooks)
+    per_scan_base = best_base / cycles * 1e6
+    per_scan_hook = best_hook / cycles * 1e6
+    print(f"recording {count} variables over {cycles} scans (best of {repeat}):")
+    print(f"  scan time without recorder   {per_scan_base:8.1f} us/scan (whole loop: programs, scenario, emulator)")
+    print(f"  ST programs alone            {min(programs) / 1000:8.1f} us/scan")
+    print(f"  sampling hook                {per_scan_hook:8.2f} us/scan = {100 * per_scan_hook / per_scan_base:5.1f} % of the scan time")
+    print(f"  loop with recorder           {best_rec / cycles * 1e6:8.1f} us/scan = "
+          f"{100 * (best_rec - best_base) / best_base:+5.1f} % (noisy: includes machine jitter)")
+    idle, change, _ = sample_costs(project)
+    print(f"  one sample, nothing changed  {idle:8.2f} us = {100 * idle / per_scan_base:5.1f} %")
+    print(f"  one sample, a value changed  {change:8.2f} us = {100 * change / per_scan_base:5.1f} %")
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--runs", type=int, default=100, help="consecutive PnP runs to compare (default 100)")
+    parser.add_argument("--repeat", type=int, default=5, help="overhead measurements to take the best of")
+    parser.add_argument("--cycles", type=int, default=9200, help="scans per overhead run (default: the scenario's)")
+    args = parser.parse_args(argv)
+    project = load(FILES)
+    print(f"determinism: {args.runs} consecutive runs of {SCENARIO.name}")
+    distinct, seconds = determinism(args.runs, project)
+    verdict = "identical" if distinct == 1 else f"NOT identical ({distinct} variants)"
+    print(f"  {args.runs} runs in {seconds:.1f} s ({seconds / max(args.runs, 1):.2f} s/run): trace files {verdict}")
+    overhead(project, args.repeat, args.cycles)
+    return 0 if distinct == 1 else 1
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

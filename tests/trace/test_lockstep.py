@@ -1,0 +1,80 @@
+"""Lockstep: the in-process emulator behind the socket FBs, on the VM clock."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from emulator import parse_faults
+from stvm.lockstep import LockstepTransport, start_lockstep
+
+LISTEN = Path(__file__).parent / "st" / "listen_check.st"
+
+
+@pytest.fixture(scope="module")
+def project():
+    from stvm.project import load
+    return load([LISTEN])
+
+
+def run(project, cycles=40, **options):
+    vm, transport = start_lockstep(project, scan="1ms", **options)
+    vm.set("Main.go", True)
+    vm.run(cycles=cycles)
+    return vm, transport
+
+
+def test_latency_defaults_to_one_scan(project):
+    vm, transport = run(project, cycles=1)
+    assert transport.latency_ns == vm.base_ns == 1_000_000
+    vm, transport = run(project, cycles=1, latency_scans=3)
+    assert transport.latency_ns == 3_000_000
+    vm, transport = run(project, cycles=1, latency_ns=250_000)
+    assert transport.latency_ns == 250_000
+
+
+@pytest.mark.parametrize(("latency", "connected", "replied"), [(0, 3, 7), (1, 4, 8), (2, 6, 11), (5, 12, 23)])
+def test_round_trips_take_the_modelled_latency(project, latency, connected, replied):
+    # the connect starts in scan 2 (counted from 1): SYN + SYN/ACK take two latencies, and the
+    # FBs see a completion one call later at the earliest (skt_min_latency_calls = 1)
+    vm, transport = run(project, latency_scans=latency)
+    assert vm.get("Main.step") == 4
+    assert (vm.get("Main.connected_scan"), vm.get("Main.reply_scan")) == (connected, replied)
+    assert vm.get("Main.reply") == b"$TMSTA,15,00,true,Listen1,*79\r\n"
+    assert [f.direction for f in transport.frames] == ["rx", "tx"]
+
+
+def test_refused_connection_is_an_fb_error(project):
+    vm, _ = run(project, faults=parse_faults(["refuse"]))
+    assert vm.get("Main.step") == 99
+    assert vm.get("Main.conn.ErrorID") == 0x2003
+
+
+def test_fault_injected_during_the_run(project):
+    vm, transport = start_lockstep(project, scan="1ms")
+    vm.set("Main.go", True)
+    vm.run(cycles=6)
+    assert transport.link.robot.accepting
+    transport.inject_fault("stop:2")        # the project stops 2 ms from now: sockets closed
+    vm.run(cycles=4)
+    assert not transport.link.robot.accepting
+    transport.clear_faults()
+    assert transport.link.core.faults == parse_faults([])
+
+
+def test_attach_checks_its_vm(project):
+    transport = LockstepTransport()
+    other = project.start(scan="1ms")
+    with pytest.raises(ValueError, match="another transport"):
+        transport.attach(other)
+    vm = project.start(scan="1ms", transport=transport)
+    transport.attach(vm)
+    with pytest.raises(ValueError, match="already attached"):
+        transport.attach(vm)
+
+
+def test_identical_runs_give_identical_frames(project):
+    first = run(project)[1].frames
+    second = run(project)[1].frames
+    assert first == second and first
