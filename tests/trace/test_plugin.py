@@ -53,9 +53,15 @@ def _dummy():
 def pytest_in(_warm_imports, pytester, monkeypatch):
     monkeypatch.delenv("STVM_UPDATE_GOLDENS", raising=False)
 
+    # an installed stvm registers the plugin through its pytest11 entry point; only a bare source
+    # tree needs `-p` (loading it twice is an error)
+    from importlib.metadata import entry_points
+    installed = any(ep.value == "stvm.pytest_plugin" for ep in entry_points(group="pytest11"))
+    load = () if installed else ("-p", "stvm.pytest_plugin")
+
     def run(folder: Path, *args: str) -> Result:
         # hypothesis and assertion rewriting only cost start-up time here
-        return Result(pytester.runpytest_inprocess("-p", "stvm.pytest_plugin", "-p", "no:cacheprovider", "-p", "no:hypothesispytest",
+        return Result(pytester.runpytest_inprocess(*load, "-p", "no:cacheprovider", "-p", "no:hypothesispytest",
                                                    "--assert=plain", "-q", *args))
     return run
 
