@@ -1,3 +1,9 @@
-from stvm.cli import main
+import sys
+
+try:
+    from stvm.cli import main
+except KeyboardInterrupt:  # Ctrl-C while Python imports stvm itself
+    print("stvm: interrupted", file=sys.stderr)
+    raise SystemExit(130)
 
 raise SystemExit(main())

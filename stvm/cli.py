@@ -99,13 +99,16 @@ def literal_value(text: str, ty):
     if negate:
         value = -value
     if isinstance(ty, t.RealType) and isinstance(value, int) and not isinstance(value, bool):
-        value = float(value)
+        try:
+            value = float(value)
+        except OverflowError:
+            raise ValueError(f"{text!r} is out of range for {ty.name}") from None
     return value
 
 
 def cmd_run(args) -> int:
     from stvm.project import LoadError, load, parse_duration
-    from stvm.runtime.vm import PathError, RuntimeFault
+    from stvm.runtime.vm import PathError, RuntimeFault, UnboundInOut
     _require_files(args.files)
     settings = _settings(args)
     try:
@@ -132,6 +135,8 @@ def cmd_run(args) -> int:
     for name in args.print or []:
         try:
             vm.resolve(name)
+        except UnboundInOut:
+            pass   # well-formed; bound once the FB has been called
         except PathError as exc:
             raise _UsageError(str(exc)) from exc
     for item in args.set or []:
@@ -187,7 +192,11 @@ def cmd_run(args) -> int:
             print(f"PnP cycles completed: {demo.state.cycles}; VM time {vm.now_ns / 1e9:.3f} s; "
                   f"scans {vm.scan_count}; overruns {vm.overruns}", file=sys.stderr)
     for name in args.print or []:
-        print(f"{name} = {vm.format(name)}")
+        try:
+            print(f"{name} = {vm.format(name)}")
+        except UnboundInOut as exc:
+            print(f"stvm: {exc}", file=sys.stderr)
+            status = status or EXIT_USAGE
     if args.stats:
         _print_stats(vm)
     elif vm.realtime and vm.scan_count:
@@ -272,6 +281,15 @@ def _register_extensions(sub) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
+    try:
+        return _main(argv)
+    except KeyboardInterrupt:
+        # Ctrl-C before the run started (imports, loading): nothing ran, nothing to print
+        print("stvm: interrupted", file=sys.stderr)
+        return 130
+
+
+def _main(argv: list[str] | None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     if not getattr(args, "func", None):

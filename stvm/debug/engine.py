@@ -32,6 +32,7 @@ from __future__ import annotations
 import queue
 import sys
 import threading
+import time
 from dataclasses import dataclass, field
 from types import CodeType, FrameType
 from typing import Any, Callable
@@ -548,6 +549,10 @@ class Engine:
         mode, count = self._commands.get()
         if mode == "terminate" or self._terminate:
             raise _Terminate()
+        if self.vm.realtime:
+            # real-time clock: the time spent stopped is not an overrun; deadlines restart from now
+            # (VM._sleep_to_deadline measures from `_rt_start`)
+            self.vm._rt_start = time.perf_counter_ns() - self.vm.scan_count * self.vm.base_ns
         self._mode = mode
         self._depth = _depth(frame) if frame is not None else 1 << 30
         if mode == FINISH and frame is None:

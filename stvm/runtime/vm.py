@@ -22,7 +22,7 @@ from typing import Any, Callable
 from stvm.runtime.context import RunContext
 from stvm.runtime.format import format_time, format_value
 from stvm.runtime.helpers import HELPERS
-from stvm.runtime.values import FunctionError, STFault
+from stvm.runtime.values import AttrRef, FunctionError, ItemRef, MapRef, STFault
 from stvm.semantics import types as t
 from stvm.syntax.nodes import Span
 
@@ -63,6 +63,10 @@ class PathError(KeyError):
 
     def __str__(self) -> str:
         return str(self.args[0])
+
+
+class UnboundInOut(PathError):
+    """The path is well-formed but goes through a VAR_IN_OUT the FB has not been called with yet."""
 
 
 _PATH_TOKEN = re.compile(r"\s*(?:([A-Za-z_][A-Za-z0-9_]*)|\[([^\]]*)\]|(\.))")
@@ -283,10 +287,7 @@ class VM:
                         raise PathError(f"{path!r}: {ty.name} has no member {text!r}")
                     container, key, ty = value, "v_" + var.key, var.type
                     if var.section == "VAR_IN_OUT":
-                        inner = getattr(container, key)
-                        if hasattr(inner, "get") and hasattr(inner, "set"):
-                            container, key = inner.obj if hasattr(inner, "obj") else inner.lst, \
-                                inner.attr if hasattr(inner, "attr") else inner.index
+                        container, key = self._through_reference(container, key, path)
                 else:
                     raise PathError(f"{path!r}: {ty.name} has no members")
             else:
@@ -309,6 +310,20 @@ class VM:
                 else:
                     ty = ty.element
         return container, key, ty
+
+    @staticmethod
+    def _through_reference(container: Any, key: Any, path: str) -> tuple[Any, Any]:
+        """Follow a VAR_IN_OUT to the variable it refers to (what the FB was last called with)."""
+        inner = getattr(container, key)
+        if inner is None:
+            raise UnboundInOut(f"{path!r}: the in-out is not bound yet (the FB instance has not been called)")
+        while isinstance(inner, MapRef):
+            inner = inner.ref
+        if isinstance(inner, AttrRef):
+            return inner.obj, inner.attr
+        if isinstance(inner, ItemRef):
+            return inner.lst, inner.index
+        return container, key   # an aggregate in-out holds the caller's object itself
 
     def get(self, path: str) -> Any:
         container, key, _ = self.resolve(path)

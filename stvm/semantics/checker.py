@@ -97,6 +97,7 @@ class Checker:
         self.enumerators: dict[str, list[tuple[t.EnumType, int]]] = {}
         self.structs: dict[str, t.Type] = {}
         self.enums: dict[str, t.Type] = {}
+        self.declaring: POUInfo | None = None   # the POU whose declarations are being resolved
 
     # ---- diagnostics
     def error(self, message: str, span: n.Span, code: str = "") -> None:
@@ -108,6 +109,8 @@ class Checker:
     # ---- indexing
     def build_index(self) -> None:
         for unit in self.units:
+            for name, span in getattr(unit, "namespace_names", ()):
+                self.check_identifier(name, span)
             for decl in unit.types:
                 key = "\\".join(decl.namespace + (decl.name,)).lower()
                 if key in self.index.type_decls or decl.name.upper() in t.ELEMENTARY:
@@ -221,6 +224,7 @@ class Checker:
                 if alias and pin:
                     info.aliases[alias] = pin
         self.check_identifier(pou.name, pou.span)
+        self.declaring = info   # its constants may size its arrays and strings (const_value)
         if pou.kind == "FUNCTION":
             if pou.return_type is None:
                 self.error(f"function '{pou.name}' needs a return type", pou.span, "E014")
@@ -260,7 +264,8 @@ class Checker:
                         if kind == IN_OUT:
                             self.error(f"VAR_IN_OUT '{name}' cannot have an initial value", span, "E013")
                         else:
-                            var.init = self.initial_value(decl.init, vtype, pou.namespace, None)
+                            var.init = self.initial_value(decl.init, vtype, pou.namespace, info)
+        self.declaring = None
         return info
 
     # ---- types
@@ -311,6 +316,7 @@ class Checker:
             next_value = 0
             seen = set()
             for name, value, span in body.members:
+                self.check_identifier(name, span)
                 if name.lower() in seen:
                     self.error(f"duplicate enumerator '{name}'", span, "E010")
                     continue
@@ -337,6 +343,7 @@ class Checker:
             for fdecl in body.fields:
                 ftype = self.resolve_type_spec(fdecl.type_spec, decl.namespace)
                 for fname, fspan in fdecl.names:
+                    self.check_identifier(fname, fspan)
                     if any(f[0].lower() == fname.lower() for f in fields):
                         self.error(f"duplicate field '{fname}' in {decl.name}", fspan, "E010")
                         continue
@@ -410,9 +417,8 @@ class Checker:
                     self.error(f"array bounds {lo}..{hi} are empty", spec.span, "E019")
                     return None
                 dims.append((lo, hi))
-            if isinstance(element, t.ArrayType) and element.dims:
-                dims += list(element.dims)
-                element = element.element
+            # ARRAY[..] OF ARRAY[..] stays an array of arrays (indexed a[i][j]); a[i, j] needs
+            # ARRAY[.., ..]
             text = ",".join(f"{lo}..{hi}" for lo, hi in dims)
             return t.ArrayType(f"ARRAY[{text}] OF {element.name}", element, tuple(dims))
         if isinstance(spec, n.SubrangeTypeSpec):
@@ -430,7 +436,7 @@ class Checker:
 
     # ---- constant evaluation
     def const_int(self, expr: n.Expr, namespace: tuple[str, ...]) -> int | None:
-        value = self.const_value(expr, namespace, None)
+        value = self.const_value(expr, namespace, self.declaring)
         if isinstance(value, bool) or not isinstance(value, int):
             if value is not _NOT_CONST:
                 self.error("expected a constant integer", expr.span, "E020")
@@ -767,6 +773,7 @@ class Checker:
             tasks: dict[str, TaskInfo] = {}
             for res in conf.resources:
                 for task in res.tasks:
+                    self.check_identifier(task.name, task.span)
                     params = {k: v for k, v in task.params}
                     interval = params.get("INTERVAL")
                     if interval is None:
@@ -781,6 +788,7 @@ class Checker:
                         self.error(f"duplicate task '{task.name}'", task.span, "E010")
                     tasks[task.name.lower()] = TaskInfo(task.name, ns, prio if isinstance(prio, int) else 0, [])
                 for prog in res.programs:
+                    self.check_identifier(prog.instance, prog.span)
                     key = self.lookup_pou_key(prog.type_name, ())
                     if key is None or self.pous[key].kind != "PROGRAM":
                         self.error(f"unknown program type '{chr(92).join(prog.type_name)}'", prog.span, "E032")

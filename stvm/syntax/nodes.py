@@ -418,3 +418,4 @@ class CompilationUnit:
     pous: tuple[POU, ...]
     globals: tuple[GlobalVars, ...]
     configurations: tuple[Configuration, ...]
+    namespace_names: tuple[tuple[str, Span], ...] = ()   # every NAMESPACE name as written

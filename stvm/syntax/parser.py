@@ -63,6 +63,7 @@ class _ToNodes(Transformer):
     def __init__(self, file: str, settings: SysmacSettings, diagnostics: list[Diagnostic]) -> None:
         super().__init__(visit_tokens=False)
         self._methods: dict[str, object] = {}
+        self.namespace_names: list[tuple[str, n.Span]] = []
         self.file = file
         self.settings = settings
         self.diagnostics = diagnostics
@@ -94,6 +95,7 @@ class _ToNodes(Transformer):
         return ("namespace", path, items[1:])
 
     def name_path(self, meta, items):
+        self.namespace_names += [(str(t), self._ts(t)) for t in items]
         return [str(t) for t in items]
 
     def pragmas(self, meta, items):
@@ -552,8 +554,9 @@ def parse_text(text: str, file: str, settings: SysmacSettings = DEFAULT_SETTINGS
     except UnexpectedInput as exc:
         diagnostics.append(_syntax_diagnostic(file, exc))
         return n.CompilationUnit(file, (), (), (), ()), diagnostics
+    transformer = _ToNodes(file, settings, diagnostics)
     try:
-        items = _ToNodes(file, settings, diagnostics).transform(tree)
+        items = transformer.transform(tree)
     except RecursionError:
         diagnostics.append(Diagnostic.error(
             "expression or statement nesting too deep for stvm (split it into smaller parts)",
@@ -562,7 +565,7 @@ def parse_text(text: str, file: str, settings: SysmacSettings = DEFAULT_SETTINGS
     out: dict[str, list] = {"types": [], "pous": [], "globals": [], "configurations": []}
     _collect(file, items, (), out)
     unit = n.CompilationUnit(file, tuple(out["types"]), tuple(out["pous"]), tuple(out["globals"]),
-                             tuple(out["configurations"]))
+                             tuple(out["configurations"]), tuple(transformer.namespace_names))
     return unit, diagnostics
 
 
