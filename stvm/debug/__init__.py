@@ -7,6 +7,7 @@ Layers, each usable on its own:
 * `scope`:   ST expressions typed and lowered in the scope of one POU instance (`print`, `set`,
              breakpoint conditions, `force`), with the project's own checker and code generator.
 * `engine`:  the VM in a worker thread under `sys.settrace`, stopping at ST statements.
+* `session`: what both front ends share: scenario, `--set`, the robot (lockstep, TCP, address).
 * `console`: the `stvm debug` command line; `dap`: the Debug Adapter Protocol server (`stvm dap`).
 
 Nothing here is imported by `stvm run`: the normal build keeps its local-variable cache and runs

@@ -68,7 +68,9 @@ class StatementMap:
     st_lines: dict[str, list[int]] = field(default_factory=dict)     # file → sorted ST lines with a stop
 
     @classmethod
-    def build(cls, line_map) -> "StatementMap":
+    def build(cls, line_map, pou_spans: frozenset[n.Span] | set[n.Span] = frozenset()) -> "StatementMap":
+        """`pou_spans`: spans of whole POUs, which the code generator gives a call's prologue and
+        write-back lines (a fault there names the POU's header); they are not statements."""
         out = cls()
         previous: n.Span | None = None
         previous_line = 0
@@ -78,7 +80,7 @@ class StatementMap:
                 continue
             out.spans[gen_line] = span
             starts = previous is None or gen_line != previous_line + 1 or span != previous
-            if starts and not is_library_file(span.file):
+            if starts and not is_library_file(span.file) and span not in pou_spans:
                 out.stops.add(gen_line)
                 out.by_st_line.setdefault((span.file, span.line), []).append(gen_line)
             previous, previous_line = span, gen_line
@@ -167,4 +169,6 @@ def load_debug(paths: Sequence[str | os.PathLike], settings: SysmacSettings = DE
     unit_pous = {lowered.classes[key]: pou for key, pou in analysis.model.pous.items() if key in lowered.classes}
     user_files = {os.path.normcase(os.path.abspath(name)): name for name, _ in texts}
     user_files.update({os.path.normcase(os.path.realpath(name)): name for name, _ in texts})
-    return DebugBuild(project, analysis, checker, StatementMap.build(lowered.line_map), unit_pous, user_files)
+    pou_spans = {node.span for node in analysis.pou_nodes.values()}
+    return DebugBuild(project, analysis, checker, StatementMap.build(lowered.line_map, pou_spans), unit_pous,
+                      user_files)
