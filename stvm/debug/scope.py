@@ -125,27 +125,12 @@ class _ScopeChecker(_BodyChecker):
                 return NameRef("global", Variable(inst_name, GLOBAL, fbt))
         return ref
 
-    def expr_Member(self, e: n.Member, expected) -> t.Type | None:
-        base = self.expr(e.base)
-        if isinstance(base, t.FBType):
-            fb = self.c.pous.get(base.qualname.lower())
-            var = fb.pin(e.name) if fb else None
-            if var is None:
-                self.error(f"{base.name} has no member '{e.name}'", e.span, "E034")
-                return None
-            if var.section == EXTERNAL:
-                self.error(f"'{e.name}' is the global {var.name}; write it without the instance", e.span, "E034")
-                return None
-            return var.type
-        if base is None:
-            return None
-        if isinstance(base, t.StructType):
-            fty = base.field_type(e.name)
-            if fty is None:
-                self.error(f"{base.name} has no member '{e.name}'", e.span, "E034")
-            return fty
-        self.error(f"'{self.describe(e.base)}' is {base.name}, which has no members", e.span, "E034")
-        return None
+    def member_visible(self, base: t.FBType, var: Variable, e: n.Member) -> bool:
+        # the debugger sees every variable of an instance; a VAR_EXTERNAL is the global itself
+        if var.section == EXTERNAL:
+            self.error(f"'{e.name}' is the global {var.name}; write it without the instance", e.span, "E034")
+            return False
+        return True
 
     def lvalue(self, target: n.Expr) -> t.Type | None:
         if isinstance(target, n.Member):

@@ -448,12 +448,16 @@ class _BodyChecker:
             if var is None:
                 self.error(f"function block {base.name} has no member '{e.name}'", e.span, "E034")
                 return None
-            if var.section not in (INPUT, OUTPUT) and not base.is_program:
-                self.error(f"'{e.name}' is internal to {base.name}; only inputs and outputs are visible outside", e.span, "E034")
-                return None
-            return var.type
+            return var.type if self.member_visible(base, var, e) else None
         self.error(f"'{self.describe(e.base)}' is {base.name}, which has no members", e.span, "E034")
         return None
+
+    def member_visible(self, base: t.FBType, var: Variable, e: n.Member) -> bool:
+        """IEC: outside an FB only its inputs and outputs are visible (the debugger sees all)."""
+        if var.section not in (INPUT, OUTPUT) and not base.is_program:
+            self.error(f"'{e.name}' is internal to {base.name}; only inputs and outputs are visible outside", e.span, "E034")
+            return False
+        return True
 
     def expr_BitAccess(self, e: n.BitAccess, expected) -> t.Type | None:
         base = self.expr(e.base)
