@@ -15,12 +15,16 @@ import pickle
 import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Sequence
+from typing import TYPE_CHECKING, Sequence
 
 from stvm import __version__
 from stvm.diagnostics import Diagnostic, has_errors, render, sort_key
 from stvm.runtime.vm import GENERATED_FILENAME, VM
 from stvm.settings import DEFAULT_SETTINGS, SysmacSettings
+
+if TYPE_CHECKING:
+    from stvm.lower import LoweredProject
+    from stvm.semantics.model import ProjectModel
 
 # The front end (Lark, the checker, the code generator) is imported only on a cache miss: a
 # cached load needs none of it, which halves the start-up time of `stvm run`.

@@ -116,7 +116,6 @@ def load_scenario(path: str | Path) -> Scenario:
 
 
 def parse_scenario(data: dict, name: str = "<scenario>") -> Scenario:
-    from stvm.project import parse_duration
     known = {"description", "set", "robot", "at", "record", "run", "emulator"}
     unknown = set(data) - known
     if unknown:
@@ -140,14 +139,9 @@ def parse_scenario(data: dict, name: str = "<scenario>") -> Scenario:
         fault = entry.get("fault", [])
         event.faults = [fault] if isinstance(fault, str) else list(fault)
         if "scan" in entry:
-            if not isinstance(entry["scan"], int) or entry["scan"] < 0:
-                raise ScenarioError(f"{where}: scan must be a non-negative integer")
-            event.scan = entry["scan"]
+            event.scan = _count(entry["scan"], f"{where}: scan")
         elif "time" in entry:
-            try:
-                event.time_ns = parse_duration(str(entry["time"]))
-            except ValueError as exc:
-                raise ScenarioError(f"{where}: {exc}") from exc
+            event.time_ns = _duration(entry["time"], f"{where}: time")
         else:
             event.when = str(entry["when"])
         scenario.events.append(event)
@@ -159,6 +153,20 @@ def parse_scenario(data: dict, name: str = "<scenario>") -> Scenario:
     return scenario
 
 
+def _count(value: Any, where: str) -> int:
+    if not isinstance(value, int) or isinstance(value, bool) or value < 0:
+        raise ScenarioError(f"{where} must be a non-negative integer")
+    return value
+
+
+def _duration(value: Any, where: str) -> int:
+    from stvm.project import parse_duration
+    try:
+        return parse_duration(str(value))
+    except ValueError as exc:
+        raise ScenarioError(f"{where}: {exc}") from exc
+
+
 def _parse_run(scenario: Scenario, run: Any, name: str) -> None:
     if not isinstance(run, dict):
         raise ScenarioError(f"{name}: [run] must be a table")
@@ -166,15 +174,12 @@ def _parse_run(scenario: Scenario, run: Any, name: str) -> None:
     if unknown:
         raise ScenarioError(f"{name}: [run]: unknown key(s) {', '.join(sorted(unknown))}; known: cycles, scan")
     if "cycles" in run:
-        if not isinstance(run["cycles"], int) or isinstance(run["cycles"], bool) or run["cycles"] < 0:
-            raise ScenarioError(f"{name}: [run] cycles must be a non-negative integer")
-        scenario.cycles = run["cycles"]
+        scenario.cycles = _count(run["cycles"], f"{name}: [run] cycles")
     if "scan" in run:
         scenario.scan = str(run["scan"])
 
 
 def _parse_emulator(scenario: Scenario, emu: Any, name: str) -> None:
-    from stvm.project import parse_duration
     if not isinstance(emu, dict):
         raise ScenarioError(f"{name}: [emulator] must be a table")
     unknown = set(emu) - {"latency_scans", "latency", "faults", "settings"}
@@ -182,14 +187,9 @@ def _parse_emulator(scenario: Scenario, emu: Any, name: str) -> None:
         raise ScenarioError(f"{name}: [emulator]: unknown key(s) {', '.join(sorted(unknown))}; "
                             "known: latency_scans, latency, faults, settings")
     if "latency_scans" in emu:
-        if not isinstance(emu["latency_scans"], int) or emu["latency_scans"] < 0:
-            raise ScenarioError(f"{name}: [emulator] latency_scans must be a non-negative integer")
-        scenario.latency_scans = emu["latency_scans"]
+        scenario.latency_scans = _count(emu["latency_scans"], f"{name}: [emulator] latency_scans")
     if "latency" in emu:
-        try:
-            scenario.latency_ns = parse_duration(str(emu["latency"]))
-        except ValueError as exc:
-            raise ScenarioError(f"{name}: [emulator] latency: {exc}") from exc
+        scenario.latency_ns = _duration(emu["latency"], f"{name}: [emulator] latency")
     faults = emu.get("faults", [])
     scenario.faults = [faults] if isinstance(faults, str) else [str(f) for f in faults]
     settings = emu.get("settings", {})

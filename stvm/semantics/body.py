@@ -14,7 +14,7 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 from stvm.semantics import types as t
-from stvm.semantics.model import EXTERNAL, GLOBAL, IN_OUT, INPUT, LOCAL, OUTPUT, TEMP, POUInfo, Variable
+from stvm.semantics.model import EXTERNAL, IN_OUT, INPUT, OUTPUT, POUInfo, Variable
 from stvm.syntax import nodes as n
 
 if TYPE_CHECKING:
@@ -571,7 +571,6 @@ class _BodyChecker:
             self.error(f"** needs numbers, not {lt.name} and {rt.name}", e.span, "E039")
             return None
         if lu and ru:
-            a, b = self.facts.consts.get(id(e.left)), self.facts.consts.get(id(e.right))
             folded = self.c.const_value(e, self.pou_namespace, self.pou)
             from stvm.semantics.checker import _NOT_CONST
             if folded is not _NOT_CONST and isinstance(folded, (int, float)):
@@ -580,7 +579,6 @@ class _BodyChecker:
                 if isinstance(folded, int):
                     return int_literal_type(folded, self.settings)
                 return t.LREAL
-            del a, b
         if isinstance(lt, t.TimeType) or isinstance(rt, t.TimeType):
             return self.time_arith(e, lt, rt)
         if isinstance(lt, (t.IntType, t.RealType)) and isinstance(rt, (t.IntType, t.RealType)):
@@ -730,7 +728,6 @@ class _BodyChecker:
 
     def bind_args(self, e: n.Call, pou: POUInfo, info, fb: bool) -> None:
         params = pou.params()
-        outputs = [v for v in pou.variables.values() if v.section == OUTPUT]
         positional = [a for a in e.args if a.kind == "positional"]
         formal = [a for a in e.args if a.kind != "positional"]
         if positional and formal:

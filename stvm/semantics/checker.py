@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 
 from stvm.diagnostics import Diagnostic
 from stvm.semantics import types as t
-from stvm.semantics.model import (EXTERNAL, GLOBAL, IN_OUT, INPUT, LOCAL, OUTPUT, TEMP, POUInfo,
+from stvm.semantics.model import (EXTERNAL, GLOBAL, IN_OUT, INPUT, LOCAL, OUTPUT, POUInfo,
                                   ProjectModel, TaskInfo, Variable)
 from stvm.settings import DEFAULT_SETTINGS, SysmacSettings
 from stvm.syntax import nodes as n

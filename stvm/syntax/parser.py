@@ -7,7 +7,6 @@ stages only see values.
 
 from __future__ import annotations
 
-import re
 from functools import lru_cache
 from importlib import resources
 from pathlib import Path
