@@ -9,8 +9,7 @@ clients cannot reassemble a frame split over two reads) unless the ``split`` fau
 from __future__ import annotations
 
 import heapq
-from dataclasses import dataclass
-from typing import Callable
+from typing import Callable, NamedTuple
 
 from .faults import NO_FAULTS, FaultPlan, corrupt_checksum
 from .framing import ListenNodeFramer
@@ -21,9 +20,11 @@ from .settings import DEFAULT_SETTINGS, EmulatorSettings
 FrameLog = Callable[[int, str, bytes, int], None]  # (t_ns, "rx"/"tx", frame bytes, conn)
 
 
-@dataclass(frozen=True)
-class Delivery:
-    """Bytes for a connection (``data``), or its closing (``data is None``)."""
+_new_tuple = tuple.__new__
+
+
+class Delivery(NamedTuple):
+    """Bytes for a connection (``data``), or its closing (``data is None``).  Immutable."""
 
     conn: int
     data: bytes | None
@@ -81,20 +82,24 @@ class EmulatorCore:
         framer = self.framers.get(conn)
         if framer is None:
             return
-        buf = self.rx_buffers[conn] + data
+        held = self.rx_buffers[conn]
+        buf = held + data if held else bytes(data)
+        end = len(buf)
         pos = 0
-        while pos < len(buf) and conn in self.framers:
-            used, result = framer.decode(buf[pos:])
+        frame_log = self.frame_log
+        framers = self.framers
+        while pos < end and conn in framers:
+            used, result = framer.decode(buf, pos)  # walks the buffer without slicing it
             if used == 0:
                 break
             pos += used
             if result is None:
                 continue  # garbage before "$" skipped (spec §2 [U])
-            if self.frame_log is not None:
-                self.frame_log(now_ns, "rx", result.raw, conn)
+            if frame_log is not None:
+                frame_log(now_ns, "rx", result.raw, conn)
             self._absorb(self.robot.handle(conn, result, now_ns))
         if conn in self.rx_buffers:
-            self.rx_buffers[conn] = buf[pos:]
+            self.rx_buffers[conn] = buf[pos:] if pos < end else b""
 
     # ------------------------------------------------------------------ time
 
@@ -102,29 +107,42 @@ class EmulatorCore:
         self._tick(now_ns)
 
     def next_deadline_ns(self) -> int | None:
-        times = [t for t in (self.robot.next_deadline_ns(), self._drop_at_ns) if t is not None]
+        best = self.robot.next_deadline_ns()
+        drop = self._drop_at_ns
+        if drop is not None and (best is None or drop < best):
+            best = drop
         if self._pending:
-            times.append(self._pending[0][0])
-        return min(times) if times else None
+            due = self._pending[0][0]
+            if best is None or due < best:
+                best = due
+        return best
 
     def pop_ready(self, now_ns: int) -> list[Delivery]:
         """Deliveries due at ``now_ns``, in order."""
         self._tick(now_ns)
+        pending = self._pending
+        if not pending or pending[0][0] > now_ns:
+            return []
         ready: list[Delivery] = []
-        while self._pending and self._pending[0][0] <= now_ns:
-            ready.append(heapq.heappop(self._pending)[2])
-        for item in ready:
-            if item.data is not None and self.frame_log is not None:
-                self.frame_log(item.at_ns, "tx", item.data, item.conn)
+        while pending and pending[0][0] <= now_ns:
+            ready.append(heapq.heappop(pending)[2])
+        frame_log = self.frame_log
+        if frame_log is not None:
+            for item in ready:
+                if item.data is not None:
+                    frame_log(item.at_ns, "tx", item.data, item.conn)
         return ready
 
     def _tick(self, now_ns: int) -> None:
-        now_ns = max(now_ns, self.now_ns)
+        if now_ns < self.now_ns:
+            now_ns = self.now_ns
         if self._drop_at_ns is not None and now_ns >= self._drop_at_ns:
             self._absorb(self.robot.advance(self._drop_at_ns))
             self._drop_all(self._drop_at_ns)
             self._drop_at_ns = None
-        self._absorb(self.robot.advance(now_ns))
+        actions = self.robot.advance(now_ns)
+        if actions:
+            self._absorb(actions)
         self.now_ns = now_ns
         moving = self.robot.executor.moving
         if moving and not self._was_moving and self.faults.drop_after_motion_ms is not None:
@@ -149,28 +167,35 @@ class EmulatorCore:
         heapq.heappush(self._pending, (delivery.at_ns, self._seq, delivery))
 
     def _absorb(self, actions: list[Action]) -> None:
-        delay = self.faults.reply_delay_ms * NS_PER_MS
+        if not actions:
+            return
+        faults = self.faults
+        delay = faults.reply_delay_ms * NS_PER_MS
+        every = faults.corrupt_checksum_every
+        split = faults.split_frames_at
+        framers = self.framers
         for action in actions:
-            if isinstance(action, Close):
-                targets = list(self.framers) if action.conn is None else [action.conn]
+            if action.__class__ is Close:
+                targets = list(framers) if action.conn is None else [action.conn]
                 for conn in targets:
                     self._push(Delivery(conn, None, action.at_ns))
-                    self.framers.pop(conn, None)
+                    framers.pop(conn, None)
                     self.rx_buffers.pop(conn, None)
                 continue
-            assert isinstance(action, Send)
-            if action.conn not in self.framers:
+            assert action.__class__ is Send
+            conn = action.conn
+            if conn not in framers:
                 continue
             data = action.data
             self._tx_count += 1
-            every = self.faults.corrupt_checksum_every
             if every and self._tx_count % every == 0:
                 data = corrupt_checksum(data)
             at = action.at_ns + delay
-            split = self.faults.split_frames_at
             if split is not None and len(data) > 1:
                 cut = split if 0 < split < len(data) else len(data) // 2
-                self._push(Delivery(action.conn, data[:cut], at))
-                self._push(Delivery(action.conn, data[cut:], at))
+                self._push(Delivery(conn, data[:cut], at))
+                self._push(Delivery(conn, data[cut:], at))
             else:
-                self._push(Delivery(action.conn, data, at))
+                self._seq += 1
+                # tuple.__new__ builds the Delivery without a Python-level __new__ call.
+                heapq.heappush(self._pending, (at, self._seq, _new_tuple(Delivery, (conn, data, at))))

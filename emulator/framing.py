@@ -63,9 +63,29 @@ def checksum(body: bytes) -> int:
 def encode(header: str, data: str | bytes) -> bytes:
     """Build ``$HEADER,LEN,DATA,*CS\\r\\n`` as the robot emits it: decimal LENGTH in bytes and an
     upper-case two-digit checksum (spec §2)."""
-    data_bytes = data.encode("utf-8") if isinstance(data, str) else data
+    if type(data) is not str and type(data) is not bytes:  # bytearray, memoryview: not hashable
+        return _encode(header, data)
+    key = (header, data)
+    frame = _ENCODED.get(key)
+    if frame is None:
+        frame = _encode(header, data)
+        if len(data) <= _ENCODE_CACHE_MAX_DATA:  # replies repeat: "1,OK", "01,01,true", ...
+            if len(_ENCODED) >= _ENCODE_CACHE_SIZE:
+                _ENCODED.clear()
+            _ENCODED[key] = frame
+    return frame
+
+
+def _encode(header: str, data: str | bytes) -> bytes:
+    data_bytes = data.encode("utf-8") if isinstance(data, str) else bytes(data)
     body = header.encode("ascii") + b"," + str(len(data_bytes)).encode("ascii") + b"," + data_bytes + b","
     return b"$" + body + b"*" + f"{checksum(body):02X}".encode("ascii") + b"\r\n"
+
+
+# encode() is pure: frames of short DATA are remembered (bounded; cleared when full).
+_ENCODED: dict[tuple[str, str | bytes], bytes] = {}
+_ENCODE_CACHE_SIZE = 4096
+_ENCODE_CACHE_MAX_DATA = 256
 
 
 def encode_cperr(code: Cperr) -> bytes:
@@ -120,76 +140,103 @@ class ListenNodeFramer:
 
     def __init__(self, settings: EmulatorSettings = DEFAULT_SETTINGS) -> None:
         self.settings = settings
+        # Once a frame's extent is known its result depends only on its bytes and the settings:
+        # repeated frames (polling, the same script again) skip checksum, header and allocation.
+        self._known: dict[bytes, Frame | FrameError] = {}
 
-    def decode(self, buf: bytes) -> DecodeResult:
-        """Return (bytes consumed, result); (0, None) means wait for more."""
-        if not buf:
+    def decode(self, buf: bytes, start: int = 0) -> DecodeResult:
+        """Return (bytes consumed, result); (0, None) means wait for more.
+
+        ``start``: decode ``buf[start:]`` without copying it (the count is relative to ``start``),
+        so a caller holding several frames in one buffer walks through it without slicing."""
+        size = len(buf) - start
+        if size <= 0:
             return 0, None
-        start = buf.find(b"$")
-        if start < 0:
-            return len(buf), None
-        if start > 0:
-            return start, None
-        comma1 = buf.find(b",", 1, 1 + MAX_HEADER_TOKEN + 1)
+        if buf[start] != START:
+            found = buf.find(b"$", start)
+            return (size if found < 0 else found - start), None
+        comma1 = buf.find(b",", start + 1, start + MAX_HEADER_TOKEN + 2)
         if comma1 < 0:
-            if len(buf) > MAX_HEADER_TOKEN + 1:
-                return self._structure_error(buf, "no comma after header")
+            if size > MAX_HEADER_TOKEN + 1:
+                return self._structure_error(buf, start, "no comma after header")
             return 0, None
-        comma2 = buf.find(b",", comma1 + 1, comma1 + 1 + MAX_LENGTH_TOKEN + 1)
+        comma2 = buf.find(b",", comma1 + 1, comma1 + MAX_LENGTH_TOKEN + 2)
         if comma2 < 0:
             if len(buf) > comma1 + 1 + MAX_LENGTH_TOKEN:
-                return self._structure_error(buf, "no comma after length")
+                return self._structure_error(buf, start, "no comma after length")
             return 0, None
-        length = parse_length(buf[comma1 + 1:comma2], self.settings)
+        token = buf[comma1 + 1:comma2]
+        # Fast path: a plain decimal LENGTH (what every client sends) needs no further checks.
+        length = int(token) if token.isdigit() else parse_length(token, self.settings)
         if length is None:
-            return self._structure_error(buf, "length is not a number")
+            return self._structure_error(buf, start, "length is not a number")
         if length > self.settings.max_data_length:
-            return self._structure_error(buf, f"length {length} above max_data_length")
+            return self._structure_error(buf, start, f"length {length} above max_data_length")
         data_end = comma2 + 1 + length
+        frame_end = data_end + TRAILER_LEN
+        if len(buf) >= frame_end and self._known and type(buf) is bytes:
+            # A frame seen before (same bytes up to the end of a two-digit trailer) has the same
+            # result: its header and LENGTH fix ``data_end``, so no other reading is possible.
+            known = self._known.get(buf[start:frame_end])
+            if known is not None:
+                return frame_end - start, known
         # One-digit checksums make the trailer one byte shorter; we need to see it to judge it.
         if len(buf) < data_end + TRAILER_LEN - 1:
             return 0, None
         trailer = buf[data_end:data_end + TRAILER_LEN]
         if trailer[:2] != b",*":
-            return self._structure_error(buf, "no ',*' at the end of DATA")
+            return self._structure_error(buf, start, "no ',*' at the end of DATA")
         digits = trailer[2:4]
         if len(trailer) >= 5 and trailer[2:3] in _HEX_SINGLE and trailer[3:5] == b"\r\n":
             # ",*H\r\n": one hex digit (spec §2 [U], §11 #9).
             if not self.settings.accept_one_digit_checksum:
-                return self._structure_error(buf, "one-digit checksum", end=data_end + 5)
+                return self._structure_error(buf, start, "one-digit checksum", end=data_end + 5 - start)
             frame_end = data_end + 5
             digits = trailer[2:3]
         else:
             if len(buf) < data_end + TRAILER_LEN:
                 return 0, None
-            if trailer[4:6] != b"\r\n" or any(d not in HEX_DIGITS for d in digits):
-                return self._structure_error(buf, "checksum is not two hex digits + CRLF")
+            if trailer[4:6] != b"\r\n" or digits not in _HEX_PAIRS:
+                return self._structure_error(buf, start, "checksum is not two hex digits + CRLF")
             frame_end = data_end + TRAILER_LEN
-        raw = bytes(buf[:frame_end])
-        text = digits.decode("ascii")
-        if not self.settings.accept_lowercase_checksum and text != text.upper():
-            return frame_end, FrameError(Cperr.CHECKSUM, raw, "lower-case checksum")
-        if int(text, 16) != checksum(buf[1:data_end + 1]):
-            return frame_end, FrameError(Cperr.CHECKSUM, raw, "checksum mismatch")
-        try:
-            header = buf[1:comma1].decode("ascii")
-        except UnicodeDecodeError:
-            header = ""
-        if header not in CLIENT_HEADERS:
-            return frame_end, FrameError(Cperr.HEADER, raw, f"unknown header {buf[1:comma1]!r}")
-        return frame_end, Frame(header, bytes(buf[comma2 + 1:data_end]), raw)
+        used = frame_end - start
+        raw = bytes(buf[start:frame_end])
+        result = self._judge(buf, start, comma1, comma2, data_end, raw, digits)
+        if used <= _KNOWN_MAX_FRAME:
+            if len(self._known) >= _KNOWN_SIZE:
+                self._known.clear()
+            self._known[raw] = result
+        return used, result
+
+    def _judge(self, buf: bytes, start: int, comma1: int, comma2: int, data_end: int, raw: bytes,
+               digits: bytes) -> Frame | FrameError:
+        """Checksum (CPERR 02) and header (CPERR 03) of a frame whose structure is sound."""
+        if not self.settings.accept_lowercase_checksum and digits != digits.upper():
+            return FrameError(Cperr.CHECKSUM, raw, "lower-case checksum")
+        if int(digits, 16) != checksum(buf[start + 1:data_end + 1]):
+            return FrameError(Cperr.CHECKSUM, raw, "checksum mismatch")
+        header_bytes = bytes(buf[start + 1:comma1])
+        header = _CLIENT_HEADER_BYTES.get(header_bytes)
+        if header is None:
+            return FrameError(Cperr.HEADER, raw, f"unknown header {header_bytes!r}")
+        return Frame(header, bytes(buf[comma2 + 1:data_end]), raw)
 
     @staticmethod
-    def _structure_error(buf: bytes, reason: str, end: int | None = None) -> DecodeResult:
+    def _structure_error(buf: bytes, start: int, reason: str, end: int | None = None) -> DecodeResult:
         """CPERR 01.  Resynchronise at the next ``$`` (or consume ``end`` bytes if the frame's
-        extent is known), so every bad frame costs exactly one CPERR."""
+        extent is known), so every bad frame costs exactly one CPERR.  ``end`` is relative to
+        ``start``."""
         if end is None:
-            nxt = buf.find(b"$", 1)
-            end = nxt if nxt > 0 else len(buf)
-        return end, FrameError(Cperr.PACKET, bytes(buf[:end]), reason)
+            nxt = buf.find(b"$", start + 1)
+            end = nxt - start if nxt > 0 else len(buf) - start
+        return end, FrameError(Cperr.PACKET, bytes(buf[start:start + end]), reason)
 
 
 _HEX_SINGLE = {bytes([c]) for c in HEX_DIGITS}
+_HEX_PAIRS = {bytes([a, b]) for a in HEX_DIGITS for b in HEX_DIGITS}
+_KNOWN_SIZE = 256  # frames remembered per framer (cleared when full)
+_KNOWN_MAX_FRAME = 512  # only frames up to this many bytes
+_CLIENT_HEADER_BYTES = {h.encode("ascii"): h for h in CLIENT_HEADERS}
 
 
 def decode_all(framer: ListenNodeFramer, buf: bytes) -> tuple[list[Frame | FrameError], bytes]:

@@ -367,6 +367,10 @@ class MotionExecutor:
         events: list[ExecutorEvent] = []
         if self.stalled:
             return events
+        if not self.queue and not self.active:  # idle: only the clock moves
+            if now_ns > self.time_ns:
+                self.time_ns = now_ns
+            return events
         while True:
             start_at = self._head_start_ns()
             end_at = self.active[-1].start_ns + self.active[-1].total_ns if self.active else None

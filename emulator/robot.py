@@ -31,7 +31,7 @@ from collections import OrderedDict, deque
 from dataclasses import dataclass, field
 from enum import Enum
 from functools import lru_cache
-from typing import Any, Callable
+from typing import Any, Callable, NamedTuple
 
 import numpy as np
 
@@ -52,6 +52,48 @@ def _parse_cached(script: str, session: tuple[tuple[str, tuple[str, bool]], ...]
     return sc.parse_script(script, dict(session))
 
 
+# Statements whose dry run (argument check, spec §7) depends only on their literal arguments and
+# the settings, never on the session variables, the planned pose or the robot state: a script made
+# of these alone gives the same dry-run result every time, so the robot remembers it by script.
+# (WaitQueueTag inside an expression reads the tags, motions depend on the planned pose, names
+# on the session variables: any of those makes a script "dynamic", dry-run every time.)
+_STATIC_STATEMENTS = frozenset({"QueueTag", "WaitQueueTag", "Sleep", "ScriptExit", "Pause", "Resume",
+                                "StopAndClearBuffer", "ChangeLoad", "ListenSend", "GetString", "Length"})
+_STATIC_EXPR_FUNCTIONS = frozenset({"GetString", "Length"})
+_DRY_CACHE_SIZE = 1024
+
+
+def _literal_only(expr: sc.Expr) -> bool:
+    kind = type(expr)
+    if kind is sc.Num or kind is sc.Str or kind is sc.Bool:
+        return True
+    if kind is sc.ArrayLit:
+        return all(_literal_only(item) for item in expr.items)
+    if kind is sc.Unary:
+        return _literal_only(expr.operand)
+    if kind is sc.Binary:
+        return _literal_only(expr.left) and _literal_only(expr.right)
+    if kind is sc.Call:
+        return expr.name in _STATIC_EXPR_FUNCTIONS and all(_literal_only(a) for a in expr.args)
+    return False
+
+
+def _dry_run_is_static(parsed: sc.ParsedScript) -> bool:
+    """Whether the dry run of ``parsed`` is a pure function of its text (see above)."""
+    for line in parsed.lines:
+        stmt = line.statement
+        if type(stmt) is sc.Empty:
+            continue
+        if type(stmt) is not sc.ExprStmt:
+            return False
+        call = stmt.expr
+        if type(call) is not sc.Call or call.name not in _STATIC_STATEMENTS:
+            return False
+        if not all(_literal_only(arg) for arg in call.args):
+            return False
+    return True
+
+
 class NodeState(str, Enum):
     """Spec §1 state machine."""
 
@@ -61,20 +103,21 @@ class NodeState(str, Enum):
     EXITING = "EXITING"    # ScriptExit() waiting for the motion queue to drain
 
 
-@dataclass(frozen=True)
-class Send:
+# Immutable records, as named tuples: several are made per frame and a tuple is far cheaper to
+# build than a frozen dataclass.
+class Send(NamedTuple):
     conn: int
     data: bytes
     at_ns: int
 
 
-@dataclass(frozen=True)
-class Close:
+class Close(NamedTuple):
     conn: int | None  # None = every connection (project stopped)
     at_ns: int
 
 
 Action = Send | Close
+_new_tuple = tuple.__new__  # builds a named tuple without its Python-level __new__
 
 
 class ArgError(Exception):
@@ -150,8 +193,14 @@ class Robot:
         self.stop_at_ns = now_ns + faults.stop_project_at_ms * NS_PER_MS \
             if faults.stop_project_at_ms is not None else None
         self.exit_path = ""
-        self.log: deque[str] = deque(maxlen=200)  # human-readable events (live view, debugging)
+        # Human-readable events (live view, debugging), formatted when read (see ``log``).
+        self._log: deque[tuple[int, str]] = deque(maxlen=200)
+        # Dry-run results of static scripts: id(parsed) -> (parsed, settings, error lines).
+        self._dry_cache: dict[int, tuple[sc.ParsedScript, EmulatorSettings, tuple[int, ...] | None]] = {}
         self._out: list[Action] = []
+        # The instant up to which everything due has been handled by advance()/handle(), with no
+        # other public call since: advancing to it again is a no-op and is skipped.
+        self._settled_ns: int | None = None
         self._process_due()
 
     # ================================================================ public API
@@ -162,6 +211,7 @@ class Robot:
         return self.state != NodeState.STOPPED
 
     def connect(self, conn: int, now_ns: int) -> list[Action]:
+        self._settled_ns = None
         self._run_until(now_ns)
         self.connections.append(conn)
         if self.settings.entry_message_on_connect and self.state == NodeState.IN_NODE:
@@ -171,6 +221,7 @@ class Robot:
     def disconnect(self, conn: int, now_ns: int) -> list[Action]:
         """Forget a connection.  Choice: its scripts already received still run (their replies
         are dropped) and its motions continue, as nothing in the spec aborts them."""
+        self._settled_ns = None
         self._run_until(now_ns)
         if conn in self.connections:
             self.connections.remove(conn)
@@ -178,7 +229,8 @@ class Robot:
 
     def handle(self, conn: int, result: Frame | FrameError, now_ns: int) -> list[Action]:
         """Answer one decoded frame (or framing error) from ``conn``."""
-        self._run_until(now_ns)
+        if now_ns != self._settled_ns:
+            self._run_until(now_ns)
         self.last_packet_ns = self.now_ns
         if isinstance(result, FrameError):
             self._send(conn, encode_cperr(result.code))
@@ -186,12 +238,15 @@ class Robot:
             self._handle_tmsta(conn, result.data)
         else:
             self._handle_tmsct(conn, result.data)
-        self._process_due()
+        self._process_due()  # runs until nothing changes: settled at now_ns
+        self._settled_ns = now_ns
         return self._take()
 
     def advance(self, now_ns: int) -> list[Action]:
         """Let time pass up to ``now_ns``."""
-        self._run_until(now_ns)
+        if now_ns != self._settled_ns:
+            self._run_until(now_ns)
+            self._settled_ns = now_ns
         return self._take()
 
     def next_deadline_ns(self) -> int | None:
@@ -200,6 +255,7 @@ class Robot:
 
     def start_project(self, now_ns: int) -> list[Action]:
         """Start the project again after a stop (flow enters the node after the entry delay)."""
+        self._settled_ns = None
         self._run_until(now_ns)
         if self.state == NodeState.STOPPED:
             self.state = NodeState.RUNNING
@@ -209,12 +265,14 @@ class Robot:
 
     def stop_project(self, now_ns: int) -> list[Action]:
         """Project stop (operator, fault): motion stops, every socket closed (spec §1.2, §8)."""
+        self._settled_ns = None
         self._run_until(now_ns)
         self._stop_project()
         return self._take()
 
     def enter_node(self, now_ns: int) -> list[Action]:
         """Make the flow reach the Listen node now (if the project runs and it is not in it)."""
+        self._settled_ns = None
         self._run_until(now_ns)
         if self.state == NodeState.RUNNING:
             self._enter_node()
@@ -245,30 +303,45 @@ class Robot:
         return out
 
     def _send(self, conn: int, data: bytes) -> None:
-        self._out.append(Send(conn, data, self.now_ns))
+        self._out.append(_new_tuple(Send, (conn, data, self.now_ns)))  # = Send(conn, data, now)
 
     def _motion_to_wall(self, motion_ns: int) -> int:
         return self.now_ns + max(0, motion_ns - self.motion_ns)
 
     def _next_internal_ns(self) -> int | None:
-        times: list[int] = []
-        if not self.paused and self.state != NodeState.STOPPED:
-            ev = self.executor.next_event_ns()
+        # The earliest of the candidates below (None: none); written without building a list, as
+        # it runs several times per received frame.
+        best: int | None = None
+        executor = self.executor
+        if not self.paused and self.state != NodeState.STOPPED and (executor.queue or executor.active):
+            ev = executor.next_event_ns()
             if ev is not None:
-                times.append(self._motion_to_wall(ev))
+                best = self._motion_to_wall(ev)
         job = self.current
         if job is not None and job.wait is not None and job.wait.until_ns is not None:
-            times.append(job.wait.until_ns)
-        for t in (self.enter_at_ns, self.next_unsolicited_ns, self.stop_at_ns):
-            if t is not None:
-                times.append(t)
-        if self.state == NodeState.IN_NODE:
-            if self.settings.data_timeout_ms > 0:
-                times.append(max(self.last_packet_ns, self.node_entered_ns)
-                             + self.settings.data_timeout_ms * NS_PER_MS)
-            if self.settings.connection_timeout_ms > 0 and not self.connections:
-                times.append(self.node_entered_ns + self.settings.connection_timeout_ms * NS_PER_MS)
-        return min(times) if times else None
+            t = job.wait.until_ns
+            if best is None or t < best:
+                best = t
+        t = self.enter_at_ns
+        if t is not None and (best is None or t < best):
+            best = t
+        t = self.next_unsolicited_ns
+        if t is not None and (best is None or t < best):
+            best = t
+        t = self.stop_at_ns
+        if t is not None and (best is None or t < best):
+            best = t
+        settings = self.settings
+        if (settings.data_timeout_ms > 0 or settings.connection_timeout_ms > 0) and self.state == NodeState.IN_NODE:
+            if settings.data_timeout_ms > 0:
+                t = max(self.last_packet_ns, self.node_entered_ns) + settings.data_timeout_ms * NS_PER_MS
+                if best is None or t < best:
+                    best = t
+            if settings.connection_timeout_ms > 0 and not self.connections:
+                t = self.node_entered_ns + settings.connection_timeout_ms * NS_PER_MS
+                if best is None or t < best:
+                    best = t
+        return best
 
     def _set_clock(self, t_ns: int) -> None:
         if t_ns <= self.now_ns:
@@ -290,14 +363,19 @@ class Robot:
                 self._set_clock(nxt + 1)
         # Everything due up to now_ns was handled in the loop; only the clocks move on (the
         # executor's too, as the reported pose is sampled at its time).
-        self._set_clock(now_ns)
-        if not self.paused and self.state != NodeState.STOPPED and not self.executor.idle:
+        if now_ns > self.now_ns:
+            self._set_clock(now_ns)
+        executor = self.executor
+        if not self.paused and self.state != NodeState.STOPPED and (executor.queue or executor.active):
             for event in self.executor.advance(self.motion_ns):  # none due: see the loop above
                 self._marker_reached(event.marker)
 
     def _process_due(self) -> bool:
         """Handle everything due at ``self.now_ns``; return whether anything happened."""
         progressed = False
+        settings = self.settings
+        timeouts = settings.data_timeout_ms > 0 or settings.connection_timeout_ms > 0
+        executor = self.executor
         for _ in range(10_000):
             changed = False
             if self.stop_at_ns is not None and self.now_ns >= self.stop_at_ns:
@@ -314,13 +392,16 @@ class Robot:
                 for conn in self.connections:
                     self._send(conn, encode("TMSTA", "90,unsolicited"))
                 changed = True
-            if self.state == NodeState.IN_NODE and self._timed_out():
+            state = self.state
+            if timeouts and state == NodeState.IN_NODE and self._timed_out():
                 changed = True
-            if not self.paused and self.state != NodeState.STOPPED:
-                for event in self.executor.advance(self.motion_ns):
+                state = self.state
+            if not self.paused and state != NodeState.STOPPED:
+                for event in executor.advance(self.motion_ns):
                     self._marker_reached(event.marker)
                     changed = True
-            if self._run_scripts():
+            # (_run_scripts does nothing without a current or buffered script.)
+            if (self.current is not None or self.buffer) and self._run_scripts():
                 changed = True
             if not changed:
                 break
@@ -342,7 +423,13 @@ class Robot:
         return False
 
     def _note(self, text: str) -> None:
-        self.log.append(f"{(self.now_ns - self.start_ns) / 1e9:9.3f} {text}")
+        self._log.append((self.now_ns, text))
+
+    @property
+    def log(self) -> deque[str]:
+        """The last 200 events, oldest first, as ``"  seconds text"``."""
+        start = self.start_ns
+        return deque((f"{(t - start) / 1e9:9.3f} {text}" for t, text in tuple(self._log)), maxlen=200)
 
     # ================================================================ node lifecycle
 
@@ -420,14 +507,16 @@ class Robot:
             self._send(conn, encode_cperr(Cperr.DATA))
             return
         script_id, sep, script = text.partition(",")
-        if not sep or not script_id or not all(c in _ID_CHARS for c in script_id):
+        # _ID_CHARS: ASCII letters and digits, i.e. isascii() and isalnum().
+        if not sep or not script_id or not (script_id.isascii() and script_id.isalnum()):
             self._send(conn, encode_cperr(Cperr.DATA))  # §4.1 ID rule
             return
         if self.state != NodeState.IN_NODE:
             self._send(conn, encode_cperr(Cperr.NOT_IN_NODE))  # §4.4, §4.6 (exiting)
             return
         self.tmsct_count += 1
-        session = tuple(sorted((name, (v[0], v[1])) for name, v in self.variables.items()))
+        session = tuple(sorted((name, (v[0], v[1])) for name, v in self.variables.items())) \
+            if self.variables else ()
         parsed = _parse_cached(script, session)
         job = ScriptJob(conn, script_id, parsed)
         every = self.faults.answer_error_every
@@ -505,15 +594,32 @@ class Robot:
         if job.forced_error:
             self._reply(job, "ERROR;1")  # fault "error"
             return False
-        errors = list(job.parsed.error_lines)
+        errors: Any = job.parsed.error_lines
         if not errors and self.settings.reject_invalid_args:
-            ctx = _Ctx(True, job.conn, {k: list(v) for k, v in self.variables.items()}, self.plan.copy())
-            self._execute_lines(job, ctx, dry=True)
-            errors = ctx.errors
+            errors = self._dry_run(job)
         if errors:
             self._reply(job, "ERROR;" + ";".join(str(n) for n in sorted(set(errors))))
             return False
         return True
+
+    def _dry_run(self, job: ScriptJob) -> Any:
+        """Error lines of the dry run (argument values, spec §7); remembered for static scripts."""
+        parsed = job.parsed
+        entry = self._dry_cache.get(id(parsed))
+        if entry is not None and entry[0] is parsed and entry[1] is self.settings:
+            if entry[2] is not None:
+                return entry[2]
+            static = False
+        else:
+            static = _dry_run_is_static(parsed)
+        ctx = _Ctx(True, job.conn, {k: list(v) for k, v in self.variables.items()}, self.plan.copy())
+        self._execute_lines(job, ctx, dry=True)
+        if entry is None or entry[0] is not parsed or entry[1] is not self.settings:
+            if len(self._dry_cache) >= _DRY_CACHE_SIZE:
+                self._dry_cache.clear()
+            # The entry holds ``parsed``, so its id cannot be reused while the entry exists.
+            self._dry_cache[id(parsed)] = (parsed, self.settings, tuple(ctx.errors) if static else None)
+        return ctx.errors
 
     def _resume(self, job: ScriptJob) -> None:
         ctx = _Ctx(False, job.conn, self.variables, self.plan)
@@ -567,6 +673,12 @@ class Robot:
 
     def _exec_statement(self, job: ScriptJob, stmt: sc.Statement, ctx: _Ctx) -> str | None:
         """Execute one statement; return "block"/"exit" if the script must stop here."""
+        if stmt.__class__ is sc.ExprStmt:  # the common case first (a function call)
+            expr = stmt.expr
+            if expr.__class__ is sc.Call and expr.name in _BLOCKING_STATEMENTS:
+                return _BLOCKING_STATEMENTS[expr.name](self, job, expr, ctx)
+            self._eval(expr, ctx)
+            return None
         if isinstance(stmt, sc.Empty):
             return None
         if isinstance(stmt, sc.Declare):

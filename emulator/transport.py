@@ -73,25 +73,39 @@ class JsonFrameLog:
     def __init__(self, path: str | None, start_ns: int = 0, keep_last: int = 12) -> None:
         self._file: IO[str] | None = open(path, "a", encoding="utf-8") if path else None
         self.start_ns = start_ns
-        self.recent: deque[tuple[float, str, str, int]] = deque(maxlen=keep_last)
+        self.keep_last = keep_last
+        # The last frames as they came (t_ns, dir, bytes, conn); ``recent`` formats them when read,
+        # so that without a log file a frame costs one append, not a decode.
+        self._recent: deque[tuple[int, str, bytes, int]] = deque(maxlen=keep_last)
         self.count = {"rx": 0, "tx": 0}
         self._lock = threading.Lock()
 
     def __call__(self, t_ns: int, direction: str, data: bytes, conn: int) -> None:
-        t_s = (t_ns - self.start_ns) / 1e9
-        text = data.decode("utf-8", errors="backslashreplace")
-        with self._lock:
-            self.count[direction] += 1
-            self.recent.append((t_s, direction, text, conn))
-            if self._file is not None:
-                self._file.write(json.dumps({"t": round(t_s, 9), "dir": direction, "data": text,
-                                             "conn": conn}) + "\n")
-                self._file.flush()
+        # Called by one thread at a time (the server thread, under the server lock, or the owner of
+        # an InProcessLink); readers copy ``count`` and ``recent`` atomically (GIL).
+        self.count[direction] += 1
+        self._recent.append((t_ns, direction, data, conn))
+        if self._file is not None:
+            t_s = (t_ns - self.start_ns) / 1e9
+            text = data.decode("utf-8", errors="backslashreplace")
+            with self._lock:
+                if self._file is not None:
+                    self._file.write(json.dumps({"t": round(t_s, 9), "dir": direction, "data": text,
+                                                 "conn": conn}) + "\n")
+                    self._file.flush()
+
+    @property
+    def recent(self) -> deque[tuple[float, str, str, int]]:
+        """The last ``keep_last`` frames as ``(seconds since start, "rx"|"tx", text, conn)``."""
+        start = self.start_ns
+        return deque((((t_ns - start) / 1e9, direction, data.decode("utf-8", errors="backslashreplace"), conn)
+                      for t_ns, direction, data, conn in list(self._recent)), maxlen=self.keep_last)
 
     def close(self) -> None:
-        if self._file is not None:
-            self._file.close()
-            self._file = None
+        with self._lock:
+            if self._file is not None:
+                self._file.close()
+                self._file = None
 
 
 # ============================================================================ TCP server
@@ -103,6 +117,7 @@ class _Conn:
     conn_id: int
     out: deque[bytes] = field(default_factory=deque)
     closing: bool = False
+    writing: bool = False  # registered for EVENT_WRITE (a frame is partly sent)
 
 
 class TcpServer:
@@ -198,25 +213,48 @@ class TcpServer:
             self._listener = None
 
     def _serve(self) -> None:
+        # One lock section per wake-up: handle the events, send what is due, compute the next
+        # deadline; then sleep in select() until a socket is ready or the deadline comes.
+        select = self._sel.select
+        stop = self._stop
+        lock = self.lock
+        core = self.core
         try:
-            while not self._stop.is_set():
-                with self.lock:
-                    deadline = self.core.next_deadline_ns()
+            with lock:
+                now = self.now_ns()
+                deadline = core.next_deadline_ns()
+            while not stop.is_set():
+                timeout = 1.0 if deadline is None else min(1.0, max(0.0, (deadline - now) / 1e9))
+                events = select(timeout)
+                with lock:
+                    # One instant per wake-up: the events, then what is due at that instant.
                     now = self.now_ns()
-                timeout = None if deadline is None else max(0.0, (deadline - now) / 1e9)
-                if timeout is not None:
-                    timeout = min(timeout, 1.0)
-                for key, mask in self._sel.select(timeout if timeout is not None else 1.0):
-                    with self.lock:
-                        self._on_event(key, mask)
-                with self.lock:
-                    self._flush(self.now_ns())
+                    for key, mask in events:
+                        self._on_event(key, mask, now)
+                    self._flush(now)
+                    deadline = core.next_deadline_ns()
         except BaseException as exc:  # surfaced through .error; the thread must not die silently
             self.error = exc
             raise
 
-    def _on_event(self, key: selectors.SelectorKey, mask: int) -> None:
-        now = self.now_ns()
+    def _on_event(self, key: selectors.SelectorKey, mask: int, now: int) -> None:
+        conn = key.data
+        if conn.__class__ is _Conn:  # the hot path: a client socket
+            if mask & selectors.EVENT_WRITE:
+                self._write(conn)
+            if mask & selectors.EVENT_READ:
+                try:
+                    data = conn.sock.recv(65536)
+                except (BlockingIOError, InterruptedError):
+                    return
+                except OSError:
+                    data = b""
+                if data:
+                    self.core.receive(conn.conn_id, data, now)
+                else:
+                    self.core.close(conn.conn_id, now)
+                    self._drop(conn)
+            return
         if key.data == "wake":
             try:
                 self._wake_r.recv(4096)
@@ -241,26 +279,10 @@ class TcpServer:
             self._conns[conn_id] = conn
             self._by_sock[sock] = conn
             self._sel.register(sock, selectors.EVENT_READ, conn)
-            return
-        conn = key.data
-        if mask & selectors.EVENT_WRITE:
-            self._write(conn)
-        if mask & selectors.EVENT_READ:
-            try:
-                data = conn.sock.recv(65536)
-            except (BlockingIOError, InterruptedError):
-                return
-            except OSError:
-                data = b""
-            if data:
-                self.core.receive(conn.conn_id, data, now)
-            else:
-                self.core.close(conn.conn_id, now)
-                self._drop(conn)
 
     def _flush(self, now: int) -> None:
         for delivery in self.core.pop_ready(now):
-            self._deliver(delivery)
+            self._deliver(delivery)  # each frame with its own send (spec §2)
         # Project stopped -> listener closed (connection refused); started again -> reopened.
         if self.core.accepting and self._listener is None and not self._stop.is_set():
             try:
@@ -295,16 +317,20 @@ class TcpServer:
                 return
             if sent < len(chunk):
                 conn.out[0] = chunk[sent:]
-                self._sel.modify(conn.sock, selectors.EVENT_READ | selectors.EVENT_WRITE, conn)
+                if not conn.writing:
+                    self._sel.modify(conn.sock, selectors.EVENT_READ | selectors.EVENT_WRITE, conn)
+                    conn.writing = True
                 return
             conn.out.popleft()
         if conn.closing:
             self._drop(conn)
             return
-        try:
-            self._sel.modify(conn.sock, selectors.EVENT_READ, conn)
-        except (KeyError, ValueError):
-            pass
+        if conn.writing:  # everything sent: stop watching for writability
+            conn.writing = False
+            try:
+                self._sel.modify(conn.sock, selectors.EVENT_READ, conn)
+            except (KeyError, ValueError):
+                pass
 
     def _drop(self, conn: _Conn) -> None:
         if self._conns.pop(conn.conn_id, None) is None:
