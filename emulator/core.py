@@ -53,7 +53,36 @@ class EmulatorCore:
 
     @property
     def accepting(self) -> bool:
-        return self.robot.accepting
+        """Whether connection attempts are accepted: the project runs and no `refuse` (all)
+        fault is active. The TCP server closes its listener otherwise, so clients get a real
+        TCP refusal (spec §1.2); a count-limited `refuse:N` has to accept and reset."""
+        return self.robot.accepting and self.faults.refuse_connections != -1
+
+    def apply_faults(self, plan: FaultPlan, now_ns: int, fault_name: str | None = None) -> None:
+        """Switch to fault plan `plan` during a run (scenario events, `inject_fault`).
+
+        Timed faults count from now: `stop:MS` stops the project MS ms later, `unsolicited:MS`
+        sends its first frame MS ms later, and a `drop:MS` given while a motion runs drops the
+        connections MS ms later (given while idle, MS ms after the next motion starts)."""
+        robot = self.robot
+        self.faults = plan
+        robot.faults = plan
+        robot.executor.stalled = plan.stay_busy
+        if fault_name == "stop" and plan.stop_project_at_ms is not None:
+            robot.stop_at_ns = now_ns + plan.stop_project_at_ms * NS_PER_MS
+        if fault_name == "unsolicited":
+            robot.next_unsolicited_ns = now_ns + plan.unsolicited_every_ms * NS_PER_MS
+        if fault_name == "drop" and robot.executor.moving:
+            self._drop_at_ns = now_ns + (plan.drop_after_motion_ms or 0) * NS_PER_MS
+
+    def clear_faults(self) -> None:
+        """Back to a robot without faults (timers armed by faults are disarmed)."""
+        robot = self.robot
+        self.faults = robot.faults = NO_FAULTS
+        robot.executor.stalled = False
+        robot.next_unsolicited_ns = None
+        robot.stop_at_ns = None
+        self._drop_at_ns = None
 
     def open(self, now_ns: int) -> int | None:
         """A client connects; return its connection id, or None if refused."""

@@ -147,6 +147,10 @@ class TcpServer:
 
     def start(self) -> "TcpServer":
         self._open_listener()
+        # a robot that refuses from the start (`refuse`, `stop:0`) closes the port before anyone
+        # can connect: clients see a TCP refusal, not an accepted-then-reset connection
+        with self.lock:
+            self._flush(self.now_ns())
         self._sel.register(self._wake_r, selectors.EVENT_READ, "wake")
         self._thread = threading.Thread(target=self._serve, name=f"tm-emulator:{self.port}", daemon=True)
         self._thread.start()

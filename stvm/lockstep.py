@@ -33,11 +33,10 @@ Any host and port connect to the one emulated robot (the address is not checked)
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from typing import Callable
 
 from emulator import DEFAULT_SETTINGS, NO_FAULTS, EmulatorSettings, FaultPlan, InProcessLink, parse_fault
-from emulator.motion import NS_PER_MS
 from stvm.stdlib.sockets import (CONNECTING, ESTABLISHED, FAILED, PEER_CLOSED, RESET, SocketError,
                                  SocketTable)
 
@@ -187,30 +186,15 @@ class LockstepTransport(SocketTable):
         drops the connections MS ms after the injection (otherwise MS ms after the next motion
         starts, as with the fault given at start-up). Returns the new plan.
         """
-        core, robot = self.link.core, self.link.robot
+        core = self.link.core
         plan = parse_fault(text, core.faults)
-        now = self.link.now_ns
-        core.faults = plan
-        robot.faults = plan
-        robot.executor.stalled = plan.stay_busy
         name = text.strip().partition(":")[0].lower().replace("-", "_")
-        if name == "stop" and plan.stop_project_at_ms is not None:
-            robot.stop_at_ns = now + plan.stop_project_at_ms * NS_PER_MS
-        if name == "unsolicited":
-            robot.next_unsolicited_ns = now + plan.unsolicited_every_ms * NS_PER_MS
-        if name == "drop" and robot.executor.moving:
-            # Choice: the plan arms only on the next "motion starts"; mid-motion injection means now+MS
-            core._drop_at_ns = now + (plan.drop_after_motion_ms or 0) * NS_PER_MS
+        core.apply_faults(plan, self.link.now_ns, name)
         return plan
 
     def clear_faults(self) -> None:
         """Back to a robot without faults (timers armed by faults are disarmed)."""
-        core, robot = self.link.core, self.link.robot
-        core.faults = robot.faults = replace(NO_FAULTS)
-        robot.executor.stalled = False
-        robot.next_unsolicited_ns = None
-        robot.stop_at_ns = None
-        core._drop_at_ns = None
+        self.link.core.clear_faults()
 
     def close_all(self) -> None:
         super().close_all()

@@ -135,15 +135,14 @@ def test_connection_refused_16_20(bench, how):
     assert b.rx() == []
 
 
-@pytest.mark.xfail(strict=True, reason="emulator fidelity: connections the robot should refuse are accepted by "
-                   "the kernel and then reset, so the connect succeeds (FIDELITY_FINDINGS.md F1, F2)")
 @pytest.mark.parametrize("fault", ["refuse", "stop:0"])
 def test_emulator_refusal_is_a_tcp_refusal(bench, fault):
     """A robot refusing connections (tm_protocol.md §1.2: no project running -> connection
     refused; docs/emulator.md `refuse`, `stop:MS`) answers the SYN with RST, so SktTCPConnect
     fails and CBT_Connect reports 16#20.  The emulator keeps its listener open and resets the
     accepted socket instead (`refuse`; and `stop:0` for the first second, F2): the kernel has
-    completed the handshake, so CBT_Connect ends with 16#20, 16#50 or 16#60 depending on timing.
+    completed the handshake, so CBT_Connect ended with 16#20, 16#50 or 16#60 depending on timing
+    (FIDELITY_FINDINGS.md F1, F2; fixed: the listener is closed while the robot refuses).
     Deterministic part, checked here: a plain connect() must be refused."""
     import socket
     b = bench(None, faults=[fault], do_connect=False)
