@@ -724,12 +724,16 @@ class Lowerer:
                         referenced.add(target.parts[0].lower())
         if pou.kind == "FUNCTION":
             referenced |= {v.key for v in pou.variables.values() if v.section == OUTPUT}
+        uses = _name_uses(node.body)
         out = {}
         for var in pou.variables.values():
             if var.section in (EXTERNAL, GLOBAL) or var.key in referenced:
                 continue
             if var.section == IN_OUT and not isinstance(var.type, (t.StructType, t.ArrayType, t.FBType)):
                 continue  # a scalar in-out is a reference object; keep it on the instance
+            # a local costs a load on entry (and a store on exit): worth it from a few uses on
+            if uses.get(var.key, 0) < _CACHE_MIN_USES:
+                continue
             out[var.key] = var
         return out
 
@@ -1106,6 +1110,33 @@ class Lowerer:
             elif target_type is not None:
                 value = self.coerce(value, var.type, target_type)
             self.store(target, value, target_type)
+
+
+_CACHE_MIN_USES = 3          # uses of a variable in a body (a use inside a loop counts as many)
+_LOOP_WEIGHT = 10
+
+
+def _name_uses(body) -> dict[str, int]:
+    """How often each single-part name is used in a statement list, loops weighted."""
+    counts: dict[str, int] = {}
+
+    def visit(node, weight: int) -> None:
+        if isinstance(node, tuple):
+            for item in node:
+                visit(item, weight)
+            return
+        if isinstance(node, n.Name) and len(node.parts) == 1:
+            key = node.parts[0].lower()
+            counts[key] = counts.get(key, 0) + weight
+        inner = weight * _LOOP_WEIGHT if isinstance(node, (n.For, n.While, n.Repeat)) else weight
+        for name in getattr(node, "__dataclass_fields__", ()):
+            if name != "span":
+                value = getattr(node, name)
+                if isinstance(value, tuple) or hasattr(value, "__dataclass_fields__"):
+                    visit(value, inner)
+
+    visit(tuple(body), 1)
+    return counts
 
 
 def _walk(body):
