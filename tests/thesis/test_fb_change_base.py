@@ -34,23 +34,10 @@ def expected_script(p: dict) -> str:
     return script
 
 
-def run(b, p) -> int:
-    b.params(p)
-    return b.execute(True)
-
-
-def steps(runner, start):
-    out = []
-    for s in runner.since(start):
-        if s["Busy"] and (not out or out[-1] != s["FB_step"]):
-            out.append(s["FB_step"])
-    return out
-
-
 def test_change_base_normal_path(bench):
     b = bench("Base")
     p = params()
-    s0 = run(b, p)
+    s0 = b.start_with(p)
     b.until_end()
     b.scans(2)
     r = b.runner
@@ -59,7 +46,7 @@ def test_change_base_normal_path(bench):
     assert b.rx() == [CHECK_LISTEN, expected]
     assert b.tx() == [LISTEN_OK, tmsct_reply("2,OK")]
     assert r.states(OUTPUTS, s0) == [(False, False, False, 0), (True, False, False, 0), (False, True, False, 0)]
-    assert steps(r, s0) == NORMAL_STEPS
+    assert r.busy_steps(s0) == NORMAL_STEPS
     wr_on = r.first(lambda s: s["WaitingReturn"], s0)
     wr_off = r.first(lambda s: not s["WaitingReturn"], wr_on.scan)
     assert wr_on["FB_step"] == 70 and wr_off["FB_step"] == 90
@@ -75,7 +62,7 @@ def test_change_base_normal_path(bench):
 def test_frames_and_done(bench, p):
     """ChangeBase has no CommandID range check (unlike the move FBs): ID 12 is sent as is."""
     b = bench("Base")
-    s0 = run(b, p)
+    s0 = b.start_with(p)
     b.until_end()
     assert b.rx() == [CHECK_LISTEN, thesis_frame(p["CommandID"], expected_script(p))]
     assert b.tx()[1] == tmsct_reply(f'{p["CommandID"]},OK')
@@ -99,7 +86,7 @@ def test_any_ok_accepted(bench):
     def robot(f, i):
         return [LISTEN_OK] if f == CHECK_LISTEN else [tmsct_reply("9,OK")]
     b = bench("Base", robot="fake", responder=robot)
-    s0 = run(b, params(2))
+    s0 = b.start_with(params(2))
     b.until_end(max_scans=3000)
     assert b.runner.states(OUTPUTS, s0)[-1] == (False, True, False, 0)
     assert b.fake.frames[1] == thesis_frame(2, expected_script(params(2)))
@@ -107,7 +94,7 @@ def test_any_ok_accepted(bench):
 
 def test_robot_error_reply_16_80(bench):
     b = bench("Base", faults=["error"])
-    s0 = run(b, params(4))
+    s0 = b.start_with(params(4))
     b.until_end()
     r = b.runner
     assert b.tx()[1] == tmsct_reply("4,ERROR;1")
@@ -123,13 +110,13 @@ def test_cperr_outside_listen_node_stays_busy(bench):
     'ERROR' - and the FB stays Busy in step 80 with WaitingReturn TRUE (CBT_Connect does not
     notice: the socket is fine)."""
     b = bench("Base", settings=emulator.EmulatorSettings(after_exit="stay"))
-    run(b, params(2, exit_node=True))
+    b.start_with(params(2, exit_node=True))
     b.until_end()
     assert b.runner.trace[-1]["Done"]
     b.execute(False)
     b.scans(3)
     p = params(3)
-    s1 = run(b, p)
+    s1 = b.start_with(p)
     b.until(lambda s: s["FB_step"] == 80, "step 80")
     b.scans(500)
     r = b.runner
@@ -145,7 +132,7 @@ def test_connection_lost_before_reply_16_99(bench):
     def robot(f, i):
         return [LISTEN_OK] if f == CHECK_LISTEN else [CLOSE]
     b = bench("Base", robot="fake", responder=robot)
-    s0 = run(b, params(5))
+    s0 = b.start_with(params(5))
     b.until(lambda s: s["Error"], "Error", max_scans=5000)
     r = b.runner
     assert r.first(lambda s: s["Error"], s0).scan - r.first(lambda s: not s["Connected"], s0).scan == 1
@@ -154,7 +141,7 @@ def test_connection_lost_before_reply_16_99(bench):
 
 def test_execute_dropped_while_busy(bench):
     b = bench("Base")
-    s0 = run(b, params(6))
+    s0 = b.start_with(params(6))
     b.scans(1)
     b.execute(False)
     b.until(lambda s: s["Done"], "Done")
@@ -167,7 +154,7 @@ def test_execute_dropped_while_busy(bench):
 
 def test_not_connected_16_99(bench):
     b = bench("Base", do_connect=False)
-    s0 = run(b, params())
+    s0 = b.start_with(params())
     b.scans(4)
     seq = [tuple(s[k] for k in OUTPUTS) for s in b.runner.since(s0)]
     assert seq == [(False, False, False, 0), (True, False, False, 0)] + [(False, False, True, 0x99)] * 2
@@ -181,7 +168,7 @@ def test_other_fb_under_execution_16_11(bench):
               "TargetPosition.RZ": 90.0, "Speed": 20, "AccelTime": 150}, inst="Abs")
     b.execute(True, inst="Abs")
     b.until(lambda s: s["WaitingReturn"], "WaitingReturn")
-    s0 = run(b, params(3))
+    s0 = b.start_with(params(3))
     b.scans(5)
     seq = [tuple(s[k] for k in OUTPUTS) for s in b.runner.since(s0)]
     assert seq == [(False, False, False, 0), (True, False, False, 0), (True, False, False, 0),
@@ -201,7 +188,7 @@ def test_realtoformatstring_values_in_frame(bench, values, text):
     half away from zero, '-0' for negatives that round to 0 - in the bytes on the wire."""
     b = bench("Base")
     p = params(2, values)
-    s0 = run(b, p)
+    s0 = b.start_with(p)
     b.until_end()
     assert pose_text(values) == text
     assert b.rx()[1] == thesis_frame(2, f"ChangeBase({text})")

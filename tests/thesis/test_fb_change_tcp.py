@@ -38,15 +38,10 @@ def expected_script(p: dict) -> str:
     return script
 
 
-def run(b, p) -> int:
-    b.params(p)
-    return b.execute(True)
-
-
 def test_change_tcp_normal_path(bench):
     b = bench("Tcp")
     p = params()
-    s0 = run(b, p)
+    s0 = b.start_with(p)
     b.until_end()
     r = b.runner
     # 150.5 -> +151, Weight UINT 2 -> '+2', inertia 0.5 -> +1, 1.49 -> +1 (sysmac.md 8.13)
@@ -69,7 +64,7 @@ def test_change_tcp_normal_path(bench):
 def test_exit_node_frame(bench):
     b = bench("Tcp")
     p = params(3, exit_node=True)
-    s0 = run(b, p)
+    s0 = b.start_with(p)
     b.until_end()
     assert b.rx() == [CHECK_LISTEN, thesis_frame(3, expected_script(p))]
     assert b.runner.states(OUTPUTS, s0)[-1] == (False, True, False, 0)
@@ -89,7 +84,7 @@ def test_checksum_never_one_digit():
 @pytest.mark.parametrize("weight", [15, 100, 65535])
 def test_weight_out_of_range_16_25(bench, weight):
     b = bench("Tcp")
-    s0 = run(b, params(weight=weight))
+    s0 = b.start_with(params(weight=weight))
     b.until(lambda s: s["Error"], "Error", max_scans=200)
     seq = b.runner.states(OUTPUTS, s0)
     assert seq == [(False, False, False, 0), (True, False, False, 0), (False, False, True, 0x25)]
@@ -99,7 +94,7 @@ def test_weight_out_of_range_16_25(bench, weight):
 
 def test_robot_error_reply_16_80(bench):
     b = bench("Tcp", faults=["error"])
-    s0 = run(b, params(4))
+    s0 = b.start_with(params(4))
     b.until_end()
     assert b.tx()[1] == tmsct_reply("4,ERROR;1")
     assert b.runner.states(OUTPUTS, s0) == [(False, False, False, 0), (True, False, False, 0), (False, False, True, 0x80)]
@@ -113,7 +108,7 @@ def test_connection_reset_before_reply_16_70(bench):
     def robot(f, i):
         return [LISTEN_OK] if f == CHECK_LISTEN else [RESET]
     b = bench("Tcp", robot="fake", responder=robot)
-    s0 = run(b, params(5))
+    s0 = b.start_with(params(5))
     b.until_end(max_scans=5000)
     b.scans(1200)
     r = b.runner
@@ -124,7 +119,7 @@ def test_connection_reset_before_reply_16_70(bench):
 
 def test_execute_dropped_while_busy(bench):
     b = bench("Tcp")
-    s0 = run(b, params(6))
+    s0 = b.start_with(params(6))
     b.scans(1)
     b.execute(False)
     b.until(lambda s: s["Done"], "Done")
@@ -137,7 +132,7 @@ def test_execute_dropped_while_busy(bench):
 
 def test_not_connected_16_99(bench):
     b = bench("Tcp", do_connect=False)
-    s0 = run(b, params())
+    s0 = b.start_with(params())
     b.scans(4)
     seq = [tuple(s[k] for k in OUTPUTS) for s in b.runner.since(s0)]
     assert seq == [(False, False, False, 0), (True, False, False, 0)] + [(False, False, True, 0x99)] * 2
@@ -148,7 +143,7 @@ def test_cperr_reply_stays_busy(bench):
     def robot(f, i):
         return [LISTEN_OK] if f == CHECK_LISTEN else [tm_frame("CPERR", "F1")]
     b = bench("Tcp", robot="fake", responder=robot, extra=["StringOfReceivedData"])
-    s0 = run(b, params(7))
+    s0 = b.start_with(params(7))
     b.until(lambda s: s["FB_step"] == 80, "step 80")
     b.scans(600)
     r = b.runner

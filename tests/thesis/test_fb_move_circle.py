@@ -44,23 +44,10 @@ def expected_script(p: dict) -> str:
     return script
 
 
-def run(b, p) -> int:
-    b.params(p)
-    return b.execute(True)
-
-
-def steps(runner, start):
-    out = []
-    for s in runner.since(start):
-        if s["Busy"] and (not out or out[-1] != s["FB_step"]):
-            out.append(s["FB_step"])
-    return out
-
-
 def test_circle_normal_path(bench):
     b = bench("Circ")
     p = params()
-    s0 = run(b, p)
+    s0 = b.start_with(p)
     b.until_end()
     r = b.runner
     expected = thesis_frame(4, 'Circle("CPP",+437,-103,+361,+180,+0,+90,+458,-122,+361,+180,+0,+90,'
@@ -69,7 +56,7 @@ def test_circle_normal_path(bench):
     assert b.rx() == [CHECK_LISTEN, expected]
     assert b.tx() == [LISTEN_OK, tmsct_reply("4,OK"), tag_notification(4)]
     assert r.states(OUTPUTS, s0) == [(False, False, False, 0), (True, False, False, 0), (False, True, False, 0)]
-    assert steps(r, s0) == NORMAL_STEPS
+    assert r.busy_steps(s0) == NORMAL_STEPS
     wr_off = r.first(lambda s: not s["WaitingReturn"], r.first(lambda s: s["WaitingReturn"], s0).scan)
     done = r.first(lambda s: s["Done"], s0)
     assert done.scan - wr_off.scan == 3 and done["CmdID_Ack"] == 4
@@ -82,7 +69,7 @@ def test_circle_normal_path(bench):
 ])
 def test_frames_and_done(bench, p):
     b = bench("Circ")
-    s0 = run(b, p)
+    s0 = b.start_with(p)
     b.until_end()
     assert b.rx() == [CHECK_LISTEN, thesis_frame(p["CommandID"], expected_script(p))]
     assert b.tx()[1] == tmsct_reply(f'{p["CommandID"]},OK')
@@ -96,7 +83,7 @@ def test_speed_above_100_is_16_26_whatever_the_unit(bench, fmt, speed):
     looking at the data format, so a CAP (mm/s) circle above 100 mm/s fails with 16#26 'Speed
     range in PTP: 0~100 %' (original bug, kept)."""
     b = bench("Circ")
-    s0 = run(b, params(fmt=fmt, speed=speed))
+    s0 = b.start_with(params(fmt=fmt, speed=speed))
     b.until(lambda s: s["Error"], "Error", max_scans=200)
     assert b.runner.states(OUTPUTS, s0) == [(False, False, False, 0), (True, False, False, 0), (False, False, True, 0x26)]
     assert b.get("ErrorDescrip") == b"Speed range in PTP: 0~100 %"
@@ -112,7 +99,7 @@ def test_parameter_range_errors(bench, changes, error_id):
     b = bench("Circ")
     p = params()
     p.update(changes)
-    s0 = run(b, p)
+    s0 = b.start_with(p)
     b.until(lambda s: s["Error"], "Error", max_scans=200)
     assert b.runner.states(OUTPUTS, s0)[-1] == (False, False, True, error_id)
     assert b.rx() == [CHECK_LISTEN]
@@ -124,7 +111,7 @@ def test_one_digit_checksum_cperr_stays_busy(bench):
     frame = thesis_frame(7, expected_script(p))
     assert frame_checksum(frame) < 0x10 and frame.endswith(b",*9\r\n")
     b = bench("Circ")
-    s0 = run(b, p)
+    s0 = b.start_with(p)
     b.until(lambda s: s["FB_step"] == 80, "step 80")
     b.scans(300)
     r = b.runner
@@ -137,7 +124,7 @@ def test_one_digit_checksum_cperr_stays_busy(bench):
 def test_robot_error_reply_16_80(bench):
     b = bench("Circ", faults=["error"])
     p = params(8)
-    s0 = run(b, p)
+    s0 = b.start_with(p)
     b.until_end()
     r = b.runner
     assert b.rx() == [CHECK_LISTEN, thesis_frame(8, expected_script(p))]
@@ -148,7 +135,7 @@ def test_robot_error_reply_16_80(bench):
 
 def test_connection_lost_mid_motion(bench):
     b = bench("Circ", faults=["drop:30"])
-    s0 = run(b, params(2))
+    s0 = b.start_with(params(2))
     b.until(lambda s: s["Error"], "Error", max_scans=5000)
     r = b.runner
     down = r.first(lambda s: not s["Connected"], s0)
@@ -160,7 +147,7 @@ def test_connection_lost_mid_motion(bench):
 def test_execute_dropped_while_busy(bench):
     b = bench("Circ")
     p = params(3)
-    s0 = run(b, p)
+    s0 = b.start_with(p)
     b.scans(1)
     b.execute(False)
     b.until(lambda s: s["Done"], "Done")
@@ -174,7 +161,7 @@ def test_execute_dropped_while_busy(bench):
 
 def test_not_connected_16_99(bench):
     b = bench("Circ", do_connect=False)
-    s0 = run(b, params())
+    s0 = b.start_with(params())
     b.scans(4)
     seq = [tuple(s[k] for k in OUTPUTS) for s in b.runner.since(s0)]
     assert seq == [(False, False, False, 0), (True, False, False, 0)] + [(False, False, True, 0x99)] * 2
@@ -190,7 +177,7 @@ def test_reply_split_over_two_segments_8_5(bench):
     def robot(f, i):
         return [LISTEN_OK] if f == CHECK_LISTEN else [ok[:9], 0.05, ok[9:]]
     b = bench("Circ", robot="fake", responder=robot, extra=["StringOfReceivedData"])
-    s0 = run(b, p)
+    s0 = b.start_with(p)
     b.until(lambda s: s["FB_step"] == 80, "step 80")
     b.scans(1500)
     r = b.runner

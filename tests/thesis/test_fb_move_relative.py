@@ -42,23 +42,10 @@ def expected_script(p: dict) -> str:
     return script
 
 
-def run(b, p) -> int:
-    b.params(p)
-    return b.execute(True)
-
-
-def steps(runner, start):
-    out = []
-    for s in runner.since(start):
-        if s["Busy"] and (not out or out[-1] != s["FB_step"]):
-            out.append(s["FB_step"])
-    return out
-
-
 def test_move_ptp_tool_normal_path(bench):
     b = bench("Rel")
     p = params()
-    s0 = run(b, p)
+    s0 = b.start_with(p)
     b.until_end()
     r = b.runner
     # -0.5 -> '-1', -10.5 -> '-11' (half away from zero), 0.4 -> '+0' (sysmac.md 8.13)
@@ -67,7 +54,7 @@ def test_move_ptp_tool_normal_path(bench):
     assert b.rx() == [CHECK_LISTEN, expected]
     assert b.tx() == [LISTEN_OK, tmsct_reply("3,OK"), tag_notification(3)]
     assert r.states(OUTPUTS, s0) == [(False, False, False, 0), (True, False, False, 0), (False, True, False, 0)]
-    assert steps(r, s0) == NORMAL_STEPS
+    assert r.busy_steps(s0) == NORMAL_STEPS
     wr_on = r.first(lambda s: s["WaitingReturn"], s0)
     wr_off = r.first(lambda s: not s["WaitingReturn"], wr_on.scan)
     done = r.first(lambda s: s["Done"], s0)
@@ -90,7 +77,7 @@ def test_move_ptp_tool_normal_path(bench):
 ])
 def test_frames_and_done(bench, p):
     b = bench("Rel")
-    s0 = run(b, p)
+    s0 = b.start_with(p)
     b.until_end()
     assert b.rx() == [CHECK_LISTEN, thesis_frame(p["CommandID"], expected_script(p))]
     assert b.tx()[1] == tmsct_reply(f'{p["CommandID"]},OK')
@@ -112,7 +99,7 @@ def test_tag_of_another_command_accepted_8_4(bench):
             return [LISTEN_OK]
         return [tmsct_reply("6,OK"), 0.05, other]
     b = bench("Rel", robot="fake", responder=robot, extra=["StringOfReceivedData"])
-    s0 = run(b, p)
+    s0 = b.start_with(p)
     b.until_end(max_scans=5000)
     r = b.runner
     assert b.fake.frames == [CHECK_LISTEN, frame]
@@ -129,7 +116,7 @@ def test_one_digit_checksum_cperr_stays_busy(bench):
     frame = thesis_frame(2, expected_script(p))
     assert frame_checksum(frame) < 0x10 and frame.endswith(b",*7\r\n")
     b = bench("Rel")
-    s0 = run(b, p)
+    s0 = b.start_with(p)
     b.until(lambda s: s["FB_step"] == 80, "step 80")
     b.scans(300)
     r = b.runner
@@ -148,7 +135,7 @@ def test_one_digit_checksum_cperr_stays_busy(bench):
 def test_robot_error_reply_16_80(bench):
     b = bench("Rel", faults=["error"])
     p = params(4)
-    s0 = run(b, p)
+    s0 = b.start_with(p)
     b.until_end()
     r = b.runner
     assert b.rx() == [CHECK_LISTEN, thesis_frame(4, expected_script(p))]
@@ -170,7 +157,7 @@ def test_connection_reset_mid_command_16_100(bench):
             return [LISTEN_OK]
         return [tmsct_reply("5,OK"), 0.05, RESET]
     b = bench("Rel", robot="fake", responder=robot)
-    s0 = run(b, p)
+    s0 = b.start_with(p)
     b.until_end(max_scans=5000)
     b.scans(1500)
     r = b.runner
@@ -193,7 +180,7 @@ def test_connection_closed_mid_command_16_99(bench):
             return [LISTEN_OK]
         return [tmsct_reply("3,OK"), 0.02, CLOSE]
     b = bench("Rel", robot="fake", responder=robot)
-    s0 = run(b, params(3))
+    s0 = b.start_with(params(3))
     b.until(lambda s: s["Error"], "Error", max_scans=5000)
     r = b.runner
     down = r.first(lambda s: not s["Connected"], s0)
@@ -207,7 +194,7 @@ def test_connection_closed_mid_command_16_99(bench):
 def test_execute_dropped_while_busy(bench):
     b = bench("Rel")
     p = params(8)
-    s0 = run(b, p)
+    s0 = b.start_with(p)
     b.scans(2)
     b.execute(False)
     b.until(lambda s: s["Done"], "Done")
@@ -222,7 +209,7 @@ def test_execute_dropped_while_busy(bench):
 
 def test_not_connected_16_99(bench):
     b = bench("Rel", do_connect=False)
-    s0 = run(b, params())
+    s0 = b.start_with(params())
     b.scans(4)
     seq = [tuple(s[k] for k in OUTPUTS) for s in b.runner.since(s0)]
     assert seq == [(False, False, False, 0), (True, False, False, 0)] + [(False, False, True, 0x99)] * 2
@@ -240,7 +227,7 @@ def test_parameter_range_errors(bench, changes, error_id, descrip):
     b = bench("Rel")
     p = params()
     p.update(changes)
-    s0 = run(b, p)
+    s0 = b.start_with(p)
     b.until(lambda s: s["Error"], "Error", max_scans=200)
     assert b.runner.states(OUTPUTS, s0) == [(False, False, False, 0), (True, False, False, 0), (False, False, True, error_id)]
     assert b.get("ErrorDescrip") == descrip

@@ -20,19 +20,6 @@ def params(cmd_id=5, command="Pause") -> dict:
     return {"CommandID": cmd_id, "Command": command}
 
 
-def run(b, p) -> int:
-    b.params(p)
-    return b.execute(True)
-
-
-def steps(runner, start):
-    out = []
-    for s in runner.since(start):
-        if s["Busy"] and (not out or out[-1] != s["FB_step"]):
-            out.append(s["FB_step"])
-    return out
-
-
 def handle(b) -> int:
     return b.vm.get("T.Cobot.Socket.Handle")
 
@@ -63,7 +50,7 @@ def test_pause_rejected_by_robot_yet_done(bench):
     happens, but the FB reports Done - it never reads the reply (sysmac.md 8.12), which stays in
     the receive buffer.  Done three scans after the send completes (60 -> 90 -> ToDone -> state 5)."""
     b = bench("Prg")
-    s0 = run(b, params(5, "Pause"))
+    s0 = b.start_with(params(5, "Pause"))
     b.until_end()
     b.scans(20)
     r = b.runner
@@ -71,7 +58,7 @@ def test_pause_rejected_by_robot_yet_done(bench):
     assert b.wait_tx(2) == [LISTEN_OK, tm_frame("CPERR", "01")]
     assert b.emulator.snapshot()["paused"] is False
     assert r.states(OUTPUTS, s0) == [(False, False, False, 0), (True, False, False, 0), (False, True, False, 0)]
-    assert steps(r, s0) == NORMAL_STEPS
+    assert r.busy_steps(s0) == NORMAL_STEPS
     at_90 = r.first(lambda s: s["FB_step"] == 90, s0)
     assert r.first(lambda s: s["Done"], s0).scan - at_90.scan == 3
     assert not any(s["WaitingReturn"] for s in r.since(s0))     # ProgramControl never sets it
@@ -81,7 +68,7 @@ def test_pause_rejected_by_robot_yet_done(bench):
 def test_resume_frame_matches_spec_vector(bench):
     """Resume() has a two-digit checksum: the frame is exactly tm_protocol.md §9.1's vector."""
     b = bench("Prg")
-    s0 = run(b, params(6, "Resume"))
+    s0 = b.start_with(params(6, "Resume"))
     b.until_end()
     b.scans(20)
     assert b.wait_rx(2) == [CHECK_LISTEN, b"$TMSCT,10,6,Resume(),*52\r\n"]
@@ -102,13 +89,13 @@ def test_pause_and_resume_during_motion(bench):
               "TargetPosition.RZ": 90.0, "Speed": 10, "AccelTime": 150}, inst="Abs")
     b.execute(True, inst="Abs")
     b.until(lambda s: s["AbsFB_step"] == 100, "move waiting for its tag")
-    s0 = run(b, params(5, "Pause"))
+    s0 = b.start_with(params(5, "Pause"))
     b.until_end()
     b.execute(False)
     b.scans(1500)
     assert b.emulator.snapshot()["paused"] is True
     assert b.runner.trace[-1]["AbsBusy"] and b.runner.trace[-1]["WaitingReturn"]
-    s1 = run(b, params(6, "Resume"))
+    s1 = b.start_with(params(6, "Resume"))
     b.until(lambda s: s["AbsDone"], "move Done", max_scans=20000)
     r = b.runner
     assert b.emulator.snapshot()["paused"] is False
@@ -125,7 +112,7 @@ def test_pause_and_resume_during_motion(bench):
 def test_robot_error_reply_not_noticed(bench):
     """The robot rejects the script (ERROR;1) but the FB does not read replies: Done (8.12)."""
     b = bench("Prg", faults=["error"])
-    s0 = run(b, params(6, "Resume"))
+    s0 = b.start_with(params(6, "Resume"))
     b.until_end()
     b.scans(10)
     assert b.wait_tx(2)[1] == tmsct_reply("6,ERROR;1")
@@ -139,7 +126,7 @@ def test_send_error_after_reset_16_60(bench):
     b.fake.push(RESET)
     b.scans(20)
     assert b.runner.trace[-1]["Connected"]
-    s0 = run(b, params(6, "Resume"))
+    s0 = b.start_with(params(6, "Resume"))
     b.until_end(max_scans=2000)
     r = b.runner
     assert r.states(OUTPUTS, s0) == [(False, False, False, 0), (True, False, False, 0), (False, False, True, 0x60)]
@@ -150,7 +137,7 @@ def test_send_error_after_reset_16_60(bench):
 
 def test_execute_dropped_while_busy(bench):
     b = bench("Prg")
-    s0 = run(b, params(6, "Resume"))
+    s0 = b.start_with(params(6, "Resume"))
     b.scans(1)
     b.execute(False)
     b.until(lambda s: s["Done"], "Done")
@@ -165,7 +152,7 @@ def test_not_connected_16_99(bench):
     """Step 10 sets 16#10 'Robot not connected'; the check above the state diagram sets 16#99
     every scan and wins (README '+')."""
     b = bench("Prg", do_connect=False)
-    s0 = run(b, params())
+    s0 = b.start_with(params())
     b.scans(4)
     seq = [tuple(s[k] for k in OUTPUTS) for s in b.runner.since(s0)]
     assert seq == [(False, False, False, 0), (True, False, False, 0)] + [(False, False, True, 0x99)] * 2
@@ -176,7 +163,7 @@ def test_unread_reply_discarded_by_next_fb_clear_buffer(bench):
     """sysmac.md 8.12: the CPERR answering the Pause stays buffered until the next FB's
     SktClearBuf (step 20): CBT_ChangeBase then reads only its own OK and completes."""
     b = bench("Prg")
-    run(b, params(5, "Pause"))
+    b.start_with(params(5, "Pause"))
     b.until_end()
     b.execute(False)
     assert reply_left_unread(b)

@@ -274,6 +274,14 @@ class Runner:
     def since(self, start: int) -> list[Sample]:
         return [s for s in self.trace if s.scan >= start]
 
+    def busy_steps(self, start: int) -> list:
+        """The FB_step values the FB went through while Busy, from scan `start` on."""
+        out: list = []
+        for s in self.since(start):
+            if s["Busy"] and (not out or out[-1] != s["FB_step"]):
+                out.append(s["FB_step"])
+        return out
+
     def first(self, predicate: Callable[[Sample], bool], start: int = 0) -> Sample:
         for s in self.trace:
             if s.scan >= start and predicate(s):
@@ -584,6 +592,11 @@ class Bench:
     # ---- driving
     def params(self, values: dict[str, Any], inst: str | None = None) -> None:
         set_struct(self.vm, f"T.{FB_PINS[inst or self.inst][1]}", values)
+
+    def start_with(self, values: dict[str, Any]) -> int:
+        """Set the FB's parameters and raise Execute; returns the scan it starts in."""
+        self.params(values)
+        return self.execute(True)
 
     def execute(self, value: bool = True, inst: str | None = None) -> int:
         """Set Execute; returns the scan number of the next scan (the one that sees it)."""
