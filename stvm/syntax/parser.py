@@ -545,14 +545,53 @@ def _syntax_diagnostic(file: str, exc: UnexpectedInput) -> Diagnostic:
     return Diagnostic.error(f"syntax error: {exc}", n.Span(file, 1, 1, 1, 2), "E001")
 
 
+_MAX_RECOVERED_ERRORS = 20
+
+
+def _missing_semicolon_recovery(file: str, recovered: list[Diagnostic]):
+    """Lark `on_error` handler for the one recovery that is certain: a missing ';'.
+
+    When ';' is what the parser can take and the offending token fits right after it, the error
+    is reported ("expected ';'") and parsing goes on, so one run shows every missing semicolon.
+    Any other syntax error stops the parse (guessing there would report errors that are not
+    there)."""
+    def on_error(exc) -> bool:
+        if not isinstance(exc, UnexpectedToken) or len(recovered) >= _MAX_RECOVERED_ERRORS:
+            return False
+        parser_state = exc.interactive_parser
+        try:
+            if "SEMICOLON" not in parser_state.accepts():
+                return False
+            trial = parser_state.copy()
+            trial.feed_token(Token("SEMICOLON", ";"))
+            accepted = trial.accepts()
+            token = exc.token
+            # the contextual lexer typed a keyword it did not expect here as a name (END_VAR
+            # after a missing ';'); after the ';' it is the keyword again
+            if token.type == "IDENT" and token.value.upper() in accepted:
+                token = Token.new_borrow_pos(token.value.upper(), token.value, token)
+            if token.type not in accepted:
+                return False
+        except Exception:  # never let recovery hide the real error
+            return False
+        recovered.append(_syntax_diagnostic(file, exc))
+        parser_state.feed_token(Token("SEMICOLON", ";"))
+        parser_state.feed_token(token)
+        return True
+    return on_error
+
+
 def parse_text(text: str, file: str, settings: SysmacSettings = DEFAULT_SETTINGS) -> tuple[n.CompilationUnit, list[Diagnostic]]:
     """Parse one ST file. On a syntax error the unit is empty and the error is a diagnostic."""
     diagnostics: list[Diagnostic] = []
+    recovered: list[Diagnostic] = []
     try:
-        tree = _parser().parse(text, start="start")
+        tree = _parser().parse(text, start="start", on_error=_missing_semicolon_recovery(file, recovered))
     except UnexpectedInput as exc:
-        diagnostics.append(_syntax_diagnostic(file, exc))
+        diagnostics += recovered + [_syntax_diagnostic(file, exc)]
         return n.CompilationUnit(file, (), (), (), ()), diagnostics
+    if recovered:
+        return n.CompilationUnit(file, (), (), (), ()), recovered
     transformer = _ToNodes(file, settings, diagnostics)
     try:
         items = transformer.transform(tree)
