@@ -399,22 +399,12 @@ class Lowerer:
             self.w.line(f"except _FunctionError as _e: _fun_error(_e, {len(self.sites) - 1})")
 
     def has_native_call(self, node: object) -> bool:
-        stack = [node]
-        while stack:
-            x = stack.pop()
+        """Does this statement call a FUNCTION (which may raise an instruction error)?"""
+        for x in _walk((node,)):
             if isinstance(x, n.Call):
                 info = self.facts.calls.get(id(x))
                 if info is not None and not info.is_fb:
                     return True
-            if isinstance(x, (n.Node,)) or hasattr(x, "__dataclass_fields__"):
-                for fname in getattr(x, "__dataclass_fields__", {}):
-                    if fname == "span":
-                        continue
-                    v = getattr(x, fname)
-                    if isinstance(v, tuple):
-                        stack.extend(v)
-                    elif v is not None and hasattr(v, "__dataclass_fields__"):
-                        stack.append(v)
         return False
 
     def st_Assign(self, s: n.Assign) -> None:
@@ -1164,21 +1154,7 @@ def _root_name(expr) -> str | None:
 
 def _calls_in(body) -> list[n.Call]:
     """Every Call node in a statement list (for the by-reference analysis)."""
-    found: list[n.Call] = []
-    stack: list = list(body)
-    while stack:
-        node = stack.pop()
-        if isinstance(node, n.Call):
-            found.append(node)
-        if isinstance(node, tuple):
-            stack.extend(node)
-            continue
-        for name in getattr(node, "__dataclass_fields__", ()):
-            if name != "span":
-                value = getattr(node, name)
-                if isinstance(value, (tuple, n.Node)) or hasattr(value, "__dataclass_fields__"):
-                    stack.append(value)
-    return found
+    return [node for node in _walk(body) if isinstance(node, n.Call)]
 
 
 def lower_project(analysis: Analysis, settings) -> LoweredProject:
