@@ -298,6 +298,20 @@ def load(paths: Sequence[str | Path], settings: SysmacSettings = DEFAULT_SETTING
                 pickle.dump((analysis.model, lowered, warnings, marshal.dumps(code), sources), fh,
                             protocol=pickle.HIGHEST_PROTOCOL)
             tmp.replace(cache_file)
+            _prune_cache(cache_file.parent)
         except OSError:
             pass
     return project
+
+
+CACHE_MAX_ENTRIES = 200
+
+
+def _prune_cache(folder: Path) -> None:
+    """Keep the cache from growing without bound: drop the least recently written entries."""
+    entries = sorted(folder.glob("*.bin"), key=lambda p: p.stat().st_mtime)
+    for old in entries[:-CACHE_MAX_ENTRIES]:
+        try:
+            old.unlink()
+        except OSError:
+            pass
