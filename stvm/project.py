@@ -281,6 +281,7 @@ def load(paths: Sequence[str | Path], settings: SysmacSettings = DEFAULT_SETTING
         try:
             with cache_file.open("rb") as fh:
                 model, lowered, warnings, code_bytes, sources = pickle.load(fh)
+            os.utime(cache_file)   # recently used: pruning drops the oldest first
             return Project(model, lowered, marshal.loads(code_bytes), sources, settings, warnings, True, manifest, root)
         except Exception:  # a stale or damaged cache entry is rebuilt, never fatal
             pass
@@ -308,7 +309,7 @@ CACHE_MAX_ENTRIES = 200
 
 
 def _prune_cache(folder: Path) -> None:
-    """Keep the cache from growing without bound: drop the least recently written entries."""
+    """Keep the cache from growing without bound: drop the least recently used entries."""
     entries = sorted(folder.glob("*.bin"), key=lambda p: p.stat().st_mtime)
     for old in entries[:-CACHE_MAX_ENTRIES]:
         try:
