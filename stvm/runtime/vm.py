@@ -140,6 +140,7 @@ class VM:
                 default.programs.append((name, self._instance(name, qualname)))
             self.tasks.append(default)
         self.tasks.sort(key=lambda tk: tk.priority)
+        self._build_schedule()
 
     # ---- running
     def _fun_error(self, error: FunctionError, site: int) -> None:
@@ -149,6 +150,16 @@ class VM:
         self.ctx.warn(f"{span.file}:{span.line}:{span.column}: instruction error (ENO FALSE, assignment skipped): {error}",
                       once_key=(site, str(error)))
 
+    def _build_schedule(self) -> None:
+        """Which tasks run at each tick of the hyperperiod, in priority order, as plain lists
+        (the scan loop does no arithmetic per task)."""
+        period = 1
+        for task in self.tasks:
+            period = period * task.every // math.gcd(period, task.every)
+        self._schedule = [[(task.name, [program for _, program in task.programs])
+                           for task in self.tasks if tick % task.every == 0]
+                          for tick in range(period)]
+
     def scan(self) -> None:
         """Run one base period: every task due at this tick, in priority order."""
         if self.fault is not None:
@@ -157,29 +168,28 @@ class VM:
         ctx = self.ctx
         ctx.now_ns = self.now_ns
         ctx.scan = tick
+        schedule = self._schedule
         started = time.perf_counter_ns() if self.collect_stats else 0
-        for task in self.tasks:
-            if tick % task.every:
-                continue
-            ctx.task = task.name
-            try:
-                for _, program in task.programs:
+        try:
+            for task_name, programs in schedule[tick % len(schedule)]:
+                ctx.task = task_name
+                for program in programs:
                     program()
-            except RecursionError as exc:
-                self._raise_fault(f"stack overflow ({exc})", exc.__traceback__, task.name)
-            except STFault as exc:
-                message = str(exc) if str(exc) else type(exc).__doc__ or type(exc).__name__
-                self._raise_fault(message, exc.__traceback__, task.name)
-            except FunctionError as exc:
-                self._raise_fault(f"instruction error: {exc}", exc.__traceback__, task.name)
-            except Exception as exc:  # an stvm bug: still report the ST location, not a traceback
-                self._raise_fault(f"internal error in stvm ({type(exc).__name__}: {exc})", exc.__traceback__, task.name)
-        if self.collect_stats:
+        except RecursionError as exc:
+            self._raise_fault(f"stack overflow ({exc})", exc.__traceback__, ctx.task)
+        except STFault as exc:
+            message = str(exc) if str(exc) else type(exc).__doc__ or type(exc).__name__
+            self._raise_fault(message, exc.__traceback__, ctx.task)
+        except FunctionError as exc:
+            self._raise_fault(f"instruction error: {exc}", exc.__traceback__, ctx.task)
+        except Exception as exc:  # an stvm bug: still report the ST location, not a traceback
+            self._raise_fault(f"internal error in stvm ({type(exc).__name__}: {exc})", exc.__traceback__, ctx.task)
+        if started:
             self.scan_durations_ns.append(time.perf_counter_ns() - started)
         if self.on_scan_end:
             for hook in self.on_scan_end:
                 hook(self)
-        self.scan_count += 1
+        self.scan_count = tick + 1
         self.now_ns += self.base_ns
         if self.realtime:
             self._sleep_to_deadline()
