@@ -466,32 +466,24 @@ def test_send_from_the_element_given(plc, peer):
     assert read_exactly(server_side, 17) == b"$TMSTA,2,00,*41\r\n"
 
 
-def test_send_copies_the_data_at_start(plc, peer):
-    sock = plc.connect(peer.port)
-    server_side = peer.accept()
-    data = list(b"OLD")
-    send = plc.fb("SktTCPSend", Socket=sock, SendDat=data, Size=3)
-    send.step(Execute=True)
-    data[:] = list(b"NEW")
-    plc.next_scan()
-    send.step()
-    assert send.Done
-    assert read_exactly(server_side, 3) == b"OLD"
-
-
-def test_send_copies_the_data_at_service_with_setting(peer):
-    plc = Plc(RealTcpTransport(), skt_send_copy="at_service")
-    sock = plc.connect(peer.port)
-    server_side = peer.accept()
-    data = list(b"OLD")
-    send = plc.fb("SktTCPSend", Socket=sock, SendDat=data, Size=3)
-    send.step(Execute=True)
-    data[:] = list(b"NEW")
-    plc.next_scan()
-    send.step()
-    assert send.Done
-    assert read_exactly(server_side, 3) == b"NEW"
-    plc.ctx.transport.close_all()
+@pytest.mark.parametrize(("skt_send_copy", "sent"), [("at_start", b"OLD"), ("at_service", b"NEW")])
+def test_send_copies_the_data_when_the_setting_says(peer, skt_send_copy, sent):
+    """`skt_send_copy` (sysmac.md 4): the bytes are taken when the request starts (default) or
+    when the socket service sends them, after the ST code changed the array."""
+    plc = Plc(RealTcpTransport(), skt_send_copy=skt_send_copy)
+    try:
+        sock = plc.connect(peer.port)
+        server_side = peer.accept()
+        data = list(b"OLD")
+        send = plc.fb("SktTCPSend", Socket=sock, SendDat=data, Size=3)
+        send.step(Execute=True)
+        data[:] = list(b"NEW")
+        plc.next_scan()
+        send.step()
+        assert send.Done
+        assert read_exactly(server_side, 3) == sent
+    finally:
+        plc.ctx.transport.close_all()
 
 
 def test_send_size_limits(plc, peer):

@@ -11,7 +11,7 @@ import random
 import pytest
 
 import emulator
-from thesis_harness import (CHECK_LISTEN, CLOSE, LISTEN_OK, OUTPUTS, frame_checksum, make_bench_fixture,
+from thesis_harness import (assert_done_once_after_drop, not_connected_states, CHECK_LISTEN, CLOSE, LISTEN_OK, OUTPUTS, frame_checksum, make_bench_fixture,
                             pose_text, thesis_frame, tm_frame, tmsct_reply)
 
 bench = make_bench_fixture()
@@ -146,18 +146,14 @@ def test_execute_dropped_while_busy(bench):
     b.execute(False)
     b.until(lambda s: s["Done"], "Done")
     b.scans(2)
-    runs = b.runner.runs(OUTPUTS, s0)
-    assert [st for st, _, _ in runs] == [(False, False, False, 0), (True, False, False, 0),
-                                         (False, True, False, 0), (False, False, False, 0)]
-    assert runs[2][2] == 1
+    assert_done_once_after_drop(b.runner, s0)
 
 
 def test_not_connected_16_99(bench):
     b = bench("Base", do_connect=False)
     s0 = b.start_with(params())
     b.scans(4)
-    seq = [tuple(s[k] for k in OUTPUTS) for s in b.runner.since(s0)]
-    assert seq == [(False, False, False, 0), (True, False, False, 0)] + [(False, False, True, 0x99)] * 2
+    assert b.runner.output_states(s0) == not_connected_states(2)
 
 
 def test_other_fb_under_execution_16_11(bench):

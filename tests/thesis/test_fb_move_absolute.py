@@ -11,7 +11,7 @@ from __future__ import annotations
 import pytest
 
 import emulator
-from thesis_harness import (CHECK_LISTEN, LISTEN_OK, OUTPUTS, frame_checksum, make_bench_fixture, pose_text,
+from thesis_harness import (assert_done_once_after_drop, not_connected_states, move_script_tail, CHECK_LISTEN, LISTEN_OK, OUTPUTS, frame_checksum, make_bench_fixture, pose_text,
                             tag_notification, thesis_frame, tm_frame, tmsct_reply)
 
 bench = make_bench_fixture()
@@ -45,11 +45,7 @@ def expected_script(p: dict) -> str:
     if p["RobotPoseEnable"]:
         args += f',{p["RobotPose.Pose1"]},{p["RobotPose.Pose2"]},{p["RobotPose.Pose3"]}'
     script = f'{p["MovementCommand"]}("{fmt}",{args})'
-    if not p["BlendingEnable"]:
-        script += f'\r\nQueueTag({p["CommandID"]},0)'
-    if p["ExitNode"]:
-        script += "\r\nScriptExit()"
-    return script
+    return script + move_script_tail(p)
 
 
 def run_move(b, p: dict) -> int:
@@ -248,8 +244,7 @@ def test_not_connected_16_99(bench):
     b = bench("Abs", do_connect=False)
     s0 = run_move(b, params(2))
     b.scans(5)
-    seq = [tuple(s[k] for k in OUTPUTS) for s in b.runner.since(s0)]
-    assert seq == [(False, False, False, 0), (True, False, False, 0)] + [(False, False, True, 0x99)] * 3
+    assert b.runner.output_states(s0) == not_connected_states(3)
     assert b.get("ErrorDescrip") == b"Robot not connected"
 
 
@@ -271,10 +266,7 @@ def test_execute_dropped_while_busy(bench):
     b.until(lambda s: s["Done"], "Done")
     b.scans(3)
     r = b.runner
-    runs = r.runs(OUTPUTS, s0)
-    assert [st for st, _, _ in runs] == [(False, False, False, 0), (True, False, False, 0),
-                                         (False, True, False, 0), (False, False, False, 0)]
-    assert runs[2][2] == 1
+    assert_done_once_after_drop(b.runner, s0)
     assert r.first(lambda s: s["Done"], s0)["CmdID_Ack"] == 9
     assert b.rx() == [CHECK_LISTEN, thesis_frame(9, expected_script(p))]
 

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import pytest
 
-from thesis_harness import (CHECK_LISTEN, LISTEN_OK, OUTPUTS, frame_checksum, make_bench_fixture, pose_text,
+from thesis_harness import (assert_done_once_after_drop, not_connected_states, move_script_tail, CHECK_LISTEN, LISTEN_OK, OUTPUTS, frame_checksum, make_bench_fixture, pose_text,
                             tag_notification, thesis_frame, tm_frame, tmsct_reply)
 
 bench = make_bench_fixture()
@@ -37,11 +37,7 @@ def expected_script(p: dict) -> str:
     script = (f'Circle("{fmt}",{pose_text(p["ArcPoint." + k] for k in keys)},'
               f'{pose_text(p["EndPoint." + k] for k in keys)},{p["Speed"]},{p["AccelTime"]},{blend},'
               f'{p["ArcAngle"]},{"true" if p["PrecisePositioning"] else "false"})')
-    if not p["BlendingEnable"]:
-        script += f'\r\nQueueTag({p["CommandID"]},0)'
-    if p["ExitNode"]:
-        script += "\r\nScriptExit()"
-    return script
+    return script + move_script_tail(p)
 
 
 def test_circle_normal_path(bench):
@@ -152,10 +148,7 @@ def test_execute_dropped_while_busy(bench):
     b.execute(False)
     b.until(lambda s: s["Done"], "Done")
     b.scans(2)
-    runs = b.runner.runs(OUTPUTS, s0)
-    assert [st for st, _, _ in runs] == [(False, False, False, 0), (True, False, False, 0),
-                                         (False, True, False, 0), (False, False, False, 0)]
-    assert runs[2][2] == 1
+    assert_done_once_after_drop(b.runner, s0)
     assert b.rx() == [CHECK_LISTEN, thesis_frame(3, expected_script(p))]
 
 
@@ -163,8 +156,7 @@ def test_not_connected_16_99(bench):
     b = bench("Circ", do_connect=False)
     s0 = b.start_with(params())
     b.scans(4)
-    seq = [tuple(s[k] for k in OUTPUTS) for s in b.runner.since(s0)]
-    assert seq == [(False, False, False, 0), (True, False, False, 0)] + [(False, False, True, 0x99)] * 2
+    assert b.runner.output_states(s0) == not_connected_states(2)
 
 
 def test_reply_split_over_two_segments_8_5(bench):

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import pytest
 
-from thesis_harness import (CHECK_LISTEN, CLOSE, LISTEN_OK, OUTPUTS, RESET, frame_checksum, make_bench_fixture,
+from thesis_harness import (assert_done_once_after_drop, not_connected_states, move_script_tail, CHECK_LISTEN, CLOSE, LISTEN_OK, OUTPUTS, RESET, frame_checksum, make_bench_fixture,
                             pose_text, tag_notification, thesis_frame, tm_frame, tmsct_reply)
 
 bench = make_bench_fixture()
@@ -35,11 +35,7 @@ def expected_script(p: dict) -> str:
     offs = pose_text(p[f"TargetPosition.{k}"] for k in ("X", "Y", "Z", "RX", "RY", "RZ"))
     blend = str(p["BlendingValue"]) if p["BlendingEnable"] else "0"
     script = f'{move}("{fmt}",{offs},{p["Speed"]},{p["AccelTime"]},{blend},{"true" if p["PrecisePositioning"] else "false"})'
-    if not p["BlendingEnable"]:
-        script += f'\r\nQueueTag({p["CommandID"]},0)'
-    if p["ExitNode"]:
-        script += "\r\nScriptExit()"
-    return script
+    return script + move_script_tail(p)
 
 
 def test_move_ptp_tool_normal_path(bench):
@@ -199,10 +195,7 @@ def test_execute_dropped_while_busy(bench):
     b.execute(False)
     b.until(lambda s: s["Done"], "Done")
     b.scans(2)
-    runs = b.runner.runs(OUTPUTS, s0)
-    assert [st for st, _, _ in runs] == [(False, False, False, 0), (True, False, False, 0),
-                                         (False, True, False, 0), (False, False, False, 0)]
-    assert runs[2][2] == 1
+    assert_done_once_after_drop(b.runner, s0)
     assert b.runner.first(lambda s: s["Done"], s0)["CmdID_Ack"] == 8
     assert b.rx() == [CHECK_LISTEN, thesis_frame(8, expected_script(p))]
 
@@ -211,8 +204,7 @@ def test_not_connected_16_99(bench):
     b = bench("Rel", do_connect=False)
     s0 = b.start_with(params())
     b.scans(4)
-    seq = [tuple(s[k] for k in OUTPUTS) for s in b.runner.since(s0)]
-    assert seq == [(False, False, False, 0), (True, False, False, 0)] + [(False, False, True, 0x99)] * 2
+    assert b.runner.output_states(s0) == not_connected_states(2)
 
 
 @pytest.mark.parametrize("changes, error_id, descrip", [

@@ -7,7 +7,7 @@ sysmac.md 8.12) and does not check CBT.WaitingReturn (README '+').
 from __future__ import annotations
 
 import emulator
-from thesis_harness import (CHECK_LISTEN, LISTEN_OK, OUTPUTS, RESET, frame_checksum, make_bench_fixture,
+from thesis_harness import (assert_done_once_after_drop, not_connected_states, CHECK_LISTEN, LISTEN_OK, OUTPUTS, RESET, frame_checksum, make_bench_fixture,
                             tag_notification, thesis_frame, tm_frame, tmsct_reply)
 
 bench = make_bench_fixture()
@@ -142,10 +142,7 @@ def test_execute_dropped_while_busy(bench):
     b.execute(False)
     b.until(lambda s: s["Done"], "Done")
     b.scans(2)
-    runs = b.runner.runs(OUTPUTS, s0)
-    assert [st for st, _, _ in runs] == [(False, False, False, 0), (True, False, False, 0),
-                                         (False, True, False, 0), (False, False, False, 0)]
-    assert runs[2][2] == 1
+    assert_done_once_after_drop(b.runner, s0)
 
 
 def test_not_connected_16_99(bench):
@@ -154,8 +151,7 @@ def test_not_connected_16_99(bench):
     b = bench("Prg", do_connect=False)
     s0 = b.start_with(params())
     b.scans(4)
-    seq = [tuple(s[k] for k in OUTPUTS) for s in b.runner.since(s0)]
-    assert seq == [(False, False, False, 0), (True, False, False, 0)] + [(False, False, True, 0x99)] * 2
+    assert b.runner.output_states(s0) == not_connected_states(2)
     assert b.get("ErrorDescrip") == b"Robot not connected"
 
 

@@ -207,6 +207,29 @@ def free_port() -> int:
 
 OUTPUTS = ("Busy", "Done", "Error", "ErrorID")
 
+# (Busy, Done, Error, ErrorID) runs of an FB whose Execute fell while Busy: the request still
+# completes, and Done shows for exactly one scan (spec section 4, rule 4)
+DROPPED_WHILE_BUSY = [(False, False, False, 0), (True, False, False, 0), (False, True, False, 0),
+                      (False, False, False, 0)]
+
+
+def not_connected_states(error_scans: int) -> list[tuple]:
+    """Per-scan outputs of an FB executed with no connection: reset, Busy, then 16#99 each scan."""
+    return [(False, False, False, 0), (True, False, False, 0)] + [(False, False, True, 0x99)] * error_scans
+
+
+def assert_done_once_after_drop(runner, start: int) -> None:
+    runs = runner.runs(OUTPUTS, start)
+    assert [state for state, _, _ in runs] == DROPPED_WHILE_BUSY
+    assert runs[2][2] == 1
+
+
+def move_script_tail(p: dict) -> str:
+    """What the move FBs append to the motion (Annex A2-A4): the QueueTag of the command unless
+    blending, and ScriptExit() when leaving the node; lines joined by CR LF."""
+    tail = "" if p["BlendingEnable"] else f'\r\nQueueTag({p["CommandID"]},0)'
+    return tail + ("\r\nScriptExit()" if p.get("ExitNode") else "")
+
 
 @dataclass
 class Sample:
@@ -273,6 +296,10 @@ class Runner:
 
     def since(self, start: int) -> list[Sample]:
         return [s for s in self.trace if s.scan >= start]
+
+    def output_states(self, start: int) -> list[tuple]:
+        """(Busy, Done, Error, ErrorID) of every scan from `start` on."""
+        return [tuple(s[k] for k in OUTPUTS) for s in self.since(start)]
 
     def busy_steps(self, start: int) -> list:
         """The FB_step values the FB went through while Busy, from scan `start` on."""
