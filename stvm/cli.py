@@ -208,26 +208,25 @@ def cmd_run(args) -> int:
 
 def _print_realtime(vm) -> None:
     """`--realtime` always reports how well the deadlines were kept (stderr)."""
-    import numpy as np
-    jitter = np.frombuffer(vm.jitter_ns, dtype=np.int64) / 1000.0
-    if len(jitter):
+    from stvm.runtime.vm import timing_us
+    jitter = timing_us(vm.jitter_ns)
+    if jitter is not None:
         print(f"realtime: {vm.scan_count} scans, {vm.overruns} overruns, start jitter us: "
-              f"p50 {np.percentile(jitter, 50):.0f}  p99 {np.percentile(jitter, 99):.0f}  max {jitter.max():.0f}",
-              file=sys.stderr)
+              f"p50 {jitter[1]:.0f}  p99 {jitter[2]:.0f}  max {jitter[3]:.0f}", file=sys.stderr)
 
 
 def _print_stats(vm) -> None:
-    import numpy as np
-    durations = np.frombuffer(vm.scan_durations_ns, dtype=np.int64) / 1000.0
-    if len(durations) == 0:
+    from stvm.runtime.vm import timing_us
+    scan = timing_us(vm.scan_durations_ns)
+    if scan is None:
         print("scans: 0")
         return
-    print(f"scans: {len(durations)}  scan time us: mean {durations.mean():.1f}  p50 {np.percentile(durations, 50):.1f}  "
-          f"p99 {np.percentile(durations, 99):.1f}  max {durations.max():.1f}")
+    mean, p50, p99, worst = scan
+    print(f"scans: {len(vm.scan_durations_ns)}  scan time us: mean {mean:.1f}  p50 {p50:.1f}  "
+          f"p99 {p99:.1f}  max {worst:.1f}")
     if vm.realtime:
-        jitter = np.frombuffer(vm.jitter_ns, dtype=np.int64) / 1000.0
-        print(f"overruns: {vm.overruns}  jitter us: p50 {np.percentile(jitter, 50) if len(jitter) else 0:.1f}  "
-              f"max {jitter.max() if len(jitter) else 0:.1f}")
+        jitter = timing_us(vm.jitter_ns) or (0.0, 0.0, 0.0, 0.0)
+        print(f"overruns: {vm.overruns}  jitter us: p50 {jitter[1]:.1f}  max {jitter[3]:.1f}")
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -18,6 +18,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from stvm.runtime.vm import timing_us
 from stvm.scenario import ScenarioDriver, load_scenario
 
 TM_LISTEN_PORT = 5890
@@ -135,12 +136,10 @@ class Demo:
             last_tx = next((f for f in reversed(frames) if _frame_dir(f) == "tx"), None)
             rows.append(("last frame PLC→robot", _frame_text(last_rx)))
             rows.append(("last frame robot→PLC", _frame_text(last_tx)))
-        durations = self.vm.scan_durations_ns[-1000:]
-        if durations:
-            ordered = sorted(durations)
-            rows.append(("scan time (last 1000)", f"mean {sum(ordered) / len(ordered) / 1000:.0f} µs, "
-                                                  f"p99 {ordered[int(len(ordered) * 0.99) - 1] / 1000:.0f} µs, "
-                                                  f"max {ordered[-1] / 1000:.0f} µs, overruns {self.vm.overruns}"))
+        scan = timing_us(self.vm.scan_durations_ns[-1000:])
+        if scan is not None:
+            rows.append(("scan time (last 1000)", f"mean {scan[0]:.0f} µs, p99 {scan[2]:.0f} µs, "
+                                                  f"max {scan[3]:.0f} µs, overruns {self.vm.overruns}"))
         return rows
 
 

@@ -29,6 +29,17 @@ from stvm.syntax.nodes import Span
 GENERATED_FILENAME = "<stvm-generated>"
 
 
+def timing_us(values_ns) -> tuple[float, float, float, float] | None:
+    """(mean, p50, p99, max) in µs of scan durations or start jitters (ns); None if empty."""
+    import numpy as np
+    values = np.frombuffer(values_ns, dtype=np.int64) / 1000.0 if isinstance(values_ns, array) \
+        else np.asarray(values_ns, dtype=np.float64) / 1000.0
+    if len(values) == 0:
+        return None
+    return (float(values.mean()), float(np.percentile(values, 50)), float(np.percentile(values, 99)),
+            float(values.max()))
+
+
 class RuntimeFault(Exception):
     """A major fault: the task stopped at an ST location."""
 
