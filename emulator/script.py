@@ -11,7 +11,7 @@ it dry-runs the script, see ``robot.py``.
 from __future__ import annotations
 
 import re
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Iterable, Union
 
 # ----------------------------------------------------------------------------- AST

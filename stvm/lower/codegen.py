@@ -341,7 +341,7 @@ class Lowerer:
             cached = self.cached_vars(pou, node)
             temps_reset = [f"self.{var_attr(v.name)} = {self.var_default(v)}" for v in own
                            if v.section == TEMP and v.key not in cached]
-            self.cached_body(pou, node, temps_reset, [])
+            self.cached_body(pou, node, cached, temps_reset, [])
         w.indent -= 2
         w.blank_span()
 
@@ -357,14 +357,11 @@ class Lowerer:
         self.pou = pou
         self.owner = "_f"
         assert node is not None and pou.return_type is not None
-        cached = self.cached_vars(pou, node)
-        # parameters arrive as Python locals; the frame holds only what is passed by reference
+        # every variable lives on the frame `_f` (so in-outs can reference it); the often used
+        # ones are copied into Python locals by cached_body
         prologue = ["_f = _Frame()"]
         for p in params:
-            if p.key not in cached:
-                prologue.append(f"_f.{var_attr(p.name)} = {var_attr(p.name)}")
-            else:
-                prologue.append(f"_f.{var_attr(p.name)} = {var_attr(p.name)}")
+            prologue.append(f"_f.{var_attr(p.name)} = {var_attr(p.name)}")
         for var in pou.variables.values():
             if var.section not in (INPUT, IN_OUT, EXTERNAL):
                 prologue.append(f"_f.{var_attr(var.name)} = {self.var_default(var)}")
@@ -372,7 +369,7 @@ class Lowerer:
         # VAR_OUTPUT of a function: written through the caller's references when it returns
         epilogue = [f"if o_{var_attr(o.name)} is not None: o_{var_attr(o.name)}.set(_f.{var_attr(o.name)})"
                     for o in outputs]
-        self.cached_body(pou, node, prologue, epilogue)
+        self.cached_body(pou, node, self.cached_vars(pou, node), prologue, epilogue)
         w.blank_span()
         w.line("return _r")
         w.indent -= 1
@@ -727,10 +724,12 @@ class Lowerer:
             out[var.key] = var
         return out
 
-    def cached_body(self, pou: POUInfo, node: n.POU, prologue_extra: list[str], epilogue_extra: list[str]) -> None:
-        """Emit the body of a call with cached locals: prologue, try/body/finally write-back."""
+    def cached_body(self, pou: POUInfo, node: n.POU, cached: dict[str, Variable], prologue_extra: list[str],
+                    epilogue_extra: list[str]) -> None:
+        """Emit the body of a call with `cached` (from `cached_vars`) in Python locals: prologue,
+        try/body/finally write-back."""
         outer = self.w
-        self.cached = self.cached_vars(pou, node)
+        self.cached = cached
         self.used, self.assigned = set(), set()
         guarded = bool(self.cached) or bool(epilogue_extra)
         body_writer = _Writer()

@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 
 from stvm.diagnostics import Diagnostic
 from stvm.semantics import types as t
-from stvm.semantics.model import (EXTERNAL, GLOBAL, IN_OUT, INPUT, LOCAL, OUTPUT, POUInfo,
+from stvm.semantics.model import (EXTERNAL, GLOBAL, IN_OUT, INPUT, LOCAL, POUInfo,
                                   ProjectModel, TaskInfo, Variable)
 from stvm.settings import DEFAULT_SETTINGS, SysmacSettings
 from stvm.syntax import nodes as n
@@ -240,8 +240,6 @@ class Checker:
             if kind == GLOBAL:
                 self.error("VAR_GLOBAL is not allowed inside a POU; declare globals at top level", block.span, "E012")
                 continue
-            if pou.kind == "FUNCTION" and kind == OUTPUT:
-                pass
             for decl in block.decls:
                 vtype = self.resolve_type_spec(decl.type_spec, pou.namespace, allow_generic=native,
                                                allow_open_array=kind in (IN_OUT, INPUT))
@@ -550,8 +548,6 @@ class Checker:
                 self.error(f"malformed typed literal '{prefix[0]}#{text}'", expr.span, "E022")
             return None
         key = self.lookup_type_key(prefix, expr.rooted, namespace)
-        if key is None and len(prefix) > 1 and prefix[0].startswith("_"):
-            key = None
         if key is None:
             # Sysmac listings sometimes print the enum type without its leading 'e' (sysmac.md 3 #1):
             # that stays an error; the restored source fixes it.
