@@ -121,6 +121,7 @@ class VM:
         self.overruns = 0
         self.fault: RuntimeFault | None = None
         self.collect_stats = True   # per-scan durations (for --stats); benchmarks switch it off
+        self.on_scan_start: list[Callable[["VM"], None]] = []   # front ends' queued writes
         self.on_scan_end: list[Callable[["VM"], None]] = []
         self._rt_start: float | None = None
         self.jitter_ns = array("q")
@@ -180,6 +181,9 @@ class VM:
         ctx.now_ns = self.now_ns
         ctx.scan = tick
         schedule = self._schedule
+        if self.on_scan_start:
+            for hook in self.on_scan_start:
+                hook(self)
         started = time.perf_counter_ns() if self.collect_stats else 0
         try:
             for task_name, programs in schedule[tick % len(schedule)]:
@@ -346,6 +350,10 @@ class VM:
             return inner.lst, inner.index
         return container, key   # an aggregate in-out holds the caller's object itself
 
+    def accessor(self, path: str) -> "Accessor":
+        """A reusable handle on one variable (checked now: raises `PathError` if `path` is unknown)."""
+        return Accessor(self, path, self.resolve(path)[2])
+
     def get(self, path: str) -> Any:
         container, key, _ = self.resolve(path)
         return container[key] if isinstance(key, int) else getattr(container, key)
@@ -371,6 +379,34 @@ class VM:
         container, key, ty = self.resolve(path)
         value = container[key] if isinstance(key, int) else getattr(container, key)
         return format_value(value, ty, self.model.pous)
+
+
+class Accessor:
+    """One variable of a running VM by path: `get()`, `set(value)`, its ST `type`.
+
+    The container is looked up again on every access, because assigning a STRUCT or ARRAY
+    replaces the object and a VAR_IN_OUT follows whatever the FB was last called with."""
+
+    __slots__ = ("vm", "path", "type")
+
+    def __init__(self, vm: VM, path: str, ty: t.Type) -> None:
+        self.vm = vm
+        self.path = path
+        self.type = ty
+
+    def get(self) -> Any:
+        return self.vm.get(self.path)
+
+    def set(self, value: Any) -> None:
+        """Store `value` (checked and converted to the variable's type)."""
+        self.vm.set(self.path, value)
+
+    def bind(self) -> Callable[[Any], None]:
+        """Resolve the container now; the returned setter stores an already converted value."""
+        container, key, _ = self.vm.resolve(self.path)
+        if isinstance(key, int):
+            return lambda value: container.__setitem__(key, value)
+        return lambda value: setattr(container, key, value)
 
 
 def coerce_python_value(value: Any, ty: t.Type) -> Any:

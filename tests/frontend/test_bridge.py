@@ -1,0 +1,101 @@
+"""The front-end bridge: snapshots between scans, writes at the start of the next scan, all or nothing."""
+
+import threading
+
+import pytest
+
+import stvm
+from stvm.frontend import VariableBridge, WriteRejected, catalog
+
+SOURCE = """
+TYPE Point : STRUCT x : REAL; y : REAL; END_STRUCT; END_TYPE
+VAR_GLOBAL g_count : DINT; g_pts : ARRAY[1..3] OF Point; END_VAR
+PROGRAM Main
+VAR_INPUT run : BOOL; END_VAR
+VAR n : INT; seen : DINT; timer : TON; END_VAR
+VAR_EXTERNAL g_count : DINT; END_VAR
+IF run THEN n := n + 1; END_IF;
+seen := g_count;
+timer(IN := run, PT := T#5ms);
+END_PROGRAM
+"""
+
+
+@pytest.fixture
+def vm(tmp_path):
+    path = tmp_path / "main.st"
+    path.write_text(SOURCE)
+    return stvm.load([str(path)]).start(scan="1ms")
+
+
+def test_snapshot_is_taken_between_scans(vm):
+    bridge = VariableBridge(vm)
+    watch = bridge.watch(["Main.n", "Main.run"])
+    assert watch.latest() is None
+    vm["Main.run"] = True
+    vm.run(cycles=3)
+    snap = watch.latest()
+    assert (snap.scan, snap.now_ns, dict(snap.values)) == (2, 2_000_000, {"Main.n": 3, "Main.run": True})
+    assert snap.version == 3
+
+
+def test_watch_interval_limits_sampling(vm):
+    bridge = VariableBridge(vm)
+    seen = []
+    bridge.watch(["Main.n"], every_ns=4_000_000, on_snapshot=seen.append)
+    vm.run(cycles=10)
+    assert [s.scan for s in seen] == [0, 4, 8]
+
+
+def test_write_applies_at_start_of_next_scan(vm):
+    bridge = VariableBridge(vm)
+    watch = bridge.watch(["Main.seen"])
+    future = bridge.submit({"g_count": 41})
+    assert not future.done() and vm["g_count"] == 0   # nothing changes before the next scan
+    vm.scan()
+    assert future.result(timeout=0) is None
+    assert watch.latest().values["Main.seen"] == 41   # the program saw the value in that scan
+
+
+def test_bad_value_rejects_whole_batch(vm):
+    bridge = VariableBridge(vm)
+    with pytest.raises(WriteRejected) as err:
+        bridge.submit({"Main.n": 5, "Main.run": "yes"})
+    assert err.value.path == "Main.run"
+    with pytest.raises(WriteRejected, match="out of range"):
+        bridge.submit({"Main.n": 40000})
+    with pytest.raises(WriteRejected, match="unknown variable"):
+        bridge.submit({"Nope.x": 1})
+    vm.scan()
+    assert vm["Main.n"] == 0
+
+
+def test_struct_member_in_array_written_from_another_thread(vm):
+    bridge = VariableBridge(vm)
+    results = []
+    worker = threading.Thread(target=lambda: results.append(bridge.submit({"g_pts[2].y": 1.5})))
+    worker.start()
+    worker.join()
+    vm.scan()
+    results[0].result(timeout=1)
+    assert vm["g_pts[2].y"] == 1.5
+    assert bridge.format("g_pts[2].y", 1.5) == "1.5"
+
+
+def test_pending_queue_is_bounded(vm):
+    bridge = VariableBridge(vm, max_pending=2)
+    bridge.submit({"Main.n": 1})
+    bridge.submit({"Main.n": 2})
+    with pytest.raises(WriteRejected, match="busy"):
+        bridge.submit({"Main.n": 3})
+    vm.scan()
+    assert vm["Main.n"] == 2   # applied in order
+
+
+def test_catalog_lists_programs_globals_and_members(vm):
+    paths = {node.path: node for root in catalog(vm) for node in root.walk()}
+    assert paths["Main"].kind == "program"
+    assert paths["Main.run"].section == "VAR_INPUT"
+    assert paths["g_pts[3].x"].kind == "member" and paths["g_pts[3].x"].leaf
+    assert paths["Main.timer.Q"].in_fb
+    assert "Main.g_count" not in paths            # externals are listed once, under the globals
