@@ -15,7 +15,6 @@ from __future__ import annotations
 
 import argparse
 import hashlib
-import statistics
 import sys
 import tempfile
 import time
@@ -77,7 +76,7 @@ def timed_run(project, watch: list[str] | None, cycles: int) -> tuple[float, flo
     started = time.perf_counter()
     vm.run(cycles=cycles)
     loop = time.perf_counter() - started
-    program_ns = statistics.fmean(vm.scan_durations_ns) if len(vm.scan_durations_ns) else 0.0
+    program_ns = vm.scan_durations_ns.mean_ns
     if watch is not None:
         recorder.finish()
     vm.close()

@@ -190,7 +190,7 @@ def cmd_run(args) -> int:
         if demo is not None:
             demo.stop()
             print(f"PnP cycles completed: {demo.state.cycles}; VM time {vm.now_ns / 1e9:.3f} s; "
-                  f"scans {vm.scan_count}; overruns {vm.overruns}", file=sys.stderr)
+                  f"scans {vm.scan_count}; {_realtime_counts(vm)}", file=sys.stderr)
     for name in args.print or []:
         try:
             print(f"{name} = {vm.format(name)}")
@@ -206,12 +206,17 @@ def cmd_run(args) -> int:
     return status
 
 
+def _realtime_counts(vm) -> str:
+    return (f"overruns {vm.overruns} (started > 1 period late), catch-up scans {vm.catch_up_scans}, "
+            f"max lateness {vm.max_lateness_ns / 1000:.0f} us")
+
+
 def _print_realtime(vm) -> None:
     """`--realtime` always reports how well the deadlines were kept (stderr)."""
     from stvm.runtime.vm import timing_us
     jitter = timing_us(vm.jitter_ns)
     if jitter is not None:
-        print(f"realtime: {vm.scan_count} scans, {vm.overruns} overruns, start jitter us: "
+        print(f"realtime: {vm.scan_count} scans, {_realtime_counts(vm)}; start jitter us: "
               f"p50 {jitter[1]:.0f}  p99 {jitter[2]:.0f}  max {jitter[3]:.0f}", file=sys.stderr)
 
 
@@ -226,7 +231,8 @@ def _print_stats(vm) -> None:
           f"p99 {p99:.1f}  max {worst:.1f}")
     if vm.realtime:
         jitter = timing_us(vm.jitter_ns) or (0.0, 0.0, 0.0, 0.0)
-        print(f"overruns: {vm.overruns}  jitter us: p50 {jitter[1]:.1f}  max {jitter[3]:.1f}")
+        print(f"overruns: {vm.overruns}  catch-up scans: {vm.catch_up_scans}  "
+              f"jitter us: p50 {jitter[1]:.1f}  p99 {jitter[2]:.1f}  max {jitter[3]:.1f}")
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -136,10 +136,12 @@ class Demo:
             last_tx = next((f for f in reversed(frames) if _frame_dir(f) == "tx"), None)
             rows.append(("last frame PLC→robot", _frame_text(last_rx)))
             rows.append(("last frame robot→PLC", _frame_text(last_tx)))
-        scan = timing_us(self.vm.scan_durations_ns[-1000:])
+        scan = timing_us(self.vm.scan_durations_ns)
         if scan is not None:
-            rows.append(("scan time (last 1000)", f"mean {scan[0]:.0f} µs, p99 {scan[2]:.0f} µs, "
-                                                  f"max {scan[3]:.0f} µs, overruns {self.vm.overruns}"))
+            rows.append(("scan time", f"mean {scan[0]:.0f} µs, p99 {scan[2]:.0f} µs, max {scan[3]:.0f} µs"))
+        if self.vm.realtime:
+            rows.append(("deadlines", f"overruns {self.vm.overruns}, catch-up scans {self.vm.catch_up_scans}, "
+                                      f"max lateness {self.vm.max_lateness_ns / 1000:.0f} µs"))
         return rows
 
 

@@ -25,7 +25,7 @@ Use::
     transport.attach(vm)                 # registers the clock hook; sets the latency
     vm.run(cycles=5000)
     transport.link.robot.snapshot()      # the robot's state
-    transport.frames                     # every frame, as `FrameRecord`s
+    transport.frames                     # the last KEEP_FRAMES frames, as `FrameRecord`s
 
 Any host and port connect to the one emulated robot (the address is not checked); a scenario's
 `[robot]` globals receive `LOCKSTEP_HOST` and `LOCKSTEP_PORT`.
@@ -33,6 +33,7 @@ Any host and port connect to the one emulated robot (the address is not checked)
 
 from __future__ import annotations
 
+from collections import deque
 from dataclasses import dataclass
 from typing import Callable
 
@@ -42,6 +43,8 @@ from stvm.stdlib.sockets import (CONNECTING, ESTABLISHED, FAILED, PEER_CLOSED, R
 
 LOCKSTEP_HOST = "127.0.0.1"
 LOCKSTEP_PORT = 5890   # the TM Listen Node's default port (tm_protocol.md 1.2)
+KEEP_FRAMES = 1_000    # frames kept in `LockstepTransport.frames` (a long run must not grow;
+                       # a trace recorder or `log_path` sees every frame through `on_frame`)
 
 # ClientEndpoint.status -> Link state (sockets.py)
 _STATES = {"connecting": CONNECTING, "connected": ESTABLISHED, "peer_closed": PEER_CLOSED,
@@ -125,7 +128,7 @@ class LockstepTransport(SocketTable):
                                   latency_ns=latency_ns if latency_ns is not None else 0,
                                   log_path=log_path)
         self._explicit_latency = latency_ns is not None
-        self.frames: list[FrameRecord] = []
+        self.frames: deque[FrameRecord] = deque(maxlen=KEEP_FRAMES)
         self.on_frame: list[Callable[[FrameRecord], None]] = []
         self._ephemeral = 49152   # IANA dynamic range start (Choice: deterministic, counts up)
         original_log = self.link.core.frame_log

@@ -14,7 +14,6 @@ from __future__ import annotations
 import math
 import re
 import time
-from array import array
 from dataclasses import dataclass, field
 from types import TracebackType
 from typing import Any, Callable
@@ -22,6 +21,7 @@ from typing import Any, Callable
 from stvm.runtime.context import RunContext
 from stvm.runtime.format import format_time, format_value
 from stvm.runtime.helpers import HELPERS
+from stvm.runtime.stats import TimingStats
 from stvm.runtime.values import AttrRef, FunctionError, ItemRef, MapRef, STFault
 from stvm.semantics import types as t
 from stvm.syntax.nodes import Span
@@ -29,15 +29,9 @@ from stvm.syntax.nodes import Span
 GENERATED_FILENAME = "<stvm-generated>"
 
 
-def timing_us(values_ns) -> tuple[float, float, float, float] | None:
-    """(mean, p50, p99, max) in µs of scan durations or start jitters (ns); None if empty."""
-    import numpy as np
-    values = np.frombuffer(values_ns, dtype=np.int64) / 1000.0 if isinstance(values_ns, array) \
-        else np.asarray(values_ns, dtype=np.float64) / 1000.0
-    if len(values) == 0:
-        return None
-    return (float(values.mean()), float(np.percentile(values, 50)), float(np.percentile(values, 99)),
-            float(values.max()))
+def timing_us(stats) -> tuple[float, float, float, float] | None:
+    """(mean, p50, p99, max) in µs of a `TimingStats` (scan durations or start jitters); None if empty."""
+    return stats.summary_us()
 
 
 class RuntimeFault(Exception):
@@ -117,14 +111,18 @@ class VM:
         self._build_tasks(scan_ns)
         self.scan_count = 0
         self.now_ns = 0
-        self.scan_durations_ns = array("q")
-        self.overruns = 0
+        # bounded memory whatever the run length (a shift-long demo must not grow)
+        self.scan_durations_ns = TimingStats()
+        self.overruns = 0          # real time: scans started more than a period late (episodes)
+        self.catch_up_scans = 0    # real time: scans started at once, behind schedule
+        self.max_lateness_ns = 0
+        self._late = False
         self.fault: RuntimeFault | None = None
         self.collect_stats = True   # per-scan durations (for --stats); benchmarks switch it off
         self.on_scan_start: list[Callable[["VM"], None]] = []   # front ends' queued writes
         self.on_scan_end: list[Callable[["VM"], None]] = []
-        self._rt_start: float | None = None
-        self.jitter_ns = array("q")
+        self._rt_start: int | None = None
+        self.jitter_ns = TimingStats()
 
     # ---- setup
     def _instance(self, name: str, qualname: str) -> Any:
@@ -200,7 +198,7 @@ class VM:
         except Exception as exc:  # an stvm bug: still report the ST location, not a traceback
             self._raise_fault(f"internal error in stvm ({type(exc).__name__}: {exc})", exc.__traceback__, ctx.task)
         if started:
-            self.scan_durations_ns.append(time.perf_counter_ns() - started)
+            self.scan_durations_ns.add(time.perf_counter_ns() - started)
         if self.on_scan_end:
             for hook in self.on_scan_end:
                 hook(self)
@@ -210,16 +208,34 @@ class VM:
             self._sleep_to_deadline()
 
     def _sleep_to_deadline(self) -> None:
+        """Wait for the release time of the next scan (`start + scan_count * period`).
+
+        Behind schedule, the next scan starts at once (a catch-up scan), so VM time stays tied
+        to the wall clock. An overrun is the first scan of such an episode that starts more than
+        one period late; the catch-up scans that follow it are counted apart (one stall of
+        57 ms is one overrun and ~57 catch-up scans, not 57 overruns)."""
         now = time.perf_counter_ns()
         if self._rt_start is None:
             self._rt_start = now - self.base_ns
         deadline = self._rt_start + self.scan_count * self.base_ns
-        if now > deadline:
-            self.overruns += 1
-            self.jitter_ns.append(now - deadline)
-            return
-        time.sleep((deadline - now) / 1e9)
-        self.jitter_ns.append(time.perf_counter_ns() - deadline)
+        waited = now < deadline
+        if waited:
+            time.sleep((deadline - now) / 1e9)
+            now = time.perf_counter_ns()
+        lateness = max(0, now - deadline)
+        self.jitter_ns.add(lateness)
+        if lateness > self.max_lateness_ns:
+            self.max_lateness_ns = lateness
+        if lateness > self.base_ns:
+            if self._late:
+                self.catch_up_scans += 1
+            else:
+                self.overruns += 1
+                self._late = True
+        elif not waited:
+            self.catch_up_scans += 1
+        else:
+            self._late = False
 
     def _raise_fault(self, message: str, tb: TracebackType | None, task: str) -> None:
         span = self.st_span(tb)
