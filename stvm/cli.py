@@ -6,6 +6,7 @@ Exit codes (a contract): 0 ok, 1 compile errors, 2 usage error, 3 runtime fault.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import signal
 import sys
 from pathlib import Path
@@ -107,7 +108,7 @@ def literal_value(text: str, ty):
 
 
 def cmd_run(args) -> int:
-    from stvm.project import LoadError, load, parse_duration
+    from stvm.project import LoadError, load, nothing_to_run, parse_duration
     from stvm.runtime.vm import PathError, RuntimeFault, UnboundInOut
     _require_files(args.files)
     settings = _settings(args)
@@ -118,8 +119,12 @@ def cmd_run(args) -> int:
         raise _UsageError(str(exc)) from exc
     if scan_ns <= 0:
         raise _UsageError("--scan must be positive")
+    if duration_ns is not None and duration_ns < 0:
+        raise _UsageError(f"--duration must not be negative, got {args.duration!r}")
     if args.cycles is not None and args.cycles < 0:
         raise _UsageError("--cycles must be >= 0")
+    if args.pnp_cycles is not None and args.pnp_cycles < 1:
+        raise _UsageError(f"--pnp-cycles must be >= 1, got {args.pnp_cycles}")
     try:
         project = load(args.files, settings, use_cache=not args.no_cache)
     except LoadError as exc:
@@ -127,6 +132,10 @@ def cmd_run(args) -> int:
         print(f"{sum(d.is_error for d in exc.diagnostics)} error(s)", file=sys.stderr)
         return EXIT_COMPILE
     _print_diagnostics(project.warnings, project.sources)
+    if nothing_to_run(project):
+        print(f"stvm: error: {nothing_to_run(project, args.files)}", file=sys.stderr)
+        return EXIT_COMPILE
+    _check_demo_flags(args, "demo" in project.manifest)
     demo_mode = "demo" in project.manifest and not args.no_demo
     # the demo talks to a robot that moves in wall-clock time: run on the real-time clock
     realtime = args.realtime or (demo_mode and not args.virtual_clock)
@@ -173,7 +182,7 @@ def cmd_run(args) -> int:
     from stvm.runtime.watchdog import Watchdog
     try:
         try:
-            with Watchdog(vm, args.watchdog):
+            with Watchdog(vm, args.watchdog) if args.watchdog is not None else contextlib.nullcontext():
                 if demo is not None:
                     from stvm.demo import run_with_status
                     run_with_status(demo, run_scans)
@@ -204,6 +213,36 @@ def cmd_run(args) -> int:
     if interrupted:
         print(f"stopped after {vm.scan_count} scans", file=sys.stderr)
     return status
+
+
+_DEMO_FLAGS = (("robot", "--robot"), ("emulator_log", "--emulator-log"), ("pnp_cycles", "--pnp-cycles"),
+               ("no_demo", "--no-demo"), ("virtual_clock", "--virtual-clock"))
+
+
+def _check_demo_flags(args, is_demo: bool) -> None:
+    """Demo options on a project without a demo would be silently ignored: refuse them."""
+    given = [flag for attr, flag in _DEMO_FLAGS if getattr(args, attr, None) not in (None, False)]
+    if given and not is_demo:
+        raise _UsageError(f"{', '.join(given)}: only for a demo project (a stvm.toml with a [demo] table "
+                          f"beside the file, e.g. st_src/); {' '.join(args.files)} has none")
+    if is_demo and args.no_demo:
+        extra = [flag for flag in given if flag not in ("--no-demo",)]
+        if extra:
+            raise _UsageError(f"{', '.join(extra)} cannot be combined with --no-demo")
+
+
+def _watchdog_seconds(text: str) -> float | None:
+    """`--watchdog SECONDS` (a positive finite number) or `off`."""
+    import math
+    if text.strip().lower() == "off":
+        return None
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"needs seconds (a positive number) or 'off', got {text!r}") from None
+    if not math.isfinite(value) or value <= 0:
+        raise argparse.ArgumentTypeError(f"needs seconds > 0 (or 'off' for no watchdog), got {text!r}")
+    return value
 
 
 def _realtime_counts(vm) -> str:
@@ -258,8 +297,8 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--stats", action="store_true", help="print scan-time statistics")
     run.add_argument("--no-cache", action="store_true", help="do not use the compile cache")
     run.add_argument("--scenario", help="scenario TOML applied to the run (see README)")
-    run.add_argument("--watchdog", type=float, default=5.0, metavar="SECONDS",
-                     help="fault when one scan runs longer than this wall-clock time (default 5)")
+    run.add_argument("--watchdog", type=_watchdog_seconds, default=5.0, metavar="SECONDS",
+                     help="fault when one scan runs longer than this wall-clock time (default 5; off: none)")
     demo = run.add_argument_group("demo (projects whose stvm.toml has [demo], e.g. st_src/)")
     demo.add_argument("--robot", metavar="HOST:PORT", help="talk to this robot instead of the bundled emulator")
     demo.add_argument("--emulator-log", metavar="FILE", help="write the emulator's frame log (JSON lines)")
@@ -285,6 +324,9 @@ def _register_extensions(sub) -> None:
         module.register(sub)
 
 
+EXIT_INTERNAL = 70   # EX_SOFTWARE: a bug in stvm, never the user's input
+
+
 def main(argv: list[str] | None = None) -> int:
     try:
         return _main(argv)
@@ -295,15 +337,16 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def _main(argv: list[str] | None) -> int:
+    from stvm.diagnostics import printable
     parser = build_parser()
     args = parser.parse_args(argv)
     if not getattr(args, "func", None):
         parser.print_help(sys.stderr)
         return EXIT_USAGE
     try:
-        return args.func(args)
+        return _dispatch(args)
     except _UsageError as exc:
-        print(f"stvm: error: {exc}", file=sys.stderr)
+        print(f"stvm: error: {printable(str(exc))}", file=sys.stderr)
         return EXIT_USAGE
     except BrokenPipeError:
         return EXIT_OK
@@ -311,6 +354,29 @@ def _main(argv: list[str] | None) -> int:
         # Ctrl-C before the run started (while loading): nothing ran, nothing to print
         print("stvm: interrupted", file=sys.stderr)
         return 130
+    except MemoryError:
+        print("stvm: error: out of memory", file=sys.stderr)
+        return EXIT_COMPILE
+    except Exception as exc:   # a bug in stvm: one line, not a traceback (STVM_TRACEBACK=1 shows it)
+        import os
+        if os.environ.get("STVM_TRACEBACK"):
+            raise
+        print(f"stvm: internal error: {type(exc).__name__}: {printable(str(exc))} "
+              f"(a bug in stvm; STVM_TRACEBACK=1 shows where)", file=sys.stderr)
+        return EXIT_INTERNAL
+
+
+def _dispatch(args) -> int:
+    """Run the command; errors that name a bad input become usage (2) or source (1) errors."""
+    from stvm.manifest import ManifestError
+    from stvm.project import LoadError
+    try:
+        return args.func(args)
+    except ManifestError as exc:
+        raise _UsageError(str(exc)) from exc
+    except LoadError as exc:   # nothing to load (an empty folder) or unreadable sources
+        _print_diagnostics(exc.diagnostics, exc.sources)
+        return EXIT_COMPILE
 
 
 if __name__ == "__main__":

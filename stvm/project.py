@@ -19,6 +19,7 @@ from typing import TYPE_CHECKING, Sequence
 
 from stvm import __version__
 from stvm.diagnostics import Diagnostic, has_errors, render, sort_key
+from stvm.manifest import MANIFEST, ManifestError, project_files, read_manifest  # noqa: F401 (API)
 from stvm.runtime.vm import GENERATED_FILENAME, VM
 from stvm.settings import DEFAULT_SETTINGS, SysmacSettings
 
@@ -29,7 +30,6 @@ if TYPE_CHECKING:
 # The front end (Lark, the checker, the code generator) is imported only on a cache miss: a
 # cached load needs none of it, which halves the start-up time of `stvm run`.
 
-MANIFEST = "stvm.toml"
 
 
 class LoadError(Exception):
@@ -79,24 +79,27 @@ def parse_duration(text: str) -> int:
 def expand_paths(paths: Sequence[str | Path]) -> tuple[list[Path], dict, Path | None]:
     """Files to load. A folder means its *.st files; a lone file in a folder with `stvm.toml`
     means the project that manifest describes (so `stvm run st_src/PnP_Example.st` loads the
-    whole thesis project)."""
+    whole thesis project). Raises ManifestError for a manifest that cannot be used and
+    LoadError when there is nothing to load (a folder without .st files)."""
     out: list[Path] = []
     manifest: dict = {}
     root: Path | None = None
     for raw in paths:
         path = Path(raw)
         if path.is_dir():
-            out += sorted(path.glob("*.st"))
+            found = sorted(p for p in path.glob("*.st") if p.is_file())
             if (path / MANIFEST).exists():
-                manifest, root = _read_manifest(path / MANIFEST), path
+                manifest, root = read_manifest(path / MANIFEST), path
+            if not found:
+                raise LoadError([Diagnostic.error(f"no .st files in {path}", _file_span(path))], {})
+            out += found
         else:
             out.append(path)
     if len(paths) == 1 and not Path(paths[0]).is_dir():
         folder = Path(paths[0]).parent
         if (folder / MANIFEST).exists():
-            manifest, root = _read_manifest(folder / MANIFEST), folder
-            listed = manifest.get("project", {}).get("files")
-            files = [folder / f for f in listed] if listed else sorted(folder.glob("*.st"))
+            manifest, root = read_manifest(folder / MANIFEST), folder
+            files = project_files(manifest, folder, folder / MANIFEST) or sorted(folder.glob("*.st"))
             out = files if Path(paths[0]).resolve() in {f.resolve() for f in files} else files + out
     seen: set[Path] = set()
     unique = []
@@ -108,9 +111,14 @@ def expand_paths(paths: Sequence[str | Path]) -> tuple[list[Path], dict, Path | 
     return unique, manifest, root
 
 
-def _read_manifest(path: Path) -> dict:
-    with path.open("rb") as fh:
-        return tomllib.load(fh)
+def source_encoding(manifest: dict) -> str:
+    """The encoding of the project's sources (`[project] encoding`, default UTF-8)."""
+    return manifest.get("project", {}).get("encoding", "utf-8")
+
+
+def _file_span(path: Path):
+    from stvm.syntax.nodes import Span
+    return Span(str(path), 0, 0, 0, 0)
 
 
 def _stdlib(settings: SysmacSettings = DEFAULT_SETTINGS) -> list[tuple[str, str]]:
@@ -151,21 +159,79 @@ def _cache_key(texts: list[tuple[str, str]], settings: SysmacSettings) -> str:
     return digest.hexdigest()
 
 
-def read_source(path: Path) -> str:
-    data = path.read_bytes()
-    if data.startswith(b"\xef\xbb\xbf"):
+MAX_SOURCE_BYTES = 8 * 2**20
+"""The largest source file stvm reads (8 MiB, about 300,000 lines of dense ST): a bigger
+input is refused with a clear error instead of minutes of parsing and gigabytes of memory."""
+
+
+class SourceError(Exception):
+    """A file that is not ST source text: too large, binary, or not in its encoding.
+    `line`/`column` locate the offending byte (0 when the whole file is the problem);
+    `text` is what can be shown of it (decoded with replacement characters)."""
+
+    def __init__(self, message: str, line: int = 0, column: int = 0, text: str = "") -> None:
+        super().__init__(message)
+        self.message = message
+        self.line = line
+        self.column = column
+        self.text = text
+
+
+def _is_utf8(encoding: str) -> bool:
+    return encoding.lower().replace("-", "").replace("_", "") == "utf8"
+
+
+def read_source(path: Path, encoding: str = "utf-8") -> str:
+    """The text of an ST file. Sources are UTF-8 (a BOM is skipped) unless the project manifest
+    declares `encoding`; raises SourceError for an oversized, binary or mis-encoded file and
+    OSError if it cannot be read."""
+    with open(path, "rb") as fh:
+        data = fh.read(MAX_SOURCE_BYTES + 1)   # bounded: /dev/zero must not exhaust memory
+    if len(data) > MAX_SOURCE_BYTES:
+        raise SourceError(f"file is larger than {MAX_SOURCE_BYTES // 2**20} MiB, the most stvm reads "
+                          f"from one source file (split it into several files)")
+    if data.startswith((b"\xff\xfe", b"\xfe\xff")):
+        raise SourceError("this file is UTF-16 text; ST sources are read as UTF-8 (save it as UTF-8)", 1, 1)
+    nul = data.find(b"\0")
+    if nul >= 0:
+        line, column = _position(data, nul, encoding)
+        raise SourceError(f"binary file (a NUL byte at line {line}, column {column}), not ST source text",
+                          line, column)
+    if data.startswith(b"\xef\xbb\xbf") and _is_utf8(encoding):
         data = data[3:]
-    return data.decode("utf-8", errors="replace")
+    try:
+        return data.decode(encoding)
+    except UnicodeDecodeError as exc:
+        line, column = _position(data, exc.start, encoding)
+        bad = data[exc.start:exc.end].hex(" ").upper()
+        hint = ("re-save the file as UTF-8, or declare its encoding in stvm.toml, e.g. "
+                "[project] encoding = \"cp1252\"") if _is_utf8(encoding) else "check the encoding declared in stvm.toml"
+        raise SourceError(f"invalid {'UTF-8' if _is_utf8(encoding) else encoding} byte {bad} ({hint})", line, column,
+                          data.decode(encoding, errors="replace")) from None
 
 
-def _read_all(paths: Sequence[Path]) -> tuple[list[tuple[str, str]], list[Diagnostic]]:
+def _position(data: bytes, offset: int, encoding: str) -> tuple[int, int]:
+    """1-based line and column (in characters) of byte `offset`."""
+    line_start = data.rfind(b"\n", 0, offset) + 1
+    column = len(data[line_start:offset].decode(encoding, errors="replace")) + 1
+    return data.count(b"\n", 0, offset) + 1, column
+
+
+def _read_all(paths: Sequence[Path], encoding: str = "utf-8") -> tuple[list[tuple[str, str]], list[Diagnostic]]:
+    """(name, text) of each file, and a diagnostic for each file that cannot be used (its text
+    is then empty or decoded with replacement characters, so a binary file is never parsed)."""
     from stvm.syntax.nodes import Span
     texts = []
     diags = []
     for path in paths:
         try:
-            texts.append((str(path), read_source(path)))
+            texts.append((str(path), read_source(path, encoding)))
+        except SourceError as exc:
+            texts.append((str(path), exc.text))
+            diags.append(Diagnostic.error(exc.message, Span(str(path), exc.line, exc.column, exc.line,
+                                                             exc.column + 1), "E001"))
         except OSError as exc:
+            texts.append((str(path), ""))
             diags.append(Diagnostic.error(f"cannot read file: {exc.strerror or exc}", Span(str(path), 0, 0, 0, 0)))
     return texts, diags
 
@@ -173,8 +239,8 @@ def _read_all(paths: Sequence[Path]) -> tuple[list[tuple[str, str]], list[Diagno
 def check(paths: Sequence[str | Path], settings: SysmacSettings = DEFAULT_SETTINGS, generate: bool = False):
     """Parse and check: (analysis or None, diagnostics sorted, sources). With `generate`, also
     lower and compile, so limits that only code generation meets are reported too."""
-    files, _, _ = expand_paths(paths)
-    texts, diags = _read_all(files)
+    files, manifest, _ = expand_paths(paths)
+    texts, diags = _read_all(files, source_encoding(manifest))
     analysis, diags, sources = _check_texts(texts, diags, settings)
     if generate and analysis is not None:
         try:
@@ -272,9 +338,9 @@ def _too_deep(file: str) -> Diagnostic:
 def load(paths: Sequence[str | Path], settings: SysmacSettings = DEFAULT_SETTINGS, use_cache: bool = True) -> Project:
     """Load a runnable project from ST files (raises LoadError with every diagnostic)."""
     files, manifest, root = expand_paths(paths)
-    texts, read_diags = _read_all(files)
+    texts, read_diags = _read_all(files, source_encoding(manifest))
     if read_diags:
-        raise LoadError(read_diags, {})
+        raise LoadError(read_diags, dict(texts))
     key = _cache_key(texts + _stdlib(settings), settings)
     cache_file = _cache_dir() / f"{key}.bin"
     if use_cache and cache_file.exists():
@@ -316,3 +382,12 @@ def _prune_cache(folder: Path) -> None:
             old.unlink()
         except OSError:
             pass
+
+
+def nothing_to_run(project: Project, files: Sequence[str | Path] = ()) -> str | None:
+    """Why `project` cannot run (no PROGRAM and no CONFIGURATION task), or None if it can."""
+    if project.model.tasks or project.model.default_programs:
+        return None
+    names = ", ".join(str(f) for f in files) or "the project"
+    return (f"no PROGRAM in {names}: a run needs a PROGRAM (or a CONFIGURATION with tasks); "
+            f"FUNCTIONs and FUNCTION_BLOCKs alone are a library (stvm check FILE checks it)")

@@ -115,39 +115,100 @@ def load_scenario(path: str | Path) -> Scenario:
     return parse_scenario(data, str(path))
 
 
+_SCALAR = (bool, int, float, str)
+
+
+def _assignments(value: Any, where: str) -> dict[str, Any]:
+    """A table of NAME = VALUE whose values are TOML scalars (a value is checked against the
+    variable's type when the scenario is applied to a VM)."""
+    if not isinstance(value, dict):
+        raise ScenarioError(f"{where} must be a table of NAME = VALUE, e.g. {{ Main.start = true }}, got {_kind(value)}")
+    for key, item in value.items():
+        if not isinstance(item, _SCALAR):
+            raise ScenarioError(f"{where}: {key} must be a boolean, a number or a string (an IEC literal "
+                                f"such as \"T#2s\"), got {_kind(item)}")
+    return dict(value)
+
+
+def _kind(value: Any) -> str:
+    if isinstance(value, bool):
+        return f"the boolean {str(value).lower()}"
+    if isinstance(value, (int, float)):
+        return f"the number {value}"
+    if isinstance(value, str):
+        return f"the string {value[:60]!r}"
+    if isinstance(value, list):
+        return "a list"
+    if isinstance(value, dict):
+        return "a table"
+    return type(value).__name__
+
+
+def _string(value: Any, where: str) -> str:
+    if not isinstance(value, str) or not value.strip():
+        raise ScenarioError(f"{where} must be a non-empty string, got {_kind(value)}")
+    return value
+
+
+def _strings(value: Any, where: str) -> list[str]:
+    """A string or a list of strings."""
+    if isinstance(value, str):
+        return [value]
+    if isinstance(value, list) and all(isinstance(v, str) for v in value):
+        return list(value)
+    raise ScenarioError(f"{where} must be a string or a list of strings, got {_kind(value)}")
+
+
+def _table(data: dict, key: str, name: str) -> dict:
+    value = data.get(key, {})
+    if not isinstance(value, dict):
+        raise ScenarioError(f"{name}: {key} must be a table ([{key}]), got {_kind(value)}")
+    return value
+
+
 def parse_scenario(data: dict, name: str = "<scenario>") -> Scenario:
     known = {"description", "set", "robot", "at", "record", "run", "emulator"}
     unknown = set(data) - known
     if unknown:
         raise ScenarioError(f"{name}: unknown section(s) {', '.join(sorted(unknown))}; known: {', '.join(sorted(known))}")
-    scenario = Scenario(path=name, description=str(data.get("description", "")), raw=data)
-    initial = data.get("set", {})
-    if not isinstance(initial, dict):
-        raise ScenarioError(f"{name}: [set] must be a table of NAME = VALUE")
-    scenario.initial = dict(initial)
-    robot = data.get("robot", {})
-    scenario.robot_address = robot.get("address")
-    scenario.robot_port = robot.get("port")
-    for i, entry in enumerate(data.get("at", [])):
+    description = data.get("description", "")
+    if not isinstance(description, str):
+        raise ScenarioError(f"{name}: description must be a string, got {_kind(description)}")
+    scenario = Scenario(path=name, description=description, raw=data)
+    scenario.initial = _assignments(data.get("set", {}), f"{name}: [set]")
+    robot = _table(data, "robot", name)
+    unknown = set(robot) - {"address", "port"}
+    if unknown:
+        raise ScenarioError(f"{name}: [robot]: unknown key(s) {', '.join(sorted(unknown))}; known: address, port")
+    scenario.robot_address = _string(robot["address"], f"{name}: [robot] address") if "address" in robot else None
+    scenario.robot_port = _string(robot["port"], f"{name}: [robot] port") if "port" in robot else None
+    events = data.get("at", [])
+    if not isinstance(events, list):
+        raise ScenarioError(f"{name}: at must be an array of tables ([[at]]), got {_kind(events)}")
+    for i, entry in enumerate(events):
         where = f"{name}: [[at]] #{i + 1}"
         if not isinstance(entry, dict):
             raise ScenarioError(f"{where}: must be a table")
+        unknown = set(entry) - {"scan", "time", "when", "set", "fault"}
+        if unknown:
+            raise ScenarioError(f"{where}: unknown key(s) {', '.join(sorted(unknown))}; known: scan, time, when, set, fault")
         keys = [k for k in ("scan", "time", "when") if k in entry]
         if len(keys) != 1:
             raise ScenarioError(f"{where}: give exactly one of scan, time, when")
-        event = Event(assignments=dict(entry.get("set", {})))
-        fault = entry.get("fault", [])
-        event.faults = [fault] if isinstance(fault, str) else list(fault)
+        event = Event(assignments=_assignments(entry.get("set", {}), f"{where}: set"))
+        event.faults = _strings(entry.get("fault", []), f"{where}: fault")
         if "scan" in entry:
             event.scan = _count(entry["scan"], f"{where}: scan")
         elif "time" in entry:
             event.time_ns = _duration(entry["time"], f"{where}: time")
         else:
-            event.when = str(entry["when"])
+            event.when = _string(entry["when"], f"{where}: when")
         scenario.events.append(event)
-    record = data.get("record", {})
-    watch = record.get("watch", [])
-    scenario.watch = [watch] if isinstance(watch, str) else list(watch)
+    record = _table(data, "record", name)
+    unknown = set(record) - {"watch"}
+    if unknown:
+        raise ScenarioError(f"{name}: [record]: unknown key(s) {', '.join(sorted(unknown))}; known: watch")
+    scenario.watch = _strings(record.get("watch", []), f"{name}: [record] watch")
     _parse_run(scenario, data.get("run", {}), name)
     _parse_emulator(scenario, data.get("emulator", {}), name)
     return scenario
@@ -160,6 +221,8 @@ def _count(value: Any, where: str) -> int:
 
 
 def _duration(value: Any, where: str) -> int:
+    if not isinstance(value, str):
+        raise ScenarioError(f"{where} must be a duration string such as \"50ms\", got {_kind(value)}")
     from stvm.project import parse_duration
     try:
         return parse_duration(str(value))
@@ -176,7 +239,11 @@ def _parse_run(scenario: Scenario, run: Any, name: str) -> None:
     if "cycles" in run:
         scenario.cycles = _count(run["cycles"], f"{name}: [run] cycles")
     if "scan" in run:
-        scenario.scan = str(run["scan"])
+        if not isinstance(run["scan"], str):
+            raise ScenarioError(f"{name}: [run] scan must be a duration string such as \"1ms\", got {_kind(run['scan'])}")
+        if _duration(run["scan"], f"{name}: [run] scan") <= 0:
+            raise ScenarioError(f"{name}: [run] scan must be positive")
+        scenario.scan = run["scan"]
 
 
 def _parse_emulator(scenario: Scenario, emu: Any, name: str) -> None:
@@ -190,8 +257,7 @@ def _parse_emulator(scenario: Scenario, emu: Any, name: str) -> None:
         scenario.latency_scans = _count(emu["latency_scans"], f"{name}: [emulator] latency_scans")
     if "latency" in emu:
         scenario.latency_ns = _duration(emu["latency"], f"{name}: [emulator] latency")
-    faults = emu.get("faults", [])
-    scenario.faults = [faults] if isinstance(faults, str) else [str(f) for f in faults]
+    scenario.faults = _strings(emu.get("faults", []), f"{name}: [emulator] faults")
     settings = emu.get("settings", {})
     if not isinstance(settings, dict):
         raise ScenarioError(f"{name}: [emulator] settings must be a table")
@@ -222,6 +288,48 @@ class ScenarioDriver:
         self.vm = vm
         self.fault_sink = fault_sink   # callable(fault text) for emulator faults, or None
         self.on_event = on_event       # callable(event, scan it is for), e.g. a trace recorder
+        self._check(vm)
+
+    def _check(self, vm) -> None:
+        """Every name and fault of the scenario, checked before the first scan (a typo found at
+        scan 5000 would lose the run)."""
+        from stvm.runtime.vm import PathError, UnboundInOut
+        from stvm.semantics import types as t
+        where = self.scenario.path
+        for i, event in enumerate(self.scenario.events):
+            entry = f"{where}: [[at]] #{i + 1}"
+            if event.faults:
+                if self.fault_sink is None:
+                    raise ScenarioError(f"{entry}: fault {event.faults[0]!r} needs an emulator: use stvm trace "
+                                        f"(lockstep) or a demo project with the bundled emulator")
+                from emulator import parse_faults
+                try:
+                    parse_faults(event.faults)
+                except ValueError as exc:
+                    raise ScenarioError(f"{entry}: fault: {exc}") from exc
+            if event.when is not None:
+                try:
+                    ty = vm.type_of(event.when)
+                except UnboundInOut:
+                    continue
+                except (PathError, ValueError) as exc:
+                    raise ScenarioError(f"{entry}: when = {event.when!r}: {exc}") from exc
+                if not isinstance(ty, t.BoolType):
+                    raise ScenarioError(f"{entry}: when = {event.when!r} must name a BOOL variable "
+                                        f"(it is {ty.name})")
+            for path in event.assignments:
+                self._check_path(path, f"{entry}: set")
+        for path in self.scenario.initial:
+            self._check_path(path, f"{where}: [set]")
+
+    def _check_path(self, path: str, where: str) -> None:
+        from stvm.runtime.vm import PathError, UnboundInOut
+        try:
+            self.vm.type_of(path)
+        except UnboundInOut:
+            pass
+        except (PathError, ValueError) as exc:
+            raise ScenarioError(f"{where}: {path}: {exc}") from exc
 
     def apply_initial(self, overrides: dict[str, Any] | None = None) -> None:
         values = dict(self.scenario.initial)
@@ -233,7 +341,7 @@ class ScenarioDriver:
     def _assign(self, path: str, raw: Any, where: str) -> None:
         try:
             self.vm.set(path, to_st_value(raw, self.vm, path))
-        except (KeyError, ValueError) as exc:
+        except (KeyError, ValueError, TypeError) as exc:
             raise ScenarioError(f"{self.scenario.path}: {where}: {path}: {exc}") from exc
 
     def _fire(self, event: Event) -> None:
@@ -256,8 +364,15 @@ class ScenarioDriver:
                 self._fire(event)
             elif event.time_ns is not None and event.time_ns <= vm.now_ns:
                 self._fire(event)
-            elif event.when is not None and not before_first and bool(vm.get(event.when)):
+            elif event.when is not None and not before_first and self._is_true(event.when):
                 self._fire(event)
+
+    def _is_true(self, path: str) -> bool:
+        from stvm.runtime.vm import UnboundInOut
+        try:
+            return bool(self.vm.get(path))
+        except UnboundInOut:   # through an in-out the FB has not been called with yet
+            return False
 
     def after_scan(self, vm) -> None:
         """VM hook: runs at the end of every scan (the VM has not advanced its clock yet)."""

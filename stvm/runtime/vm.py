@@ -334,7 +334,10 @@ class VM:
             else:
                 if not isinstance(ty, t.ArrayType) or ty.dims is None:
                     raise PathError(f"{path!r}: not an array")
-                indices = [int(x.strip(), 0) for x in text.split(",")]
+                try:
+                    indices = [int(x.strip(), 0) for x in text.split(",")]
+                except ValueError:
+                    raise PathError(f"{path!r}: array index [{text}] must be integers, e.g. [2] or [1, 3]") from None
                 dims = list(ty.dims)
                 for ix in indices:
                     if not dims:
@@ -461,4 +464,23 @@ def coerce_python_value(value: Any, ty: t.Type) -> Any:
                 return v
         if isinstance(value, int) and ty.name_of(value) is not None:
             return value
-    raise ValueError(f"cannot store {value!r} in a {ty.name} variable")
+    raise ValueError(f"cannot store {_describe_value(value)} in {_article(ty.name)} {ty.name} variable")
+
+
+def _describe_value(value: Any) -> str:
+    """A Python value as the user wrote it (TRUE, 5, 'text'), for error messages."""
+    if isinstance(value, bool):
+        return "TRUE" if value else "FALSE"
+    if isinstance(value, (bytes, bytearray)):
+        value = bytes(value).decode("utf-8", "replace")
+    if isinstance(value, str):
+        return "'" + value[:40] + ("…'" if len(value) > 40 else "'")
+    return repr(value)[:60]
+
+
+_SPELLED = frozenset({"LREAL", "LINT", "LWORD", "LTIME", "LDATE", "SINT"})   # read letter by letter
+
+
+def _article(word: str) -> str:
+    """'an INT', 'an ARRAY', 'an LREAL', but 'a BOOL', 'a UINT', 'a STRING'."""
+    return "an" if word[:1].upper() in "AEIO" or word.upper() in _SPELLED else "a"

@@ -71,6 +71,10 @@ def cmd_trace(args) -> int:
         return _usage("--cycles must be >= 0")
     if args.context < 0:
         return _usage("--context must be >= 0")
+    if args.latency_scans is not None and args.latency_scans < 0:
+        return _usage(f"--latency-scans must be >= 0, got {args.latency_scans}")
+    if args.max_columns < 1:
+        return _usage(f"--max-columns must be >= 1, got {args.max_columns}")
     if args.scenario and not Path(args.scenario).exists():
         return _usage(f"no such scenario: {args.scenario}")
     if args.compare and not Path(args.compare).exists():
