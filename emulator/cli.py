@@ -18,12 +18,47 @@ from .settings import DEFAULT_SETTINGS, parse_setting_assignment
 from .transport import TcpServer
 
 
+def _port(text: str) -> int:
+    try:
+        port = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"needs a TCP port number 0-65535, got {text!r}") from None
+    if not 0 <= port <= 65535:
+        raise argparse.ArgumentTypeError(f"needs a TCP port number 0-65535 (0: any free port), got {port}")
+    return port
+
+
+def _seconds(text: str) -> float:
+    import math
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"needs seconds, got {text!r}") from None
+    if not math.isfinite(value) or value < 0:
+        raise argparse.ArgumentTypeError(f"needs seconds >= 0, got {text!r}")
+    return value
+
+
+def check_log_path(path: str) -> str | None:
+    """Why frames cannot be logged to `path` (None if they can): checked before the socket is
+    bound, so an unwritable log is not reported as a socket error."""
+    import os
+    try:
+        with open(path, "a", encoding="utf-8"):
+            pass
+    except OSError as exc:
+        return f"--log {path}: cannot write the frame log: {exc.strerror or exc}"
+    if os.path.isdir(path):
+        return f"--log {path}: is a folder"
+    return None
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="tm-emulator",
         description="Emulated TM robot in Listen Node mode (TMSCT/TMSTA/CPERR on TCP).")
     parser.add_argument("--host", default="127.0.0.1", help="address to bind (default 127.0.0.1)")
-    parser.add_argument("--port", type=int, default=5890, help="TCP port (default 5890; 0 = any free)")
+    parser.add_argument("--port", type=_port, default=5890, help="TCP port 0-65535 (default 5890; 0 = any free)")
     parser.add_argument("--log", metavar="FILE", help="append every frame as a JSON line to FILE")
     parser.add_argument("--fault", action="append", default=[], metavar="NAME[:ARG]",
                         help="inject a fault (repeatable): refuse[:N], delay:MS, drop[:MS], corrupt[:N], "
@@ -32,7 +67,7 @@ def build_parser() -> argparse.ArgumentParser:
                         help="change an EmulatorSettings field (repeatable), e.g. "
                              "--set accept_one_digit_checksum=true")
     parser.add_argument("--quiet", action="store_true", help="no live view, only the listening line")
-    parser.add_argument("--duration", type=float, default=None, help=argparse.SUPPRESS)  # tests
+    parser.add_argument("--duration", type=_seconds, default=None, help=argparse.SUPPRESS)  # tests
     return parser
 
 
@@ -46,6 +81,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     except ValueError as exc:
         print(f"tm-emulator: error: {exc}", file=sys.stderr)
         return 2
+    if args.log:
+        problem = check_log_path(args.log)
+        if problem:
+            print(f"tm-emulator: error: {problem}", file=sys.stderr)
+            return 2
     try:
         server = TcpServer(args.host, args.port, settings, faults, args.log).start()
     except OSError as exc:

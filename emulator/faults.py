@@ -59,34 +59,43 @@ def parse_fault(text: str, plan: FaultPlan = NO_FAULTS) -> FaultPlan:
     name, _, arg = text.strip().partition(":")
     name = name.lower().replace("-", "_")
 
-    def number(default: int | None = None) -> int:
+    def number(default: int | None = None, minimum: int = 0) -> int:
         if arg == "":
             if default is None:
                 raise ValueError(f"fault {name} needs an argument: {name}:N")
             return default
-        value = int(arg)
-        if value < 0:
-            raise ValueError(f"fault {name}: negative argument")
+        try:
+            value = int(arg)
+        except ValueError:
+            raise ValueError(f"fault {name}:{arg}: the argument must be a whole number") from None
+        if value < minimum:
+            raise ValueError(f"fault {name}:{arg}: the argument must be >= {minimum}")
         return value
 
+    def no_argument() -> None:
+        if arg:
+            raise ValueError(f"fault {name} takes no argument, got {name}:{arg}")
+
     if name == "refuse":
-        return replace(plan, refuse_connections=number(-1) if arg else -1)
+        return replace(plan, refuse_connections=number(-1, minimum=1) if arg else -1)
     if name == "delay":
         return replace(plan, reply_delay_ms=number())
     if name == "drop":
         return replace(plan, drop_after_motion_ms=number(0))
     if name == "corrupt":
-        return replace(plan, corrupt_checksum_every=max(1, number(1)))
+        return replace(plan, corrupt_checksum_every=number(1, minimum=1))
     if name == "split":
         return replace(plan, split_frames_at=number(0))
     if name == "error":
-        return replace(plan, answer_error_every=max(1, number(1)))
+        return replace(plan, answer_error_every=number(1, minimum=1))
     if name == "busy":
+        no_argument()
         return replace(plan, stay_busy=True)
     if name == "tag_false":
+        no_argument()
         return replace(plan, tag_false=True)
     if name == "unsolicited":
-        return replace(plan, unsolicited_every_ms=max(1, number(1000)))
+        return replace(plan, unsolicited_every_ms=number(1000, minimum=1))
     if name == "stop":
         return replace(plan, stop_project_at_ms=number())
     raise ValueError(f"unknown fault {name!r} (refuse, delay, drop, corrupt, split, error, busy, "

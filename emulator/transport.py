@@ -63,6 +63,10 @@ from .core import Delivery, EmulatorCore
 from .faults import NO_FAULTS, FaultPlan
 from .settings import DEFAULT_SETTINGS, EmulatorSettings
 
+# Pending connections the kernel queues before accept(): like a real server's (nginx 511,
+# asyncio 100), not 16, which made a client's connect/close loop stall for the 1 s SYN retry.
+ACCEPT_BACKLOG = 128
+
 # ============================================================================ frame log
 
 
@@ -204,7 +208,7 @@ class TcpServer:
         sock = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
         sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
         sock.bind((self.host, self.port))
-        sock.listen(16)
+        sock.listen(ACCEPT_BACKLOG)
         sock.setblocking(False)
         self.port = sock.getsockname()[1]
         self._listener = sock

@@ -225,6 +225,11 @@ def _check_demo_flags(args, is_demo: bool) -> None:
     if given and not is_demo:
         raise _UsageError(f"{', '.join(given)}: only for a demo project (a stvm.toml with a [demo] table "
                           f"beside the file, e.g. st_src/); {' '.join(args.files)} has none")
+    if getattr(args, "emulator_log", None):
+        from emulator.cli import check_log_path
+        problem = check_log_path(args.emulator_log)
+        if problem:
+            raise _UsageError(problem.replace("--log", "--emulator-log", 1))
     if is_demo and args.no_demo:
         extra = [flag for flag in given if flag not in ("--no-demo",)]
         if extra:

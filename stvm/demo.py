@@ -70,6 +70,9 @@ class Demo:
         self.cycle_from = self.config.get("cycle_from")
         self.cycle_to = self.config.get("cycle_to")
         self.status_paths = list(self.config.get("status", []))
+        # STRING variables with the last error text (CBT_Connect's Connect_ErrorDescrip, …):
+        # shown in the table and, whenever not empty, on the line-a-second output too
+        self.error_paths = list(self.config.get("errors", []))
         self.started = time.monotonic()
 
     # ---- setup
@@ -110,6 +113,18 @@ class Demo:
             self.state.last_step = step
             self.state.step_since_ns = vm.now_ns
 
+    def error_rows(self) -> list[tuple[str, str]]:
+        """The error variables that are not empty (connection refused, motion rejected, …)."""
+        rows = []
+        for path in self.error_paths:
+            try:
+                text = self.vm.format(path)
+            except KeyError:
+                continue
+            if text not in ("''", '""'):
+                rows.append((path, text))
+        return rows
+
     def done(self) -> bool:
         limit = getattr(self.args, "pnp_cycles", None)
         return limit is not None and self.state.cycles >= limit
@@ -119,7 +134,7 @@ class Demo:
         rows = [("robot", f"{self.robot_address[0]}:{self.robot_address[1]}" + (" (bundled emulator)" if self.server else "")),
                 ("VM time", f"{self.vm.now_ns / 1e9:.3f} s, scan {self.vm.scan_count}"),
                 ("PnP cycles done", str(self.state.cycles))]
-        for path in self.status_paths:
+        for path in self.status_paths + [p for p in self.error_paths if p not in self.status_paths]:
             try:
                 rows.append((path, self.vm.format(path)))
             except KeyError:
@@ -191,7 +206,7 @@ def run_with_status(demo: Demo, run_scans, stream=None) -> None:
         second = vm.now_ns // 1_000_000_000
         if second != last_print[0]:
             last_print[0] = second
-            fields = "  ".join(f"{k}={v}" for k, v in demo.status_rows()[1:6])
+            fields = "  ".join(f"{k}={v}" for k, v in demo.status_rows()[1:6] + demo.error_rows())
             print(fields, file=stream, flush=True)
     demo.vm.on_scan_end.append(line)
     run_scans()

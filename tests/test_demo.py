@@ -50,3 +50,31 @@ def test_demo_reports_a_robot_that_cannot_be_reached(tmp_path):
     assert "Connect_Error = TRUE" in result.stdout
     # thesis error code 16#20: the socket connection failed (Table 5.3.1.4)
     assert "Program_Example_Instance.CBT_Connect_Instance.ErrorID = 32" in result.stdout
+
+
+def test_demo_status_line_shows_the_connection_error():
+    # the line-a-second view (stdout not a terminal) names the error, not only Connected=FALSE
+    result = subprocess.run(
+        [sys.executable, "-m", "stvm", "run", "st_src/PnP_Example.st", "--scan", "1ms", "--robot", "127.0.0.1:9",
+         "--virtual-clock", "--duration", "2500ms"],
+        cwd=ROOT, capture_output=True, text=True, timeout=60)
+    assert result.returncode == 0, result.stderr
+    lines = result.stdout.splitlines()
+    assert any("Cobot.Connected=FALSE" in line and "Connect_ErrorDescrip='Connection Error'" in line
+               for line in lines), result.stdout
+
+
+def test_demo_table_rows_include_the_error_variables():
+    import stvm
+    from stvm.demo import Demo
+    project = stvm.load([ROOT / "st_src" / "PnP_Example.st"])
+    vm = project.start(scan="1ms")
+
+    class Args:
+        scenario = robot = emulator_log = pnp_cycles = None
+    demo = Demo(project, vm, Args())
+    demo.robot_address = ("127.0.0.1", 9)
+    vm["Connect_ErrorDescrip"] = "Connection Error"
+    rows = dict(demo.status_rows())
+    assert rows["Connect_ErrorDescrip"] == "'Connection Error'"
+    assert demo.error_rows() == [("Connect_ErrorDescrip", "'Connection Error'")]

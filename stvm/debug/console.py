@@ -162,6 +162,8 @@ class Console:
 
     def do_scan(self, rest: str) -> None:
         count = _count(rest, 1)
+        if count < 1:
+            raise DebugError(f"scan takes a number of scans >= 1, got {count}")
         self._go(SCAN, count)
 
     # ---- breakpoints
@@ -203,6 +205,11 @@ class Console:
         if not rest:
             self.do_info("watch")
             return
+        from stvm.syntax import parse_expression
+        expr, diags = parse_expression(rest, "<watch>")
+        if expr is None or any(d.is_error for d in diags):
+            problem = next((d.message for d in diags if d.is_error), "not an expression")
+            raise DebugError(f"watch needs an ST expression: {problem}")
         self.watches.append(rest)
         self.write(f"watch {len(self.watches)}: {rest} = {self._value_or_error(rest)}")
 

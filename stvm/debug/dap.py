@@ -26,6 +26,7 @@ from typing import Any, BinaryIO
 from stvm.debug.engine import (BREAKPOINT, CONTINUE, ENTRY, FAULT, FAULTED, FINISH, NEXT, PAUSED,
                                SCAN, SCANNED, STEP, STEPPED, Engine, StopEvent)
 from stvm.debug.scope import DebugError, is_scalar_ref
+from stvm.diagnostics import printable
 from stvm.semantics import types as t
 from stvm.semantics.model import EXTERNAL, IN_OUT, INPUT, OUTPUT
 
@@ -37,6 +38,54 @@ _GLOBAL_FRAME = -1
 
 class ProtocolError(Exception):
     pass
+
+
+class FramingError(Exception):
+    """The byte stream is not `Content-Length` framed: the session cannot go on."""
+
+
+class BadMessage(Exception):
+    """A well-framed message that is not a usable JSON object: it is reported and skipped."""
+
+
+MAX_MESSAGE_BYTES = 16 * 2**20   # a DAP message (setBreakpoints of a huge file is far below)
+MAX_HEADER_LINE = 8192
+
+
+def _int_arg(args: dict, name: str, default: int = 0) -> int:
+    value = args.get(name)
+    if value is None:
+        return default
+    if isinstance(value, bool) or not isinstance(value, int):
+        raise ProtocolError(f"argument {name!r} must be an integer, got {json.dumps(value)[:40]}")
+    return value
+
+
+def _str_arg(args: dict, name: str, default: str | None = None) -> str | None:
+    value = args.get(name)
+    if value is None:
+        return default
+    if not isinstance(value, str):
+        raise ProtocolError(f"argument {name!r} must be a string, got {json.dumps(value)[:40]}")
+    return value
+
+
+def _str_list_arg(args: dict, name: str) -> list[str]:
+    value = args.get(name)
+    if value is None:
+        return []
+    if not isinstance(value, list) or not all(isinstance(v, str) for v in value):
+        raise ProtocolError(f"argument {name!r} must be a list of strings, got {json.dumps(value)[:40]}")
+    return list(value)
+
+
+def _dict_arg(args: dict, name: str) -> dict:
+    value = args.get(name)
+    if value is None:
+        return {}
+    if not isinstance(value, dict):
+        raise ProtocolError(f"argument {name!r} must be an object, got {json.dumps(value)[:40]}")
+    return value
 
 
 @dataclass
@@ -70,23 +119,47 @@ class DapServer:
 
     # ================================================================ transport
     def read_message(self) -> dict | None:
+        """The next message (a JSON object), or None at the end of the input. Raises
+        FramingError when the header cannot be used (the stream cannot be resynchronised) and
+        BadMessage for a well-framed body that is not a JSON object (the session goes on)."""
         length = None
+        headers = 0
         while True:
-            line = self.rfile.readline()
+            line = self.rfile.readline(MAX_HEADER_LINE + 1)
             if not line:
                 return None
+            if len(line) > MAX_HEADER_LINE:
+                raise FramingError(f"header line longer than {MAX_HEADER_LINE} bytes")
+            headers += 1
+            if headers > 32:
+                raise FramingError("more than 32 header lines without a blank line")
             line = line.strip()
             if not line:
                 if length is not None:
                     break
                 continue
-            name, _, value = line.decode("ascii", "replace").partition(":")
+            name, sep, value = line.decode("ascii", "replace").partition(":")
+            if not sep:
+                raise FramingError(f"malformed header {printable(line.decode('ascii', 'replace'), 80)!r} "
+                                   f"(expected 'Content-Length: N')")
             if name.strip().lower() == "content-length":
-                length = int(value.strip())
+                text = value.strip()
+                if not text.isdigit():
+                    raise FramingError(f"Content-Length must be a byte count, got {printable(text, 40)!r}")
+                length = int(text)
+                if length > MAX_MESSAGE_BYTES:
+                    raise FramingError(f"Content-Length {length} is over the limit of {MAX_MESSAGE_BYTES} bytes")
         body = self.rfile.read(length)
         if len(body) < length:
             return None
-        message = json.loads(body.decode("utf-8"))
+        try:
+            message = json.loads(body.decode("utf-8"))
+        except UnicodeDecodeError as exc:
+            raise BadMessage(f"message body is not UTF-8 ({exc.reason} at byte {exc.start})") from None
+        except (ValueError, RecursionError) as exc:
+            raise BadMessage(f"message body is not JSON ({printable(str(exc), 120)})") from None
+        if not isinstance(message, dict):
+            raise BadMessage(f"a message must be a JSON object, got {type(message).__name__}")
         self._log("<-", message)
         return message
 
@@ -125,7 +198,16 @@ class DapServer:
     def serve(self) -> int:
         try:
             while self.running:
-                message = self.read_message()
+                try:
+                    message = self.read_message()
+                except BadMessage as exc:
+                    self.output(f"stvm dap: ignored a message: {exc}", "stderr")
+                    continue
+                except FramingError as exc:
+                    self.output(f"stvm dap: protocol error, ending the session: {exc}", "stderr")
+                    import sys
+                    print(f"stvm: error: dap: {exc}", file=sys.stderr)
+                    return 2
                 if message is None:
                     break
                 if message.get("type") != "request":
@@ -139,7 +221,13 @@ class DapServer:
 
     def dispatch(self, request: dict) -> None:
         command = request.get("command", "")
-        handler = getattr(self, "on_" + command, None)
+        if not isinstance(command, str) or not isinstance(request.get("seq", 0), int) \
+                or not isinstance(request.get("arguments") or {}, dict):
+            self.respond({"seq": 0, "command": ""}, success=False,
+                         message="a request needs \"command\" (a string), \"seq\" (an integer) and "
+                                 "\"arguments\" (an object)")
+            return
+        handler = getattr(self, "on_" + command, None) if command.isidentifier() else None
         if handler is None:
             self.respond(request, success=False, message=f"unsupported request {command!r}")
             return
@@ -192,7 +280,18 @@ class DapServer:
         if not program:
             raise ProtocolError("launch needs \"program\": an ST file (or a list of files)")
         files = program if isinstance(program, list) else [program]
-        cwd = args.get("cwd") or os.getcwd()
+        if not all(isinstance(f, str) and f for f in files):
+            raise ProtocolError("launch \"program\" must be a file name (a string) or a list of file names")
+        cwd = _str_arg(args, "cwd") or os.getcwd()
+        for name in ("scenario", "robot"):
+            _str_arg(args, name)
+        scan = args.get("scan")
+        if scan is not None and (isinstance(scan, bool) or not isinstance(scan, (str, int))):
+            raise ProtocolError("launch \"scan\" must be a duration such as \"1ms\"")
+        cycles = args.get("cycles")
+        if cycles is not None and (_int_arg(args, "cycles") < 0):
+            raise ProtocolError("launch \"cycles\" must be >= 0")
+        sets, sysmac = _str_list_arg(args, "set"), _str_list_arg(args, "sysmac")
         files = [f if os.path.isabs(f) else os.path.join(cwd, f) for f in files]
         for f in files:
             if not os.path.exists(f):
@@ -201,7 +300,7 @@ class DapServer:
         if scenario and not os.path.isabs(scenario):
             scenario = os.path.join(cwd, scenario)
         options = SessionOptions(files, scan=args.get("scan"), scenario=scenario,
-                                 sets=list(args.get("set") or []), sysmac=list(args.get("sysmac") or []),
+                                 sets=sets, sysmac=sysmac,
                                  robot=args.get("robot"), realtime=bool(args.get("realtime")),
                                  max_scans=args.get("cycles"))
         try:
@@ -229,11 +328,20 @@ class DapServer:
         self.event("initialized")
 
     def on_setBreakpoints(self, args: dict) -> dict:
-        source = args.get("source") or {}
-        path = source.get("path") or source.get("name") or ""
+        source = _dict_arg(args, "source")
+        path = _str_arg(source, "path") or _str_arg(source, "name") or ""
         specs = args.get("breakpoints")
         if specs is None:
-            specs = [{"line": line} for line in args.get("lines") or []]
+            lines = args.get("lines") or []
+            if not isinstance(lines, list):
+                raise ProtocolError("argument 'lines' must be a list of line numbers")
+            specs = [{"line": line} for line in lines]
+        if not isinstance(specs, list) or not all(isinstance(spec, dict) for spec in specs):
+            raise ProtocolError("argument 'breakpoints' must be a list of {\"line\": N} objects")
+        for spec in specs:
+            if _int_arg(spec, "line", -1) < 1:
+                raise ProtocolError("each breakpoint needs \"line\": a line number >= 1")
+            _str_arg(spec, "condition")
         if self.engine is None:
             self.pending_breakpoints.append(args)
             return {"breakpoints": [{"verified": False, "line": s.get("line"), "message": "not launched yet"} for s in specs]}
@@ -284,8 +392,8 @@ class DapServer:
             frames.append({"id": frame.index + 1, "name": f"{frame.name} ({frame.pou.name})",
                            "source": self._source(span.file), "line": span.line, "column": span.column,
                            "endLine": span.end_line, "endColumn": span.end_column})
-        start = int(args.get("startFrame") or 0)
-        levels = int(args.get("levels") or 0)
+        start = _int_arg(args, "startFrame")
+        levels = _int_arg(args, "levels")
         chosen = frames[start:start + levels] if levels else frames[start:]
         return {"stackFrames": chosen, "totalFrames": len(frames)}
 
@@ -302,8 +410,9 @@ class DapServer:
 
     def on_source(self, args: dict) -> dict:
         engine = self._require_engine()
-        ref = args.get("sourceReference") or (args.get("source") or {}).get("sourceReference")
-        name = self.sources.get(ref) if ref else (args.get("source") or {}).get("path")
+        source = _dict_arg(args, "source")
+        ref = _int_arg(args, "sourceReference") or _int_arg(source, "sourceReference")
+        name = self.sources.get(ref) if ref else _str_arg(source, "path")
         text = engine.build.project.sources.get(name or "")
         if text is None:
             raise ProtocolError(f"no source {name!r}")
@@ -311,7 +420,7 @@ class DapServer:
 
     def on_scopes(self, args: dict) -> dict:
         engine = self._require_engine()
-        frame_index = int(args.get("frameId", 1)) - 1
+        frame_index = _int_arg(args, "frameId", 1) - 1
         event = engine.stop_event
         if event is None or event.between_scans:
             return {"scopes": [self._scope("Globals", _Node("globals", _GLOBAL_FRAME)),
@@ -334,12 +443,12 @@ class DapServer:
 
     def on_variables(self, args: dict) -> dict:
         engine = self._require_engine()
-        node = self.handles.get(int(args.get("variablesReference", 0)))
+        node = self.handles.get(_int_arg(args, "variablesReference"))
         if node is None:
             return {"variables": []}
         children = self._children(engine, node)
-        start = int(args.get("start") or 0)
-        count = int(args.get("count") or 0)
+        start = max(0, _int_arg(args, "start"))
+        count = max(0, _int_arg(args, "count"))
         if args.get("filter") == "named" and node.kind == "value" and isinstance(node.type, t.ArrayType):
             children = []
         if start or count:
@@ -392,7 +501,7 @@ class DapServer:
 
     def on_setVariable(self, args: dict) -> dict:
         engine = self._require_engine()
-        node = self.handles.get(int(args.get("variablesReference", 0)))
+        node = self.handles.get(_int_arg(args, "variablesReference"))
         if node is None:
             raise ProtocolError("unknown variablesReference")
         name = args.get("name", "")
@@ -407,7 +516,7 @@ class DapServer:
     def on_evaluate(self, args: dict) -> dict:
         engine = self._require_engine()
         expression = str(args.get("expression", "")).strip()
-        frame = int(args["frameId"]) - 1 if args.get("frameId") else 0
+        frame = _int_arg(args, "frameId") - 1 if args.get("frameId") else 0
         if engine.stop_event is not None and engine.stop_event.between_scans:
             frame = _GLOBAL_FRAME
         if args.get("context") == "repl":
