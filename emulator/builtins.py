@@ -24,10 +24,12 @@ import math
 import struct
 from collections import OrderedDict
 from dataclasses import dataclass, field
+from fractions import Fraction
 from typing import Any, Callable, Protocol
 
 import numpy as np
 
+from . import detmath as dm
 from . import script as sc
 from .framing import encode
 from .motion import (NS_PER_MS, Kinematics, Marker, MotionExecutor, PlanError, PlannedState, Planner,
@@ -187,7 +189,7 @@ def fn_ptp(robot: ScriptHost, args: list[Any], ctx: ScriptContext) -> bool:
         if fmt == "JPP":
             joints = target
         else:
-            joints = robot.planner.solve(ctx.plan, ctx.plan.base @ pose_to_matrix(target))
+            joints = robot.planner.solve(ctx.plan, dm.matmul(ctx.plan.base, pose_to_matrix(target)))
         seg = robot.planner.joint_motion(ctx.plan, joints, speed, accel, blend, precise, f"PTP {fmt}")
     except PlanError as exc:
         raise ArgError(str(exc)) from None
@@ -222,16 +224,16 @@ def fn_line(robot: ScriptHost, args: list[Any], ctx: ScriptContext) -> bool:
     """
     v = _motion_values(args, (11,))
     fmt = _check_format(v[0], LINE_FORMATS, robot.settings)
-    return _line_like(robot, ctx, fmt, ctx.plan.base @ pose_to_matrix(_pose6(v[1:7])), v, f"Line {fmt}")
+    return _line_like(robot, ctx, fmt, dm.matmul(ctx.plan.base, pose_to_matrix(_pose6(v[1:7]))), v, f"Line {fmt}")
 
 
 def _relative_tcp(plan: PlannedState, frame: str, delta: np.ndarray) -> np.ndarray:
     """Target of a relative motion: ``C`` = in the current base, ``T`` = in the tool frame."""
     if frame == "T":
-        return plan.tcp @ pose_to_matrix(delta)
+        return dm.matmul(plan.tcp, pose_to_matrix(delta))
     # Choice (§7 Move_*): base-relative adds the translation and the three angles.
-    current = matrix_to_pose(np.linalg.inv(plan.base) @ plan.tcp)
-    return plan.base @ pose_to_matrix(current + delta)
+    current = matrix_to_pose(dm.matmul(dm.rigid_inverse(plan.base), plan.tcp))
+    return dm.matmul(plan.base, pose_to_matrix(current + delta))
 
 
 def fn_move_ptp(robot: ScriptHost, args: list[Any], ctx: ScriptContext) -> bool:
@@ -277,8 +279,8 @@ def fn_circle(robot: ScriptHost, args: list[Any], ctx: ScriptContext) -> bool:
     """
     v = _motion_values(args, (18,))
     fmt = _check_format(v[0], {"CPP", "CAP"}, robot.settings)
-    via = ctx.plan.base @ pose_to_matrix(_pose6(v[1:7]))
-    end = ctx.plan.base @ pose_to_matrix(_pose6(v[7:13]))
+    via = dm.matmul(ctx.plan.base, pose_to_matrix(_pose6(v[1:7])))
+    end = dm.matmul(ctx.plan.base, pose_to_matrix(_pose6(v[7:13])))
     speed_is_pct = fmt[1] == "P"
     speed, accel, blend = _speed(v[13], speed_is_pct, robot.settings), _accel(v[14]), _blend(v[15], True)
     arc = _num(v[16], "arc angle")
@@ -305,7 +307,7 @@ def _pline(robot: ScriptHost, args: list[Any], ctx: ScriptContext, relative: boo
             pct = 100.0 * speed / robot.settings.max_tcp_speed_mm_s
             seg = robot.planner.joint_motion(ctx.plan, joints, pct, accel, blend, False, f"PLine {fmt}")
         else:
-            target = _relative_tcp(ctx.plan, fmt[0], values) if relative else ctx.plan.base @ pose_to_matrix(values)
+            target = _relative_tcp(ctx.plan, fmt[0], values) if relative else dm.matmul(ctx.plan.base, pose_to_matrix(values))
             seg = robot.planner.cart_motion(ctx.plan, target, speed, False, accel, blend, False, False,
                                             f"PLine {fmt}")
     except PlanError as exc:
@@ -583,7 +585,8 @@ def st_sleep(robot: ScriptHost, job: ScriptJob, call: sc.Call, ctx: ScriptContex
         raise ArgError("negative sleep")
     if ctx.dry:
         return None
-    job.wait = Wait("delay", until_ns=robot.now_ns + int(ms * NS_PER_MS))
+    # exact: the nanoseconds of the number the script wrote (a float's exact value), truncated
+    job.wait = Wait("delay", until_ns=robot.now_ns + int(Fraction(ms) * NS_PER_MS))
     return "block"
 
 

@@ -20,6 +20,14 @@ Timing model (spec §8 [U], §11 #11; every constant is an :class:`EmulatorSetti
   If nothing is queued at the hand-over instant the motion stops at its target.
 * Precise positioning (``disablePrecise`` false) adds ``precise_settle_ms`` at the end.
 * Every duration is multiplied by ``time_scale`` and rounded to whole nanoseconds.
+
+Machine independence (issue 17): the kinematics use :mod:`emulator.detmath` (no BLAS, LAPACK or
+C-library trigonometry, whose results differ between CPUs), and the timing model works on exact
+rationals: a segment's duration, acceleration, blend and settle times are the integer
+nanoseconds nearest to the exact values of the formulas above (ties to even), computed with
+``fractions.Fraction`` and ``math.isqrt`` from the (deterministic) distances and the script's
+numbers. :class:`SegmentTiming` keeps those inputs, so a test recomputes every time stamp with
+an independent reference.
 """
 
 from __future__ import annotations
@@ -27,10 +35,12 @@ from __future__ import annotations
 import math
 from collections import deque
 from dataclasses import dataclass, field
+from fractions import Fraction
 from typing import Any, Sequence
 
 import numpy as np
 
+from . import detmath as dm
 from .settings import DEFAULT_SETTINGS, EmulatorSettings
 
 NS_PER_S = 1_000_000_000
@@ -41,8 +51,8 @@ NS_PER_MS = 1_000_000
 
 def euler_to_matrix(rx: float, ry: float, rz: float) -> np.ndarray:
     """TM orientation (degrees): fixed X-Y-Z angles, R = Rz @ Ry @ Rx."""
-    a, b, c = np.radians([rx, ry, rz])
-    ca, sa, cb, sb, cc, sc = math.cos(a), math.sin(a), math.cos(b), math.sin(b), math.cos(c), math.sin(c)
+    a, b, c = dm.radians(rx), dm.radians(ry), dm.radians(rz)
+    ca, sa, cb, sb, cc, sc = dm.cos(a), dm.sin(a), dm.cos(b), dm.sin(b), dm.cos(c), dm.sin(c)
     return np.array([
         [cc * cb, cc * sb * sa - sc * ca, cc * sb * ca + sc * sa],
         [sc * cb, sc * sb * sa + cc * ca, sc * sb * ca - cc * sa],
@@ -52,14 +62,14 @@ def euler_to_matrix(rx: float, ry: float, rz: float) -> np.ndarray:
 
 def matrix_to_euler(rot: np.ndarray) -> np.ndarray:
     sy = -float(rot[2, 0])
-    ry = math.asin(max(-1.0, min(1.0, sy)))
+    ry = dm.asin(max(-1.0, min(1.0, sy)))
     if abs(sy) < 1.0 - 1e-9:
-        rx = math.atan2(rot[2, 1], rot[2, 2])
-        rz = math.atan2(rot[1, 0], rot[0, 0])
+        rx = dm.atan2(rot[2, 1], rot[2, 2])
+        rz = dm.atan2(rot[1, 0], rot[0, 0])
     else:  # gimbal lock: put everything into rz
         rx = 0.0
-        rz = math.atan2(-rot[0, 1], rot[1, 1])
-    return np.degrees([rx, ry, rz])
+        rz = dm.atan2(-rot[0, 1], rot[1, 1])
+    return np.array([dm.degrees(rx), dm.degrees(ry), dm.degrees(rz)])
 
 
 def pose_to_matrix(pose: Sequence[float]) -> np.ndarray:
@@ -75,8 +85,9 @@ def matrix_to_pose(mat: np.ndarray) -> np.ndarray:
 
 def rotation_angle_deg(r_a: np.ndarray, r_b: np.ndarray) -> float:
     """Angle of the rotation taking ``r_a`` to ``r_b``."""
-    cos_angle = (np.trace(r_a.T @ r_b) - 1.0) / 2.0
-    return math.degrees(math.acos(max(-1.0, min(1.0, cos_angle))))
+    # trace(r_a^T r_b) = sum of the elementwise products, in a fixed order
+    cos_angle = (dm.dot(np.asarray(r_a).ravel(), np.asarray(r_b).ravel()) - 1.0) / 2.0
+    return dm.degrees(dm.acos(max(-1.0, min(1.0, cos_angle))))
 
 
 def _quat_from_matrix(rot: np.ndarray) -> np.ndarray:
@@ -91,7 +102,7 @@ def _quat_from_matrix(rot: np.ndarray) -> np.ndarray:
 
 
 def _matrix_from_quat(q: np.ndarray) -> np.ndarray:
-    w, x, y, z = q / np.linalg.norm(q)
+    w, x, y, z = (float(v) for v in q / dm.norm(q))
     return np.array([
         [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
         [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
@@ -101,13 +112,13 @@ def _matrix_from_quat(q: np.ndarray) -> np.ndarray:
 
 def slerp_matrix(r_a: np.ndarray, r_b: np.ndarray, s: float) -> np.ndarray:
     qa, qb = _quat_from_matrix(r_a), _quat_from_matrix(r_b)
-    dot = float(qa @ qb)
+    dot = dm.dot(qa, qb)
     if dot < 0:
         qb, dot = -qb, -dot
     if dot > 0.9995:
         return _matrix_from_quat(qa + s * (qb - qa))
-    theta = math.acos(dot)
-    return _matrix_from_quat((math.sin((1 - s) * theta) * qa + math.sin(s * theta) * qb) / math.sin(theta))
+    theta = dm.acos(dot)
+    return _matrix_from_quat((dm.sin((1 - s) * theta) * qa + dm.sin(s * theta) * qb) / dm.sin(theta))
 
 
 # --------------------------------------------------------------------------- kinematics
@@ -124,16 +135,22 @@ class Kinematics:
     def __init__(self, settings: EmulatorSettings = DEFAULT_SETTINGS, dh: Sequence[Sequence[float]] = TM5_700_DH):
         self.dh = np.array(dh, dtype=float)
         self.limits = np.array(settings.joint_limits_deg, dtype=float)
+        # per link: alpha, a, d, theta offset and the (constant) cos/sin of alpha
+        self._links = [(float(al), float(a), float(d), float(off), dm.cos(dm.radians(al)), dm.sin(dm.radians(al)))
+                       for al, a, d, off in dh]
 
     def fk(self, joints_deg: Sequence[float], tool: np.ndarray | None = None) -> np.ndarray:
         """4x4 pose of the TCP in the robot base (``tool`` = flange -> TCP transform)."""
-        out = np.eye(4)
-        for (alpha, a, d, offset), q in zip(self.dh, joints_deg):
-            th, al = math.radians(q + offset), math.radians(alpha)
-            ct, st, ca, sa = math.cos(th), math.sin(th), math.cos(al), math.sin(al)
-            out = out @ np.array([[ct, -st * ca, st * sa, a * ct], [st, ct * ca, -ct * sa, a * st],
-                                  [0.0, sa, ca, d], [0.0, 0.0, 0.0, 1.0]])
-        return out @ tool if tool is not None else out
+        out = [[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0]]
+        for (alpha, a, d, offset, ca, sa), q in zip(self._links, joints_deg):
+            th = dm.radians(float(q) + offset)
+            ct, st = dm.cos(th), dm.sin(th)
+            link = ((ct, -st * ca, st * sa, a * ct), (st, ct * ca, -ct * sa, a * st), (0.0, sa, ca, d))
+            # out = out @ link, row by row; the implicit last rows are (0, 0, 0, 1)
+            out = [[r[0] * link[0][j] + r[1] * link[1][j] + r[2] * link[2][j] + (r[3] if j == 3 else 0.0)
+                    for j in range(4)] for r in out]
+        result = np.array(out + [[0.0, 0.0, 0.0, 1.0]])
+        return dm.matmul(result, tool) if tool is not None else result
 
     def within_limits(self, joints_deg: Sequence[float]) -> bool:
         q = np.asarray(joints_deg)
@@ -144,34 +161,34 @@ class Kinematics:
         """Joint angles (deg) whose TCP pose is ``target`` (4x4, robot base), starting from
         ``seed_deg``; None if it does not converge within 0.01 mm / 0.01 deg or leaves the joint
         limits (the target is then unreachable)."""
-        q = np.radians(np.asarray(seed_deg, dtype=float))
+        q = np.asarray(seed_deg, dtype=float) * dm.RAD_PER_DEG
         damping = 1.0
         for _ in range(max_iterations):
-            err = self._pose_error(target, np.degrees(q), tool)
-            if np.linalg.norm(err[:3]) < 1e-2 and np.linalg.norm(err[3:]) < math.radians(1e-2):
-                result = np.degrees(q)
+            err = self._pose_error(target, q * dm.DEG_PER_RAD, tool)
+            if dm.norm(err[:3]) < 1e-2 and dm.norm(err[3:]) < dm.radians(1e-2):
+                result = q * dm.DEG_PER_RAD
                 # Keep angles near the seed (joints rotate more than 360 deg on a TM).
                 result = np.asarray(seed_deg) + (result - np.asarray(seed_deg) + 180.0) % 360.0 - 180.0
                 return result if self.within_limits(result) else None
-            jac = self._jacobian(np.degrees(q), tool)
+            jac = self._jacobian(q * dm.DEG_PER_RAD, tool)
             scaled = err.copy()
             scaled[3:] *= 300.0  # weight rotation like ~300 mm of lever arm
             jac_s = jac.copy()
             jac_s[3:] *= 300.0
-            step = jac_s.T @ np.linalg.solve(jac_s @ jac_s.T + damping * np.eye(6), scaled)
+            step = dm.matmul(jac_s.T, dm.solve(dm.matmul(jac_s, jac_s.T) + damping * np.eye(6), scaled))
             q = q + step
         return None
 
     def _pose_error(self, target: np.ndarray, q_deg: np.ndarray, tool: np.ndarray | None) -> np.ndarray:
         cur = self.fk(q_deg, tool)
         dp = target[:3, 3] - cur[:3, 3]
-        r_err = target[:3, :3] @ cur[:3, :3].T
-        angle = math.acos(max(-1.0, min(1.0, (np.trace(r_err) - 1) / 2)))
+        r_err = dm.matmul(target[:3, :3], cur[:3, :3].T)
+        angle = dm.acos(max(-1.0, min(1.0, (dm.trace3(r_err) - 1) / 2)))
         if angle < 1e-12:
             dr = np.zeros(3)
         else:
             axis = np.array([r_err[2, 1] - r_err[1, 2], r_err[0, 2] - r_err[2, 0], r_err[1, 0] - r_err[0, 1]])
-            norm = np.linalg.norm(axis)
+            norm = dm.norm(axis)
             dr = axis / norm * angle if norm > 1e-12 else np.zeros(3)
         return np.concatenate([dp, dr])
 
@@ -182,10 +199,10 @@ class Kinematics:
         h = 1e-6
         for i in range(6):
             dq = np.array(q_deg, dtype=float)
-            dq[i] += math.degrees(h)
+            dq[i] += dm.degrees(h)
             moved = self.fk(dq, tool)
             jac[:3, i] = (moved[:3, 3] - base[:3, 3]) / h
-            r_d = moved[:3, :3] @ base[:3, :3].T
+            r_d = dm.matmul(moved[:3, :3], base[:3, :3].T)
             jac[3:, i] = np.array([r_d[2, 1] - r_d[1, 2], r_d[0, 2] - r_d[2, 0], r_d[1, 0] - r_d[0, 1]]) / (2 * h)
         return jac
 
@@ -204,6 +221,67 @@ def trapezoid_duration_s(distance: float, top_speed: float, accel_s: float) -> f
     if distance >= top_speed * accel_s:
         return distance / top_speed + accel_s
     return 2.0 * math.sqrt(distance * accel_s / top_speed)
+
+
+def _round_sqrt(square: Fraction) -> int:
+    """The integer nearest to sqrt(square) (square >= 0), ties to even: exact."""
+    num, den = square.numerator, square.denominator
+    root = math.isqrt(num // den)          # floor(sqrt(x)) == isqrt(floor(x))
+    # compare sqrt(x) with root + 1/2:  4*x  vs  (2*root + 1)**2
+    lhs, rhs = 4 * num, (2 * root + 1) ** 2 * den
+    if lhs > rhs or (lhs == rhs and root & 1):
+        return root + 1
+    return root
+
+
+def _trapezoid_square(distance: Fraction, top_speed: Fraction, accel_s: Fraction) -> Fraction:
+    """The square of the exact trapezoid duration in seconds (see the module docstring)."""
+    if distance <= 0:
+        return Fraction(0)
+    if top_speed <= 0:
+        raise ValueError("top speed must be positive")
+    if accel_s <= 0:
+        return (distance / top_speed) ** 2
+    if distance >= top_speed * accel_s:
+        return (distance / top_speed + accel_s) ** 2
+    return 4 * distance * accel_s / top_speed       # (2 * sqrt(D * ta / v)) ** 2
+
+
+@dataclass(frozen=True)
+class SegmentTiming:
+    """The inputs of a segment's timing, each an exact number (a float is the exact binary
+    value it holds). ``distances[i]`` runs at ``top_speeds[i]``; the slowest axis sets the
+    duration. ``blend`` is a percentage of the deceleration, or a radius in mm when
+    ``blend_is_radius`` (overlapping the time the last ``blend`` mm take at ``blend_speed``)."""
+
+    distances: tuple[Fraction, ...]
+    top_speeds: tuple[Fraction, ...]
+    accel_s: Fraction
+    time_scale: Fraction
+    blend: Fraction = Fraction(0)
+    blend_is_radius: bool = False
+    blend_speed: Fraction = Fraction(1)
+    settle_ms: Fraction = Fraction(0)
+
+    def times_ns(self) -> tuple[int, int, int, int]:
+        """(duration, acceleration, blend, settle) in whole nanoseconds of motion time."""
+        ns_per_s = self.time_scale * NS_PER_S
+        scale_sq = ns_per_s * ns_per_s
+        duration_sq = max((_trapezoid_square(d, v, self.accel_s) for d, v in zip(self.distances, self.top_speeds)),
+                          default=Fraction(0))
+        decel_sq = min(self.accel_s * self.accel_s, duration_sq / 4)     # min(ta, duration / 2) ** 2
+        blend_sq = Fraction(0)
+        if self.blend > 0:
+            if self.blend_is_radius:
+                # Choice: a radius r overlaps the time the motion needs for its last r mm:
+                # fraction = min(1, r / max(v * decel / 2, 1e-9))
+                denominator_sq = max(self.blend_speed * self.blend_speed / 4 * decel_sq, Fraction(1e-9) ** 2)
+                fraction_sq = min(Fraction(1), self.blend * self.blend / denominator_sq)
+            else:
+                fraction_sq = min(Fraction(1), self.blend / 100) ** 2
+            blend_sq = fraction_sq * decel_sq
+        return (_round_sqrt(duration_sq * scale_sq), _round_sqrt(decel_sq * scale_sq),
+                _round_sqrt(blend_sq * scale_sq), round(self.settle_ms / 1000 * ns_per_s))
 
 
 def trapezoid_fraction(t_s: float, duration_s: float, accel_s: float) -> float:
@@ -247,6 +325,7 @@ class Segment:
     circle: dict[str, Any] | None = None
     label: str = ""
     start_ns: int = 0  # motion time when it started (set by the executor)
+    timing: SegmentTiming | None = None  # what the four times above were computed from
 
     @property
     def total_ns(self) -> int:
@@ -267,7 +346,7 @@ class Segment:
         if self.circle is not None:
             c = self.circle
             angle = c["sweep"] * s
-            out[:3, 3] = c["center"] + c["radius"] * (math.cos(angle) * c["u"] + math.sin(angle) * c["v"])
+            out[:3, 3] = c["center"] + c["radius"] * (dm.cos(angle) * c["u"] + dm.sin(angle) * c["v"])
         else:
             out[:3, 3] = self.start_tcp[:3, 3] + s * (self.end_tcp[:3, 3] - self.start_tcp[:3, 3])
         out[:3, :3] = slerp_matrix(self.start_tcp[:3, :3], self.end_tcp[:3, :3], s)
@@ -448,37 +527,27 @@ class Planner:
         self.kin = kinematics
         self.settings = settings
 
-    def _ns(self, seconds: float) -> int:
-        return int(round(seconds * self.settings.time_scale * NS_PER_S))
+    def _accel_s(self, accel_ms: float) -> Fraction:
+        return max(Fraction(accel_ms), Fraction(self.settings.min_accel_ms)) / 1000
 
-    def _accel_s(self, accel_ms: float) -> float:
-        return max(float(accel_ms), float(self.settings.min_accel_ms)) / 1000.0
-
-    def _blend_ns(self, duration_s: float, accel_s: float, blend: float, blend_is_radius: bool,
-                  top_speed: float) -> int:
-        if blend <= 0:
-            return 0
-        decel = min(accel_s, duration_s / 2.0)
-        if blend_is_radius:
-            # Choice: a radius r overlaps the time the motion needs for its last r mm.
-            fraction = min(1.0, blend / max(top_speed * decel / 2.0, 1e-9))
-        else:
-            fraction = min(1.0, blend / 100.0)
-        return self._ns(fraction * decel)
+    def _timing(self, distances: Sequence[Fraction], speeds: Sequence[Fraction], accel_ms: float, blend: float,
+                blend_is_radius: bool, blend_speed: Fraction, precise: bool) -> SegmentTiming:
+        return SegmentTiming(tuple(distances), tuple(speeds), self._accel_s(accel_ms),
+                             Fraction(self.settings.time_scale), Fraction(max(blend, 0)), blend_is_radius,
+                             blend_speed, Fraction(self.settings.precise_settle_ms) if precise else Fraction(0))
 
     def joint_motion(self, state: PlannedState, target_joints: np.ndarray, speed_pct: float, accel_ms: float,
                      blend_pct: float, precise: bool, label: str) -> Segment:
         if not self.kin.within_limits(target_joints):
             raise PlanError("joint target outside the joint limits")
-        accel_s = self._accel_s(accel_ms)
-        top = np.array(self.settings.max_joint_speed_deg_s) * (speed_pct / 100.0)
-        distances = np.abs(target_joints - state.joints)
-        duration = max(trapezoid_duration_s(float(d), float(v), accel_s) for d, v in zip(distances, top))
+        pct = Fraction(speed_pct) / 100
+        speeds = [Fraction(v) * pct for v in self.settings.max_joint_speed_deg_s]
+        distances = [abs(Fraction(float(t)) - Fraction(float(q))) for t, q in zip(target_joints, state.joints)]
+        timing = self._timing(distances, speeds, accel_ms, blend_pct, False, Fraction(1), precise)
+        duration_ns, accel_ns, blend_ns, settle_ns = timing.times_ns()
         end_tcp = self.kin.fk(target_joints, state.tool)
         seg = Segment("joint", state.joints.copy(), target_joints.copy(), state.tcp.copy(), end_tcp,
-                      self._ns(duration), self._ns(min(accel_s, duration / 2.0)),
-                      self._blend_ns(duration, accel_s, blend_pct, False, 1.0),
-                      self._ns(self.settings.precise_settle_ms / 1000.0) if precise else 0, label=label)
+                      duration_ns, accel_ns, blend_ns, settle_ns, label=label, timing=timing)
         state.joints, state.tcp = target_joints.copy(), end_tcp
         return seg
 
@@ -492,21 +561,16 @@ class Planner:
                     accel_ms: float, blend: float, blend_is_radius: bool, precise: bool, label: str,
                     circle: dict[str, Any] | None = None, path_length: float | None = None) -> Segment:
         joints = self.solve(state, tcp_target)
-        accel_s = self._accel_s(accel_ms)
-        if speed_is_pct:
-            fraction = speed / 100.0
-        else:
-            fraction = speed / self.settings.max_tcp_speed_mm_s
-        v = fraction * self.settings.max_tcp_speed_mm_s
-        w = fraction * self.settings.max_tcp_rot_speed_deg_s
-        length = path_length if path_length is not None else float(np.linalg.norm(tcp_target[:3, 3] - state.tcp[:3, 3]))
+        max_speed = Fraction(self.settings.max_tcp_speed_mm_s)
+        fraction = Fraction(speed) / 100 if speed_is_pct else Fraction(speed) / max_speed
+        v = fraction * max_speed
+        w = fraction * Fraction(self.settings.max_tcp_rot_speed_deg_s)
+        length = path_length if path_length is not None else dm.norm(tcp_target[:3, 3] - state.tcp[:3, 3])
         rot = rotation_angle_deg(state.tcp[:3, :3], tcp_target[:3, :3])
-        duration = max(trapezoid_duration_s(length, v, accel_s), trapezoid_duration_s(rot, w, accel_s))
+        timing = self._timing([Fraction(length), Fraction(rot)], [v, w], accel_ms, blend, blend_is_radius, v, precise)
+        duration_ns, accel_ns, blend_ns, settle_ns = timing.times_ns()
         seg = Segment("cart", state.joints.copy(), joints, state.tcp.copy(), tcp_target.copy(),
-                      self._ns(duration), self._ns(min(accel_s, duration / 2.0)),
-                      self._blend_ns(duration, accel_s, blend, blend_is_radius, v),
-                      self._ns(self.settings.precise_settle_ms / 1000.0) if precise else 0,
-                      circle=circle, label=label)
+                      duration_ns, accel_ns, blend_ns, settle_ns, circle=circle, label=label, timing=timing)
         state.joints, state.tcp = joints, tcp_target.copy()
         return seg
 
@@ -517,25 +581,26 @@ class Planner:
         sweep that angle keeping the start orientation; 0: stop at ``end`` (spec §7)."""
         p0, p1, p2 = state.tcp[:3, 3], via[:3, 3], end[:3, 3]
         a, b = p1 - p0, p2 - p0
-        normal = np.cross(a, b)
-        if np.linalg.norm(normal) < 1e-6:
+        normal = dm.cross(a, b)
+        if dm.norm(normal) < 1e-6:
             raise PlanError("circle points are collinear")
-        normal /= np.linalg.norm(normal)
+        normal /= dm.norm(normal)
         # Circumcentre of the three points.
-        center = p0 + (np.dot(b, b) * np.cross(np.cross(a, b), a) + np.dot(a, a) * np.cross(b, np.cross(a, b))) \
-            / (2.0 * np.dot(np.cross(a, b), np.cross(a, b)))
-        radius = float(np.linalg.norm(p0 - center))
+        a_x_b = dm.cross(a, b)
+        center = p0 + (dm.dot(b, b) * dm.cross(a_x_b, a) + dm.dot(a, a) * dm.cross(b, a_x_b)) \
+            / (2.0 * dm.dot(a_x_b, a_x_b))
+        radius = dm.norm(p0 - center)
         u = (p0 - center) / radius
-        v = np.cross(normal, u)
+        v = dm.cross(normal, u)
 
         def angle_of(p: np.ndarray) -> float:
-            return math.atan2(float(np.dot(p - center, v)), float(np.dot(p - center, u))) % (2 * math.pi)
+            return dm.atan2(dm.dot(p - center, v), dm.dot(p - center, u)) % (2 * dm.PI)
 
         if arc_angle_deg:
-            sweep = math.radians(arc_angle_deg)
+            sweep = dm.radians(arc_angle_deg)
             target = np.eye(4)
             target[:3, :3] = state.tcp[:3, :3]
-            target[:3, 3] = center + radius * (math.cos(sweep) * u + math.sin(sweep) * v)
+            target[:3, 3] = center + radius * (dm.cos(sweep) * u + dm.sin(sweep) * v)
         else:
             sweep = angle_of(p2)  # via lies between start and end by construction of v
             target = end

@@ -36,6 +36,7 @@ from . import script as sc
 from .builtins import BLOCKING_STATEMENTS, FUNCTIONS, ArgError, ScriptContext, ScriptJob, format_value
 from .faults import NO_FAULTS, FaultPlan
 from .framing import Cperr, Frame, FrameError, encode, encode_cperr
+from . import detmath as dm
 from .motion import NS_PER_MS, Kinematics, Marker, MotionExecutor, PlannedState, Planner, matrix_to_pose
 from .settings import DEFAULT_SETTINGS, EmulatorSettings
 
@@ -754,7 +755,7 @@ class Robot:
         raise ArgError(f"unknown member {name}")  # pragma: no cover - checked statically
 
     def _pose_in_base(self, tcp: np.ndarray) -> np.ndarray:
-        return matrix_to_pose(np.linalg.inv(self.base) @ tcp)
+        return matrix_to_pose(dm.matmul(dm.rigid_inverse(self.base), tcp))
 
     def _tcp_speed_mm_s(self) -> float:
         if not self.executor.active:
@@ -764,7 +765,7 @@ class Robot:
         t = self.executor.time_ns
         a = seg.tcp_at(max(seg.start_ns, t - dt))[:3, 3]
         b = seg.tcp_at(t)[:3, 3]
-        return float(np.linalg.norm(b - a) / (dt / 1e9))
+        return dm.norm(b - a) / (dt / 1e9)
 
     # ================================================================ motion queue (§8)
 

@@ -92,6 +92,15 @@ class GoldenTrace:
         expected = read_trace(golden)
         divergence = compare(expected, run.trace)
         if divergence is None:
+            # compare() matches frames by scan; the golden must also be byte-identical (the
+            # nanosecond of every robot frame), as on every machine the emulator is exact
+            text = to_jsonl(run.trace)
+            committed = golden.read_text(encoding="utf-8")
+            if text != committed:
+                fresh.write_text(text, encoding="utf-8")
+                pytest.fail(f"{golden} matches scan by scan but not byte for byte: "
+                            f"{_first_line_difference(committed, text)}\nactual trace: {fresh}\n"
+                            f"to accept it: pytest {UPDATE_OPTION}", pytrace=False)
             if fresh.exists():
                 fresh.unlink()
             return run
@@ -99,6 +108,13 @@ class GoldenTrace:
         fresh.write_text(to_jsonl(run.trace), encoding="utf-8")
         report = render_report(divergence, expected, run.trace, context, str(golden))
         pytest.fail(report + f"actual trace: {fresh}\nto accept it: pytest {UPDATE_OPTION}", pytrace=False)
+
+
+def _first_line_difference(expected: str, actual: str) -> str:
+    for number, (old, new) in enumerate(zip(expected.splitlines(), actual.splitlines()), 1):
+        if old != new:
+            return f"line {number}:\n  golden: {old[:200]}\n  actual: {new[:200]}"
+    return f"{len(expected.splitlines())} lines in the golden, {len(actual.splitlines())} now"
 
 
 @pytest.fixture

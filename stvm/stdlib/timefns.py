@@ -8,6 +8,9 @@ after 2106-02-06 is an instruction error.
 
 from __future__ import annotations
 
+import math
+from fractions import Fraction
+
 from stvm.runtime.values import FunctionError, STFault
 from stvm.semantics.types import LINT
 from stvm.stdlib.conversions import DATE_LAST_NS, NS_PER_DAY
@@ -36,7 +39,10 @@ def sub_time(ctx, first: int, second: int) -> int:
 
 @native_function("MUL_TIME")
 def mul_time(ctx, duration: int, factor: float) -> int:
-    return _time(round(duration * factor))  # Choice: to the nearest ns
+    if not math.isfinite(factor):
+        raise FunctionError(f"MUL_TIME: the factor {factor} is not a finite number")
+    # exact: the ns nearest to duration x the REAL's value (ties to even), on every machine
+    return _time(round(Fraction(duration) * Fraction(factor)))  # Choice: to the nearest ns
 
 
 @native_function("DIV_TIME")
@@ -45,7 +51,9 @@ def div_time(ctx, duration: int, divisor: float) -> int:
         if ctx.settings.int_div_zero == "zero":
             return 0
         raise STFault("DIV_TIME by zero")
-    return _time(round(duration / divisor))
+    if not math.isfinite(divisor):
+        raise FunctionError(f"DIV_TIME: the divisor {divisor} is not a finite number")
+    return _time(round(Fraction(duration) / Fraction(divisor)))
 
 
 @native_function("ADD_TOD_TIME")
