@@ -341,8 +341,23 @@ def main(argv: list[str] | None = None) -> int:
         return 130
 
 
+def _show_cache_warnings() -> None:
+    """A cache that cannot be used safely is one `stvm: warning:` line, not a Python warning."""
+    import warnings
+    from stvm.cache import CacheWarning
+    shown = warnings.showwarning
+
+    def show(message, category, filename, lineno, file=None, line=None):
+        if issubclass(category, CacheWarning):
+            print(f"stvm: warning: {message}", file=sys.stderr)
+        else:
+            shown(message, category, filename, lineno, file, line)
+    warnings.showwarning = show
+
+
 def _main(argv: list[str] | None) -> int:
     from stvm.diagnostics import printable
+    _show_cache_warnings()
     parser = build_parser()
     args = parser.parse_args(argv)
     if not getattr(args, "func", None):

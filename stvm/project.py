@@ -24,6 +24,7 @@ from stvm.runtime.vm import GENERATED_FILENAME, VM
 from stvm.settings import DEFAULT_SETTINGS, SysmacSettings
 
 if TYPE_CHECKING:
+    from stvm.cache import SignedCache
     from stvm.lower import LoweredProject
     from stvm.semantics.model import ProjectModel
 
@@ -128,10 +129,22 @@ def _stdlib(settings: SysmacSettings = DEFAULT_SETTINGS) -> list[tuple[str, str]
 
 
 def _cache_dir() -> Path:
-    base = os.environ.get("STVM_CACHE_DIR")
-    if base:
-        return Path(base)
-    return Path(os.environ.get("XDG_CACHE_HOME", Path.home() / ".cache")) / "stvm"
+    from stvm.cache import default_folder
+    return default_folder()
+
+
+def _cache() -> "SignedCache":
+    """The compile cache: entries signed with the user's key (stvm/cache.py), so a shared
+    STVM_CACHE_DIR cannot hand stvm a pickle someone else wrote."""
+    from stvm.cache import SignedCache
+    folder = _cache_dir()
+    cached = _CACHES.get(folder)
+    if cached is None:
+        cached = _CACHES[folder] = SignedCache(folder)
+    return cached
+
+
+_CACHES: dict[Path, "SignedCache"] = {}
 
 
 _CODE_DIGEST: list[str] = []
@@ -264,24 +277,20 @@ def _stdlib_units(settings: SysmacSettings) -> tuple[list, list[Diagnostic], dic
         units, diags = _STDLIB_UNITS[key]
         return units, list(diags), sources
     from stvm.syntax.parser import parse_text
-    path = _cache_dir() / f"stdlib-{key}.ast"
+    cache = _cache()
+    name = f"stdlib-{key}.ast"
     try:
-        with path.open("rb") as fh:
-            units, diags = pickle.load(fh)
-    except Exception:  # missing or unreadable: parse again
+        payload = cache.get(name)
+        if payload is None:
+            raise LookupError(name)
+        units, diags = pickle.loads(payload)   # verified: written by this user's stvm
+    except Exception:  # missing, unreadable or not ours: parse again
         units, diags = [], []
         for name, text in texts:
             unit, d = parse_text(text, name, settings)
             units.append(unit)
             diags += d
-        try:
-            path.parent.mkdir(parents=True, exist_ok=True)
-            tmp = path.with_suffix(".tmp%d" % os.getpid())
-            with tmp.open("wb") as fh:
-                pickle.dump((units, diags), fh, protocol=pickle.HIGHEST_PROTOCOL)
-            tmp.replace(path)
-        except OSError:
-            pass
+        cache.put(name, pickle.dumps((units, diags), protocol=pickle.HIGHEST_PROTOCOL))
     _STDLIB_UNITS[key] = (units, diags)
     return units, list(diags), sources
 
@@ -342,14 +351,14 @@ def load(paths: Sequence[str | Path], settings: SysmacSettings = DEFAULT_SETTING
     if read_diags:
         raise LoadError(read_diags, dict(texts))
     key = _cache_key(texts + _stdlib(settings), settings)
-    cache_file = _cache_dir() / f"{key}.bin"
-    if use_cache and cache_file.exists():
+    cache_name = f"{key}.bin"
+    payload = _cache().get(cache_name) if use_cache else None
+    if payload is not None:
         try:
-            with cache_file.open("rb") as fh:
-                model, lowered, warnings, code_bytes, sources = pickle.load(fh)
-            os.utime(cache_file)   # recently used: pruning drops the oldest first
+            # verified: only this user's stvm (holding the key) can have written it
+            model, lowered, warnings, code_bytes, sources = pickle.loads(payload)
             return Project(model, lowered, marshal.loads(code_bytes), sources, settings, warnings, True, manifest, root)
-        except Exception:  # a stale or damaged cache entry is rebuilt, never fatal
+        except Exception:  # a stale entry (an older stvm's classes) is rebuilt, never fatal
             pass
     analysis, diags, sources = _check_texts(texts, [], settings)
     if analysis is None:
@@ -359,29 +368,17 @@ def load(paths: Sequence[str | Path], settings: SysmacSettings = DEFAULT_SETTING
     project = Project(analysis.model, lowered, code, sources, settings, warnings, False, manifest, root)
     if use_cache:
         try:
-            cache_file.parent.mkdir(parents=True, exist_ok=True)
-            tmp = cache_file.with_suffix(".tmp%d" % os.getpid())
-            with tmp.open("wb") as fh:
-                pickle.dump((analysis.model, lowered, warnings, marshal.dumps(code), sources), fh,
-                            protocol=pickle.HIGHEST_PROTOCOL)
-            tmp.replace(cache_file)
-            _prune_cache(cache_file.parent)
-        except OSError:
-            pass
+            payload = pickle.dumps((analysis.model, lowered, warnings, marshal.dumps(code), sources),
+                                   protocol=pickle.HIGHEST_PROTOCOL)
+        except (pickle.PicklingError, RecursionError, TypeError):
+            payload = None
+        if payload is not None:
+            _cache().put(cache_name, payload)
+            _cache().prune("*.bin", CACHE_MAX_ENTRIES)
     return project
 
 
 CACHE_MAX_ENTRIES = 200
-
-
-def _prune_cache(folder: Path) -> None:
-    """Keep the cache from growing without bound: drop the least recently used entries."""
-    entries = sorted(folder.glob("*.bin"), key=lambda p: p.stat().st_mtime)
-    for old in entries[:-CACHE_MAX_ENTRIES]:
-        try:
-            old.unlink()
-        except OSError:
-            pass
 
 
 def nothing_to_run(project: Project, files: Sequence[str | Path] = ()) -> str | None:

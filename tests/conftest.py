@@ -28,6 +28,8 @@ for p in (str(ROOT), str(TESTS)):
 if not os.environ.get("STVM_TESTS_KEEP_CACHE"):       # set it to use STVM_CACHE_DIR as given
     os.environ["STVM_CACHE_DIR"] = tempfile.mkdtemp(prefix="stvm-test-cache-")
     atexit.register(shutil.rmtree, os.environ["STVM_CACHE_DIR"], ignore_errors=True)
+    # the compile cache's signing key too (stvm/cache.py), never the user's own
+    os.environ["STVM_CACHE_KEY_FILE"] = os.path.join(tempfile.mkdtemp(prefix="stvm-test-key-"), "cache.key")
 
 
 def pytest_addoption(parser: pytest.Parser) -> None:

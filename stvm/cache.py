@@ -1,0 +1,206 @@
+"""A cache folder nobody else can poison: entries signed with a per-user key.
+
+The compile cache stores pickled models and marshalled code objects; loading either runs code,
+so an entry someone else wrote must never be loaded. Harmless in a private `~/.cache`,
+dangerous when `STVM_CACHE_DIR` is a shared or CI cache folder.
+
+* Every entry is `HMAC-SHA256(key, name + payload) || payload`; an entry whose tag does not
+  verify (forged, truncated, renamed from another entry, written with another user's key) is
+  treated as missing and rebuilt. Only the verified payload is unpickled.
+* The key is 32 random bytes in a file of the user's own (`$XDG_CONFIG_HOME/stvm/cache.key`,
+  default `~/.config/stvm/cache.key`, or `STVM_CACHE_KEY_FILE`), created with mode 0600 in a
+  0700 folder, never inside the cache folder. A key file that others can read or write, or
+  that belongs to another user, disables the cache with a warning.
+* A cache folder (or the folder holding it, unless that one has the sticky bit, as /tmp does)
+  that other users can write, or that another user owns, is refused with a warning: the run
+  goes on without a cache.
+
+`SignedCache(folder).get(name)` / `.put(name, payload)` is the one interface; the compile cache
+(stvm/project.py) and any later parse or check cache use it.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import hmac
+import os
+import secrets
+import stat
+import warnings
+from pathlib import Path
+
+TAG_BYTES = 32
+
+
+class CacheWarning(UserWarning):
+    """The cache cannot be used safely; the run goes on without it."""
+
+
+_WARNED: set[str] = set()
+
+
+def _warn(message: str) -> None:
+    if message not in _WARNED:        # once per process: a run loads the cache several times
+        _WARNED.add(message)
+        warnings.warn(message, CacheWarning, stacklevel=3)
+
+
+def default_folder() -> Path:
+    base = os.environ.get("STVM_CACHE_DIR")
+    if base:
+        return Path(base)
+    return Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "stvm"
+
+
+def key_file() -> Path:
+    explicit = os.environ.get("STVM_CACHE_KEY_FILE")
+    if explicit:
+        return Path(explicit)
+    return Path(os.environ.get("XDG_CONFIG_HOME") or Path.home() / ".config") / "stvm" / "cache.key"
+
+
+def _writable_by_others(info: os.stat_result) -> bool:
+    return bool(info.st_mode & (stat.S_IWGRP | stat.S_IWOTH))
+
+
+def _folder_problem(folder: Path) -> str | None:
+    """Why `folder` is not safe as a cache (None if it is, or does not exist yet)."""
+    uid = os.getuid()
+    try:
+        info = folder.stat()
+    except FileNotFoundError:
+        info = None
+    except OSError as exc:
+        return f"cannot use the cache folder {folder}: {exc.strerror or exc}"
+    if info is not None:
+        if not stat.S_ISDIR(info.st_mode):
+            return f"the cache folder {folder} is not a folder"
+        if info.st_uid != uid:
+            return f"the cache folder {folder} belongs to another user (uid {info.st_uid})"
+        if _writable_by_others(info):
+            return (f"the cache folder {folder} is writable by other users (mode {stat.S_IMODE(info.st_mode):o}); "
+                    f"chmod go-w it or set STVM_CACHE_DIR to a private folder")
+    parent = folder.resolve().parent
+    try:
+        parent_info = parent.stat()
+    except OSError:
+        return None
+    if _writable_by_others(parent_info) and not parent_info.st_mode & stat.S_ISVTX and parent_info.st_uid != uid:
+        return f"the cache folder's parent {parent} is writable by other users (they could replace the folder)"
+    return None
+
+
+def _load_key(path: Path) -> bytes | None:
+    """The user's key, created on first use; None (with a warning) if it cannot be trusted."""
+    try:
+        fd = os.open(path, os.O_RDONLY | getattr(os, "O_NOFOLLOW", 0))
+    except FileNotFoundError:
+        return _create_key(path)
+    except OSError as exc:
+        _warn(f"compile cache disabled: cannot read the cache key {path}: {exc.strerror or exc}")
+        return None
+    try:
+        info = os.fstat(fd)
+        if not stat.S_ISREG(info.st_mode) or info.st_uid != os.getuid() or info.st_mode & 0o077:
+            _warn(f"compile cache disabled: the cache key {path} must be a file of yours with mode 0600 "
+                  f"(it is {stat.S_IMODE(info.st_mode):o}, uid {info.st_uid})")
+            return None
+        key = os.read(fd, 4096)
+    finally:
+        os.close(fd)
+    if len(key) < TAG_BYTES:
+        _warn(f"compile cache disabled: the cache key {path} is damaged (delete it to make a new one)")
+        return None
+    return key
+
+
+def _create_key(path: Path) -> bytes | None:
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True, mode=0o700)
+        fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600)
+    except FileExistsError:       # another stvm made it meanwhile
+        return _load_key(path)
+    except OSError as exc:
+        _warn(f"compile cache disabled: cannot create the cache key {path}: {exc.strerror or exc}")
+        return None
+    key = secrets.token_bytes(TAG_BYTES)
+    try:
+        os.write(fd, key)
+    finally:
+        os.close(fd)
+    return key
+
+
+class SignedCache:
+    """Entries named by the caller (a content hash), verified with the user's key."""
+
+    def __init__(self, folder: Path | None = None, key_path: Path | None = None) -> None:
+        self.folder = Path(folder) if folder is not None else default_folder()
+        self._key_path = key_path if key_path is not None else key_file()
+        self._key: bytes | None = None
+        self._checked = False
+        self.usable = False
+
+    def _ready(self) -> bool:
+        if not self._checked:
+            self._checked = True
+            problem = _folder_problem(self.folder)
+            if problem:
+                _warn(f"compile cache not used: {problem}")
+            else:
+                self._key = _load_key(self._key_path)
+                self.usable = self._key is not None
+        return self.usable
+
+    def _tag(self, name: str, payload: bytes) -> bytes:
+        assert self._key is not None
+        return hmac.new(self._key, name.encode() + b"\0" + payload, hashlib.sha256).digest()
+
+    def path(self, name: str) -> Path:
+        return self.folder / name
+
+    def get(self, name: str) -> bytes | None:
+        """The payload stored under `name`, or None if missing, damaged or not signed by us."""
+        if not self._ready():
+            return None
+        try:
+            with self.path(name).open("rb") as fh:
+                data = fh.read()
+        except OSError:
+            return None
+        tag, payload = data[:TAG_BYTES], data[TAG_BYTES:]
+        if len(tag) < TAG_BYTES or not hmac.compare_digest(tag, self._tag(name, payload)):
+            return None
+        try:
+            os.utime(self.path(name))      # recently used: pruning drops the oldest first
+        except OSError:
+            pass
+        return payload
+
+    def put(self, name: str, payload: bytes) -> None:
+        """Store `payload` under `name` (atomically; errors are ignored: a cache is optional)."""
+        if not self._ready():
+            return
+        try:
+            self.folder.mkdir(parents=True, exist_ok=True, mode=0o700)
+            tmp = self.path(f"{name}.tmp{os.getpid()}")
+            fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o600)
+            with os.fdopen(fd, "wb") as fh:
+                fh.write(self._tag(name, payload) + payload)
+            tmp.replace(self.path(name))
+        except OSError:
+            pass
+
+    def prune(self, pattern: str, keep: int) -> None:
+        """Keep the `keep` most recently used entries matching `pattern`."""
+        if not self._ready():
+            return
+        try:
+            entries = sorted(self.folder.glob(pattern), key=lambda p: p.stat().st_mtime)
+        except OSError:
+            return
+        for old in entries[:-keep] if keep else entries:
+            try:
+                old.unlink()
+            except OSError:
+                pass
