@@ -16,8 +16,13 @@ above, and a quantile is reported as the midpoint of its bucket, clamped to [min
 from __future__ import annotations
 
 from array import array
+from typing import TYPE_CHECKING
 
-import numpy as np
+if TYPE_CHECKING:
+    import numpy as np
+
+# numpy is imported on first use (the first fold or summary), not with the VM: `stvm run` of a
+# short program must not pay numpy's import time.
 
 # Choice: a hand-written HDR-style histogram rather than a sketch library. `add` runs once per
 # scan inside the scan loop (a toggle program scans in under 1 µs), where a library's
@@ -28,8 +33,9 @@ _SUB = 1 << _SUB_BITS                 # buckets per power of two (relative error
 _BUCKETS = (64 - _SUB_BITS + 1) * _SUB  # enough for any int64
 
 
-def _bucket_indices(values: np.ndarray) -> np.ndarray:
+def _bucket_indices(values: "np.ndarray") -> "np.ndarray":
     """Histogram bucket of each (non-negative int64) value."""
+    import numpy as np
     v = np.maximum(values, 0)
     bits = np.frexp(v.astype(np.float64))[1].astype(np.int64)   # bit_length (exact below 2**53)
     shift = np.maximum(bits - (_SUB_BITS + 1), 0)
@@ -60,7 +66,7 @@ class TimingStats:
         self._ring = array("q", bytes(8 * window))
         self._pos = 0            # next slot of the ring
         self._pending = 0        # ring values not yet in the histogram
-        self._histogram: np.ndarray | None = None
+        self._histogram: "np.ndarray | None" = None
         self.count = 0
         self.total = 0
         self.minimum: int | None = None
@@ -82,6 +88,7 @@ class TimingStats:
             self._fold()
 
     def _fold(self) -> None:
+        import numpy as np
         histogram = self._histogram
         if histogram is None:
             histogram = self._histogram = np.zeros(_BUCKETS, dtype=np.int64)
@@ -92,8 +99,9 @@ class TimingStats:
     def __len__(self) -> int:
         return self.count
 
-    def recent(self, n: int | None = None) -> np.ndarray:
+    def recent(self, n: int | None = None) -> "np.ndarray":
         """The last `n` values (at most `window`), oldest first, as int64."""
+        import numpy as np
         held = min(self.count, self.window)
         n = held if n is None else max(0, min(n, held))
         ring = np.frombuffer(self._ring, dtype=np.int64)
@@ -108,6 +116,7 @@ class TimingStats:
 
     def quantile_ns(self, q: float) -> float:
         """The `q` quantile (0..1); exact while count <= window, else a bucket midpoint."""
+        import numpy as np
         if not self.count:
             raise ValueError("no values recorded")
         if self._histogram is None:
