@@ -34,6 +34,18 @@ def timing_us(stats) -> tuple[float, float, float, float] | None:
     return stats.summary_us()
 
 
+# FB instances nest and POUs call each other up to the checker's NESTING_LIMIT (200) levels;
+# each level is a few Python frames (constructor, call, copy), more under the debugger's trace
+# hook, so the interpreter's limit must be well above 3 x 200 for run and debug alike.
+_RECURSION_LIMIT = 4000
+
+
+def _ensure_recursion_limit() -> None:
+    import sys
+    if sys.getrecursionlimit() < _RECURSION_LIMIT:
+        sys.setrecursionlimit(_RECURSION_LIMIT)
+
+
 class RuntimeFault(Exception):
     """A major fault: the task stopped at an ST location."""
 
@@ -80,6 +92,7 @@ _PATH_TOKEN = re.compile(r"\s*(?:([A-Za-z_][A-Za-z0-9_]*)|\[([^\]]*)\]|(\.))")
 class VM:
     def __init__(self, project, scan_ns: int = 10_000_000, realtime: bool = False,
                  start_dt_ns: int = 0, transport: Any = None, settings=None) -> None:
+        _ensure_recursion_limit()
         self.project = project
         self.model = project.model
         self.settings = settings or project.settings

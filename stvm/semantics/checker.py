@@ -81,6 +81,50 @@ class _Index:
         self.short_pous: dict[str, list[str]] = {}
 
 
+NESTING_LIMIT = 200
+"""How deep FB instances may nest (a FB instance inside a FB instance inside …) and POU calls
+may chain, for `stvm run` and `stvm debug` alike: deeper programs are a check-time error (E028)
+naming the chain. Real PLC programs stay far below; 200 keeps the VM well inside Python's stack."""
+
+
+def _aggregate_key(ty: t.Type) -> str | None:
+    while isinstance(ty, t.ArrayType):
+        ty = ty.element
+    if isinstance(ty, (t.FBType, t.StructType)):
+        return ty.qualname.lower()
+    return None
+
+
+def _longest_paths(graph: dict[str, list[tuple[str, str]]]) -> tuple[dict[str, int], dict[str, tuple[str, str] | None]]:
+    """For each node: the number of nodes on the longest path starting there, and its first
+    edge (label, successor). Iterative (no recursion); edges closing a cycle are ignored (cycles
+    are reported by check_containment / check_recursion)."""
+    depth: dict[str, int] = {}
+    best: dict[str, tuple[str, str] | None] = {}
+    for root in graph:
+        if root in depth:
+            continue
+        stack = [(root, iter(graph.get(root, ())))]
+        on_path = {root}
+        while stack:
+            key, edges = stack[-1]
+            for _, succ in edges:
+                if succ not in depth and succ not in on_path:
+                    on_path.add(succ)
+                    stack.append((succ, iter(graph.get(succ, ()))))
+                    break
+            else:
+                stack.pop()
+                on_path.discard(key)
+                length, first = 1, None
+                for label, succ in graph.get(key, ()):
+                    if succ in depth and depth[succ] + 1 > length:
+                        length, first = depth[succ] + 1, (label, succ)
+                depth[key] = length
+                best[key] = first
+    return depth, best
+
+
 class Checker:
     def __init__(self, units: list[n.CompilationUnit], settings: SysmacSettings) -> None:
         self.units = units
@@ -657,8 +701,11 @@ class Checker:
                     self.error(f"native POU '{pou.name}' must not have a body", pou.span, "E025")
                 continue
             _BodyChecker(self, info, pou).check()
-        self.check_containment()
-        self.check_recursion()
+        # the depth check walks iteratively and runs first: the two checks after it recurse,
+        # and a chain thousands deep must be a diagnostic naming it, not a RecursionError
+        if self.check_nesting_depth():
+            self.check_containment()
+            self.check_recursion()
         tasks, defaults = self.check_configuration()
         model = ProjectModel(self.pous, self.globals, tasks, defaults, self.structs, self.enums)
         return Analysis(model, self.facts, self.units, dict(self.index.pou_nodes), self.diags, self.type_inits)
@@ -731,6 +778,75 @@ class Checker:
         for key, decl in self.index.type_decls.items():
             if isinstance(decl.body, n.StructDecl):
                 visit(key, [], [])
+
+    def check_nesting_depth(self) -> bool:
+        """FB instances nested in FB instances (or structs), and POUs calling POUs, at most
+        NESTING_LIMIT deep: the same limit for `stvm run` and `stvm debug` (the VM builds and
+        calls them on the Python stack). Returns False if a chain is too deep."""
+        from stvm.lower.codegen import _calls_in
+        contains: dict[str, list[tuple[str, str]]] = {}
+        for key, pou in self.pous.items():
+            if pou.kind != "FUNCTION":
+                contains[key] = [(v.name, inner) for v in pou.variables.values()
+                                 if v.section not in (IN_OUT, EXTERNAL)
+                                 for inner in [_aggregate_key(v.type)] if inner is not None]
+        for key, decl in self.index.type_decls.items():
+            if isinstance(decl.body, n.StructDecl):
+                contains[key] = [(name, inner) for name, inner in self._struct_members(key, decl)]
+        calls: dict[str, list[tuple[str, str]]] = {key: [] for key in self.index.pou_nodes}
+        for key, node in self.index.pou_nodes.items():
+            seen: set[str] = set()
+            for call in _calls_in(node.body):
+                info = self.facts.calls.get(id(call))
+                if info is not None and info.pou.key not in seen:
+                    seen.add(info.pou.key)
+                    calls[key].append((info.pou.name, info.pou.key))
+        ok = True
+        reported: set[str] = set()
+        for graph, what in ((contains, "instances"), (calls, "calls")):
+            depth, best = _longest_paths(graph)
+            deep = {key for key, d in depth.items() if d > NESTING_LIMIT}
+            inside = {succ for key in deep for _, succ in graph.get(key, ()) if succ in deep}
+            for root in sorted(deep - inside - reported):   # one error per chain
+                reported.add(root)
+                ok = False
+                chain = [self._display(root)]
+                key = root
+                while best.get(key) is not None:
+                    label, key = best[key]
+                    chain.append(f".{label} ({self._display(key)})" if what == "instances" else self._display(key))
+                shown = chain if len(chain) <= 8 else chain[:5] + ["…"] + chain[-2:]
+                if what == "instances":
+                    text = f"FB instances and structures nested {depth[root]} deep: {' '.join(shown)}"
+                else:
+                    text = f"calls nested {depth[root]} deep: {' -> '.join(shown)}"
+                self.error(f"{text}; stvm's limit is {NESTING_LIMIT} levels (for run and debug alike)",
+                           self._span_of_key(root), "E028")
+        return ok
+
+    def _struct_members(self, key: str, decl) -> list[tuple[str, str]]:
+        out = []
+        for fdecl in decl.body.fields:
+            spec = fdecl.type_spec
+            while isinstance(spec, n.ArrayTypeSpec):
+                spec = spec.element
+            if isinstance(spec, n.NamedTypeSpec):
+                fkey = self.lookup_type_key(spec.parts, spec.rooted, decl.namespace) \
+                    or self.lookup_pou_key(spec.parts, decl.namespace)
+                if fkey is not None:
+                    out += [(name, fkey) for name, _ in fdecl.names]
+        return out
+
+    def _display(self, key: str) -> str:
+        if key in self.pous:
+            return self.pous[key].name
+        decl = self.index.type_decls.get(key)
+        return decl.name if decl is not None else key
+
+    def _span_of_key(self, key: str) -> n.Span:
+        if key in self.pous:
+            return self.pous[key].span
+        return self.index.type_decls[key].span
 
     def check_recursion(self) -> None:
         """IEC 61131-3 (and Sysmac) forbid recursive calls of functions and FBs."""
