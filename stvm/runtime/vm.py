@@ -25,6 +25,7 @@ from stvm.runtime.helpers import HELPERS
 from stvm.runtime.values import AttrRef, FunctionError, ItemRef, MapRef, STFault
 from stvm.semantics import types as t
 from stvm.syntax.nodes import Span
+from stvm.settings import FunErrorPolicy
 
 GENERATED_FILENAME = "<stvm-generated>"
 
@@ -157,7 +158,7 @@ class VM:
     # ---- running
     def _fun_error(self, error: FunctionError, site: int) -> None:
         span = self.project.lowered.sites[site]
-        if self.settings.fun_error_policy == "fault":
+        if self.settings.fun_error_policy is FunErrorPolicy.FAULT:
             raise STFault(f"instruction error: {error}")
         self.ctx.warn(f"{span.file}:{span.line}:{span.column}: instruction error (ENO FALSE, assignment skipped): {error}",
                       once_key=(site, str(error)))

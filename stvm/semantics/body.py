@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING
 from stvm.semantics import types as t
 from stvm.semantics.model import EXTERNAL, IN_OUT, INPUT, OUTPUT, POUInfo, Variable
 from stvm.syntax import nodes as n
+from stvm.settings import IntLiteralType
 
 if TYPE_CHECKING:
     from stvm.semantics.checker import Checker
@@ -27,7 +28,7 @@ OP_TEXT = {**_ARITH, **_COMPARE, **_LOGIC, "NOT": "NOT"}
 
 
 def int_literal_type(value: int, settings) -> t.Type:
-    if settings.int_literal_type == "lint":
+    if settings.int_literal_type is IntLiteralType.LINT:
         return t.LINT
     if t.DINT.lo <= value <= t.DINT.hi:
         return t.DINT

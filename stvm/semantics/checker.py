@@ -15,7 +15,7 @@ from stvm.diagnostics import Diagnostic
 from stvm.semantics import types as t
 from stvm.semantics.model import (EXTERNAL, GLOBAL, IN_OUT, INPUT, LOCAL, POUInfo,
                                   ProjectModel, TaskInfo, Variable)
-from stvm.settings import DEFAULT_SETTINGS, SysmacSettings
+from stvm.settings import BareEnumerators, DEFAULT_SETTINGS, SysmacSettings
 from stvm.syntax import nodes as n
 
 # Reserved words that the contextual lexer may still let through as names.
@@ -505,7 +505,7 @@ class Checker:
         cands = self.enumerators.get(name.lower(), [])
         if not cands:
             return None
-        if self.settings.bare_enumerators == "require_type":
+        if self.settings.bare_enumerators is BareEnumerators.REQUIRE_TYPE:
             if report:
                 self.error(f"enumerator '{name}' needs its type: write Type#{name}", span, "E021")
             return None
