@@ -20,6 +20,7 @@ from stvm.semantics.checker import Analysis, CallInfo
 from stvm.semantics.model import EXTERNAL, GLOBAL, IN_OUT, INPUT, OUTPUT, TEMP, POUInfo, Variable
 from stvm.lower.names import unit_name, var_attr
 from stvm.syntax import nodes as n
+from stvm.settings import EnumDefault, ForEndEval, IntDivZero
 
 
 @dataclass
@@ -180,7 +181,7 @@ class Lowerer:
     def enum_default(self, ty: t.EnumType) -> int:
         if ty.default is not None:
             return ty.default
-        if self.settings.enum_default == "zero" or not ty.members:
+        if self.settings.enum_default is EnumDefault.ZERO or not ty.members:
             return 0
         return ty.members[0][1]
 
@@ -478,7 +479,7 @@ class Lowerer:
             self.w.line(f"{step} = {self.expr_as(s.step, var_type)}")  # type: ignore[arg-type]
             cond = f"({read} <= {end} if {step} > 0 else {read} >= {end})"
         increment = self.store_code(s.variable, _wrap(f"{read} + {step}", var_type), var_type)
-        if self.settings.for_end_eval == "each":
+        if self.settings.for_end_eval is ForEndEval.EACH:
             cond = cond.replace(end, f"({self.expr_as(s.end, var_type)})")
         self.w.line(f"while {cond}:")
         self.w.indent += 1
@@ -498,7 +499,7 @@ class Lowerer:
         is a genuinely endless loop, reported as a fault instead of hanging)."""
         if not isinstance(step, int) or isinstance(step, bool) or step == 0:
             return False
-        if self.settings.for_end_eval != "once":
+        if self.settings.for_end_eval is not ForEndEval.ONCE:
             return False
         ref = self.facts.names.get(id(s.variable))
         if ref is None or ref.kind != "var" or ref.variable is None or ref.variable.key not in self.cached:
@@ -924,10 +925,10 @@ class Lowerer:
         right = self.expr_as(e.right, ty)
         if isinstance(ty, t.IntType):
             if op == "SLASH":
-                div = "_idiv" if self.settings.int_div_zero == "fault" else "_idiv0"
+                div = "_idiv" if self.settings.int_div_zero is IntDivZero.FAULT else "_idiv0"
                 return _wrap(f"{div}({left}, {right})", ty)
             if op == "MOD":
-                mod = "_imod" if self.settings.int_div_zero == "fault" else "_imod0"
+                mod = "_imod" if self.settings.int_div_zero is IntDivZero.FAULT else "_imod0"
                 return f"{mod}({left}, {right})"
             pyop = {"PLUS": "+", "MINUS": "-", "STAR": "*"}[op]
             if self.in_range_without_wrap(e, ty):
