@@ -167,7 +167,7 @@ class VM:
         self.ctx.warn(f"{span.file}:{span.line}:{span.column}: instruction error (ENO FALSE, assignment skipped): {error}",
                       once_key=(site, str(error)))
 
-    def _string_overflow(self, value: bytes, max_bytes: int, site: int) -> bytes:
+    def _string_overflow(self, value: bytes, max_bytes: int, file: str, line: int, column: int) -> bytes:
         """A store into STRING[max_bytes + 1] of a value that may not fit (sysmac.md 2,
         `string_overflow`): a fault, or cut to `max_bytes` with one warning per site."""
         if len(value) <= max_bytes:
@@ -176,10 +176,10 @@ class VM:
         if self.settings.string_overflow is StringOverflow.ERROR:
             raise STFault(f"a string of {len(value)} bytes does not fit {destination} "
                           f"({max_bytes} bytes; string_overflow=error)")
-        self.ctx.warn_at(self.project.lowered.sites[site],
+        self.ctx.warn_at(Span(file, line, column, line, column),
                          f"a string of {len(value)} bytes is truncated to the {max_bytes} bytes of "
                          f"{destination} (string_overflow=truncate_warn; reported once)",
-                         once_key=("string_overflow", site))
+                         once_key=("string_overflow", file, line, column))
         return HELPERS["_strfit"](value, max_bytes)   # the cut the generated code makes
 
     def _index_skipped(self, error: ArrayIndexError, site: int) -> None:
