@@ -29,25 +29,25 @@ class SettingError(ValueError):
 # ---- the allowed values, one Enum per setting (value = the spelling on the command line) ------
 
 class SktProgressWithoutCall(Enum):
-    """sysmac.md 1: a busy socket request progresses between calls of its FB."""
+    """A busy socket request progresses between calls of its FB."""
     ON = "on"                   # the request completes in the background; seen at the next call
     CANCEL = "cancel"           # a scan without a call cancels the request
 
 
 class EnumDefault(Enum):
-    """sysmac.md 1: initial value of an enum variable without initialiser."""
+    """Initial value of an enum variable without initialiser."""
     FIRST = "first"             # the first enumerator
     ZERO = "zero"               # the value 0
 
 
 class FunErrorPolicy(Enum):
-    """sysmac.md 1: a function's instruction error (ENO FALSE)."""
+    """A function's instruction error (ENO FALSE)."""
     SKIP_ASSIGNMENT = "skip_assignment"   # the receiving assignment is skipped, a warning once per site
     FAULT = "fault"                       # the task stops
 
 
 class ArrayOob(Enum):
-    """sysmac.md 1: an array index out of range in user code."""
+    """An array index out of range in user code."""
     FAULT = "fault"             # the task stops with the ST location (the spec's default)
     # Choice (sysmac.md 1, 9 give no alternative): W501 6-6-3 lists an access beyond the array
     # range among the *instruction errors*, so the alternative treats it like a function's
@@ -57,219 +57,219 @@ class ArrayOob(Enum):
 
 
 class IntDivZero(Enum):
-    """sysmac.md 1: integer `/`, MOD, DIV, MOD(), DIV_TIME by zero, everywhere the same."""
+    """Integer `/` and MOD, DIV(), TIME / INT, TIME / REAL and DIV_TIME by zero (one meaning everywhere)."""
     FAULT = "fault"             # the task stops with the ST location
     ZERO = "zero"               # the result is 0
 
 
 class IntLiteralType(Enum):
-    """sysmac.md 2: type of an untyped integer literal."""
+    """Type of an untyped integer literal."""
     DINT = "dint"               # DINT if it fits, else LINT
     LINT = "lint"               # always LINT (no 32-bit overflow)
 
 
 class StringLengthUnit(Enum):
-    """sysmac.md 2: what string lengths and positions count."""
+    """What string lengths and positions count."""
     UTF8 = "utf8"               # UTF-8 characters (an invalid byte counts 1)
     BYTES = "bytes"
 
 
 class StringOverflow(Enum):
-    """sysmac.md 2: a text longer than STRING[n] holds, assigned to it."""
+    """A text longer than STRING[n] holds, assigned to it."""
     TRUNCATE_WARN = "truncate_warn"   # cut to n-1 bytes, `FILE:LINE:COL: warning: ...` once per site
     ERROR = "error"                   # a constant: a check-time error; at run time: a fault
 
 
 class BareEnumerators(Enum):
-    """sysmac.md 3 #3: an enumerator written without `Type#`."""
+    """An enumerator written without `Type#`."""
     RESOLVE_UNIQUE = "resolve_unique"  # looked up in every visible enum; ambiguity is an error
     REQUIRE_TYPE = "require_type"      # always an error
 
 
 class DollarN(Enum):
-    """sysmac.md 3 #7: the `$N` escape."""
+    """The `$N` escape."""
     LF = "lf"
     CRLF = "crlf"
 
 
 class InvalidDollarEscape(Enum):
-    """sysmac.md 3 #7: an unknown `$x` escape."""
+    """An unknown `$x` escape."""
     ERROR = "error"             # a build error
     LITERAL = "literal"         # kept as the two characters
 
 
 class DoubleQuoteStrings(Enum):
-    """sysmac.md 3 #8: a double-quoted STRING literal."""
+    """A double-quoted STRING literal."""
     ACCEPT_WARN = "accept_warn"
     ERROR = "error"
 
 
 class ForEndEval(Enum):
-    """sysmac.md 9: when a FOR loop evaluates its end expression."""
+    """When a FOR loop evaluates its end expression."""
     ONCE = "once"               # before the first iteration
     EACH = "each"               # before every iteration
 
 
 class SktSendCopy(Enum):
-    """sysmac.md 4 #2: when SktTCPSend copies its data bytes."""
+    """When SktTCPSend copies its data bytes."""
     AT_START = "at_start"       # at the call that starts the request
     AT_SERVICE = "at_service"   # when the request is serviced
 
 
 class SktErrorIdReset(Enum):
-    """sysmac.md 4 #2: when ErrorID goes back to 0."""
+    """When ErrorID goes back to 0."""
     START_AND_CLEAR = "start_and_clear"   # at a start and when Error clears
     START_ONLY = "start_only"
 
 
 class SockaddrPortnoType(Enum):
-    """sysmac.md 5: the type of `_sSOCKET_ADDRESS.PortNo`."""
+    """The type of `_sSOCKET_ADDRESS.PortNo`."""
     UINT = "UINT"
     UDINT = "UDINT"             # as printed in the thesis
 
 
 class SktConnectSrcport0(Enum):
-    """sysmac.md 5: SktTCPConnect with SrcTcpPort 0."""
+    """SktTCPConnect with SrcTcpPort 0."""
     EPHEMERAL = "ephemeral"     # the system picks a port
     ERROR = "error"             # error 16#0400
 
 
 class SktSocketAfterClose(Enum):
-    """sysmac.md 5: the Socket output of SktTCPConnect after the socket is closed."""
+    """The Socket output of SktTCPConnect after the socket is closed."""
     UNCHANGED = "unchanged"
     ZEROED = "zeroed"
 
 
 class SktStatusClosedHandle(Enum):
-    """sysmac.md 5: SktGetTCPStatus on a handle closed by SktClose."""
+    """SktGetTCPStatus on a handle closed by SktClose."""
     DONE_CLOSED = "done_closed"  # Done with `_CLOSED`
     ERROR = "error"              # error 16#2007
 
 
 class SktSendSize0(Enum):
-    """sysmac.md 5: SktTCPSend with Size 0."""
+    """SktTCPSend with Size 0."""
     DONE = "done"               # Done, nothing sent
     ERROR = "error"             # error 16#0400
 
 
 class SktRcvTimeout0(Enum):
-    """sysmac.md 5: SktTCPRcv with TimeOut 0."""
+    """SktTCPRcv with TimeOut 0."""
     FOREVER = "forever"                  # wait forever
     ERROR_IF_EMPTY = "error_if_empty"    # error 16#2006 when nothing is buffered
 
 
 class SktRcvPeerClosed(Enum):
-    """sysmac.md 5: SktTCPRcv after the peer's FIN with nothing buffered."""
+    """SktTCPRcv after the peer's FIN with nothing buffered."""
     DONE_ZERO = "done_zero"     # Done, RcvSize 0
     ERROR = "error"             # error 16#2003
 
 
 class ToarybyteStringModel(Enum):
-    """sysmac.md 6: the bytes ToAryByte writes for a STRING."""
+    """The bytes ToAryByte writes for a STRING."""
     TEXT_NUL = "text_nul"       # the text bytes and one 16#00
     TEXT = "text"               # the text bytes only
     IMAGE = "image"             # the whole declared storage
 
 
 class ToarybyteWideOrder(Enum):
-    """sysmac.md 6: word order of 4/8-byte values in ToAryByte."""
+    """Word order of 4/8-byte values in ToAryByte."""
     BIG_ENDIAN = "big_endian"
     WORD_SWAPPED = "word_swapped"
 
 
 class ArytostringOversize(Enum):
-    """sysmac.md 6: AryToString with Size > 1985 or more than the elements left."""
+    """AryToString with Size > 1985 or more than the elements left."""
     ERROR = "error"
     TRUNCATE = "truncate"
 
 
 class RtfsRounding(Enum):
-    """sysmac.md 6: RealToFormatString rounding of a tie."""
+    """RealToFormatString rounding of a tie."""
     HALF_AWAY = "half_away"     # half away from zero
     HALF_EVEN = "half_even"
 
 
 class RtfsNegativeZero(Enum):
-    """sysmac.md 6: RealToFormatString of a negative value that rounds to 0, with Sign TRUE."""
+    """RealToFormatString of a negative value that rounds to 0, with Sign TRUE."""
     MINUS = "minus"             # '-0'
     PLUS = "plus"               # '+0'
 
 
 class ByteToStringFormat(Enum):
-    """sysmac.md 6: BYTE/WORD/DWORD/LWORD_TO_STRING."""
+    """BYTE/WORD/DWORD/LWORD_TO_STRING."""
     HEX_NOPAD = "hex_nopad"     # 16#0A -> 'A'
     HEX_PAD2 = "hex_pad2"       # 16#0A -> '0A'
     DECIMAL = "decimal"         # 16#0A -> '10'
 
 
 class StouTrailing(Enum):
-    """sysmac.md 6: STRING_TO_UINT with characters after the number."""
+    """STRING_TO_UINT with characters after the number."""
     ERROR = "error"
     IGNORE_BLANKS = "ignore_blanks"
 
 
 class StouPlus(Enum):
-    """sysmac.md 6: STRING_TO_UINT with a leading `+`."""
+    """STRING_TO_UINT with a leading `+`."""
     ACCEPT = "accept"
     ERROR = "error"
 
 
 class SectodtRange(Enum):
-    """sysmac.md 6: SecToDt outside 0 .. 4,294,943,999."""
+    """SecToDt outside 0 .. 4,294,943,999."""
     ERROR = "error"
     CLAMP = "clamp"
 
 
 class TimerClock(Enum):
-    """sysmac.md 7: the clock the timers read."""
+    """The clock the timers read."""
     SCAN_START = "scan_start"   # the VM clock at the start of the scan
     CALL_TIME = "call_time"     # the clock at the call (a free-running clock)
 
 
 class RtrigFirstCall(Enum):
-    """sysmac.md 7: R_TRIG's first call with CLK TRUE."""
+    """R_TRIG's first call with CLK TRUE."""
     FIRE = "fire"
     NO_FIRE = "no_fire"
 
 
 class TonPtBelowEt(Enum):
-    """sysmac.md 7: TON whose PT drops below ET while timing."""
+    """TON whose PT drops below ET while timing."""
     Q_TRUE = "q_true"           # Q TRUE, ET := PT
     KEEP_TIMING = "keep_timing"
 
 
 class TonNonpositivePtEt(Enum):
-    """sysmac.md 7: ET of a TON with PT <= 0 once IN is TRUE."""
+    """ET of a TON with PT <= 0 once IN is TRUE."""
     ZERO = "zero"
     PT = "pt"
 
 
 class IecPinAliases(Enum):
-    """sysmac.md 7: Omron pin spellings (Reset, Load, Set1, Reset1) as aliases of IEC pins."""
+    """Omron pin spellings (Reset, Load, Set1, Reset1) as aliases of IEC pins."""
     ON = "on"
     OFF = "off"
 
 
 class StringResultOverflow(Enum):
-    """sysmac.md 7: a string function whose result exceeds 1985 bytes."""
+    """A string function whose result exceeds 1985 bytes."""
     ERROR = "error"             # a function error
     TRUNCATE = "truncate"
 
 
 class StringFnRange(Enum):
-    """sysmac.md 7: a string function position out of range."""
+    """A string function position out of range."""
     ERROR = "error"             # a function error
     CLAMP = "clamp"
 
 
 class ConcatArity(Enum):
-    """sysmac.md 7: CONCAT with one input."""
+    """CONCAT with one input."""
     ONE_WARNS = "one_warns"     # 1..32 inputs; one input is the identity, with a warning
     TWO_OR_MORE = "two_or_more"
 
 
 class FindEmpty(Enum):
-    """sysmac.md 7: FIND(s, '')."""
+    """FIND(s, '')."""
     ZERO = 0
     ONE = 1
 
@@ -335,9 +335,10 @@ _DINT = (-2**31, 2**31 - 1)
 
 
 def setting(default: Any = None, spec: str = "", *, lo: int | None = None, hi: int | None = None,
-            table: Table | None = None, factory: Callable[[], Any] | None = None) -> Any:
-    """Declare one setting: its default, its spec section and (numbers) its range."""
-    meta = {"spec": spec, "lo": lo, "hi": hi, "table": table}
+            table: Table | None = None, factory: Callable[[], Any] | None = None, doc: str = "") -> Any:
+    """Declare one setting: its default, its spec section (of sysmac.md), for a number its range,
+    and what it means (an Enum setting says that in the Enum's docstring)."""
+    meta = {"spec": spec, "lo": lo, "hi": hi, "table": table, "doc": doc}
     if factory is not None:
         return field(default_factory=factory, metadata=meta)
     return field(default=default, metadata=meta)
@@ -366,34 +367,43 @@ class SysmacSettings:
     # section 4/5: sockets
     skt_send_copy: SktSendCopy = setting(SktSendCopy.AT_START, "4 #2")
     skt_errorid_reset: SktErrorIdReset = setting(SktErrorIdReset.START_AND_CLEAR, "4 #2")
-    skt_min_latency_calls: int = setting(1, "4 #3", lo=0, hi=1000)
+    skt_min_latency_calls: int = setting(1, "4 #3", lo=0, hi=1000,
+                                         doc="Calls after the starting call before a socket request can complete")
     sockaddr_portno_type: SockaddrPortnoType = setting(SockaddrPortnoType.UINT, "5")
     connection_state_values: dict = setting(spec="5", factory=_bsd_connection_states,
-                                            table=Table(CONNECTION_STATES, *_DINT, distinct=False))
+                                            table=Table(CONNECTION_STATES, *_DINT, distinct=False),
+                                            doc="Values of `_eCONNECTION_STATE` (default: BSD order)")
     byte_order_values: dict = setting(spec="5", factory=_default_byte_orders,
-                                      table=Table(BYTE_ORDERS, *_DINT, distinct=True))
+                                      table=Table(BYTE_ORDERS, *_DINT, distinct=True),
+                                      doc="Values of `_eBYTE_ORDER`")
     skt_connect_srcport0: SktConnectSrcport0 = setting(SktConnectSrcport0.EPHEMERAL, "5")
     skt_socket_after_close: SktSocketAfterClose = setting(SktSocketAfterClose.UNCHANGED, "5")
     skt_status_closed_handle: SktStatusClosedHandle = setting(SktStatusClosedHandle.DONE_CLOSED, "5")
     skt_send_size0: SktSendSize0 = setting(SktSendSize0.DONE, "5")
-    skt_send_max: int = setting(2000, "5", lo=0, hi=65535)               # Size is a UINT
+    skt_send_max: int = setting(2000, "5", lo=0, hi=65535,               # Size is a UINT
+                                doc="Largest SktTCPSend Size; above it error 16#0400")
     skt_rcv_timeout0: SktRcvTimeout0 = setting(SktRcvTimeout0.FOREVER, "5")
-    skt_rcv_timeout_unit_ns: int = setting(100_000_000, "5", lo=1, hi=2**63 - 1)
+    skt_rcv_timeout_unit_ns: int = setting(100_000_000, "5", lo=1, hi=2**63 - 1,
+                                           doc="What one unit of SktTCPRcv TimeOut is, in ns")
     skt_rcv_peer_closed: SktRcvPeerClosed = setting(SktRcvPeerClosed.DONE_ZERO, "5")
     skt_error_codes: dict = setting(spec="5", factory=_default_skt_error_codes,
-                                    table=Table(SOCKET_ERROR_KINDS, 0, 0xFFFF, distinct=False))
+                                    table=Table(SOCKET_ERROR_KINDS, 0, 0xFFFF, distinct=False),
+                                    doc="ErrorID of each socket failure (default: the spec's table)")
     # section 6: Omron functions
     toarybyte_string_model: ToarybyteStringModel = setting(ToarybyteStringModel.TEXT_NUL, "6")
     toarybyte_wide_order: ToarybyteWideOrder = setting(ToarybyteWideOrder.BIG_ENDIAN, "6")
     arytostring_oversize: ArytostringOversize = setting(ArytostringOversize.ERROR, "6")
     rtfs_rounding: RtfsRounding = setting(RtfsRounding.HALF_AWAY, "6")
     rtfs_negative_zero: RtfsNegativeZero = setting(RtfsNegativeZero.MINUS, "6")
-    rtfs_max_minlen: int = setting(24, "6 `rtfs_limits`", lo=0, hi=255)     # MinLen is a USINT
-    rtfs_max_decplace: int = setting(7, "6 `rtfs_limits`", lo=0, hi=255)    # DecPlace is a USINT
+    rtfs_max_minlen: int = setting(24, "6", lo=0, hi=255,         # MinLen is a USINT
+                                   doc="Largest RealToFormatString MinLen (`rtfs_limits`)")
+    rtfs_max_decplace: int = setting(7, "6", lo=0, hi=255,        # DecPlace is a USINT
+                                     doc="Largest RealToFormatString DecPlace (`rtfs_limits`)")
     byte_to_string_format: ByteToStringFormat = setting(ByteToStringFormat.HEX_NOPAD, "6")
     stou_trailing: StouTrailing = setting(StouTrailing.ERROR, "6")
     stou_plus: StouPlus = setting(StouPlus.ACCEPT, "6")
-    gettime_resolution_ns: int = setting(1_000_000, "6", lo=1, hi=86_400_000_000_000)
+    gettime_resolution_ns: int = setting(1_000_000, "6", lo=1, hi=86_400_000_000_000,
+                                         doc="GetTime's resolution in ns")
     sectodt_range: SectodtRange = setting(SectodtRange.ERROR, "6")
     # section 7: IEC library
     timer_clock: TimerClock = setting(TimerClock.SCAN_START, "7")
@@ -451,6 +461,12 @@ class Declaration:
     lo: int | None
     hi: int | None
     table: Table | None
+    doc: str
+
+    @property
+    def meaning(self) -> str:
+        """What the setting decides (the Enum's docstring, or the declaration's `doc`)."""
+        return self.doc or (self.kind.__doc__ or "").strip()
 
     @property
     def choices(self) -> tuple[Enum, ...]:
@@ -519,8 +535,9 @@ def _declarations() -> dict[str, Declaration]:
             default = f.default_factory() if f.default_factory is not MISSING else f.default
             kind = hints[f.name]
             kind = dict if typing.get_origin(kind) is dict else kind
-            _DECLARATIONS[f.name] = Declaration(f.name, kind, default, f.metadata["spec"], f.metadata["lo"],
-                                                f.metadata["hi"], f.metadata["table"])
+            meta = f.metadata
+            _DECLARATIONS[f.name] = Declaration(f.name, kind, default, meta["spec"], meta["lo"], meta["hi"],
+                                                meta["table"], meta["doc"])
     return _DECLARATIONS
 
 

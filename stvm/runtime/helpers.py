@@ -54,8 +54,9 @@ def _imod0(a: int, b: int) -> int:
 
 
 def _tdiv(duration_ns: int, divisor: float) -> int:
-    """TIME / REAL, truncated to whole ns; dividing by 0 is the integer division by zero of
-    `int_div_zero` (the result is a TIME, an integer), as in DIV_TIME."""
+    """TIME / REAL, truncated to whole ns."""
+    # Choice (sysmac.md 1, `int_div_zero`): dividing a TIME by 0.0 is an integer division by
+    # zero (the result is a TIME, an integer), as DIV_TIME already treats it
     if divisor == 0:
         raise STFault("integer division by zero (TIME / 0.0)")
     return _time_of(duration_ns / divisor)
