@@ -135,10 +135,11 @@ class Names(Kind):
     """A tuple of names (comma-separated on the command line, a list in TOML)."""
 
     def allowed(self) -> str:
-        return "names separated by commas (a list in TOML)"
+        return "one or more names separated by commas (a list in TOML)"
 
     def coerce(self, name: str, value: Any) -> tuple[str, ...]:
-        if isinstance(value, (list, tuple)) and all(isinstance(v, str) and v and "," not in v for v in value):
+        if isinstance(value, (list, tuple)) and value and all(isinstance(v, str) and v and "," not in v
+                                                              for v in value):
             return tuple(value)
         raise self._reject(name, value)
 
