@@ -518,12 +518,6 @@ class Declaration:
             raise SettingError(f"{self.name}: {text!r} is not an integer; allowed: {self.allowed()}") from None
         return self.coerce(number)
 
-    def show(self, value: object) -> str:
-        """A value as the README and messages spell it."""
-        if isinstance(value, Enum):
-            return str(value.value)
-        return str(value)
-
 
 _DECLARATIONS: dict[str, Declaration] = {}
 

@@ -24,7 +24,7 @@ import pytest
 import stvm
 from core_helpers import load_st, write_st
 from stvm.settings import (
-    DEFAULT_SETTINGS, Declaration, SettingError, SysmacSettings, declaration, declarations,
+    DEFAULT_SETTINGS, Declaration, SettingError, SysmacSettings, declarations,
 )
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -12,7 +12,6 @@ meta-tests hold the emulator to the declarations:
 from __future__ import annotations
 
 import ast
-import re
 import subprocess
 import sys
 from enum import Enum
@@ -23,7 +22,7 @@ import pytest
 
 from emulator.cli import main
 from emulator.framing import ListenNodeFramer, checksum, decode_all, encode
-from emulator.robot import Close, Robot, Send
+from emulator.robot import Robot, Send
 from emulator.settings import (
     DEFAULT_SETTINGS, AfterExit, EmulatorSettings, SettingError, declarations, parse_setting_assignment,
 )
