@@ -155,7 +155,17 @@ class VariableBridge:
         except PathError as exc:
             raise WriteRejected(str(exc), path) from None
         try:
-            return coerce_python_value(literal_value(text, ty), ty)
+            value = literal_value(text, ty)
+        except ValueError as exc:
+            raise WriteRejected(str(exc), path) from None
+        if isinstance(ty, t.StringType):
+            # Choice: a front end's text that does not fit is refused, not cut to the length
+            # (an ST assignment truncates; an operator should see that the text was too long)
+            data = value.encode("utf-8") if isinstance(value, str) else bytes(value)
+            if len(data) > ty.max_bytes:
+                raise WriteRejected(f"{len(data)} bytes is longer than {ty.name} ({ty.max_bytes} bytes)", path)
+        try:
+            return coerce_python_value(value, ty)
         except ValueError as exc:
             raise WriteRejected(str(exc), path) from None
 
