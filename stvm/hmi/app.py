@@ -176,6 +176,7 @@ def build_app(server: "HmiServer") -> Starlette:
             pass
         finally:
             sender.cancel()
+            await asyncio.gather(sender, return_exceptions=True)
             server.clients.discard(client)
             server._update_watch()
 

@@ -54,15 +54,13 @@ function show(path, value) {
       if (el.classList.contains("toggle")) el.dataset.action = `set:${path}=${value ? "FALSE" : "TRUE"}`;
     } else if (el.tagName === "SELECT") {
       el.value = typeof value === "boolean" ? (value ? "TRUE" : "FALSE") : String(value);
-    } else if (el.tagName === "OUTPUT") {
-      el.value = value === null ? "" : String(value);
     } else if (!(el === document.activeElement && el.dataset.dirty)) {
       el.value = value === null ? "" : String(value);    // never overwrite what is being typed
     }
   }
 }
 
-for (const el of document.querySelectorAll("input[data-var], select[data-var]")) {
+for (const el of document.querySelectorAll("input[data-var]:not([readonly]), select[data-var]")) {
   el.addEventListener("input", () => { el.dataset.dirty = "1"; });
   el.addEventListener("change", async () => {
     const path = el.dataset.var;
