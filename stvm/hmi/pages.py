@@ -411,7 +411,7 @@ class _Reader:
             "text": isinstance(ty, t.StringType),
         }.get(kind, True)
         if not ok:
-            wanted = {"lamp": "BOOL", "toggle": "BOOL", "momentary": "BOOL", "numeric": "an integer or REAL",
+            wanted = {"lamp": "a BOOL", "toggle": "a BOOL", "momentary": "a BOOL", "numeric": "an integer or REAL",
                       "dropdown": "an enumeration, integer or BOOL", "text": "a STRING"}[kind]
             f.error(where + ("var",), f"wrong type: a {kind} widget needs {wanted} variable, "
                                       f"{var} is {ty.name}{context}")
