@@ -168,10 +168,14 @@ def build_app(server: "HmiServer") -> Starlette:
         server._update_watch()
         sender = asyncio.create_task(_send_loop(server, client))
         try:
-            while True:   # clients send nothing we need; reading notices when they go
+            while True:   # a page only says which pop-up is open; reading also notices it leave
                 message = await ws.receive()
                 if message["type"] == "websocket.disconnect":
                     break
+                popup = _popup_request(message.get("text"))
+                if popup is not False and client.open_popup(popup):
+                    server._update_watch()
+                    client.offer(server, {}, None, [])   # what is known now; the rest follows
         except (WebSocketDisconnect, RuntimeError, OSError):
             pass
         finally:
@@ -218,6 +222,20 @@ async def _send_loop(server: "HmiServer", client: _Client) -> None:
             await ws.close(code=1011)
         except Exception:   # noqa: BLE001
             pass
+
+
+def _popup_request(text: str | None):
+    """`{"popup": "Segment-1"}` / `{"popup": null}` → the id / None; anything else → False."""
+    if not text or len(text) > 200:
+        return False
+    try:
+        data = json.loads(text)
+    except ValueError:
+        return False
+    if not isinstance(data, dict) or "popup" not in data:
+        return False
+    popup = data["popup"]
+    return popup if popup is None or isinstance(popup, str) else False
 
 
 async def _json_body(request: Request, allow_empty: bool = False):

@@ -151,14 +151,15 @@ class Page:
     @property
     def paths(self) -> tuple[str, ...]:
         """Every variable this page shows, in page order, each once (robot-view targets too)."""
-        seen: dict[str, None] = {}
-        for widget in self.widgets():
-            if widget.var:
-                seen[widget.var] = None
-            for target in widget.targets:
-                for axis in ("X", "Y", "Z"):
-                    seen[f"{target}.{axis}"] = None
-        return tuple(seen)
+        return _paths(self.widgets())
+
+    @property
+    def base_paths(self) -> tuple[str, ...]:
+        """What the page shows with no pop-up open (a pop-up's fields are watched while open)."""
+        return _paths(w for area in self.areas for w in area.widgets)
+
+    def popup_paths(self, popup_id: str) -> tuple[str, ...]:
+        return _paths(w for p in self.popups if p.id == popup_id for w in p.widgets)
 
     @property
     def has_robot_view(self) -> bool:
@@ -652,6 +653,17 @@ class _Reader:
             return raw
         f.error(where, f"must be a string, got {raw!r}")
         return ""
+
+
+def _paths(widgets) -> tuple[str, ...]:
+    seen: dict[str, None] = {}
+    for widget in widgets:
+        if widget.var:
+            seen[widget.var] = None
+        for target in widget.targets:
+            for axis in ("X", "Y", "Z"):
+                seen[f"{target}.{axis}"] = None
+    return tuple(seen)
 
 
 def _substitute(text: str, subst: Mapping[str, str]) -> str:

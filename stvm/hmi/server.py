@@ -16,7 +16,8 @@ Threads and queues (why a slow browser never slows the scan):
     sender tasks    one per WebSocket, sends what is pending, with a timeout; a client that
                     vanished or stalls is dropped
 
-The watch covers only the pages that have a browser open (none: the scan pays nothing) and
+The watch covers only the pages that have a browser open, and of a page's pop-ups only the one
+open (`{"popup": ID}` / `{"popup": null}` from the page); with no browser the scan pays nothing. It
 samples at most every `update_ns` of VM time and of wall-clock time (20 per second by default).
 
 HTTP contract (docs/hmi.md; kept stable for black-box tests):
@@ -347,14 +348,26 @@ class _Client:
     def __init__(self, websocket, page) -> None:
         self.websocket = websocket
         self.page = page
-        self.paths = page.paths
+        self.paths = page.base_paths
         self._path_set = set(self.paths)
+        self.popup: str | None = None
         self.robot = page.has_robot_view
         self.pending: dict[str, Any] = {}
         self.robot_pending: dict[str, Any] | None = None
         self.points: list = []
         self.full = True
         self.wake = asyncio.Event()
+
+    def open_popup(self, popup_id: str | None) -> bool:
+        """Watch the fields of the pop-up the page opened (None: closed); False if unknown."""
+        extra = self.page.popup_paths(popup_id) if popup_id else ()
+        if popup_id and not extra:
+            return False
+        self.popup = popup_id
+        self.paths = self.page.base_paths + tuple(p for p in extra if p not in self.page.base_paths)
+        self._path_set = set(self.paths)
+        self.full = True     # the next update carries every value of the page and pop-up
+        return True
 
     def offer(self, server: HmiServer, changed: dict[str, Any], robot, new_points: list) -> None:
         if self.full:

@@ -329,3 +329,23 @@ def test_other_hosts_and_origins_are_refused(live):
     assert cross.status_code == 403 and "cross-origin" in cross.json()["error"]
     same = live.write({"Speed": "20"}, headers={"Origin": live.base})
     assert same.status_code == 200
+
+
+def test_a_popup_is_watched_only_while_open(live_hmi):
+    # the thesis PnP page: six segment editors of 20 fields each, sampled only when shown
+    url = f"ws://127.0.0.1:{live_hmi.server.port}/ws?page=pgPnP_sequence"
+    field = "PnP_MoveParameters[1].Speed"
+    with ws_connect(url) as ws:
+        first = json.loads(ws.recv(timeout=5))
+        assert field not in first["values"] and field not in live_hmi.server._watch_paths
+        ws.send(json.dumps({"popup": "Segment-1"}))
+        seen = {}
+        deadline = time.monotonic() + 5
+        while field not in seen and time.monotonic() < deadline:
+            seen.update(json.loads(ws.recv(timeout=5))["values"])
+        assert seen[field] == 0
+        ws.send(json.dumps({"popup": None}))
+        wait_for(lambda: field not in live_hmi.server._watch_paths, what="the pop-up unwatched")
+        ws.send("not json")                       # ignored
+        ws.send(json.dumps({"popup": "Nope-9"}))  # unknown: ignored
+        assert json.loads(ws.recv(timeout=5))["scan"] >= first["scan"]

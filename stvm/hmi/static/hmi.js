@@ -87,7 +87,10 @@ async function act(action, el) {
   } else if (kind === "page") {
     window.location.href = `/page/${encodeURIComponent(rest)}`;
   } else if (kind === "popup") {
-    document.getElementById(`popup-${rest}`).showModal();
+    const dialog = document.getElementById(`popup-${rest}`);
+    dialog.showModal();
+    tell({popup: rest});                  // the server now sends this pop-up's fields too
+    dialog.addEventListener("close", () => tell({popup: null}), {once: true});
   }
 }
 
@@ -175,12 +178,18 @@ function drawRobot(view, robot, t) {
 }
 
 // ---- the live connection
+let socket = null;
+const tell = (message) => { if (socket && socket.readyState === WebSocket.OPEN) socket.send(JSON.stringify(message)); };
 const live = document.getElementById("hmi-live");
 const clock = document.getElementById("hmi-clock");
 function connect() {
   const scheme = window.location.protocol === "https:" ? "wss" : "ws";
-  const socket = new WebSocket(`${scheme}://${window.location.host}/ws?page=${encodeURIComponent(pageName)}`);
-  socket.onopen = () => { live.dataset.state = "on"; };
+  socket = new WebSocket(`${scheme}://${window.location.host}/ws?page=${encodeURIComponent(pageName)}`);
+  socket.onopen = () => {
+    live.dataset.state = "on";
+    const open = document.querySelector("dialog[open]");
+    if (open) tell({popup: open.dataset.popup});
+  };
   socket.onclose = () => { live.dataset.state = "off"; setTimeout(connect, 1000); };
   socket.onmessage = (event) => {
     const update = JSON.parse(event.data);
