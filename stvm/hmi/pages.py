@@ -56,7 +56,7 @@ _KEYS: dict[str, set[str]] = {
     "preset": {"preset"},
     "nav": {"page"},
     "popup": {"popup", "instance"},
-    "robot_view": {"targets", "history_s", "x_range", "y_range", "z_range"},
+    "robot_view": {"targets", "history_s", "x_range", "y_range", "z_range", "views"},
     "note": set(),
 }
 RUN_PARAMETERS = ("robot_host", "robot_port")
@@ -106,6 +106,7 @@ class Widget:
     targets: tuple[str, ...] = ()               # robot_view: struct paths with X, Y, Z
     history_s: float = 20.0
     ranges: tuple[tuple[float, float], ...] = ()  # robot_view: x, y, z ranges in mm
+    views: tuple[str, ...] = ("XY", "XZ")         # robot_view: the projections drawn (axes →, ↑)
 
 
 @dataclass(frozen=True)
@@ -522,6 +523,12 @@ class _Reader:
                 return None
             ranges.append((float(value[0]), float(value[1])))
         out["ranges"] = tuple(ranges)
+        views = table.get("views", ["XY", "XZ"])
+        if not isinstance(views, list) or not views or \
+                not all(isinstance(v, str) and v.upper() in ("XY", "XZ", "YZ") for v in views):
+            f.error(where + ("views",), "views must be a list of projections among \"XY\", \"XZ\", \"YZ\"")
+            return None
+        out["views"] = tuple(v.upper() for v in views)
         return out
 
     # ---- presets

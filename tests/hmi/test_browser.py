@@ -227,7 +227,7 @@ def test_thesis_flow_from_the_pages(flow_hmi, page):
     expect(speed).to_have_value("20")
     dialog.locator('[data-action="close"]').click()
     expect(dialog).to_be_hidden()
-    target = page.locator('[data-robot-view] .view-side .target[data-target="1"]')
+    target = page.locator('[data-robot-view] .view-front .target[data-target="1"]')
     expect(target).to_have_attribute("data-mm", "400,-150,180")
     shot(page, "flow-pgPnP_sequence-edited")
 

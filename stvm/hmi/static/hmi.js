@@ -130,10 +130,11 @@ const views = [...document.querySelectorAll("[data-robot-view]")].map((figure) =
 }));
 const SVG = "http://www.w3.org/2000/svg";
 
-function toView(view, axes, p) {           // mm -> viewBox coordinates (y up)
+function toView(view, axes, p) {           // mm -> viewBox coordinates: y up, equal scale, centred
   const [a, b] = axes;
   const [a0, a1] = view.ranges[a], [b0, b1] = view.ranges[b];
-  return [10 + (p[a] - a0) / (a1 - a0) * 300, 230 - (p[b] - b0) / (b1 - b0) * 210];
+  const scale = Math.min(300 / (a1 - a0), 200 / (b1 - b0));
+  return [160 + (p[a] - (a0 + a1) / 2) * scale, 130 - (p[b] - (b0 + b1) / 2) * scale];
 }
 
 function drawTargets(view) {
