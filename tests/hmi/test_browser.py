@@ -256,3 +256,65 @@ def test_thesis_flow_from_the_pages(flow_hmi, page):
     wait_until(lambda: vm["PnP_Example_Instance.Prg_Step"] != paused_step, 30, "the PnP program going on")
     expect(lamp(page, "PnP_MoveError")).to_have_attribute("data-state", "off")
     shot(page, "flow-pgPnP_sequence-resumed")
+
+
+def test_stvm_run_hmi_serves_the_thesis_project(page, tmp_path):
+    """The command of the issue, as a user runs it: `stvm run st_src/PnP_Example.st --hmi PORT`
+    (bundled emulator on a TCP port, real-time clock), driven from the browser until Ctrl-C."""
+    import os
+    import signal
+    import subprocess
+    import sys
+    import threading
+    proc = subprocess.Popen([sys.executable, "-m", "stvm", "run", str(ROOT / "st_src" / "PnP_Example.st"),
+                             "--scan", "1ms", "--hmi", "127.0.0.1:0"],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=tmp_path)
+    lines: list[str] = []
+    found = threading.Event()
+
+    def read_stderr() -> None:
+        for line in proc.stderr:
+            lines.append(line)
+            if line.startswith("HMI: "):
+                found.set()
+    threading.Thread(target=read_stderr, daemon=True).start()
+    threading.Thread(target=lambda: proc.stdout.read(), daemon=True).start()   # the demo's status lines
+    try:
+        assert found.wait(120), "".join(lines)
+        url = next(line for line in lines if line.startswith("HMI: "))[5:].strip()
+        page.goto(url)
+        page.wait_for_url("**/page/Main")
+        wait_live(page)
+        click(page, "page:pgConnect")
+        page.wait_for_url("**/page/pgConnect")
+        wait_live(page)
+        # the HMI scenario filled in the bundled emulator's address; Preset Values keeps it
+        port = var(page, "Connect_Dest_PortIP")
+        wait_until(lambda: port.input_value() not in ("", "0"), 10, "the emulator's port")
+        emulator_port = port.input_value()
+        click(page, "preset:ConnectPreset")
+        expect(var(page, "Connect_Time_Out")).to_have_value("100")
+        expect(port).to_have_value(emulator_port)
+        click(page, "set:Connect_Execute=TRUE")
+        expect(lamp(page, "Cobot.Connected")).to_have_attribute("data-state", "on", timeout=20_000)
+        click(page, "page:Main")
+        click(page, "page:pgMoveAbsolute")
+        page.wait_for_url("**/page/pgMoveAbsolute")
+        wait_live(page)
+        click(page, "preset:MoveAbsPreset")
+        expect(var(page, "MoveAbs_Param.TargetPosition.X")).to_have_value("350.0")
+        click(page, "set:MoveAbs_Execute=TRUE")
+        expect(lamp(page, "MoveAbs_Done")).to_have_attribute("data-state", "on", timeout=60_000)
+        click(page, "page:Main")
+        page.wait_for_url("**/page/Main")
+        wait_until(lambda: page.locator("[data-robot-view]").get_attribute("data-tcp"), 10, "the robot pose")
+        assert tuple(round(v) for v in tcp(page)) == (350, 0, 350)
+    finally:
+        proc.send_signal(signal.SIGINT)
+        try:
+            code = proc.wait(30)
+        except subprocess.TimeoutExpired:
+            os.kill(proc.pid, signal.SIGKILL)
+            raise
+    assert code == 0, "".join(lines)
+    assert "Traceback" not in "".join(lines)
