@@ -51,7 +51,10 @@ def main() -> int:
     parser.add_argument("--seconds", type=float, default=5.0, help="length of each phase")
     parser.add_argument("--rounds", type=int, default=2)
     parser.add_argument("--clients", type=int, default=5)
+    parser.add_argument("--switch-interval", type=float, default=None, help="sys.setswitchinterval (s) for the run")
     args = parser.parse_args()
+    if args.switch_interval:
+        sys.setswitchinterval(args.switch_interval)
 
     import stvm
     from stvm.frontend import VariableBridge

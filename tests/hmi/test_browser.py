@@ -236,26 +236,33 @@ def test_thesis_flow_from_the_pages(flow_hmi, page):
     expect(step).not_to_have_value("0", timeout=5_000)
     # the robot goes down to the edited pick point
     wait_until(lambda: abs(tcp(page)[2] - 180.0) < 0.5, 30, "the TCP at the edited pick Z = 180")
-    expect(view := page.locator("[data-robot-view]")).to_have_attribute("data-robot-state", "moving", timeout=30_000)
+    view = page.locator("[data-robot-view]")
 
-    # ---- Pause while the robot moves, then Resume
+    # ---- Pause while the robot travels to the place point (step 21, the longest segment), Resume
+    wait_until(lambda: vm["PnP_Example_Instance.Prg_Step"] == 21 and view.get_attribute("data-robot-state") == "moving",
+               30, "the travel to the place point")
     click(page, "preset:Pause")
     expect(view).to_have_attribute("data-robot-state", "paused", timeout=10_000)
     expect(lamp(page, "ProgramControl_Done")).to_have_attribute("data-state", "on")
     expect(var(page, "ProgramControl_Param.Command")).to_have_value("Pause")
     held = tcp(page)
-    paused_step = vm["PnP_Example_Instance.Prg_Step"]
     time.sleep(1.0)
     assert tcp(page) == held, "the TCP moved while paused"
-    assert vm["PnP_Example_Instance.Prg_Step"] == paused_step
+    assert vm["PnP_MoveDone"] is False
     shot(page, "flow-pgPnP_sequence-paused")
     click(page, "preset:Resume")
     expect(var(page, "ProgramControl_Param.Command")).to_have_value("Resume")
     expect(view).not_to_have_attribute("data-robot-state", "paused", timeout=10_000)
     wait_until(lambda: tcp(page) != held, 10, "the TCP moving again after Resume")
-    wait_until(lambda: vm["PnP_Example_Instance.Prg_Step"] != paused_step, 30, "the PnP program going on")
+    wait_until(lambda: vm["PnP_Example_Instance.Prg_Step"] > 21, 30, "the PnP program going on")
     expect(lamp(page, "PnP_MoveError")).to_have_attribute("data-state", "off")
     shot(page, "flow-pgPnP_sequence-resumed")
+    click(page, "page:Main")
+    page.wait_for_url("**/page/Main")
+    wait_live(page)
+    expect(page.locator("[data-robot-view] .view-top .target")).to_have_count(6)
+    expect(lamp(page, "Cobot.Connected")).to_have_attribute("data-state", "on")
+    shot(page, "flow-Main")
 
 
 def test_stvm_run_hmi_serves_the_thesis_project(page, tmp_path):
