@@ -693,7 +693,7 @@ def literal_number(literal: str) -> float | None:
     body = text.lstrip("+-")
     try:
         return sign * float(body) if any(c in body for c in ".eE") and "#" not in body else sign * decode_int(body)
-    except (ValueError, KeyError, Exception):
+    except (ValueError, KeyError):   # LiteralError is a ValueError; enum names, TRUE, 'text'
         return None
 
 

@@ -39,7 +39,6 @@ import json
 import secrets
 import socket
 import threading
-import time
 from collections import deque
 from pathlib import Path
 from typing import Any
@@ -355,7 +354,9 @@ class _Client:
         self.pending: dict[str, Any] = {}
         self.robot_pending: dict[str, Any] | None = None
         self.points: list = []
-        self.full = True
+        self.full = True             # the next message carries every value (and the whole path)
+        self.reset_path = False
+        self.scan, self.now_ns = -1, 0
         self.wake = asyncio.Event()
 
     def open_popup(self, popup_id: str | None) -> bool:
@@ -395,7 +396,7 @@ class _Client:
         self.pending = {}
         if self.robot_pending is not None:
             message["robot"] = dict(self.robot_pending, points=self.points,
-                                    reset=getattr(self, "reset_path", False))
+                                    reset=self.reset_path)
             self.robot_pending = None
             self.points = []
             self.reset_path = False
@@ -428,7 +429,3 @@ def token_from(headers: dict[str, str], query: str) -> str | None:
 
 def json_dumps(data: Any) -> str:
     return json.dumps(data, separators=(",", ":"), ensure_ascii=False)
-
-
-def monotonic_s() -> float:
-    return time.monotonic()

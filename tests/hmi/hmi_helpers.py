@@ -11,7 +11,6 @@ import threading
 from dataclasses import dataclass
 from pathlib import Path
 
-import stvm
 from stvm.frontend import VariableBridge
 from stvm.hmi import HmiServer, from_lockstep, load_pages
 from stvm.hmi.cli import page_files
