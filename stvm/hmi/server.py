@@ -301,7 +301,9 @@ class HmiServer:
         """Submit one batch; the scan count once applied (None: not applied within WRITE_WAIT_S)."""
         future = self.bridge.submit(values)   # raises WriteRejected (checked again, busy)
         try:
-            await asyncio.wait_for(asyncio.wrap_future(future), WRITE_WAIT_S)
+            # shielded: a timeout answers 202 and the batch stays queued (cancelling the wait
+            # must not cancel the write, or "queued" would be a lie)
+            await asyncio.wait_for(asyncio.shield(asyncio.wrap_future(future)), WRITE_WAIT_S)
         except asyncio.TimeoutError:
             return None
         return self.bridge.vm.scan_count
