@@ -75,7 +75,11 @@ class Demo:
     # ---- setup
     def start(self) -> None:
         root = self.project.root or Path(".")
-        scenario_path = self.args.scenario or (root / self.config["scenario"] if "scenario" in self.config else None)
+        config_scenario = self.config.get("scenario")
+        hmi_table = self.project.manifest.get("hmi", {})
+        if getattr(self.args, "hmi", None) and isinstance(hmi_table, dict) and "scenario" in hmi_table:
+            config_scenario = hmi_table["scenario"]   # the operator drives the cell from the pages
+        scenario_path = self.args.scenario or (root / config_scenario if config_scenario else None)
         scenario = load_scenario(scenario_path) if scenario_path else None
         if self.args.robot:
             self.robot_address = parse_robot(self.args.robot)
