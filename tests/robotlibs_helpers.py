@@ -117,6 +117,20 @@ def motion_commands(frames: Iterable[bytes]) -> list[tuple[str, list[Any]]]:
     return out
 
 
+def free_high_port() -> int:
+    """A free loopback TCP port above 32767 (which an INT port variable cannot hold)."""
+    import random
+    import socket
+    for port in random.Random().sample(range(32768, 61000), 200):
+        with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as probe:
+            try:
+                probe.bind(("127.0.0.1", port))
+            except OSError:
+                continue
+            return port
+    raise RuntimeError("no free port above 32767")
+
+
 # ====================================================================== projects
 
 
