@@ -86,7 +86,10 @@ def statements(script: str) -> list[tuple[str, list[Any]]]:
             elif raw.lower() in ("true", "false"):
                 args.append(raw.lower() == "true")
             elif raw:
-                args.append(float(raw))
+                try:
+                    args.append(float(raw))
+                except ValueError:
+                    args.append(raw)          # an expression (e.g. GetString(...)): as written
         out.append((match.group(1), args))
     return out
 
