@@ -185,6 +185,17 @@ def test_blending_and_configuration_and_frames(bench):
     assert snap["pose"][:3] == pytest.approx([-100.0, -400.0, 250.0], abs=0.02)     # in the user frame
 
 
+def test_blending_move_id(bench):
+    b = bench()
+    b.path([cartesian((417.5, -122.3, 300.0, 180, 0, 90), move_id=7, termination=6, tolerance=50.0),
+            cartesian((417.5, -122.3, 250.0, 180, 0, 90), move_id=8)])
+    b.watch = {"Active": "R.Robot.Sts.ActiveMoveID", "Blending": "R.Robot.Sts.BlendingMoveID"}
+    b.run("A", 0, 2)
+    assert until_end(b)["Sts_PC"]
+    pairs = {(s["Active"], s["Blending"]) for s in b.samples}
+    assert (7, 8) in pairs and (8, 7) not in pairs and (8, 0) in pairs
+
+
 def test_zero_dynamics_keep_the_last_valid_values(bench):
     b = bench()
     second = pnp_point(1)
