@@ -70,6 +70,8 @@ class Demo:
         self.cycle_from = self.config.get("cycle_from")
         self.cycle_to = self.config.get("cycle_to")
         self.status_paths = list(self.config.get("status", []))
+        # the manifest names its demo (libraries other than the thesis's have one each)
+        self.title = str(self.config.get("title", "thesis PnP demo"))
         self.started = time.monotonic()
 
     # ---- setup
@@ -172,7 +174,7 @@ def run_with_status(demo: Demo, run_scans, stream=None) -> None:
         from rich.table import Table
 
         def render() -> Table:
-            table = Table(title="stvm — thesis PnP demo (Ctrl-C to stop)", show_header=False)
+            table = Table(title=f"stvm — {demo.title} (Ctrl-C to stop)", show_header=False)
             table.add_column("what", style="bold")
             table.add_column("value")
             for name, value in demo.status_rows():
