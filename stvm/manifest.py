@@ -8,6 +8,7 @@
     int_div_zero = "zero"
 
     [demo]                              # makes `stvm run FILE` the demo (stvm/demo.py)
+    title = "thesis PnP demo"
     scenario = "scenarios/pnp_demo.toml"
     step_variable = "PnP_Example_Instance.Prg_Step"
     cycle_from = 26
@@ -51,6 +52,9 @@ _SCHEMA: dict[str, dict[str, tuple[Any, str]] | None] = {
         "description": (lambda v: isinstance(v, str), "a string"),
     },
     "sysmac": None,     # NAME = VALUE, checked by stvm.settings (names and allowed values)
+    "hmi": None,        # the web HMI's pages, checked by stvm/hmi when it starts
+    "opcua": None,      # front ends and tools that read their own table
+    "lint": None,
     "demo": {
         "scenario": (lambda v: isinstance(v, str), "a scenario file name, relative to the manifest"),
         "step_variable": (lambda v: isinstance(v, str), "a variable path, e.g. \"Main.step\""),
@@ -58,6 +62,7 @@ _SCHEMA: dict[str, dict[str, tuple[Any, str]] | None] = {
         "cycle_to": (_integer, "an integer (the step a new cycle starts with)"),
         "status": (_string_list, "a list of variable paths"),
         "errors": (_string_list, "a list of STRING variable paths"),
+        "title": (lambda v: isinstance(v, str), "a string (the demo's name in the status view)"),
         "description": (lambda v: isinstance(v, str), "a string"),
     },
 }

@@ -12,7 +12,6 @@ import hashlib
 import marshal
 import os
 import pickle
-import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Sequence
@@ -78,19 +77,23 @@ def parse_duration(text: str) -> int:
 
 
 def expand_paths(paths: Sequence[str | Path]) -> tuple[list[Path], dict, Path | None]:
-    """Files to load. A folder means its *.st files; a lone file in a folder with `stvm.toml`
-    means the project that manifest describes (so `stvm run st_src/PnP_Example.st` loads the
-    whole thesis project). Raises ManifestError for a manifest that cannot be used and
-    LoadError when there is nothing to load (a folder without .st files)."""
+    """Files to load. A folder means the files its `stvm.toml` lists, else its *.st files; a lone
+    file in a folder with `stvm.toml` means the project that manifest describes (so `stvm run
+    st_src/PnP_Example.st` loads the whole thesis project). Raises ManifestError for a manifest
+    that cannot be used and LoadError when there is nothing to load (a folder without .st files)."""
     out: list[Path] = []
     manifest: dict = {}
     root: Path | None = None
     for raw in paths:
         path = Path(raw)
         if path.is_dir():
-            found = sorted(p for p in path.glob("*.st") if p.is_file())
+            listed = None
             if (path / MANIFEST).exists():
                 manifest, root = read_manifest(path / MANIFEST), path
+                listed = project_files(manifest, path, path / MANIFEST)
+            # a folder with a manifest that lists its files is that project (the files may be in
+            # other folders, e.g. a library the project builds on); else every *.st in it
+            found = listed or sorted(p for p in path.glob("*.st") if p.is_file())
             if not found:
                 raise LoadError([Diagnostic.error(f"no .st files in {path}", _file_span(path))], {})
             out += found
@@ -120,6 +123,22 @@ def source_encoding(manifest: dict) -> str:
 def _file_span(path: Path):
     from stvm.syntax.nodes import Span
     return Span(str(path), 0, 0, 0, 0)
+
+
+def project_settings(paths: Sequence[str | Path], overrides: Sequence[str] = ()) -> SysmacSettings:
+    """The Sysmac settings of a run on `paths`: the spec's defaults, then the `[sysmac]` table of
+    the project's `stvm.toml` (when the files belong to one), then `--sysmac NAME=VALUE`
+    overrides; the last one wins. Raises ValueError (SettingError, ManifestError) that names
+    the setting, the file and the allowed values."""
+    _, manifest, root = expand_paths(paths)
+    settings = DEFAULT_SETTINGS
+    table = manifest.get("sysmac")
+    if table is not None:
+        where = f"{Path(root or '.') / MANIFEST}: [sysmac]"
+        if not isinstance(table, dict):
+            raise ManifestError(f"{where} must be a table of NAME = VALUE")
+        settings = settings.with_table(table, where)
+    return settings.with_overrides(list(overrides))
 
 
 def _stdlib(settings: SysmacSettings = DEFAULT_SETTINGS) -> list[tuple[str, str]]:
@@ -249,9 +268,12 @@ def _read_all(paths: Sequence[Path], encoding: str = "utf-8") -> tuple[list[tupl
     return texts, diags
 
 
-def check(paths: Sequence[str | Path], settings: SysmacSettings = DEFAULT_SETTINGS, generate: bool = False):
+def check(paths: Sequence[str | Path], settings: SysmacSettings | None = None, generate: bool = False):
     """Parse and check: (analysis or None, diagnostics sorted, sources). With `generate`, also
-    lower and compile, so limits that only code generation meets are reported too."""
+    lower and compile, so limits that only code generation meets are reported too. Without
+    `settings`, the project's own (`project_settings`)."""
+    if settings is None:
+        settings = project_settings(paths)
     files, manifest, _ = expand_paths(paths)
     texts, diags = _read_all(files, source_encoding(manifest))
     analysis, diags, sources = _check_texts(texts, diags, settings)
@@ -344,8 +366,11 @@ def _too_deep(file: str) -> Diagnostic:
                             Span(file, 1, 1, 1, 2), "E003")
 
 
-def load(paths: Sequence[str | Path], settings: SysmacSettings = DEFAULT_SETTINGS, use_cache: bool = True) -> Project:
-    """Load a runnable project from ST files (raises LoadError with every diagnostic)."""
+def load(paths: Sequence[str | Path], settings: SysmacSettings | None = None, use_cache: bool = True) -> Project:
+    """Load a runnable project from ST files (raises LoadError with every diagnostic). Without
+    `settings`, the project's own: `stvm.toml` `[sysmac]` over the defaults (`project_settings`)."""
+    if settings is None:
+        settings = project_settings(paths)
     files, manifest, root = expand_paths(paths)
     texts, read_diags = _read_all(files, source_encoding(manifest))
     if read_diags:
