@@ -122,7 +122,9 @@ def test_same_motion_commands_as_the_thesis_demo(project):
 @pytest.mark.parametrize("project", PROGRAMS[1:])
 def test_same_tcp_path_within_one_emulator_step(project):
     ref, other = run_demo(REFERENCE).path, run_demo(project).path
-    tolerance = np.maximum(step_of(ref), step_of(other)) + 1e-6
+    # + 1e-5 (mm, degrees): orientations carry the inverse kinematics' rounding noise (a few
+    # 1e-6 degrees; the IK converges to 0.01 mm / 0.01 degrees), which depends on float details
+    tolerance = np.maximum(step_of(ref), step_of(other)) + 1e-5
     assert np.all(farthest(other, ref) <= tolerance), (farthest(other, ref), tolerance)
     assert np.all(farthest(ref, other) <= tolerance), (farthest(ref, other), tolerance)
     # the same motion time: at most one scan per segment apart (the sub-scan start of a motion)
