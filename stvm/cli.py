@@ -71,6 +71,12 @@ def literal_value(text: str, ty):
     from stvm.syntax import nodes as n
     expr, diags = parse_expression(text, "<--set>")
     if expr is None or any(d.is_error for d in diags):
+        stripped = text.strip()
+        if stripped[:1] in ("'", '"'):
+            # a quote opens an ST string: one that does not parse is a mistake, not text
+            quote = stripped[0]
+            raise ValueError(f"{text!r} is not a complete string literal (close it with {quote}, "
+                             f"write $' for a quote inside)")
         if isinstance(ty, t.StringType):
             return text.encode("utf-8")
         raise ValueError(f"{text!r} is not an ST literal")
@@ -98,12 +104,29 @@ def literal_value(text: str, ty):
         raise ValueError(f"{text!r} is not a literal")
     if negate:
         value = -value
+    _check_literal_kind(text, expr, value, ty)
     if isinstance(ty, t.RealType) and isinstance(value, int) and not isinstance(value, bool):
         try:
             value = float(value)
         except OverflowError:
             raise ValueError(f"{text!r} is out of range for {ty.name}") from None
+    if isinstance(ty, t.RealType):
+        import math
+        limit = 3.4028234663852886e38 if ty.bits == 32 else 1.7976931348623157e308
+        if not math.isfinite(value) or abs(value) > limit:
+            raise ValueError(f"{text} is out of range for {ty.name} (at most ±{limit:.8g})")
     return value
+
+
+def _check_literal_kind(text: str, expr, value, ty) -> None:
+    """User text must be a literal of the variable's kind: TIME takes T#5ms (5 alone would be
+    5 ns), BOOL takes TRUE/FALSE (or BOOL#1), not 1."""
+    from stvm.semantics import types as t
+    from stvm.syntax import nodes as n
+    if isinstance(ty, t.TimeType) and not isinstance(expr, (n.TimeLiteral, n.HashLiteral)):
+        raise ValueError(f"{text!r} is not a duration: write it as TIME, e.g. T#5ms or T#1s500ms")
+    if isinstance(ty, t.BoolType) and not isinstance(expr, (n.BoolLiteral, n.HashLiteral)):
+        raise ValueError(f"{text!r} is not a BOOL: write TRUE or FALSE")
 
 
 def cmd_run(args) -> int:

@@ -92,7 +92,8 @@ def check_manifest(data: dict, path: Path | str) -> dict:
             continue
         value = data[table]
         if not isinstance(value, dict):
-            raise ManifestError(f"{path}: {table} must be a table ([{table}]), got {_kind(value)}")
+            what = "a table of NAME = VALUE" if keys is None else "a table"
+            raise ManifestError(f"{path}: [{table}] must be {what}, got {_kind(value)}")
         if keys is None:
             continue
         extra = sorted(set(value) - set(keys))
