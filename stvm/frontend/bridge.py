@@ -14,6 +14,11 @@ variable itself:
 
 The queue is bounded: a front end that floods writes gets `WriteRejected("busy")` instead of slowing
 the scan. Nothing here blocks the VM thread.
+
+* **One-shot reads** (`sample(paths)`) are answered by the VM thread at the next point between two
+  scans: the end of the running scan, or at once when a `RunControl` holds the VM paused (it calls
+  `serve_between_scans`). A front end that reads values nobody watches (an OPC UA Read) costs the
+  scan loop only those paths, once.
 """
 
 from __future__ import annotations
@@ -31,6 +36,9 @@ from stvm.semantics import types as t
 MAX_PENDING_WRITES = 1024
 """Write batches queued for the next scan; more are rejected (a front end cannot stall the VM)."""
 
+MAX_PENDING_SAMPLES = 1024
+"""One-shot read requests waiting for the next point between scans; more are rejected ("busy")."""
+
 
 class WriteRejected(ValueError):
     """A write batch that was not applied; `path` names the offending variable (None: the batch)."""
@@ -45,7 +53,7 @@ class WriteRejected(ValueError):
 class Snapshot:
     """Values of one watch, all read between the same two scans."""
 
-    scan: int                   # the scan (0-based) whose end state this is
+    scan: int                   # the scan (0-based) whose end state this is; -1: before the first scan
     now_ns: int                 # that scan's start time on the VM clock (virtual or real time)
     values: Mapping[str, Any]   # path → Python value (see stvm.semantics.types for the table)
     version: int                # increases with every new snapshot of this watch
@@ -72,19 +80,24 @@ class Watch:
     def close(self) -> None:
         self.bridge._remove_watch(self)
 
-    def _sample(self, vm: VM) -> None:
-        # VM thread, between scans. A path through a VAR_IN_OUT not bound yet reads as None.
-        values = {}
-        for path, accessor in zip(self.paths, self._accessors):
-            try:
-                values[path] = accessor.get()
-            except UnboundInOut:
-                values[path] = None
+    def _sample(self, scan: int, now_ns: int) -> None:
+        # VM thread, between scans.
         self._version += 1
-        snapshot = Snapshot(vm.scan_count, vm.now_ns, values, self._version)
+        snapshot = Snapshot(scan, now_ns, _read_all(self.paths, self._accessors), self._version)
         self._latest = snapshot   # one reference assignment: readers see the old or the new one
         if self.on_snapshot is not None:
             self.on_snapshot(snapshot)
+
+
+def _read_all(paths: list[str], accessors: list) -> dict[str, Any]:
+    """VM thread, between scans. A path through a VAR_IN_OUT not bound yet reads as None."""
+    values = {}
+    for path, accessor in zip(paths, accessors):
+        try:
+            values[path] = accessor.get()
+        except UnboundInOut:
+            values[path] = None
+    return values
 
 
 class VariableBridge:
@@ -93,6 +106,7 @@ class VariableBridge:
     def __init__(self, vm: VM, max_pending: int = MAX_PENDING_WRITES) -> None:
         self.vm = vm
         self._pending: queue.Queue = queue.Queue(maxsize=max_pending)
+        self._samples: queue.Queue = queue.Queue(maxsize=MAX_PENDING_SAMPLES)
         self._watches: list[Watch] = []
         self._lock = threading.Lock()
         vm.on_scan_start.append(self._apply_pending)
@@ -122,12 +136,50 @@ class VariableBridge:
         """`value` of `path` as the IEC literal `--print` shows (safe from any thread)."""
         return format_value(value, self.type_of(path), self.vm.model.pous)
 
+    def sample(self, paths: Iterable[str]) -> Future:
+        """One snapshot of `paths`, taken by the VM thread at the next point between two scans.
+
+        Raises `PathError` at once for an unknown path and `WriteRejected("busy")` when too many
+        requests wait; the future's result is a `Snapshot` (version 0). It stays pending while
+        the VM is stopped inside a scan (a debugger breakpoint): callers wait with a timeout."""
+        paths = list(paths)
+        accessors = [self.vm.accessor(p) for p in paths]
+        future: Future = Future()
+        try:
+            self._samples.put_nowait((paths, accessors, future))
+        except queue.Full:
+            raise WriteRejected("busy: too many reads waiting for the next scan") from None
+        return future
+
+    def serve_between_scans(self, vm: VM) -> None:
+        """Apply queued writes and answer one-shot reads now; for a loop that holds the VM between
+        two scans (a paused `RunControl`), so a paused controller still reads and writes. Watches
+        sample again after a write, so their snapshots show the written values."""
+        # the VM waits before scan `vm.scan_count`: the state is the end of the scan before it
+        scan, now_ns = vm.scan_count - 1, max(0, vm.now_ns - vm.base_ns)
+        if not self._pending.empty():
+            self._apply_pending(vm)
+            for watch in self._watches:
+                watch._sample(scan, now_ns)
+        self._answer_samples(scan, now_ns)
+
     def _sample_due(self, vm: VM) -> None:
         now = vm.now_ns
         for watch in self._watches:   # the list is replaced, never mutated: no lock needed here
             if now >= watch._next_ns:
                 watch._next_ns = now + watch.every_ns
-                watch._sample(vm)
+                watch._sample(vm.scan_count, now)
+        if not self._samples.empty():
+            self._answer_samples(vm.scan_count, now)
+
+    def _answer_samples(self, scan: int, now_ns: int) -> None:
+        while True:
+            try:
+                paths, accessors, future = self._samples.get_nowait()
+            except queue.Empty:
+                return
+            if future.set_running_or_notify_cancel():
+                future.set_result(Snapshot(scan, now_ns, _read_all(paths, accessors), 0))
 
     # ---- writes
     def submit(self, values: Mapping[str, Any]) -> Future:

@@ -123,6 +123,7 @@ class VM:
         self.collect_stats = True   # per-scan durations (for --stats); benchmarks switch it off
         self.on_scan_start: list[Callable[["VM"], None]] = []   # front ends' queued writes
         self.on_scan_end: list[Callable[["VM"], None]] = []
+        self.held = False           # a front end's run control holds the VM between two scans
         self._rt_start: float | None = None
         self.jitter_ns = array("q")
 

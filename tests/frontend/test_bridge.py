@@ -99,3 +99,25 @@ def test_catalog_lists_programs_globals_and_members(vm):
     assert paths["g_pts[3].x"].kind == "member" and paths["g_pts[3].x"].leaf
     assert paths["Main.timer.Q"].in_fb
     assert "Main.g_count" not in paths            # externals are listed once, under the globals
+
+
+def test_one_shot_sample_is_answered_at_the_end_of_the_next_scan(vm):
+    bridge = VariableBridge(vm)
+    vm["Main.run"] = True
+    vm.run(cycles=2)
+    future = bridge.sample(["Main.n", "g_pts[1].x"])
+    assert not future.done()
+    vm.scan()
+    snap = future.result(timeout=0)
+    assert (snap.scan, dict(snap.values)) == (2, {"Main.n": 3, "g_pts[1].x": 0.0})
+    with pytest.raises(KeyError):
+        bridge.sample(["Main.nope"])
+
+
+def test_catalog_marks_constants(tmp_path):
+    path = tmp_path / "c.st"
+    path.write_text("VAR_GLOBAL CONSTANT LIMIT : INT := 5; END_VAR\nVAR_GLOBAL g : INT; END_VAR\n"
+                    "PROGRAM Main VAR x : INT; END_VAR x := LIMIT; END_PROGRAM\n")
+    vm = stvm.load([str(path)]).start()
+    paths = {node.path: node for root in catalog(vm) for node in root.walk()}
+    assert paths["LIMIT"].constant and not paths["g"].constant and not paths["Main.x"].constant
