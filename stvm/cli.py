@@ -148,7 +148,7 @@ def cmd_run(args) -> int:
             raise _UsageError(str(exc)) from exc
         except ValueError as exc:
             raise _UsageError(f"--set {name}: {exc}") from exc
-    demo = None
+    demo = opcua = None
     try:
         if demo_mode:
             from stvm.demo import Demo
@@ -159,7 +159,9 @@ def cmd_run(args) -> int:
             driver = ScenarioDriver(load_scenario(args.scenario), vm)
             driver.apply_initial()
             vm.on_scan_end.append(driver.after_scan)
-    except (ValueError, KeyError) as exc:
+        from stvm.opcua.cli import start_server
+        opcua = start_server(args, project, vm, args.files)
+    except (ValueError, KeyError, RuntimeError) as exc:
         if demo is not None:
             demo.stop()
         raise _UsageError(str(exc)) from exc
@@ -186,6 +188,8 @@ def cmd_run(args) -> int:
             status = EXIT_FAULT
     finally:
         signal.signal(signal.SIGINT, previous)
+        if opcua is not None:
+            opcua.stop()
         vm.close()
         if demo is not None:
             demo.stop()
@@ -254,6 +258,8 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--scenario", help="scenario TOML applied to the run (see README)")
     run.add_argument("--watchdog", type=float, default=5.0, metavar="SECONDS",
                      help="fault when one scan runs longer than this wall-clock time (default 5)")
+    from stvm.opcua.cli import add_option
+    add_option(run)
     demo = run.add_argument_group("demo (projects whose stvm.toml has [demo], e.g. st_src/)")
     demo.add_argument("--robot", metavar="HOST:PORT", help="talk to this robot instead of the bundled emulator")
     demo.add_argument("--emulator-log", metavar="FILE", help="write the emulator's frame log (JSON lines)")

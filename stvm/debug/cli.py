@@ -34,6 +34,8 @@ def register(subparsers) -> None:
     debug.add_argument("--realtime", action="store_true", help="sleep to each deadline (default: virtual clock)")
     debug.add_argument("--sysmac", action="append", default=[], metavar="NAME=VALUE",
                        help="override a Sysmac UNCERTAIN setting")
+    from stvm.opcua.cli import add_option
+    add_option(debug)
     debug.set_defaults(func=cmd_debug)
 
     dap = subparsers.add_parser(
@@ -78,9 +80,19 @@ def cmd_debug(args) -> int:
         sys.stderr.write(render(warning, session.build.project.sources))
     if session.robot != "none":
         print(f"robot: {session.robot}" + (f" on port {session.server.port}" if session.server else ""))
+    opcua = None
+    try:
+        from stvm.opcua.cli import start_server
+        # the debugger is the run control: no Runtime.Scan/Pause/Resume beside it
+        opcua = start_server(args, session.build.project, session.engine.vm, args.files, run_control=False)
+    except (ValueError, RuntimeError) as exc:
+        session.close()
+        return _error(str(exc))
     try:
         return Console(session.engine).run(commands)
     finally:
+        if opcua is not None:
+            opcua.stop()
         session.close()
 
 
