@@ -195,18 +195,11 @@ class OpcUaServer:
         server.set_endpoint(self.url + "/")
         server.set_server_name(f"stvm {config.project_name}")
         await server.set_application_uri(f"urn:stvm:{config.project_name}:server")
-        policies = [ua.SecurityPolicyType.NoSecurity] if endpoint.loopback else []
         if config.secure:
             await server.load_certificate(str(config.certificate))
             await server.load_private_key(str(config.private_key))
-            policies += [ua.SecurityPolicyType.Basic256Sha256_SignAndEncrypt,
-                         ua.SecurityPolicyType.Basic256Sha256_Sign]
+        policies, tokens = security_plan(config)
         server.set_security_policy(policies)
-        tokens: list[type] = [ua.AnonymousIdentityToken] if endpoint.loopback else []
-        if config.users:
-            tokens.append(ua.UserNameIdentityToken)
-        if config.trusted_clients:
-            tokens.append(ua.X509IdentityToken)
         server.set_identity_tokens(tokens)
         self.ns = await server.register_namespace(config.namespace_uri)
         self._server = server
@@ -610,6 +603,21 @@ class OpcUaServer:
         self.control.resume()
         await self._set_runtime("Paused", ua.Variant(False, ua.VariantType.Boolean), self._timestamp(0))
         return []
+
+
+def security_plan(config: OpcUaConfig) -> tuple[list, list[type]]:
+    """(security policies, identity token kinds) the endpoint offers: SecurityPolicy None and
+    anonymous clients only on loopback; Basic256Sha256 whenever a certificate is configured."""
+    loopback = config.endpoint.loopback
+    policies = [ua.SecurityPolicyType.NoSecurity] if loopback else []
+    if config.secure:
+        policies += [ua.SecurityPolicyType.Basic256Sha256_SignAndEncrypt, ua.SecurityPolicyType.Basic256Sha256_Sign]
+    tokens: list[type] = [ua.AnonymousIdentityToken] if loopback else []
+    if config.users:
+        tokens.append(ua.UserNameIdentityToken)
+    if config.trusted_clients:
+        tokens.append(ua.X509IdentityToken)
+    return policies, tokens
 
 
 class _UserManager:
