@@ -5,7 +5,7 @@
     snap = watch.latest()                    # Snapshot taken between two scans
     future = bridge.submit({"Main.x": 5})    # applied at the start of the next scan, all or nothing
     bridge.sample(["Main.y"])                # one snapshot at the next point between scans
-    control = RunControl(vm, bridge)         # pause / resume / step(n) from another thread
+    control = RunControl(vm)                 # pause / resume / step(n) from another thread
 
 `catalog(vm)` lists every variable a front end may publish, as a tree of `VariableInfo`.
 """

@@ -16,8 +16,8 @@ The queue is bounded: a front end that floods writes gets `WriteRejected("busy")
 the scan. Nothing here blocks the VM thread.
 
 * **One-shot reads** (`sample(paths)`) are answered by the VM thread at the next point between two
-  scans: the end of the running scan, or at once when a `RunControl` holds the VM paused (it calls
-  `serve_between_scans`). A front end that reads values nobody watches (an OPC UA Read) costs the
+  scans: the end of the running scan, or at once when the VM is held between scans (a paused
+  `RunControl`, a debugger stopped after a scan: they call the `vm.on_idle` hooks). A front end that reads values nobody watches (an OPC UA Read) costs the
   scan loop only those paths, once.
 """
 
@@ -111,6 +111,7 @@ class VariableBridge:
         self._lock = threading.Lock()
         vm.on_scan_start.append(self._apply_pending)
         vm.on_scan_end.append(self._sample_due)
+        vm.on_idle.append(self.serve_between_scans)
 
     # ---- reads
     def type_of(self, path: str) -> t.Type:
@@ -152,9 +153,10 @@ class VariableBridge:
         return future
 
     def serve_between_scans(self, vm: VM) -> None:
-        """Apply queued writes and answer one-shot reads now; for a loop that holds the VM between
-        two scans (a paused `RunControl`), so a paused controller still reads and writes. Watches
-        sample again after a write, so their snapshots show the written values."""
+        """Apply queued writes and answer one-shot reads now (a `vm.on_idle` hook: called by a loop
+        holding the VM between two scans, a paused `RunControl` or a debugger stopped after a scan),
+        so a paused controller still reads and writes. Watches sample again after a write, so their
+        snapshots show the written values."""
         # the VM waits before scan `vm.scan_count`: the state is the end of the scan before it
         scan, now_ns = vm.scan_count - 1, max(0, vm.now_ns - vm.base_ns)
         if not self._pending.empty():

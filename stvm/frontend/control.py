@@ -11,8 +11,8 @@ the debugger's worker). `RunControl` puts a gate in front of every scan instead
 * `step(n)`: it runs `n` scans, then waits again; the returned future completes once the n-th
   scan's end hooks (watch snapshots included) have run, with the number of scans done so far.
 
-While it waits, the gate serves the bridge (`VariableBridge.serve_between_scans`) every
-`poll_s`: one-shot reads are answered and writes applied, so a paused controller can still be
+While it waits, the gate calls the `vm.on_idle` hooks every `poll_s` (a `VariableBridge` answers
+one-shot reads and applies writes there), so a paused controller can still be
 read and written, as a real one in program mode. `vm.held` tells the watchdog not to count the
 wait as a scan that hangs. Only for the virtual clock: pausing a real-time run would make every
 later deadline an overrun.
@@ -23,18 +23,16 @@ from __future__ import annotations
 import threading
 from concurrent.futures import Future
 
-from stvm.frontend.bridge import VariableBridge
 from stvm.runtime.vm import VM
 
 
 class RunControl:
     """Pause/resume/step `vm` from any thread; create it before the run starts."""
 
-    def __init__(self, vm: VM, bridge: VariableBridge | None = None, poll_s: float = 0.005) -> None:
+    def __init__(self, vm: VM, poll_s: float = 0.005) -> None:
         if vm.realtime:
             raise ValueError("run control (pause, resume, scan steps) needs the virtual clock")
         self.vm = vm
-        self.bridge = bridge
         self.poll_s = poll_s
         self._cond = threading.Condition()
         self._engaged = False          # fast path: False while running freely
@@ -122,7 +120,7 @@ class RunControl:
                         vm.held = True
                         self._cond.notify_all()   # wake wait_paused()
                     self._cond.wait(self.poll_s)
-                    if self.bridge is not None:
-                        self.bridge.serve_between_scans(vm)
+                    for hook in vm.on_idle:
+                        hook(vm)
         finally:
             vm.held = False

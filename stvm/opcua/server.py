@@ -73,7 +73,7 @@ class OpcUaServer:
         self.vm = vm
         self.config = config
         self.bridge = bridge or VariableBridge(vm)
-        self.control = RunControl(vm, self.bridge) if run_control and not vm.realtime else None
+        self.control = RunControl(vm) if run_control and not vm.realtime else None
         self.base_ns = vm.base_ns
         self.realtime = vm.realtime
         self.start_dt_ns = vm.ctx.start_dt_ns

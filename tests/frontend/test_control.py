@@ -42,7 +42,7 @@ def run_in_thread(vm, cycles):
 
 def test_step_runs_exact_scans_and_waits(vm):
     bridge = VariableBridge(vm)
-    control = RunControl(vm, bridge)
+    control = RunControl(vm)
     watch = bridge.watch(["Main.n"])
     control.pause()
     thread, errors = run_in_thread(vm, cycles=1000)
@@ -59,7 +59,7 @@ def test_step_runs_exact_scans_and_waits(vm):
 
 def test_paused_vm_answers_reads_and_applies_writes(vm):
     bridge = VariableBridge(vm)
-    control = RunControl(vm, bridge)
+    control = RunControl(vm)
     control.pause()
     thread, errors = run_in_thread(vm, cycles=10)
     assert control.wait_paused(5)
