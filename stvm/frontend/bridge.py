@@ -5,8 +5,8 @@ variable itself:
 
 * **Reads** come from a `Snapshot`: the values of a `Watch`'s paths, all taken by the VM thread at
   the end of one scan, so every value in it belongs to the same instant. A watch samples at most
-  once per scan and at least `every_ns` of VM time apart; sampling costs the scan loop one getter
-  call per path and nothing when no watch is due.
+  once per scan and at least `every_ns` of VM time apart; sampling costs the scan loop one call of a
+  generated reader (about 0.05 µs a value) and nothing when no watch is due.
 * **Writes** are submitted as a batch `{path: value}`. The batch is checked against the variables'
   types in the caller's thread (a bad value is rejected at once, the VM untouched), queued, and
   applied by the VM thread at the start of the next scan, all of it or none of it, never in the
@@ -63,12 +63,14 @@ class Watch:
     """A set of paths sampled by the VM thread; `latest()` is safe from any thread."""
 
     def __init__(self, bridge: "VariableBridge", paths: list[str], every_ns: int,
-                 on_snapshot: Callable[[Snapshot], None] | None) -> None:
+                 on_snapshot: Callable[[Snapshot], None] | None, changes_only: bool = False) -> None:
         self.bridge = bridge
         self.paths = list(paths)
         self.every_ns = max(0, int(every_ns))
         self.on_snapshot = on_snapshot
-        self._accessors = [bridge.vm.accessor(p) for p in self.paths]
+        self.changes_only = changes_only
+        self._read = bridge._reader(self.paths)   # raises PathError for an unknown path
+        self._last: tuple | None = None
         self._next_ns = 0
         self._version = 0
         self._latest: Snapshot | None = None
@@ -82,8 +84,13 @@ class Watch:
 
     def _sample(self, scan: int, now_ns: int) -> None:
         # VM thread, between scans.
+        values = self._read()
+        if self.changes_only:
+            if values == self._last:
+                return          # nothing changed: no snapshot, nothing handed over
+            self._last = values
         self._version += 1
-        snapshot = Snapshot(scan, now_ns, _read_all(self.paths, self._accessors), self._version)
+        snapshot = Snapshot(scan, now_ns, dict(zip(self.paths, values)), self._version)
         self._latest = snapshot   # one reference assignment: readers see the old or the new one
         if self.on_snapshot is not None:
             self.on_snapshot(snapshot)
@@ -108,6 +115,7 @@ class VariableBridge:
         self._pending: queue.Queue = queue.Queue(maxsize=max_pending)
         self._samples: queue.Queue = queue.Queue(maxsize=MAX_PENDING_SAMPLES)
         self._watches: list[Watch] = []
+        self._routes: dict | None = None   # path → (type, root, steps), built on the first watch
         self._lock = threading.Lock()
         vm.on_scan_start.append(self._apply_pending)
         vm.on_scan_end.append(self._sample_due)
@@ -119,15 +127,56 @@ class VariableBridge:
         return self.vm.accessor(path).type
 
     def watch(self, paths: Iterable[str], every_ns: int = 0,
-              on_snapshot: Callable[[Snapshot], None] | None = None) -> Watch:
+              on_snapshot: Callable[[Snapshot], None] | None = None, changes_only: bool = False) -> Watch:
         """Sample `paths` between scans, at most once per scan and `every_ns` VM-time apart.
 
         `on_snapshot` runs in the VM thread: it must only hand the snapshot over (for example
-        `loop.call_soon_threadsafe`), never block."""
-        watch = Watch(self, list(paths), every_ns, on_snapshot)
+        `loop.call_soon_threadsafe`), never block. With `changes_only`, a sample equal to the
+        previous one makes no snapshot (a subscriber that forwards changes pays one comparison)."""
+        watch = Watch(self, list(paths), every_ns, on_snapshot, changes_only)
         with self._lock:
             self._watches = self._watches + [watch]
         return watch
+
+    def read_now(self, paths: Iterable[str]) -> dict[str, Any]:
+        """The values of `paths` read at once: only in the VM's thread between two scans, or before
+        the run starts (a front end's initial values). Raises `PathError` for an unknown path."""
+        paths = list(paths)
+        return dict(zip(paths, self._reader(paths)()))
+
+    def _reader(self, paths: list[str]) -> Callable[[], tuple]:
+        """A function returning the values of `paths` as a tuple, for the VM thread.
+
+        Paths the trace's compiled sampler can reach (every variable the catalog lists) are read
+        by one generated function, one attribute or item access per step from the globals or a
+        program instance (~0.05 µs a value instead of a path lookup per value); the rest (paths
+        through a VAR_IN_OUT) through their accessors."""
+        from stvm.trace.signals import Signal, all_nodes, make_sampler
+        if self._routes is None:
+            self._routes = {name.lower().replace(" ", ""): (ty, root, steps)
+                            for name, ty, root, steps in all_nodes(self.vm)}
+        fast: list[Signal] = []
+        slow: list[int] = []
+        for index, path in enumerate(paths):
+            route = self._routes.get(path.lower().replace(" ", ""))
+            if route is None or route[0].kind not in ("bool", "int", "real", "time", "string", "enum"):
+                slow.append(index)
+            else:
+                fast.append(Signal(path, *route))
+        sampler = make_sampler(fast) if fast else (lambda: ())
+        if not slow:
+            return sampler
+        slow_paths = [paths[i] for i in slow]
+        slow_accessors = [self.vm.accessor(p) for p in slow_paths]
+        order = [i for i in range(len(paths)) if i not in set(slow)] + slow
+
+        def read() -> tuple:
+            merged = sampler() + tuple(_read_all(slow_paths, slow_accessors).values())
+            values = [None] * len(paths)
+            for position, value in zip(order, merged):
+                values[position] = value
+            return tuple(values)
+        return read
 
     def _remove_watch(self, watch: Watch) -> None:
         with self._lock:

@@ -21,6 +21,7 @@ as Int64), real nodes take Float, Double or integers.
 
 from __future__ import annotations
 
+import functools
 import math
 import struct
 from dataclasses import dataclass
@@ -63,6 +64,7 @@ class UaType:
     text: str                       # the ST type as the Description shows it
 
 
+@functools.lru_cache(maxsize=None)
 def ua_type(ty: t.Type) -> UaType | None:
     """The mapping of an elementary ST type; None for a type published as an object."""
     if isinstance(ty, t.BoolType):

@@ -170,91 +170,101 @@ def _dv(value: Any, variant: ua.VariantType, is_array: bool = False) -> ua.DataV
 
 
 class NodeBuilder:
-    """Writes node records into a started-up asyncua address space (server loop thread only)."""
+    """Writes node records into a started-up asyncua address space (server loop thread only).
+
+    Attributes that never change (NodeClass, DataType, access levels, …) share one attribute
+    record between all nodes that have the same value, as do the references to a type
+    definition and back to a parent: only NodeId, names and Value are per node. Sharing is safe
+    because nothing writes those attributes (clients get BadNotWritable, see `server`); a client
+    monitoring one of them gets its initial value and never a change."""
 
     def __init__(self, aspace, ns: int, min_sampling_ms: float) -> None:
         self.aspace = aspace
         self.ns = ns
-        self._common = {
-            ua.AttributeIds.WriteMask: _dv(0, ua.VariantType.UInt32),
-            ua.AttributeIds.UserWriteMask: _dv(0, ua.VariantType.UInt32),
-        }
-        self._variable = {
-            ua.AttributeIds.NodeClass: _dv(ua.NodeClass.Variable.value, ua.VariantType.Int32),
-            ua.AttributeIds.ValueRank: _dv(-1, ua.VariantType.Int32),
-            ua.AttributeIds.ArrayDimensions: _dv([], ua.VariantType.UInt32, is_array=True),
-            ua.AttributeIds.Historizing: _dv(False, ua.VariantType.Boolean),
-            ua.AttributeIds.MinimumSamplingInterval: _dv(float(min_sampling_ms), ua.VariantType.Double),
-        }
-        self._object = {
-            ua.AttributeIds.NodeClass: _dv(ua.NodeClass.Object.value, ua.VariantType.Int32),
-            ua.AttributeIds.EventNotifier: _dv(0, ua.VariantType.Byte),
-        }
         read = ua.AccessLevel.CurrentRead.mask
         write = read | ua.AccessLevel.CurrentWrite.mask
-        self._access = {False: _dv(read, ua.VariantType.Byte), True: _dv(write, ua.VariantType.Byte)}
-        self._datatypes: dict[ua.NodeId, ua.DataValue] = {}
+        common = {ua.AttributeIds.WriteMask: _dv(0, ua.VariantType.UInt32),
+                  ua.AttributeIds.UserWriteMask: _dv(0, ua.VariantType.UInt32)}
+        variable = {**common,
+                    ua.AttributeIds.NodeClass: _dv(ua.NodeClass.Variable.value, ua.VariantType.Int32),
+                    ua.AttributeIds.ValueRank: _dv(-1, ua.VariantType.Int32),
+                    ua.AttributeIds.ArrayDimensions: _dv([], ua.VariantType.UInt32, is_array=True),
+                    ua.AttributeIds.Historizing: _dv(False, ua.VariantType.Boolean),
+                    ua.AttributeIds.MinimumSamplingInterval: _dv(float(min_sampling_ms), ua.VariantType.Double)}
+        self._variable = {access: {key: AttributeValue(value) for key, value in
+                                   {**variable, ua.AttributeIds.AccessLevel: _dv(level, ua.VariantType.Byte),
+                                    ua.AttributeIds.UserAccessLevel: _dv(level, ua.VariantType.Byte)}.items()}
+                          for access, level in ((False, read), (True, write))}
+        self._object = {key: AttributeValue(value) for key, value in
+                        {**common, ua.AttributeIds.NodeClass: _dv(ua.NodeClass.Object.value, ua.VariantType.Int32),
+                         ua.AttributeIds.EventNotifier: _dv(0, ua.VariantType.Byte)}.items()}
+        self._datatypes: dict[ua.NodeId, AttributeValue] = {}
+        self._descriptions: dict[str, AttributeValue] = {}
+        self._up: dict[ua.NodeId, ua.ReferenceDescription] = {}
+        self._typedef = {
+            ua.NodeClass.Variable: ua.ReferenceDescription(
+                ReferenceTypeId=_REF_TYPEDEF, IsForward=True, NodeId=_VARIABLE_TYPE,
+                BrowseName=ua.QualifiedName("BaseDataVariableType", 0),
+                DisplayName=ua.LocalizedText("BaseDataVariableType"), NodeClass=ua.NodeClass.VariableType,
+                TypeDefinition=ua.NodeId()),
+            ua.NodeClass.Object: ua.ReferenceDescription(
+                ReferenceTypeId=_REF_TYPEDEF, IsForward=True, NodeId=_OBJECT_TYPE,
+                BrowseName=ua.QualifiedName("BaseObjectType", 0), DisplayName=ua.LocalizedText("BaseObjectType"),
+                NodeClass=ua.NodeClass.ObjectType, TypeDefinition=ua.NodeId())}
 
     def nodeid(self, text: str) -> ua.NodeId:
         return ua.NodeId(text, self.ns)
 
-    def _record(self, nodeid: ua.NodeId, name: str, description: str, constant: dict) -> NodeData:
+    def _record(self, nodeid: ua.NodeId, name: str, description: str, constant: dict,
+                browse: ua.QualifiedName, display: ua.LocalizedText) -> NodeData:
         data = NodeData(nodeid)
         attrs = data.attributes
-        for key, value in self._common.items():
-            attrs[key] = AttributeValue(value)
-        for key, value in constant.items():
-            attrs[key] = AttributeValue(value)
-        browse = ua.QualifiedName(name, self.ns)
+        attrs.update(constant)
         attrs[ua.AttributeIds.NodeId] = AttributeValue(_dv(nodeid, ua.VariantType.NodeId))
         attrs[ua.AttributeIds.BrowseName] = AttributeValue(_dv(browse, ua.VariantType.QualifiedName))
-        attrs[ua.AttributeIds.DisplayName] = AttributeValue(_dv(ua.LocalizedText(name), ua.VariantType.LocalizedText))
-        attrs[ua.AttributeIds.Description] = AttributeValue(
-            _dv(ua.LocalizedText(description), ua.VariantType.LocalizedText))
+        attrs[ua.AttributeIds.DisplayName] = AttributeValue(_dv(display, ua.VariantType.LocalizedText))
+        shared = self._descriptions.get(description)
+        if shared is None:
+            shared = self._descriptions[description] = AttributeValue(
+                _dv(ua.LocalizedText(description), ua.VariantType.LocalizedText))
+        attrs[ua.AttributeIds.Description] = shared
         return data
 
-    def _link(self, parent: NodeData, child: NodeData, name: str, nodeclass: ua.NodeClass,
-              typedef: ua.NodeId, reftype: ua.NodeId = _REF_COMPONENT) -> None:
-        browse = ua.QualifiedName(name, self.ns)
-        display = ua.LocalizedText(name)
+    def _link(self, parent: NodeData, child: NodeData, nodeclass: ua.NodeClass, typedef: ua.NodeId,
+              browse: ua.QualifiedName, display: ua.LocalizedText) -> None:
         parent.references.append(ua.ReferenceDescription(
-            ReferenceTypeId=reftype, IsForward=True, NodeId=child.nodeid, BrowseName=browse,
+            ReferenceTypeId=_REF_COMPONENT, IsForward=True, NodeId=child.nodeid, BrowseName=browse,
             DisplayName=display, NodeClass=nodeclass, TypeDefinition=typedef))
-        parent_name = parent.attributes[ua.AttributeIds.BrowseName].value.Value.Value
-        parent_class = ua.NodeClass(parent.attributes[ua.AttributeIds.NodeClass].value.Value.Value)
-        child.references.append(ua.ReferenceDescription(
-            ReferenceTypeId=reftype, IsForward=False, NodeId=parent.nodeid, BrowseName=parent_name,
-            DisplayName=parent.attributes[ua.AttributeIds.DisplayName].value.Value.Value,
-            NodeClass=parent_class, TypeDefinition=ua.NodeId()))
-        child.references.append(ua.ReferenceDescription(
-            ReferenceTypeId=_REF_TYPEDEF, IsForward=True, NodeId=typedef,
-            BrowseName=ua.QualifiedName("BaseDataVariableType" if nodeclass == ua.NodeClass.Variable
-                                        else "BaseObjectType", 0),
-            DisplayName=ua.LocalizedText("BaseDataVariableType" if nodeclass == ua.NodeClass.Variable
-                                         else "BaseObjectType"),
-            NodeClass=ua.NodeClass.VariableType if nodeclass == ua.NodeClass.Variable else ua.NodeClass.ObjectType,
-            TypeDefinition=ua.NodeId()))
+        up = self._up.get(parent.nodeid)
+        if up is None:
+            up = self._up[parent.nodeid] = ua.ReferenceDescription(
+                ReferenceTypeId=_REF_COMPONENT, IsForward=False, NodeId=parent.nodeid,
+                BrowseName=parent.attributes[ua.AttributeIds.BrowseName].value.Value.Value,
+                DisplayName=parent.attributes[ua.AttributeIds.DisplayName].value.Value.Value,
+                NodeClass=ua.NodeClass(parent.attributes[ua.AttributeIds.NodeClass].value.Value.Value),
+                TypeDefinition=ua.NodeId())
+        child.references.append(up)
+        child.references.append(self._typedef[nodeclass])
 
     def add_object(self, parent_id: ua.NodeId, path: str, name: str, description: str) -> NodeData:
-        data = self._record(self.nodeid(path), name, description, self._object)
-        self._link(self.aspace[parent_id], data, name, ua.NodeClass.Object, _OBJECT_TYPE)
+        browse, display = ua.QualifiedName(name, self.ns), ua.LocalizedText(name)
+        data = self._record(self.nodeid(path), name, description, self._object, browse, display)
+        self._link(self.aspace[parent_id], data, ua.NodeClass.Object, _OBJECT_TYPE, browse, display)
         self.aspace[data.nodeid] = data
         return data
 
     def add_variable(self, parent_id: ua.NodeId, var: PublishedVariable, name: str, datatype: ua.NodeId,
                      value: ua.DataValue) -> NodeData:
-        constant = dict(self._variable)
-        constant[ua.AttributeIds.AccessLevel] = self._access[var.writable]
-        constant[ua.AttributeIds.UserAccessLevel] = self._access[var.writable]
-        dt = self._datatypes.get(datatype)
-        if dt is None:
-            dt = self._datatypes[datatype] = _dv(datatype, ua.VariantType.NodeId)
-        constant[ua.AttributeIds.DataType] = dt
-        section = var.info.section
-        data = self._record(self.nodeid(var.path), name, f"{var.uatype.text} ({section})", constant)
+        browse, display = ua.QualifiedName(name, self.ns), ua.LocalizedText(name)
+        data = self._record(self.nodeid(var.path), name, f"{var.uatype.text} ({var.info.section})",
+                            self._variable[var.writable], browse, display)
+        shared = self._datatypes.get(datatype)
+        if shared is None:
+            shared = self._datatypes[datatype] = AttributeValue(_dv(datatype, ua.VariantType.NodeId))
+        data.attributes[ua.AttributeIds.DataType] = shared
         var.nodeid = data.nodeid
         var.value_attr = data.attributes[ua.AttributeIds.Value] = AttributeValue(value)
-        self._link(self.aspace[parent_id], data, name, ua.NodeClass.Variable, _VARIABLE_TYPE)
+        self._link(self.aspace[parent_id], data, ua.NodeClass.Variable, _VARIABLE_TYPE, browse, display)
         self.aspace[data.nodeid] = data
         return data
 

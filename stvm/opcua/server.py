@@ -29,6 +29,7 @@ from __future__ import annotations
 import asyncio
 import contextvars
 import dataclasses
+import gc
 import hashlib
 import hmac
 import logging
@@ -50,12 +51,12 @@ from stvm.opcua.datatypes import datetime_of
 from stvm.opcua.nodes import GLOBALS_ID, RUNTIME_ID, NodeBuilder, PublishedVariable, describe, select, \
     walk_published
 
-FORWARD_S = 0.01          # newest snapshots go into the nodes at most this often (wall time)
+FORWARD_S = 0.02          # newest snapshots go into the nodes at most this often (wall time)
 READ_WAIT_S = 1.0         # a Read waits this long for a scan to end before answering from the cache
 WRITE_WAIT_S = 1.0        # a Write waits this long to see its batch applied (then answers Good: queued)
 MAX_READS_WAITING = 32    # more concurrent Reads answer from the cache at once
 MAX_SCAN_STEP = 10_000_000
-HEARTBEAT_NS = 100_000_000   # Runtime.ScanCount / Time refresh, in VM time
+HEARTBEAT_NS = 1_000_000_000   # Runtime.ScanCount / Time refresh without a subscription, in VM time
 
 _REQUESTED_INTERVALS: contextvars.ContextVar[dict | None] = contextvars.ContextVar("stvm_sampling", default=None)
 # the identity token being activated: asyncua hands its user manager the secure channel's client
@@ -108,14 +109,7 @@ class OpcUaServer:
 
     def _read_initial_values(self) -> dict[str, Any]:
         # the run has not started: the VM thread is this thread, idle
-        from stvm.runtime.vm import UnboundInOut
-        values = {}
-        for path in self.variables:
-            try:
-                values[path] = self.vm.accessor(path).get()
-            except UnboundInOut:
-                values[path] = None
-        return values
+        return self.bridge.read_now(self.variables)
 
     # ================================================================ lifecycle (caller's thread)
     @property
@@ -179,6 +173,11 @@ class OpcUaServer:
                 watch.close()
             self._watches = {}
             try:
+                # asyncua's clock task sleeps 1 s between updates and stop() waits for it: cancel it
+                time_task = self._server.iserver.time_task
+                if time_task is not None:
+                    time_task.cancel()
+                    self._server.iserver.time_task = None
                 loop.run_until_complete(self._server.stop())
             except Exception:   # noqa: BLE001 - shutting down anyway
                 pass
@@ -203,7 +202,13 @@ class OpcUaServer:
         server.set_identity_tokens(tokens)
         self.ns = await server.register_namespace(config.namespace_uri)
         self._server = server
-        await self._build_address_space(server)
+        collecting = gc.isenabled()
+        gc.disable()   # ~15 objects a node, none of them garbage: the collector would only re-scan them
+        try:
+            await self._build_address_space(server)
+        finally:
+            if collecting:
+                gc.enable()
         self._hook_sessions(server)
         self._hook_monitoring(server)
         await server.start()
@@ -562,7 +567,7 @@ class OpcUaServer:
             key = (every, tuple(sorted(paths)))
             watch = self._watches.pop(key, None)
             if watch is None:
-                watch = self.bridge.watch(list(key[1]), every, self._handover_for(key))
+                watch = self.bridge.watch(list(key[1]), every, self._handover_for(key), changes_only=True)
             watches[key] = watch
         for watch in self._watches.values():
             watch.close()
