@@ -23,7 +23,7 @@ def make_certificate(folder, name, uri, use):
 @pytest.fixture(scope="module")
 def pki(tmp_path_factory):
     folder = tmp_path_factory.mktemp("pki")
-    server = make_certificate(folder, "server", "urn:stvm:st_src:server", ExtendedKeyUsageOID.SERVER_AUTH)
+    server = make_certificate(folder, "server", "urn:stvm:CBT_Commands_Lib:server", ExtendedKeyUsageOID.SERVER_AUTH)
     scada = make_certificate(folder, "scada", "urn:example:scada", ExtendedKeyUsageOID.CLIENT_AUTH)
     stranger = make_certificate(folder, "stranger", "urn:example:stranger", ExtendedKeyUsageOID.CLIENT_AUTH)
     return folder, server, scada, stranger
