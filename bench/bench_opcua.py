@@ -58,7 +58,7 @@ CLIENT = textwrap.dedent("""
 
 
 def fresh_vm(project, realtime: bool):
-    from conftest import wire_demo
+    from opcua_helpers import wire_demo
     from stvm.lockstep import LockstepTransport
     transport = LockstepTransport(latency_scans=1)
     vm = project.start(scan="1ms", transport=transport, realtime=realtime)

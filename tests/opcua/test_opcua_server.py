@@ -4,13 +4,12 @@ from __future__ import annotations
 
 import asyncio
 
+import pytest
 from asyncua import Client, ua
 from asyncua.ua import uaerrors
-from conftest import Running, run_async, wire_demo
+from opcua_helpers import Running, run_async, wire_demo
 
 from stvm.lockstep import start_lockstep
-
-import pytest
 
 
 async def ns_index(client: Client, running: Running) -> int:

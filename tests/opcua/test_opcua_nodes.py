@@ -4,7 +4,7 @@ import asyncio
 
 import pytest
 from asyncua import Client, ua
-from conftest import Running, run_async
+from opcua_helpers import Running, run_async
 
 import stvm
 from stvm.frontend import catalog

@@ -12,7 +12,7 @@ import threading
 import time
 
 from asyncua import Client, ua
-from conftest import LOOPBACK, ROOT, run_async
+from opcua_helpers import LOOPBACK, ROOT, run_async
 
 SERVER_LINE = re.compile(r"OPC UA server on (opc\.tcp://\S+): namespace (\S+) \(ns=(\d+)\)")
 

@@ -7,7 +7,7 @@ import pytest
 from asyncua import Client, ua
 from asyncua.crypto.cert_gen import setup_self_signed_certificate
 from asyncua.ua import uaerrors
-from conftest import THESIS, Running, run_async
+from opcua_helpers import THESIS, Running, run_async
 from cryptography.x509.oid import ExtendedKeyUsageOID
 
 from stvm.opcua.config import load_config
