@@ -32,6 +32,9 @@ def start_server(args, project, vm, files, run_control: bool = True):
     print(f"OPC UA server on {url}: namespace {config.namespace_uri} (ns={server.ns}), "
           f"{len(server.variables)} variables, {server.writable_count} writable{steps}{paused}",
           file=sys.stderr, flush=True)
+    if config.start_paused and server.control is None:
+        print("opcua: start = \"paused\" is ignored: stepping needs the virtual clock under stvm run",
+              file=sys.stderr)
     for skipped in server.selection.skipped[:5]:
         print(f"opcua: not published (no OPC UA mapping): {skipped}", file=sys.stderr)
     return server

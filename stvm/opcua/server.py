@@ -179,6 +179,12 @@ class OpcUaServer:
                     time_task.cancel()
                     self._server.iserver.time_task = None
                 loop.run_until_complete(self._server.stop())
+                # sessions of clients still connected keep timeout and publish tasks: end them
+                # here, not with "Task was destroyed but it is pending!" when the loop closes
+                pending = [task for task in asyncio.all_tasks(loop) if not task.done()]
+                for task in pending:
+                    task.cancel()
+                loop.run_until_complete(asyncio.gather(*pending, return_exceptions=True))
             except Exception:   # noqa: BLE001 - shutting down anyway
                 pass
             loop.close()
