@@ -120,8 +120,12 @@ def test_bad_writes_get_their_status_and_change_nothing(running):
                 item = ua.WriteValue(NodeId=ua.NodeId(path, ns), AttributeId=ua.AttributeIds.Value,
                                      Value=ua.DataValue(variant))
                 params.NodesToWrite.append(item)
+            params.NodesToWrite.append(ua.WriteValue(NodeId=ua.NodeId("Connect_Time_Out", ns),
+                                                     AttributeId=ua.AttributeIds.Value, IndexRange="0",
+                                                     Value=ua.DataValue(ua.Variant(5, ua.VariantType.UInt16))))
             results = await client.uaclient.write(params)
-            assert [r.value for r in results] == [ua.StatusCodes.Good, ua.StatusCodes.BadOutOfRange]
+            assert [r.value for r in results] == [ua.StatusCodes.Good, ua.StatusCodes.BadOutOfRange,
+                                                  ua.StatusCodes.BadWriteNotSupported]
             await scan(client, ns, 1)
             after = {path: await node(client, ns, path).read_value() for path, _, _ in cases}
             assert after == before and await node(client, ns, "Connect_Time_Out").read_value() == 77
