@@ -42,14 +42,16 @@ from pathlib import Path
 from typing import Any
 
 from asyncua import Server, ua
+from asyncua.crypto import uacrypto
 from asyncua.crypto.permission_rules import User, UserRole
 from asyncua.server.internal_session import InternalSession
 
 from stvm.frontend import RunControl, Snapshot, VariableBridge, WriteRejected, catalog
 from stvm.opcua.config import OpcUaConfig
-from stvm.opcua.datatypes import datetime_of
+from stvm.opcua.datatypes import BadWrite, datetime_of
 from stvm.opcua.nodes import GLOBALS_ID, RUNTIME_ID, NodeBuilder, PublishedVariable, describe, select, \
     walk_published
+from stvm.semantics import types as t
 
 FORWARD_S = 0.02          # newest snapshots go into the nodes at most this often (wall time)
 READ_WAIT_S = 1.0         # a Read waits this long for a scan to end before answering from the cache
@@ -73,14 +75,14 @@ class OpcUaServer:
                  run_control: bool = True) -> None:
         self.vm = vm
         self.config = config
+        self.roots = catalog(vm)
+        self.selection = select(self.roots, config)   # first: a bad rule leaves the VM untouched
+        self.variables: dict[str, PublishedVariable] = self.selection.variables
         self.bridge = bridge or VariableBridge(vm)
         self.control = RunControl(vm) if run_control and not vm.realtime else None
         self.base_ns = vm.base_ns
         self.realtime = vm.realtime
         self.start_dt_ns = vm.ctx.start_dt_ns
-        self.roots = catalog(vm)
-        self.selection = select(self.roots, config)
-        self.variables: dict[str, PublishedVariable] = self.selection.variables
         self._initial = self._read_initial_values()
         self._by_nodeid: dict[ua.NodeId, PublishedVariable] = {}
         self._loop: asyncio.AbstractEventLoop | None = None
@@ -251,7 +253,6 @@ class OpcUaServer:
 
     async def _enum_datatypes(self, server: Server) -> dict[str, ua.NodeId]:
         """One Enumeration DataType per ST enum type that a published variable has."""
-        from stvm.semantics import types as t
         found: dict[str, t.EnumType] = {}
         for var in self.variables.values():
             ty = var.info.type
@@ -438,7 +439,6 @@ class OpcUaServer:
         return results
 
     async def _write(self, session: InternalSession, params: ua.WriteParameters) -> list[ua.StatusCode]:
-        from stvm.opcua.datatypes import BadWrite
         items = params.NodesToWrite
         results: list[ua.StatusCode | None] = [None] * len(items)
         batch: dict[str, Any] = {}
@@ -639,7 +639,6 @@ class _UserManager:
         self.loopback = config.endpoint.loopback
         self.trusted: dict[bytes, str] = {}
         for path in config.trusted_clients:
-            from asyncua.crypto import uacrypto
             der = path.read_bytes()
             if der.startswith(b"-----BEGIN"):
                 der = uacrypto.der_from_x509(uacrypto.x509_from_pem(der))
@@ -665,7 +664,6 @@ class _UserManager:
 
 
 def _der(certificate) -> bytes:
-    from asyncua.crypto import uacrypto
     return uacrypto.der_from_x509(certificate)
 
 

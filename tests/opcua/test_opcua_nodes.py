@@ -1,7 +1,5 @@
 """Which variables are published and writable: the [opcua] rules over the variable catalog."""
 
-import asyncio
-
 import pytest
 from asyncua import Client, ua
 from opcua_helpers import Running, run_async
