@@ -272,3 +272,26 @@ def test_client_vanishing_mid_subscription(running):
         except Exception:   # noqa: BLE001 - its connection is gone
             pass
     run_async(body())
+
+
+def test_pause_resume_and_bad_scan_counts(running):
+    async def body():
+        async with Client(running.url) as client:
+            ns = await ns_index(client, running)
+            runtime = node(client, ns, "@Runtime")
+            paused, count = node(client, ns, "@Runtime.Paused"), node(client, ns, "@Runtime.ScanCount")
+            assert await paused.read_value() is True                  # start = "paused"
+            await runtime.call_method(f"{ns}:Resume")
+            await asyncio.sleep(0.3)
+            await runtime.call_method(f"{ns}:Pause")
+            assert await paused.read_value() is True
+            first = await count.read_value()
+            await asyncio.sleep(0.2)
+            assert first > 0 and await count.read_value() == first   # held between two scans
+            assert await scan(client, ns, 2) == first + 2
+            with pytest.raises(uaerrors.BadOutOfRange):
+                await scan(client, ns, 0)
+            with pytest.raises(uaerrors.BadTypeMismatch):
+                await runtime.call_method(f"{ns}:Scan", ua.Variant("ten", ua.VariantType.String))
+            assert await count.read_value() == first + 2
+    run_async(body())
