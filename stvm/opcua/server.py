@@ -95,7 +95,9 @@ class OpcUaServer:
         self._wall_offset_ns = 0
         # monitored items (server loop only)
         self._monitors: dict[int, tuple[str, int]] = {}     # callback handle → (path, every_ns)
-        self._watches: dict[tuple, Any] = {}
+        self._watches: dict[tuple, Any] = {}            # (every_ns, paths) → bridge watch
+        self._group_handles: dict[tuple, dict[str, list[int]]] = {}   # watch key → path → handles
+        self._group_sent: dict[tuple, dict[str, Any]] = {}  # watch key → path → value last notified
         self._heartbeat = None
         self._rebuild_pending = False
         # snapshot hand-over (VM thread writes slots, the loop pops them)
@@ -341,21 +343,39 @@ class OpcUaServer:
         for key in list(self._inbox):
             snapshot = self._inbox.pop(key, None)
             if snapshot is not None:
-                snapshots.append(snapshot)
-        snapshots.sort(key=lambda s: (s.scan, s.version))
-        for snapshot in snapshots:
-            await self._apply(snapshot)
+                snapshots.append((snapshot, key))
+        snapshots.sort(key=lambda pair: (pair[0].scan, pair[0].version))
+        for snapshot, key in snapshots:
+            await self._apply(snapshot, key)
 
-    async def _apply(self, snapshot: Snapshot) -> None:
+    async def _apply(self, snapshot: Snapshot, key=None) -> None:
+        """Put the snapshot's changed values into the nodes. The sample of a subscription watch
+        (`key`) notifies only the monitored items of that sampling interval, each when its value
+        differs from the one that group last sent: a node monitored every scan and every 100 ms
+        notifies each at its own rate. One-shot samples (reads) notify nobody."""
         stamp = self._timestamp(snapshot.now_ns)
+        handles = self._group_handles.get(key) if key is not None else None
+        sent = self._group_sent.setdefault(key, {}) if handles is not None else None
         for path, value in snapshot.values.items():
             var = self.variables.get(path)
-            if var is None or value is None or value == var.last:
+            if var is None or value is None:
                 continue
-            var.last = value
-            await self._set_value(var.value_attr,
-                                  ua.DataValue(ua.Variant(var.uatype.to_ua(value), var.uatype.variant),
-                                               SourceTimestamp=stamp, ServerTimestamp=stamp))
+            dv = None
+            if value != var.last:
+                var.last = value
+                dv = var.value_attr.value = ua.DataValue(
+                    ua.Variant(var.uatype.to_ua(value), var.uatype.variant), SourceTimestamp=stamp,
+                    ServerTimestamp=stamp)
+            if handles is None or sent.get(path, _NOTHING) == value:
+                continue
+            sent[path] = value
+            dv = dv or ua.DataValue(ua.Variant(var.uatype.to_ua(value), var.uatype.variant),
+                                    SourceTimestamp=stamp, ServerTimestamp=stamp)
+            callbacks = var.value_attr.datachange_callbacks
+            for handle in handles.get(path, ()):
+                callback = callbacks.get(handle)
+                if callback is not None:
+                    await _notify(callback, handle, dv)
         await self._set_runtime("ScanCount", ua.Variant(snapshot.scan + 1, ua.VariantType.UInt64), stamp)
         await self._set_runtime("Time", ua.Variant(stamp, ua.VariantType.DateTime), stamp)
         if self.control is not None:
@@ -372,10 +392,7 @@ class OpcUaServer:
     async def _set_value(attr, dv: ua.DataValue) -> None:
         attr.value = dv
         for handle, callback in list(attr.datachange_callbacks.items()):
-            try:
-                await callback(handle, dv)
-            except Exception:   # noqa: BLE001 - one broken subscription must not stop the others
-                _log.exception("data change notification failed")
+            await _notify(callback, handle, dv)
 
     async def _fresh(self, paths: list[str]) -> Snapshot | None:
         """A one-shot snapshot of `paths` put into the nodes; None if no scan ended in time."""
@@ -561,23 +578,23 @@ class OpcUaServer:
             asyncio.get_running_loop().call_later(0.005, self._rebuild_watches)
 
     def _rebuild_watches(self) -> None:
+        """One watch per sampling interval in use, over the paths monitored at that interval."""
         self._rebuild_pending = False
-        fastest: dict[str, int] = {}
-        for path, every in self._monitors.values():
-            fastest[path] = min(fastest.get(path, every), every)
-        groups: dict[int, list[str]] = {}
-        for path, every in fastest.items():
-            groups.setdefault(every, []).append(path)
-        watches = {}
-        for every, paths in groups.items():
-            key = (every, tuple(sorted(paths)))
+        groups: dict[int, dict[str, list[int]]] = {}
+        for handle, (path, every) in self._monitors.items():
+            groups.setdefault(every, {}).setdefault(path, []).append(handle)
+        watches, handles = {}, {}
+        for every, by_path in groups.items():
+            key = (every, tuple(sorted(by_path)))
             watch = self._watches.pop(key, None)
             if watch is None:
                 watch = self.bridge.watch(list(key[1]), every, self._handover_for(key), changes_only=True)
             watches[key] = watch
-        for watch in self._watches.values():
-            watch.close()
-        self._watches = watches
+            handles[key] = by_path
+        for old in self._watches.values():
+            old.close()
+        self._group_sent = {key: sent for key, sent in self._group_sent.items() if key in watches}
+        self._watches, self._group_handles = watches, handles
 
     @property
     def monitored_paths(self) -> set[str]:
@@ -629,6 +646,16 @@ def security_plan(config: OpcUaConfig) -> tuple[list, list[type]]:
     if config.trusted_clients:
         tokens.append(ua.X509IdentityToken)
     return policies, tokens
+
+
+_NOTHING = object()
+
+
+async def _notify(callback, handle: int, dv: ua.DataValue) -> None:
+    try:
+        await callback(handle, dv)
+    except Exception:   # noqa: BLE001 - one broken subscription must not stop the others
+        _log.exception("data change notification failed")
 
 
 class _UserManager:

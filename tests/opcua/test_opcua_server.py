@@ -9,6 +9,7 @@ from asyncua import Client, ua
 from asyncua.ua import uaerrors
 from opcua_helpers import Running, run_async, wire_demo
 
+import stvm
 from stvm.lockstep import start_lockstep
 
 
@@ -295,3 +296,35 @@ def test_pause_resume_and_bad_scan_counts(running):
                 await runtime.call_method(f"{ns}:Scan", ua.Variant("ten", ua.VariantType.String))
             assert await count.read_value() == first + 2
     run_async(body())
+
+
+def test_sampling_interval_slower_than_a_scan(tmp_path):
+    source = tmp_path / "count.st"
+    source.write_text("PROGRAM Main VAR n : DINT; END_VAR n := n + 1; END_PROGRAM\n")
+    run = Running(stvm.load([str(source)]), demo=False, files=[str(source)])
+    try:
+        async def body():
+            async with Client(run.url) as client:
+                ns = await ns_index(client, run)
+                fast, slow = [], []
+
+                class Into:
+                    def __init__(self, sink):
+                        self.sink = sink
+
+                    def datachange_notification(self, monitored, value, data):
+                        self.sink.append(value)
+                every_scan = await client.create_subscription(10, Into(fast))
+                every_10ms = await client.create_subscription(10, Into(slow))
+                counter = node(client, ns, "Main.n")
+                await every_scan.subscribe_data_change(counter, sampling_interval=0)
+                await every_10ms.subscribe_data_change(counter, sampling_interval=10)
+                for _ in range(6):
+                    await scan(client, ns, 5)     # VM time 5 ms per call
+                    await asyncio.sleep(0.05)     # one publishing interval at least
+                return fast, slow
+        fast, slow = run_async(body())
+    finally:
+        run.close()
+    assert fast[-1] == 30 and {5, 10, 15, 20, 25, 30} <= set(fast)   # sampled at the end of every scan
+    assert set(slow) - {0} <= {1, 11, 21} and 21 in slow                # scans 0, 10, 20: every 10 ms of VM time
