@@ -37,7 +37,7 @@ from .builtins import BLOCKING_STATEMENTS, FUNCTIONS, ArgError, ScriptContext, S
 from .faults import NO_FAULTS, FaultPlan
 from .framing import Cperr, Frame, FrameError, encode, encode_cperr
 from .motion import NS_PER_MS, Kinematics, Marker, MotionExecutor, PlannedState, Planner, matrix_to_pose
-from .settings import DEFAULT_SETTINGS, EmulatorSettings
+from .settings import DEFAULT_SETTINGS, AfterExit, EmulatorSettings
 
 _ID_CHARS = frozenset("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789")
 
@@ -413,9 +413,9 @@ class Robot:
         self.variables.clear()
         self.note(f"left Listen node ({path})")
         after = self.settings.after_exit
-        if after == "reenter":
+        if after is AfterExit.REENTER:
             self.enter_at_ns = self.now_ns + self.settings.reenter_delay_ms * NS_PER_MS
-        elif after == "stop":
+        elif after is AfterExit.STOP:
             self._stop_project()
 
     def _stop_project(self) -> None:

@@ -10,8 +10,6 @@ import signal
 import sys
 from pathlib import Path
 
-from stvm.settings import DEFAULT_SETTINGS
-
 EXIT_OK, EXIT_COMPILE, EXIT_USAGE, EXIT_FAULT = 0, 1, 2, 3
 
 
@@ -27,8 +25,9 @@ class _Parser(argparse.ArgumentParser):
 
 
 def _settings(args):
+    from stvm.project import project_settings
     try:
-        return DEFAULT_SETTINGS.with_overrides(getattr(args, "sysmac", None) or [])
+        return project_settings(args.files, getattr(args, "sysmac", None) or [])
     except ValueError as exc:
         raise _UsageError(str(exc)) from exc
 

@@ -109,8 +109,33 @@ def expand_paths(paths: Sequence[str | Path]) -> tuple[list[Path], dict, Path | 
 
 
 def _read_manifest(path: Path) -> dict:
-    with path.open("rb") as fh:
-        return tomllib.load(fh)
+    try:
+        with path.open("rb") as fh:
+            return tomllib.load(fh)
+    except OSError as exc:
+        raise ManifestError(f"{path}: cannot read the project manifest: {exc.strerror or exc}") from exc
+    except tomllib.TOMLDecodeError as exc:
+        raise ManifestError(f"{path}: not valid TOML: {exc}") from exc
+
+
+class ManifestError(ValueError):
+    """A project manifest (`stvm.toml`) that cannot be used; the message names the file."""
+
+
+def project_settings(paths: Sequence[str | Path], overrides: Sequence[str] = ()) -> SysmacSettings:
+    """The Sysmac settings of a run on `paths`: the spec's defaults, then the `[sysmac]` table of
+    the project's `stvm.toml` (when the files belong to one), then `--sysmac NAME=VALUE`
+    overrides; the last one wins. Raises ValueError (SettingError, ManifestError) that names
+    the setting, the file and the allowed values."""
+    _, manifest, root = expand_paths(paths)
+    settings = DEFAULT_SETTINGS
+    table = manifest.get("sysmac")
+    if table is not None:
+        where = f"{Path(root or '.') / MANIFEST}: [sysmac]"
+        if not isinstance(table, dict):
+            raise ManifestError(f"{where} must be a table of NAME = VALUE")
+        settings = settings.with_table(table, where)
+    return settings.with_overrides(list(overrides))
 
 
 def _stdlib(settings: SysmacSettings = DEFAULT_SETTINGS) -> list[tuple[str, str]]:
@@ -170,9 +195,12 @@ def _read_all(paths: Sequence[Path]) -> tuple[list[tuple[str, str]], list[Diagno
     return texts, diags
 
 
-def check(paths: Sequence[str | Path], settings: SysmacSettings = DEFAULT_SETTINGS, generate: bool = False):
+def check(paths: Sequence[str | Path], settings: SysmacSettings | None = None, generate: bool = False):
     """Parse and check: (analysis or None, diagnostics sorted, sources). With `generate`, also
-    lower and compile, so limits that only code generation meets are reported too."""
+    lower and compile, so limits that only code generation meets are reported too. Without
+    `settings`, the project's own (`project_settings`)."""
+    if settings is None:
+        settings = project_settings(paths)
     files, _, _ = expand_paths(paths)
     texts, diags = _read_all(files)
     analysis, diags, sources = _check_texts(texts, diags, settings)
@@ -269,8 +297,11 @@ def _too_deep(file: str) -> Diagnostic:
                             Span(file, 1, 1, 1, 2), "E003")
 
 
-def load(paths: Sequence[str | Path], settings: SysmacSettings = DEFAULT_SETTINGS, use_cache: bool = True) -> Project:
-    """Load a runnable project from ST files (raises LoadError with every diagnostic)."""
+def load(paths: Sequence[str | Path], settings: SysmacSettings | None = None, use_cache: bool = True) -> Project:
+    """Load a runnable project from ST files (raises LoadError with every diagnostic). Without
+    `settings`, the project's own: `stvm.toml` `[sysmac]` over the defaults (`project_settings`)."""
+    if settings is None:
+        settings = project_settings(paths)
     files, manifest, root = expand_paths(paths)
     texts, read_diags = _read_all(files)
     if read_diags:

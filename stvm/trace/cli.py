@@ -48,9 +48,8 @@ def _usage(message: str) -> int:
 
 
 def cmd_trace(args) -> int:
-    from stvm.project import LoadError, load
+    from stvm.project import LoadError, load, project_settings
     from stvm.scenario import ScenarioError
-    from stvm.settings import DEFAULT_SETTINGS
     from stvm.trace.golden import compare, locate_writer, render_report
     from stvm.trace.run import TraceSpec, run_trace
     from stvm.trace.signals import WatchError
@@ -76,7 +75,7 @@ def cmd_trace(args) -> int:
     if args.compare and not Path(args.compare).exists():
         return _usage(f"no such golden trace: {args.compare} (record one with -o {args.compare})")
     try:
-        settings = DEFAULT_SETTINGS.with_overrides(args.sysmac or [])
+        settings = project_settings(args.files, args.sysmac or [])
         if args.scan is not None:
             from stvm.project import parse_duration
             if parse_duration(args.scan) <= 0:

@@ -55,12 +55,13 @@ class _Prepared:
 
     def __init__(self, spec: TraceSpec, project=None) -> None:
         from stvm.lockstep import LOCKSTEP_HOST, LOCKSTEP_PORT, LockstepTransport
-        from stvm.project import load
+        from stvm.project import load, project_settings
         from stvm.scenario import Scenario, ScenarioDriver, load_scenario
-        from stvm.settings import DEFAULT_SETTINGS
         self.spec = spec
-        settings = DEFAULT_SETTINGS.with_overrides(list(spec.settings_overrides)) if spec.settings_overrides else DEFAULT_SETTINGS
-        self.project = project if project is not None else load(list(spec.files), settings, use_cache=spec.use_cache)
+        if project is None:
+            settings = project_settings(list(spec.files), list(spec.settings_overrides))
+            project = load(list(spec.files), settings, use_cache=spec.use_cache)
+        self.project = project
         self.scenario = load_scenario(spec.scenario) if spec.scenario else Scenario()
         scenario = self.scenario
         emu_settings, plan = scenario.emulator_plan()
