@@ -77,8 +77,8 @@ def parse_duration(text: str) -> int:
 
 
 def expand_paths(paths: Sequence[str | Path]) -> tuple[list[Path], dict, Path | None]:
-    """Files to load. A folder means its *.st files; a lone file in a folder with `stvm.toml`
-    means the project that manifest describes (so `stvm run st_src/PnP_Example.st` loads the
+    """Files to load. A folder means the files its `stvm.toml` lists, else its *.st files; a lone
+    file in a folder with `stvm.toml` means the project that manifest describes (so `stvm run st_src/PnP_Example.st` loads the
     whole thesis project)."""
     out: list[Path] = []
     manifest: dict = {}
@@ -86,9 +86,13 @@ def expand_paths(paths: Sequence[str | Path]) -> tuple[list[Path], dict, Path | 
     for raw in paths:
         path = Path(raw)
         if path.is_dir():
-            out += sorted(path.glob("*.st"))
+            listed = None
             if (path / MANIFEST).exists():
                 manifest, root = _read_manifest(path / MANIFEST), path
+                listed = manifest.get("project", {}).get("files")
+            # a folder with a manifest that lists its files is that project (the files may be in
+            # other folders, e.g. a library the project builds on); else every *.st in it
+            out += [path / f for f in listed] if listed else sorted(path.glob("*.st"))
         else:
             out.append(path)
     if len(paths) == 1 and not Path(paths[0]).is_dir():

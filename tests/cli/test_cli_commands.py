@@ -296,3 +296,19 @@ def test_path_through_an_unbound_in_out_is_a_usage_error(args):
     rc, out, err = cli(["run", path, "--no-cache", *args])
     assert "Traceback" not in err
     assert rc in (0, 2)
+
+
+def test_a_folder_whose_manifest_lists_its_files(tmp_path):
+    """`stvm run FOLDER`: a folder with an stvm.toml that lists [project] files runs those files,
+    which may lie in another folder (a library the project builds on); without the list, every *.st
+    of the folder."""
+    lib = tmp_path / "lib"
+    app = tmp_path / "app"
+    lib.mkdir()
+    app.mkdir()
+    (lib / "inc.st").write_text("FUNCTION Inc : INT VAR_INPUT v : INT; END_VAR Inc := v + 1; END_FUNCTION\n")
+    (app / "main.st").write_text("PROGRAM Main\nVAR n : INT; END_VAR\nn := Inc(n);\nEND_PROGRAM\n")
+    (app / "unused.st").write_text("this is not ST and is not listed\n")
+    (app / "stvm.toml").write_text('[project]\nfiles = ["../lib/inc.st", "main.st"]\n')
+    rc, out, err = cli(["run", app, "--cycles", "4", "--no-cache", "--print", "Main.n"])
+    assert (rc, out) == (0, "Main.n = 4\n"), err
