@@ -141,6 +141,10 @@ class VM:
         self.on_scan_end: list[Callable[["VM"], None]] = []
         self._rt_start: int | None = None
         self.jitter_ns = TimingStats()
+        self.held = False           # a front end's run control holds the VM between two scans
+        # called by a loop that holds the VM between two scans (a paused run control, a debugger
+        # stopped after a scan): front ends answer reads and apply writes from there
+        self.on_idle: list[Callable[["VM"], None]] = []
 
     # ---- setup
     def _instance(self, name: str, qualname: str) -> Any:
