@@ -110,7 +110,7 @@ def literal_value(text: str, ty):
             value = float(value)
         except OverflowError:
             raise ValueError(f"{text!r} is out of range for {ty.name}") from None
-    if isinstance(ty, t.RealType):
+    if isinstance(ty, t.RealType) and isinstance(value, (int, float)) and not isinstance(value, bool):
         import math
         limit = 3.4028234663852886e38 if ty.bits == 32 else 1.7976931348623157e308
         if not math.isfinite(value) or abs(value) > limit:

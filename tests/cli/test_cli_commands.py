@@ -94,17 +94,21 @@ def test_set_applies_before_the_first_scan(prog):
         "Main.l = -1.0E+300", "Main.u8 = 255", "Main.m = [[0, 0], [7, 0]]"]
 
 
-@pytest.mark.parametrize("value", ["Green", "Color#Green", "-5", "INT#7", "16#10", "2#11", "FALSE", "0"])
+@pytest.mark.parametrize("value", ["Green", "Color#Green", "-5", "INT#7", "16#10", "2#11", "FALSE", "BOOL#0"])
 def test_set_accepts_iec_literals(prog, value):
-    var = {"Green": "Main.c", "Color#Green": "Main.c", "FALSE": "Main.b", "0": "Main.b"}.get(value, "Main.x")
+    var = {"Green": "Main.c", "Color#Green": "Main.c", "FALSE": "Main.b", "BOOL#0": "Main.b"}.get(value, "Main.x")
     rc, out, err = run(prog, "--cycles", "0", "--set", f"{var}={value}", "--print", var)
     assert rc == 0, err
     expected = {"Green": "Color#Green", "Color#Green": "Color#Green", "-5": "-5", "INT#7": "7", "16#10": "16",
-                "2#11": "3", "FALSE": "FALSE", "0": "FALSE"}[value]
+                "2#11": "3", "FALSE": "FALSE", "BOOL#0": "FALSE"}[value]
     assert out == f"{var} = {expected}\n"
 
 
 @pytest.mark.parametrize("args", [
+    ["--set", "Main.b=1"],                        # a BOOL takes TRUE/FALSE (issue 17)
+    ["--set", "Main.t=5"],                        # a TIME takes T#5ms, not 5 (ns)
+    ["--set", "Main.s='open"],                    # an unterminated string
+    ["--set", "Main.r=1e40"],                     # beyond REAL
     ["--set", "Main.x=70000"],                    # out of range
     ["--set", "Main.x=abc"],                      # not a literal
     ["--set", "Main.x"],                          # no '='
