@@ -1,0 +1,100 @@
+"""A forward dataflow solver over a POU's CFG, with the PLC scan as the outer loop.
+
+A PLC calls a PROGRAM or FB instance once per scan, and its persistent variables carry over, so
+the state at the start of a call is the initial state joined with whatever a previous call
+left at its end. `solve` models exactly that: the entry state is
+`initial ⊔ next_call(exit state)`, iterated to a fixpoint together with the body's own loops.
+Widening is applied at the entry and at loop heads, after a few plain joins, so integer
+ranges settle on program constants instead of creeping one step per iteration.
+
+An analysis supplies the lattice (`join`, `widen`, `leq`) and the transfer functions; a state
+of `None` means "unreachable".
+"""
+
+from __future__ import annotations
+
+import heapq
+from typing import Generic, Protocol, TypeVar
+
+from stvm.lint.cfg import CFG, Edge, Node
+
+S = TypeVar("S")
+
+_PLAIN_JOINS = 3   # joins at a widening point before widening starts
+
+
+class ForwardAnalysis(Protocol[S]):
+    def initial(self) -> S: ...
+    def next_call(self, exit_state: S) -> S: ...
+    def transfer(self, node: Node, state: S) -> S: ...
+    def edge(self, edge: Edge, state: S) -> S | None: ...
+    def join(self, a: S, b: S) -> S: ...
+    def widen(self, old: S, new: S) -> S: ...
+    def leq(self, a: S, b: S) -> bool: ...
+
+
+class Solution(Generic[S]):
+    """`before[node]`: the state on entry to the node (None: the node is never reached)."""
+
+    def __init__(self, cfg: CFG, before: dict[int, S | None]) -> None:
+        self.cfg = cfg
+        self.before = before
+
+    def at(self, node: Node) -> S | None:
+        return self.before.get(node.index)
+
+    def reachable(self, node: Node) -> bool:
+        return self.before.get(node.index) is not None
+
+
+def solve(cfg: CFG, analysis: ForwardAnalysis[S], scan_loop: bool = True) -> Solution[S]:
+    order = cfg.rpo()
+    position = {node.index: i for i, node in enumerate(order)}
+    before: dict[int, S | None] = {node.index: None for node in cfg.nodes}
+    visits: dict[int, int] = {}
+    widen_at = {node.index for node in cfg.nodes if node.loop_head}
+    if scan_loop:
+        widen_at.add(cfg.entry.index)
+    before[cfg.entry.index] = analysis.initial()
+    initial = before[cfg.entry.index]
+    # worklist ordered by reverse post-order: inner nodes settle before their loop heads re-run
+    heap = [position[cfg.entry.index]]
+    queued = {cfg.entry.index}
+
+    def push(index: int) -> None:
+        if index not in queued:
+            queued.add(index)
+            heapq.heappush(heap, position[index])
+
+    def offer(target: Node, state: S) -> None:
+        old = before[target.index]
+        if old is None:
+            before[target.index] = state
+            push(target.index)
+            return
+        if analysis.leq(state, old):
+            return
+        merged = analysis.join(old, state)
+        if target.index in widen_at:
+            count = visits.get(target.index, 0) + 1
+            visits[target.index] = count
+            if count > _PLAIN_JOINS:
+                merged = analysis.widen(old, merged)
+        before[target.index] = merged
+        push(target.index)
+
+    while heap:
+        node = order[heapq.heappop(heap)]
+        index = node.index
+        queued.discard(index)
+        state = before[index]
+        if state is None:
+            continue
+        after = analysis.transfer(node, state)
+        for edge in node.succs:
+            out = analysis.edge(edge, after)
+            if out is not None:
+                offer(edge.dst, out)
+        if node is cfg.exit and scan_loop:
+            offer(cfg.entry, analysis.join(initial, analysis.next_call(after)))
+    return Solution(cfg, before)
