@@ -552,16 +552,23 @@ class RangeAnalysis:
                      "GE": (bound[0], None), "EQ": (bound[0], bound[1]), "NE": (None, None)}[rel]
             lo = current[0] if limit[0] is None else max(current[0], limit[0])
             hi = current[1] if limit[1] is None else min(current[1], limit[1])
+            excluded = None
             if rel == "NE" and is_point(bound):
                 if lo == bound[0]:
                     lo += 1
                 if hi == bound[0]:
                     hi -= 1
+                if lo < bound[0] < hi:
+                    # an interval has no holes: remember the excluded value beside it
+                    # (`x[<>0]`; a write of x drops it with x's other sub-keys)
+                    excluded = excluded_key(key, bound[0])
             if lo > hi:
                 return None
-            if (lo, hi) != current:
+            if (lo, hi) != current or excluded is not None:
                 out = dict(out)
                 out[key] = (lo, hi)
+                if excluded is not None:
+                    out[excluded] = (1, 1)
         return out
 
     def _subject(self, expr: n.Expr) -> tuple[n.Expr, str | None]:
@@ -644,6 +651,11 @@ class RangeAnalysis:
         out = dict(state)
         out[key] = (lo, hi)
         return out
+
+
+def excluded_key(key: str, value: int) -> str:
+    """The state key recording that place `key` is known to differ from `value`."""
+    return f"{key}[<>{value}]"
 
 
 def _kill_prefix(state: State, key: str) -> None:

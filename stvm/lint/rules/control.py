@@ -177,6 +177,7 @@ def _state_variables(ctx: PouContext) -> dict[str, object]:
       VAR_INPUT ok : BOOL; END_VAR
       VAR step : INT; END_VAR
       CASE step OF
+          0:  step := 10;
           10: IF ok THEN
                   step := 70;         (* overwritten below *)
               END_IF;
@@ -189,6 +190,7 @@ def _state_variables(ctx: PouContext) -> dict[str, object]:
       VAR_INPUT ok : BOOL; END_VAR
       VAR step : INT; END_VAR
       CASE step OF
+          0:  step := 10;
           10: IF ok THEN
                   step := 70;
               ELSE

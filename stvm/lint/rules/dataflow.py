@@ -110,16 +110,16 @@ def read_before_write(ctx: PouContext):
       """,
       """
       FUNCTION_BLOCK Rx
-      VAR rcv : SktTCPRcv; sock : _sSOCKET; buf : ARRAY[0..255] OF BYTE;
-          received : UINT; text : STRING[256]; END_VAR
+      VAR_OUTPUT text : STRING[256]; END_VAR
+      VAR rcv : SktTCPRcv; sock : _sSOCKET; buf : ARRAY[0..255] OF BYTE; received : UINT; END_VAR
       rcv(Execute := TRUE, Socket := sock, Size := 256, RcvDat := buf[0], RcvSize => received);
       text := AryToString(buf[0], 256);      (* received is never used *)
       END_FUNCTION_BLOCK
       """,
       """
       FUNCTION_BLOCK Rx
-      VAR rcv : SktTCPRcv; sock : _sSOCKET; buf : ARRAY[0..255] OF BYTE;
-          received : UINT; text : STRING[256]; END_VAR
+      VAR_OUTPUT text : STRING[256]; END_VAR
+      VAR rcv : SktTCPRcv; sock : _sSOCKET; buf : ARRAY[0..255] OF BYTE; received : UINT; END_VAR
       rcv(Execute := TRUE, Socket := sock, Size := 256, RcvDat := buf[0], RcvSize => received);
       text := AryToString(buf[0], received);
       END_FUNCTION_BLOCK
@@ -304,7 +304,7 @@ def _positive_reads(expr: n.Expr, keys: set[str], ctx: PouContext, positive: boo
       is fine (that block detects the edge).
       """,
       """
-      FUNCTION_BLOCK Move
+      FUNCTION_BLOCK MoveAxis
       VAR_INPUT Execute : BOOL; END_VAR
       VAR_OUTPUT Error : BOOL; END_VAR
       VAR_IN_OUT Axis : BOOL; END_VAR
@@ -314,7 +314,7 @@ def _positive_reads(expr: n.Expr, keys: set[str], ctx: PouContext, positive: boo
       END_FUNCTION_BLOCK
       """,
       """
-      FUNCTION_BLOCK Move
+      FUNCTION_BLOCK MoveAxis
       VAR_INPUT Execute : BOOL; END_VAR
       VAR_OUTPUT Error : BOOL; END_VAR
       VAR_IN_OUT Axis : BOOL; END_VAR

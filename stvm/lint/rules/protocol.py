@@ -257,8 +257,8 @@ def _receives(ctx: PouContext) -> dict[str, dict]:
       """,
       """
       FUNCTION_BLOCK Rx
-      VAR rcv : SktTCPRcv; sock : _sSOCKET; buf : ARRAY[0..255] OF BYTE;
-          received : UINT; text : STRING[256]; END_VAR
+      VAR_OUTPUT text : STRING[256]; END_VAR
+      VAR rcv : SktTCPRcv; sock : _sSOCKET; buf : ARRAY[0..255] OF BYTE; received : UINT; END_VAR
       rcv(Execute := TRUE, Socket := sock, Size := 256, RcvDat := buf[0], RcvSize => received);
       IF rcv.Done THEN
           text := AryToString(buf[0], 256);
@@ -267,8 +267,8 @@ def _receives(ctx: PouContext) -> dict[str, dict]:
       """,
       """
       FUNCTION_BLOCK Rx
-      VAR rcv : SktTCPRcv; sock : _sSOCKET; buf : ARRAY[0..255] OF BYTE;
-          received : UINT; text : STRING[256]; END_VAR
+      VAR_OUTPUT text : STRING[256]; END_VAR
+      VAR rcv : SktTCPRcv; sock : _sSOCKET; buf : ARRAY[0..255] OF BYTE; received : UINT; END_VAR
       rcv(Execute := TRUE, Socket := sock, Size := 256, RcvDat := buf[0], RcvSize => received);
       IF rcv.Done THEN
           text := AryToString(buf[0], received);

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from stvm.lint.context import PouContext
 from stvm.lint.facts import NOT_CONST, iter_exprs, node_exprs, place_key, text_of
-from stvm.lint.ranges import fmt, type_range
+from stvm.lint.ranges import excluded_key, fmt, type_range
 from stvm.lint.registry import rule
 from stvm.semantics import types as t
 from stvm.syntax import nodes as n
@@ -109,8 +109,8 @@ def _statements(body):
       FUNCTION_BLOCK Checksum
       VAR_INPUT text : STRING[64]; END_VAR
       VAR_OUTPUT cs : BYTE; END_VAR
-      VAR buf : ARRAY[0..63] OF BYTE; n, i : UINT; END_VAR
-      n := ToAryByte(text, _eBYTE_ORDER#_LOW_HIGH, buf[0]);
+      VAR buf : ARRAY[0..63] OF BYTE; i : UINT; END_VAR
+      ToAryByte(text, _eBYTE_ORDER#_LOW_HIGH, buf[0]);
       cs := 0;
       FOR i := 1 TO LEN(text) DO      (* buf[LEN(text)] is past the text *)
           cs := cs XOR buf[i];
@@ -121,8 +121,8 @@ def _statements(body):
       FUNCTION_BLOCK Checksum
       VAR_INPUT text : STRING[64]; END_VAR
       VAR_OUTPUT cs : BYTE; END_VAR
-      VAR buf : ARRAY[0..63] OF BYTE; n, i : UINT; END_VAR
-      n := ToAryByte(text, _eBYTE_ORDER#_LOW_HIGH, buf[0]);
+      VAR buf : ARRAY[0..63] OF BYTE; i : UINT; END_VAR
+      ToAryByte(text, _eBYTE_ORDER#_LOW_HIGH, buf[0]);
       cs := 0;
       FOR i := 0 TO LEN(text) - 1 DO
           cs := cs XOR buf[i];
@@ -182,10 +182,10 @@ def index_out_of_bounds(ctx: PouContext):
                     reported.add(id(sub))
                     byte = {"text_nul": "the terminating 16#00 ToAryByte adds", "text": "a stale byte",
                             "image": "the string's unused storage"}.get(model, "a byte after the text")
-                    last = f"LEN({fill[3]})" + (f" + {past}" if past else "")
+                    last = (f"{fill[1]} + " if fill[1] else "") + f"LEN({fill[3]})" + (f" + {past}" if past else "")
                     yield ctx.finding(
                         "SA201",
-                        f"{text_of(sub)} reaches index {fill[1]} + {last} when {text_of(loop.variable)} reaches "
+                        f"{text_of(sub)} reaches index {last} when {text_of(loop.variable)} reaches "
                         f"its end: past the LEN({fill[3]}) bytes that ToAryByte copied from element {fill[1]} "
                         f"(line {fill[2].line}); that element is {byte} (toarybyte_string_model={model})",
                         sub.span)
@@ -204,14 +204,16 @@ def index_out_of_bounds(ctx: PouContext):
       """
       FUNCTION_BLOCK Timeout
       VAR_INPUT seconds : UINT; END_VAR
-      VAR t : TON; expired : BOOL; END_VAR
+      VAR_OUTPUT expired : BOOL; END_VAR
+      VAR t : TON; END_VAR
       t(IN := TRUE, PT := NanoSecToTime(seconds * 1000000000), Q => expired);
       END_FUNCTION_BLOCK
       """,
       """
       FUNCTION_BLOCK Timeout
       VAR_INPUT seconds : UINT; END_VAR
-      VAR t : TON; expired : BOOL; END_VAR
+      VAR_OUTPUT expired : BOOL; END_VAR
+      VAR t : TON; END_VAR
       t(IN := TRUE, PT := NanoSecToTime(UINT_TO_LINT(seconds) * 1000000000), Q => expired);
       END_FUNCTION_BLOCK
       """,
@@ -360,6 +362,9 @@ def division_by_zero(ctx: PouContext):
                 rng = ctx.value(sub.right, state)
                 if rng is None or not rng[0] <= 0 <= rng[1]:
                     continue
+                key = place_key(sub.right, ctx.facts)
+                if key is not None and excluded_key(key, 0) in state:
+                    continue   # tested `<> 0` on this path
                 op = "/" if sub.op == "SLASH" else "MOD"
                 yield ctx.finding("SA204", f"divisor {text_of(sub.right)} can be 0 here ({fmt(rng)}): "
                                            f"{op} by zero stops the task", sub.right.span)

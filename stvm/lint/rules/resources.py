@@ -61,15 +61,17 @@ def _steps(states) -> str:
       """,
       """
       FUNCTION_BLOCK Link
-      VAR_INPUT Execute : BOOL; END_VAR
+      VAR_INPUT start, failed, stop : BOOL; END_VAR
       VAR_OUTPUT Error : BOOL; END_VAR
       VAR step : INT; connect : SktTCPConnect; close : SktClose; sock : _sSOCKET;
-          connectExe, closeExe, failed : BOOL; END_VAR
+          connectExe, closeExe : BOOL; END_VAR
       CASE step OF
-          0: IF Execute THEN connectExe := TRUE; step := 10; END_IF;
+          0: IF start THEN connectExe := TRUE; step := 10; END_IF;
           10: IF connect.Done THEN connectExe := FALSE; step := 20; END_IF;
           20: IF failed THEN
                   Error := TRUE;          (* the socket stays open *)
+              ELSIF stop THEN
+                  step := 30;
               END_IF;
           30: closeExe := TRUE;
       END_CASE;
@@ -79,16 +81,18 @@ def _steps(states) -> str:
       """,
       """
       FUNCTION_BLOCK Link
-      VAR_INPUT Execute : BOOL; END_VAR
+      VAR_INPUT start, failed, stop : BOOL; END_VAR
       VAR_OUTPUT Error : BOOL; END_VAR
       VAR step : INT; connect : SktTCPConnect; close : SktClose; sock : _sSOCKET;
-          connectExe, closeExe, failed : BOOL; END_VAR
+          connectExe, closeExe : BOOL; END_VAR
       CASE step OF
-          0: IF Execute THEN connectExe := TRUE; step := 10; END_IF;
+          0: IF start THEN connectExe := TRUE; step := 10; END_IF;
           10: IF connect.Done THEN connectExe := FALSE; step := 20; END_IF;
           20: IF failed THEN
                   Error := TRUE;
                   step := 30;             (* close, then report *)
+              ELSIF stop THEN
+                  step := 30;
               END_IF;
           30: closeExe := TRUE;
       END_CASE;
@@ -135,7 +139,8 @@ def socket_leak(ctx: PouContext):
       FUNCTION_BLOCK Cmd
       VAR_OUTPUT Error : BOOL; END_VAR
       VAR_IN_OUT Link : BOOL; END_VAR      (* TRUE: a reply is pending *)
-      VAR step : INT; sent, lost, replied : BOOL; END_VAR
+      VAR_INPUT sent, lost, replied : BOOL; END_VAR
+      VAR step : INT; END_VAR
       CASE step OF
           0: IF sent THEN Link := TRUE; step := 10; END_IF;
           10: IF replied THEN Link := FALSE; step := 0;
@@ -149,7 +154,8 @@ def socket_leak(ctx: PouContext):
       FUNCTION_BLOCK Cmd
       VAR_OUTPUT Error : BOOL; END_VAR
       VAR_IN_OUT Link : BOOL; END_VAR
-      VAR step : INT; sent, lost, replied : BOOL; END_VAR
+      VAR_INPUT sent, lost, replied : BOOL; END_VAR
+      VAR step : INT; END_VAR
       CASE step OF
           0: IF sent THEN Link := TRUE; step := 10; END_IF;
           10: IF replied THEN Link := FALSE; step := 0;
