@@ -79,7 +79,6 @@ def render_sarif(findings: list[Finding], diagnostics: list[Diagnostic], base: P
     index = {r.code: i for i, r in enumerate(rules)}
     driver = {
         "name": "stvm-lint",
-        "informationUri": "https://github.com/stvm/stvm/blob/main/docs/lint.md",
         "version": version or __version__,
         "rules": [
             {
@@ -89,7 +88,6 @@ def render_sarif(findings: list[Finding], diagnostics: list[Diagnostic], base: P
                 "fullDescription": {"text": " ".join(r.rationale.split())},
                 "help": {"text": " ".join(r.rationale.split()),
                          "markdown": f"{r.rationale}\n\n```iecst\n{r.example}\n```\n\nInstead:\n\n```iecst\n{r.fixed}\n```"},
-                "helpUri": f"https://github.com/stvm/stvm/blob/main/{DOCS_PAGE}#{rule_anchor(r.code)}",
                 "defaultConfiguration": {"level": "warning"},
                 "properties": {"tags": [r.family.lower()]},
             }
