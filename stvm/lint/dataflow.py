@@ -20,7 +20,8 @@ from stvm.lint.cfg import CFG, Edge, Node
 
 S = TypeVar("S")
 
-_PLAIN_JOINS = 3   # joins at a widening point before widening starts
+_PLAIN_JOINS = 3   # joins at a loop head before widening starts
+_PLAIN_JOINS_ENTRY = 1   # at the call entry (the scan loop): each pass re-runs the whole body
 
 
 class ForwardAnalysis(Protocol[S]):
@@ -78,7 +79,7 @@ def solve(cfg: CFG, analysis: ForwardAnalysis[S], scan_loop: bool = True) -> Sol
         if target.index in widen_at:
             count = visits.get(target.index, 0) + 1
             visits[target.index] = count
-            if count > _PLAIN_JOINS:
+            if count > (_PLAIN_JOINS_ENTRY if target is cfg.entry else _PLAIN_JOINS):
                 merged = analysis.widen(old, merged)
         before[target.index] = merged
         push(target.index)

@@ -26,6 +26,7 @@ class FactsView:
     def __init__(self, analysis) -> None:
         self._facts = analysis.facts
         self.model = analysis.model
+        self.place_keys: dict[int, str | None] = {}   # memo of place_key, per expression
 
     def type_of(self, expr: n.Expr) -> t.Type | None:
         return self._facts.types.get(id(expr))
@@ -60,20 +61,34 @@ class FactsView:
         return None
 
 
-def _children(node) -> Iterator:
-    for f in fields(node):
-        if f.name == "span" or f.name == "end_span":
-            continue
-        value = getattr(node, f.name)
-        yield from _flatten(value)
+_FIELDS: dict[type, tuple[str, ...]] = {}
 
 
-def _flatten(value) -> Iterator:
-    if isinstance(value, n.Node):
-        yield value
-    elif isinstance(value, tuple):
-        for item in value:
-            yield from _flatten(item)
+def _field_names(cls: type) -> tuple[str, ...]:
+    names = _FIELDS.get(cls)
+    if names is None:
+        names = tuple(f.name for f in fields(cls) if f.name not in ("span", "end_span"))
+        _FIELDS[cls] = names
+    return names
+
+
+def _children(node) -> list:
+    out: list = []
+    for name in _field_names(type(node)):
+        value = getattr(node, name)
+        if isinstance(value, n.Node):
+            out.append(value)
+        elif isinstance(value, tuple) and value:
+            _flatten_into(value, out)
+    return out
+
+
+def _flatten_into(value: tuple, out: list) -> None:
+    for item in value:
+        if isinstance(item, n.Node):
+            out.append(item)
+        elif isinstance(item, tuple):
+            _flatten_into(item, out)
 
 
 def iter_exprs(node, into_bodies: bool = False) -> Iterator[n.Expr]:
@@ -84,11 +99,12 @@ def iter_exprs(node, into_bodies: bool = False) -> Iterator[n.Expr]:
         item = stack.pop()
         if isinstance(item, n.Expr):
             yield item
-        if isinstance(item, n.Statement) and item is not node and not into_bodies:
+        elif isinstance(item, n.Statement) and item is not node and not into_bodies:
             continue
         if is_dataclass(item):
-            kids = list(_children(item))
-            stack.extend(reversed(kids))
+            kids = _children(item)
+            kids.reverse()
+            stack.extend(kids)
 
 
 def node_exprs(stmt: n.Statement | None, kind: str, expr: n.Expr | None) -> list[n.Expr]:
@@ -109,6 +125,26 @@ def node_exprs(stmt: n.Statement | None, kind: str, expr: n.Expr | None) -> list
     return []
 
 
+def node_subexprs(node) -> list[n.Expr]:
+    """Every expression a CFG node evaluates (pre-order), computed once per node."""
+    cached = getattr(node, "_subexprs", None)
+    if cached is None:
+        cached = [sub for expr in node_exprs(node.stmt, node.kind, node.expr) for sub in iter_exprs(expr)]
+        node._subexprs = cached
+    return cached
+
+
+def node_calls(node) -> list[n.Call]:
+    """The calls a CFG node makes, innermost first, computed once per node."""
+    cached = getattr(node, "_calls", None)
+    if cached is None:
+        cached = []
+        for expr in node_exprs(node.stmt, node.kind, node.expr):
+            cached += calls_in(expr)
+        node._calls = cached
+    return cached
+
+
 def calls_in(expr: n.Expr) -> list[n.Call]:
     """Calls inside an expression, innermost first (the order they run)."""
     out = [e for e in iter_exprs(expr) if isinstance(e, n.Call)]
@@ -119,6 +155,15 @@ def calls_in(expr: n.Expr) -> list[n.Call]:
 def place_key(expr: n.Expr, facts: FactsView) -> str | None:
     """A canonical name for the storage an expression denotes ('x', 'cbt.connected',
     'buf[0]'), or None when it is not a fixed place (`a[i]`, a call result, a bit)."""
+    memo = facts.place_keys
+    key = id(expr)
+    if key in memo:
+        return memo[key]
+    value = memo[key] = _place_key(expr, facts)
+    return value
+
+
+def _place_key(expr: n.Expr, facts: FactsView) -> str | None:
     if isinstance(expr, n.Name):
         var = facts.variable_of(expr)
         return var.key if var is not None else None

@@ -28,7 +28,7 @@ from dataclasses import dataclass, field
 from stvm.lint.access import node_accesses
 from stvm.lint.context import PouContext
 from stvm.lint.dataflow import solve
-from stvm.lint.facts import iter_exprs, node_exprs, place_key
+from stvm.lint.facts import node_calls, place_key
 from stvm.lint.ranges import is_point
 from stvm.semantics import types as t
 from stvm.semantics.model import EXTERNAL, GLOBAL, IN_OUT, LOCAL, OUTPUT
@@ -211,13 +211,12 @@ class _Typestate:
         self.calls: dict[int, set[str]] = {}
         for node in ctx.cfg.nodes:
             keys = set()
-            for expr in node_exprs(node.stmt, node.kind, node.expr):
-                for call in (e for e in iter_exprs(expr) if isinstance(e, n.Call)):
-                    info = ctx.facts.call(call)
-                    if info is not None and info.is_fb and info.instance is not None:
-                        key = place_key(info.instance, ctx.facts)
-                        if key is not None:
-                            keys.add(key)
+            for call in node_calls(node):
+                info = ctx.facts.call(call)
+                if info is not None and info.is_fb and info.instance is not None:
+                    key = place_key(info.instance, ctx.facts)
+                    if key is not None:
+                        keys.add(key)
             if keys:
                 self.calls[node.index] = keys
 

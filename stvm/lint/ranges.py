@@ -29,8 +29,9 @@ from bisect import bisect_left, bisect_right
 
 from stvm.lint.cfg import CFG, Edge, Node
 from stvm.lint.dataflow import Solution, solve
-from stvm.lint.facts import (EXTERNAL, GLOBAL, IN_OUT, INPUT, LOCAL, NOT_CONST, OUTPUT, TEMP, FactsView,
-                             calls_in, iter_exprs, node_exprs, place_key, root_expr)
+from stvm.lint.facts import (EXTERNAL, GLOBAL, IN_OUT, LOCAL, NOT_CONST, OUTPUT, TEMP, FactsView,
+                             node_calls, node_subexprs, place_key,
+                             root_expr)
 from stvm.semantics import types as t
 from stvm.syntax import nodes as n
 
@@ -343,6 +344,7 @@ class RangeAnalysis:
         self.fresh = {key for key, var in pou_info.variables.items() if var.section in fresh_sections}
         self.thresholds = _thresholds(cfg, facts)
         self.key_types: dict[str, t.Type] = {}
+        self.parents: set[str] = set()   # keys that have (or had) sub-keys in some state
         self._initial_values = self._initial_values_of(self.persistent | self.fresh)
         self._fresh_values = {k: v for k, v in self._initial_values.items() if k in self.fresh}
 
@@ -376,6 +378,8 @@ class RangeAnalysis:
         return out
 
     def leq(self, a: State, b: State) -> bool:
+        if a is b:
+            return True
         for key, vb in b.items():
             va = a.get(key)
             if va is None or va[0] < vb[0] or va[1] > vb[1]:
@@ -402,13 +406,13 @@ class RangeAnalysis:
     # ---- transfer
     def transfer(self, node: Node, state: State) -> State:
         kind = node.kind
-        if kind in ("entry", "exit", "join"):
+        calls = node_calls(node)
+        if kind in ("entry", "exit", "join") or (kind in ("branch", "case", "for_test") and not calls):
             return state
         stmt = node.stmt
         state = dict(state)
-        for expr in node_exprs(stmt, kind, node.expr):
-            for call in calls_in(expr):
-                self.call_effects(call, state)
+        for call in calls:
+            self.call_effects(call, state)
         if kind == "assign":
             self.write(stmt.target, self.ev.eval(stmt.value, state), state)  # type: ignore[union-attr]
         elif kind == "for_init":
@@ -436,7 +440,7 @@ class RangeAnalysis:
         if info.is_fb and info.instance is not None:
             key = place_key(info.instance, self.facts)
             if key is not None:
-                _kill_prefix(state, key)
+                self.kill_children(state, key)
         if not info.pou.native:
             # a user POU may write globals (VAR_EXTERNAL) and, through them, our in-outs
             for key in list(state):
@@ -447,13 +451,13 @@ class RangeAnalysis:
     def kill_place(self, target: n.Expr, state: State) -> None:
         key = place_key(target, self.facts)
         if key is not None:
-            _kill_prefix(state, key)
+            self.kill_children(state, key)
             state.pop(key, None)
             return
         base = root_expr(target)
         key = place_key(base, self.facts)
         if key is not None:
-            _kill_prefix(state, key)
+            self.kill_children(state, key)
             state.pop(key, None)
 
     def write(self, target: n.Expr, value: Interval | None, state: State) -> None:
@@ -461,7 +465,7 @@ class RangeAnalysis:
         if key is None:
             self.kill_place(target, state)
             return
-        _kill_prefix(state, key)
+        self.kill_children(state, key)
         ty = self.facts.type_of(target)
         if value is not None:
             value = self.ev.fit(value, ty)
@@ -471,7 +475,18 @@ class RangeAnalysis:
         if value is None:
             state.pop(key, None)
         else:
-            state[key] = value
+            self.store(state, key, value)
+
+    def store(self, state: State, key: str, value: Interval) -> None:
+        state[key] = value
+        if "." in key or "[" in key:
+            for i, ch in enumerate(key):
+                if ch in ".[":
+                    self.parents.add(key[:i])
+
+    def kill_children(self, state: State, key: str) -> None:
+        if key in self.parents:
+            _kill_prefix(state, key)
 
     # ---- edges
     def edge(self, edge: Edge, state: State) -> State | None:
@@ -516,13 +531,13 @@ class RangeAnalysis:
             if key is None:
                 return state
             out = dict(state)
-            out[key] = (want, want)
+            self.store(out, key, (want, want))
             if truth and isinstance(cond, n.Member) and cond.name.lower() in _EXCLUSIVE_OUTPUTS:
                 base = place_key(cond.base, self.facts)
                 if base is not None and isinstance(self.facts.type_of(cond.base), t.FBType):
                     for sibling in _EXCLUSIVE_OUTPUTS:
                         if sibling != cond.name.lower() and self._has_pin(cond.base, sibling):
-                            out[f"{base}.{sibling}"] = (0, 0)
+                            self.store(out, f"{base}.{sibling}", (0, 0))
             return out
         return state
 
@@ -566,9 +581,9 @@ class RangeAnalysis:
                 return None
             if (lo, hi) != current or excluded is not None:
                 out = dict(out)
-                out[key] = (lo, hi)
+                self.store(out, key, (lo, hi))
                 if excluded is not None:
-                    out[excluded] = (1, 1)
+                    self.store(out, excluded, (1, 1))
         return out
 
     def _subject(self, expr: n.Expr) -> tuple[n.Expr, str | None]:
@@ -603,7 +618,7 @@ class RangeAnalysis:
             if key is None or new == current:
                 return state
             out = dict(state)
-            out[key] = new
+            self.store(out, key, new)
             return out
         # ELSE: remove labels covering an end of the interval
         lo, hi = current
@@ -620,7 +635,7 @@ class RangeAnalysis:
         if key is None or (lo, hi) == current:
             return state
         out = dict(state)
-        out[key] = (lo, hi)
+        self.store(out, key, (lo, hi))
         return out
 
     def refine_for(self, loop: n.For, inside: bool, state: State) -> State | None:
@@ -649,7 +664,7 @@ class RangeAnalysis:
             # the loop variable cannot pass the end without wrapping: exit only at the type's end
             return None
         out = dict(state)
-        out[key] = (lo, hi)
+        self.store(out, key, (lo, hi))
         return out
 
 
@@ -708,11 +723,10 @@ def declared_subranges(pou: n.POU, alias_ranges: dict[str, Interval]) -> dict[st
 def _thresholds(cfg: CFG, facts: FactsView) -> list[int]:
     values = {0, 1, -1}
     for node in cfg.nodes:
-        for expr in node_exprs(node.stmt, node.kind, node.expr):
-            for sub in iter_exprs(expr):
-                value = facts.const(sub)
-                if isinstance(value, int) and not isinstance(value, bool):
-                    values.update((value - 1, value, value + 1))
+        for sub in node_subexprs(node):
+            value = facts.const(sub)
+            if isinstance(value, int) and not isinstance(value, bool):
+                values.update((value - 1, value, value + 1))
     for ty in t.ELEMENTARY.values():
         if isinstance(ty, t.IntType):
             values.update((ty.lo, ty.hi))

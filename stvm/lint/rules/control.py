@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from stvm.lint.access import node_accesses
 from stvm.lint.context import PouContext
-from stvm.lint.facts import iter_exprs, node_exprs, place_key, text_of
+from stvm.lint.facts import node_subexprs, iter_exprs, place_key, text_of
 from stvm.lint.ranges import fmt
 from stvm.lint.registry import rule
 from stvm.semantics import types as t
@@ -350,10 +350,9 @@ def for_variable_written(ctx: PouContext):
       """)
 def real_equality(ctx: PouContext):
     for node, _state in ctx.reachable_nodes():
-        for expr in node_exprs(node.stmt, node.kind, node.expr):
-            for sub in iter_exprs(expr):
-                if isinstance(sub, n.Binary) and sub.op in ("EQ", "NE") \
-                        and isinstance(ctx.facts.operand_type(sub), t.RealType):
-                    op = "=" if sub.op == "EQ" else "<>"
-                    yield ctx.finding("SA405", f"{text_of(sub)} compares {ctx.facts.operand_type(sub).name} values "
-                                               f"with {op}: use a tolerance, ABS(a - b) < eps", sub.span)
+        for sub in node_subexprs(node):
+            if isinstance(sub, n.Binary) and sub.op in ("EQ", "NE") \
+                    and isinstance(ctx.facts.operand_type(sub), t.RealType):
+                op = "=" if sub.op == "EQ" else "<>"
+                yield ctx.finding("SA405", f"{text_of(sub)} compares {ctx.facts.operand_type(sub).name} values "
+                                           f"with {op}: use a tolerance, ABS(a - b) < eps", sub.span)

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from stvm.lint.context import PouContext
-from stvm.lint.facts import iter_exprs, node_exprs, place_key, root_expr, text_of
+from stvm.lint.facts import node_calls, node_subexprs, iter_exprs, node_exprs, place_key, root_expr, text_of
 from stvm.lint.ranges import MAX_STRING_BYTES, fmt, is_point
 from stvm.lint.registry import rule
 from stvm.semantics import types as t
@@ -19,11 +19,10 @@ _POSITION_WORDS = ("pos", "coord", "pose", "point", "target", "offset", "joint")
 def _calls(ctx: PouContext):
     """(node, state, call, info) for every function/FB call in reachable statements."""
     for node, state in ctx.reachable_nodes():
-        for expr in node_exprs(node.stmt, node.kind, node.expr):
-            for call in (e for e in iter_exprs(expr) if isinstance(e, n.Call)):
-                info = ctx.facts.call(call)
-                if info is not None:
-                    yield node, state, call, info
+        for call in node_calls(node):
+            info = ctx.facts.call(call)
+            if info is not None:
+                yield node, state, call, info
 
 
 def _parents(root: n.Expr) -> dict[int, n.Expr]:
@@ -65,15 +64,14 @@ def _length_checked(ctx: PouContext) -> set[str]:
     """String places whose LEN the POU tests (a padding step follows)."""
     out = set()
     for node in ctx.cfg.nodes:
-        for expr in node_exprs(node.stmt, node.kind, node.expr):
-            for sub in iter_exprs(expr):
-                if isinstance(sub, n.Binary) and sub.op in ("EQ", "NE", "LT", "LE", "GT", "GE"):
-                    for side in (sub.left, sub.right):
-                        info = ctx.facts.call(side) if isinstance(side, n.Call) else None
-                        if info is not None and info.pou.name.upper() == "LEN" and info.inputs:
-                            key = place_key(info.inputs[0][1], ctx.facts)
-                            if key is not None:
-                                out.add(key)
+        for sub in node_subexprs(node):
+            if isinstance(sub, n.Binary) and sub.op in ("EQ", "NE", "LT", "LE", "GT", "GE"):
+                for side in (sub.left, sub.right):
+                    info = ctx.facts.call(side) if isinstance(side, n.Call) else None
+                    if info is not None and info.pou.name.upper() == "LEN" and info.inputs:
+                        key = place_key(info.inputs[0][1], ctx.facts)
+                        if key is not None:
+                            out.add(key)
     return out
 
 
@@ -220,30 +218,29 @@ def _receives(ctx: PouContext) -> dict[str, dict]:
     'line', 'instance'} from the calls of SktTCPRcv/SktUDPRcv instances."""
     out: dict[str, dict] = {}
     for node in ctx.cfg.nodes:
-        for expr in node_exprs(node.stmt, node.kind, node.expr):
-            for call in (e for e in iter_exprs(expr) if isinstance(e, n.Call)):
-                info = ctx.facts.call(call)
-                if info is None or not info.is_fb:
-                    continue
-                pins = _RECEIVE_FBS.get(info.pou.name.upper())
-                if pins is None:
-                    continue
-                args = {var.key: value for var, value in info.inputs}
-                data = args.get(pins[0])
-                if data is None:
-                    continue
-                array = place_key(root_expr(data) if isinstance(data, n.Index) else data, ctx.facts)
-                if isinstance(data, n.Index):
-                    array = place_key(data.base, ctx.facts)
-                if array is None:
-                    continue
-                size = args.get(pins[1])
-                received = next((target for var, target, _ in info.outputs if var.key == pins[2]), None)
-                out[array] = {"size": place_key(size, ctx.facts) if size is not None else None,
-                              "size_text": text_of(size) if size is not None else None,
-                              "rcvsize": place_key(received, ctx.facts) if received is not None else None,
-                              "rcvsize_text": text_of(received) if received is not None else None,
-                              "line": call.span.line, "instance": text_of(info.instance)}
+        for call in node_calls(node):
+            info = ctx.facts.call(call)
+            if info is None or not info.is_fb:
+                continue
+            pins = _RECEIVE_FBS.get(info.pou.name.upper())
+            if pins is None:
+                continue
+            args = {var.key: value for var, value in info.inputs}
+            data = args.get(pins[0])
+            if data is None:
+                continue
+            array = place_key(root_expr(data) if isinstance(data, n.Index) else data, ctx.facts)
+            if isinstance(data, n.Index):
+                array = place_key(data.base, ctx.facts)
+            if array is None:
+                continue
+            size = args.get(pins[1])
+            received = next((target for var, target, _ in info.outputs if var.key == pins[2]), None)
+            out[array] = {"size": place_key(size, ctx.facts) if size is not None else None,
+                          "size_text": text_of(size) if size is not None else None,
+                          "rcvsize": place_key(received, ctx.facts) if received is not None else None,
+                          "rcvsize_text": text_of(received) if received is not None else None,
+                          "line": call.span.line, "instance": text_of(info.instance)}
     return out
 
 

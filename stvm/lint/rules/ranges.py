@@ -7,7 +7,7 @@ from declarations, subranges, assignments, loop bounds and the conditions on the
 from __future__ import annotations
 
 from stvm.lint.context import PouContext
-from stvm.lint.facts import NOT_CONST, iter_exprs, node_exprs, place_key, text_of
+from stvm.lint.facts import node_calls, node_subexprs, NOT_CONST, iter_exprs, node_exprs, place_key, text_of
 from stvm.lint.ranges import excluded_key, fmt, type_range
 from stvm.lint.registry import rule
 from stvm.semantics import types as t
@@ -46,21 +46,20 @@ def _buffer_fills(ctx: PouContext) -> dict[str, tuple[str, int, n.Span, str]]:
     first element k, call span, string text)."""
     out = {}
     for node in ctx.cfg.nodes:
-        for expr in node_exprs(node.stmt, node.kind, node.expr):
-            for call in (e for e in iter_exprs(expr) if isinstance(e, n.Call)):
-                info = ctx.facts.call(call)
-                if info is None or info.is_fb or info.pou.name.upper() != "TOARYBYTE":
-                    continue
-                args = {var.key: value for var, value in info.inputs}
-                source, target = args.get("in"), args.get("aryout")
-                if source is None or target is None or not isinstance(ctx.facts.type_of(source), t.StringType):
-                    continue
-                if not isinstance(target, n.Index) or len(target.indices) != 1:
-                    continue
-                first = ctx.facts.const(target.indices[0])
-                array_key, string_key = place_key(target.base, ctx.facts), place_key(source, ctx.facts)
-                if isinstance(first, int) and array_key is not None and string_key is not None:
-                    out.setdefault(array_key, (string_key, first, call.span, text_of(source)))
+        for call in node_calls(node):
+            info = ctx.facts.call(call)
+            if info is None or info.is_fb or info.pou.name.upper() != "TOARYBYTE":
+                continue
+            args = {var.key: value for var, value in info.inputs}
+            source, target = args.get("in"), args.get("aryout")
+            if source is None or target is None or not isinstance(ctx.facts.type_of(source), t.StringType):
+                continue
+            if not isinstance(target, n.Index) or len(target.indices) != 1:
+                continue
+            first = ctx.facts.const(target.indices[0])
+            array_key, string_key = place_key(target.base, ctx.facts), place_key(source, ctx.facts)
+            if isinstance(first, int) and array_key is not None and string_key is not None:
+                out.setdefault(array_key, (string_key, first, call.span, text_of(source)))
     return out
 
 
@@ -135,22 +134,21 @@ def index_out_of_bounds(ctx: PouContext):
     reported: set[int] = set()
     # declared bounds, from the interval analysis
     for node, state in ctx.reachable_nodes():
-        for expr in node_exprs(node.stmt, node.kind, node.expr):
-            for sub in iter_exprs(expr):
-                if not isinstance(sub, n.Index) or ctx.facts.is_array_from_element(sub):
+        for sub in node_subexprs(node):
+            if not isinstance(sub, n.Index) or ctx.facts.is_array_from_element(sub):
+                continue
+            base = ctx.type_of(sub.base)
+            if not isinstance(base, t.ArrayType) or not base.dims:
+                continue
+            for ix, (lo, hi) in zip(sub.indices, base.dims):
+                rng = ctx.value(ix, state)
+                if rng is None or (lo <= rng[0] and rng[1] <= hi):
                     continue
-                base = ctx.type_of(sub.base)
-                if not isinstance(base, t.ArrayType) or not base.dims:
+                if rng == type_range(ctx.type_of(ix)) or id(sub) in reported:
                     continue
-                for ix, (lo, hi) in zip(sub.indices, base.dims):
-                    rng = ctx.value(ix, state)
-                    if rng is None or (lo <= rng[0] and rng[1] <= hi):
-                        continue
-                    if rng == type_range(ctx.type_of(ix)) or id(sub) in reported:
-                        continue
-                    reported.add(id(sub))
-                    yield ctx.finding("SA201", f"index {text_of(ix)} can be {fmt(rng)} here, outside "
-                                               f"{text_of(sub.base)}'s bounds {lo}..{hi}", ix.span)
+                reported.add(id(sub))
+                yield ctx.finding("SA201", f"index {text_of(ix)} can be {fmt(rng)} here, outside "
+                                           f"{text_of(sub.base)}'s bounds {lo}..{hi}", ix.span)
     # the data a string copy left in a buffer
     fills = _buffer_fills(ctx)
     if not fills:
@@ -167,28 +165,27 @@ def index_out_of_bounds(ctx: PouContext):
         for node in body_nodes:
             if ctx.state_at(node) is None:
                 continue
-            for expr in node_exprs(node.stmt, node.kind, node.expr):
-                for sub in iter_exprs(expr):
-                    if not isinstance(sub, n.Index) or len(sub.indices) != 1 or id(sub) in reported:
-                        continue
-                    array_key = place_key(sub.base, ctx.facts)
-                    fill = fills.get(array_key or "")
-                    idx = _linear(sub.indices[0], ctx)
-                    if fill is None or idx is None or idx[0] != var_key or fill[0] != string_key:
-                        continue
-                    past = end[1] + idx[1] - fill[1]     # how far the last index is past the text's last byte + 1
-                    if past < 0:
-                        continue
-                    reported.add(id(sub))
-                    byte = {"text_nul": "the terminating 16#00 ToAryByte adds", "text": "a stale byte",
-                            "image": "the string's unused storage"}.get(model, "a byte after the text")
-                    last = (f"{fill[1]} + " if fill[1] else "") + f"LEN({fill[3]})" + (f" + {past}" if past else "")
-                    yield ctx.finding(
-                        "SA201",
-                        f"{text_of(sub)} reaches index {last} when {text_of(loop.variable)} reaches "
-                        f"its end: past the LEN({fill[3]}) bytes that ToAryByte copied from element {fill[1]} "
-                        f"(line {fill[2].line}); that element is {byte} (toarybyte_string_model={model})",
-                        sub.span)
+            for sub in node_subexprs(node):
+                if not isinstance(sub, n.Index) or len(sub.indices) != 1 or id(sub) in reported:
+                    continue
+                array_key = place_key(sub.base, ctx.facts)
+                fill = fills.get(array_key or "")
+                idx = _linear(sub.indices[0], ctx)
+                if fill is None or idx is None or idx[0] != var_key or fill[0] != string_key:
+                    continue
+                past = end[1] + idx[1] - fill[1]     # how far the last index is past the text's last byte + 1
+                if past < 0:
+                    continue
+                reported.add(id(sub))
+                byte = {"text_nul": "the terminating 16#00 ToAryByte adds", "text": "a stale byte",
+                        "image": "the string's unused storage"}.get(model, "a byte after the text")
+                last = (f"{fill[1]} + " if fill[1] else "") + f"LEN({fill[3]})" + (f" + {past}" if past else "")
+                yield ctx.finding(
+                    "SA201",
+                    f"{text_of(sub)} reaches index {last} when {text_of(loop.variable)} reaches "
+                    f"its end: past the LEN({fill[3]}) bytes that ToAryByte copied from element {fill[1]} "
+                    f"(line {fill[2].line}); that element is {byte} (toarybyte_string_model={model})",
+                    sub.span)
 
 
 @rule("SA202", "integer-overflow",
@@ -222,39 +219,38 @@ def index_out_of_bounds(ctx: PouContext):
 def integer_overflow(ctx: PouContext):
     ev = ctx.ranges.ev
     for node, state in ctx.reachable_nodes():
-        for expr in node_exprs(node.stmt, node.kind, node.expr):
-            for sub in iter_exprs(expr):
-                if not isinstance(sub, n.Binary) or sub.op not in ("PLUS", "MINUS", "STAR"):
-                    continue
-                ty = ctx.type_of(sub)
-                if not isinstance(ty, t.IntType):
-                    continue
-                if ctx.facts.const(sub) is not NOT_CONST:
-                    continue   # folded by the checker: typed to fit
-                exact = ev.math(sub, state)
-                if exact is None or (ty.lo <= exact[0] and exact[1] <= ty.hi):
-                    continue
-                left_const = ctx.facts.const(sub.left) is not NOT_CONST
-                right_const = ctx.facts.const(sub.right) is not NOT_CONST
-                if left_const and right_const:
-                    yield ctx.finding("SA202", f"{text_of(sub)} = {fmt(exact)} overflows {ty.name} "
-                                               f"({ty.lo}..{ty.hi}): it wraps", sub.span)
-                    continue
-                if sub.op != "STAR" or not (left_const or right_const):
-                    continue
-                variable, constant = (sub.right, sub.left) if left_const else (sub.left, sub.right)
-                rng = ctx.value(variable, state)
-                factor = ctx.facts.const(constant)
-                if rng is None or not isinstance(factor, int) or factor == 0:
-                    continue
-                limit = ty.hi if factor > 0 else ty.lo
-                first = -(-(limit + (1 if factor > 0 else -1)) // factor) if factor > 0 else None
-                source = ctx.type_of(variable)
-                from_where = f"{source.name}" if rng == type_range(source) else "its range here"
-                detail = f" from {text_of(variable)} = {first} on" if first is not None and rng[0] < first <= rng[1] else ""
-                yield ctx.finding("SA202", f"{text_of(sub)} is computed in {ty.name}: with {text_of(variable)} "
-                                           f"{fmt(rng)} ({from_where}) it reaches {fmt(exact)}, beyond "
-                                           f"{ty.name}'s {ty.lo}..{ty.hi}, and wraps{detail}", sub.span)
+        for sub in node_subexprs(node):
+            if not isinstance(sub, n.Binary) or sub.op not in ("PLUS", "MINUS", "STAR"):
+                continue
+            ty = ctx.type_of(sub)
+            if not isinstance(ty, t.IntType):
+                continue
+            if ctx.facts.const(sub) is not NOT_CONST:
+                continue   # folded by the checker: typed to fit
+            exact = ev.math(sub, state)
+            if exact is None or (ty.lo <= exact[0] and exact[1] <= ty.hi):
+                continue
+            left_const = ctx.facts.const(sub.left) is not NOT_CONST
+            right_const = ctx.facts.const(sub.right) is not NOT_CONST
+            if left_const and right_const:
+                yield ctx.finding("SA202", f"{text_of(sub)} = {fmt(exact)} overflows {ty.name} "
+                                           f"({ty.lo}..{ty.hi}): it wraps", sub.span)
+                continue
+            if sub.op != "STAR" or not (left_const or right_const):
+                continue
+            variable, constant = (sub.right, sub.left) if left_const else (sub.left, sub.right)
+            rng = ctx.value(variable, state)
+            factor = ctx.facts.const(constant)
+            if rng is None or not isinstance(factor, int) or factor == 0:
+                continue
+            limit = ty.hi if factor > 0 else ty.lo
+            first = -(-(limit + (1 if factor > 0 else -1)) // factor) if factor > 0 else None
+            source = ctx.type_of(variable)
+            from_where = f"{source.name}" if rng == type_range(source) else "its range here"
+            detail = f" from {text_of(variable)} = {first} on" if first is not None and rng[0] < first <= rng[1] else ""
+            yield ctx.finding("SA202", f"{text_of(sub)} is computed in {ty.name}: with {text_of(variable)} "
+                                       f"{fmt(rng)} ({from_where}) it reaches {fmt(exact)}, beyond "
+                                       f"{ty.name}'s {ty.lo}..{ty.hi}, and wraps{detail}", sub.span)
 
 
 def _implicit_conversions(ctx: PouContext, node):
@@ -311,21 +307,20 @@ def narrowing_conversion(ctx: PouContext):
             yield ctx.finding("SA203", f"{text_of(value)} ({source.name}, {fmt(rng)}) is converted to "
                                        f"{target.name} ({target.lo}..{target.hi}) {what}: values outside "
                                        f"that range change", value.span)
-        for expr in node_exprs(node.stmt, node.kind, node.expr):
-            for call in (e for e in iter_exprs(expr) if isinstance(e, n.Call)):
-                info = ctx.facts.call(call)
-                if info is None or info.is_fb or "_TO_" not in info.pou.name.upper() or not info.inputs:
-                    continue
-                result = info.pou.return_type
-                arg = info.inputs[0][1]
-                source = ctx.type_of(arg)
-                if not isinstance(result, t.IntType) or not isinstance(source, t.IntType):
-                    continue
-                rng = ctx.value(arg, state)
-                if rng is None or rng == type_range(source) or (result.lo <= rng[0] and rng[1] <= result.hi):
-                    continue
-                yield ctx.finding("SA203", f"{info.pou.name}({text_of(arg)}): the argument can be {fmt(rng)} "
-                                           f"here, outside {result.name} ({result.lo}..{result.hi})", call.span)
+        for call in node_calls(node):
+            info = ctx.facts.call(call)
+            if info is None or info.is_fb or "_TO_" not in info.pou.name.upper() or not info.inputs:
+                continue
+            result = info.pou.return_type
+            arg = info.inputs[0][1]
+            source = ctx.type_of(arg)
+            if not isinstance(result, t.IntType) or not isinstance(source, t.IntType):
+                continue
+            rng = ctx.value(arg, state)
+            if rng is None or rng == type_range(source) or (result.lo <= rng[0] and rng[1] <= result.hi):
+                continue
+            yield ctx.finding("SA203", f"{info.pou.name}({text_of(arg)}): the argument can be {fmt(rng)} "
+                                       f"here, outside {result.name} ({result.lo}..{result.hi})", call.span)
 
 
 @rule("SA204", "division-by-zero",
@@ -353,18 +348,17 @@ def narrowing_conversion(ctx: PouContext):
       """)
 def division_by_zero(ctx: PouContext):
     for node, state in ctx.reachable_nodes():
-        for expr in node_exprs(node.stmt, node.kind, node.expr):
-            for sub in iter_exprs(expr):
-                if not isinstance(sub, n.Binary) or sub.op not in ("SLASH", "MOD"):
-                    continue
-                if not isinstance(ctx.type_of(sub), t.IntType):
-                    continue
-                rng = ctx.value(sub.right, state)
-                if rng is None or not rng[0] <= 0 <= rng[1]:
-                    continue
-                key = place_key(sub.right, ctx.facts)
-                if key is not None and excluded_key(key, 0) in state:
-                    continue   # tested `<> 0` on this path
-                op = "/" if sub.op == "SLASH" else "MOD"
-                yield ctx.finding("SA204", f"divisor {text_of(sub.right)} can be 0 here ({fmt(rng)}): "
-                                           f"{op} by zero stops the task", sub.right.span)
+        for sub in node_subexprs(node):
+            if not isinstance(sub, n.Binary) or sub.op not in ("SLASH", "MOD"):
+                continue
+            if not isinstance(ctx.type_of(sub), t.IntType):
+                continue
+            rng = ctx.value(sub.right, state)
+            if rng is None or not rng[0] <= 0 <= rng[1]:
+                continue
+            key = place_key(sub.right, ctx.facts)
+            if key is not None and excluded_key(key, 0) in state:
+                continue   # tested `<> 0` on this path
+            op = "/" if sub.op == "SLASH" else "MOD"
+            yield ctx.finding("SA204", f"divisor {text_of(sub.right)} can be 0 here ({fmt(rng)}): "
+                                       f"{op} by zero stops the task", sub.right.span)

@@ -3,23 +3,21 @@
 from __future__ import annotations
 
 from stvm.lint.context import PouContext
-from stvm.lint.facts import iter_exprs, node_exprs, place_key, text_of
+from stvm.lint.facts import node_calls, place_key, text_of
 from stvm.lint.machines import Resource, _positive_members, leaks, nonlocal_flags, step_machines
 from stvm.lint.registry import rule
-from stvm.syntax import nodes as n
 
 
 def _fb_calls(ctx: PouContext, fb_name: str):
     """(instance key, instance text, Execute place key or None, call) of calls of FB type fb_name."""
     for node in ctx.cfg.nodes:
-        for expr in node_exprs(node.stmt, node.kind, node.expr):
-            for call in (e for e in iter_exprs(expr) if isinstance(e, n.Call)):
-                info = ctx.facts.call(call)
-                if info is None or not info.is_fb or info.pou.name.upper() != fb_name or info.instance is None:
-                    continue
-                execute = next((value for var, value in info.inputs if var.key == "execute"), None)
-                yield (place_key(info.instance, ctx.facts), text_of(info.instance),
-                       place_key(execute, ctx.facts) if execute is not None else None, call)
+        for call in node_calls(node):
+            info = ctx.facts.call(call)
+            if info is None or not info.is_fb or info.pou.name.upper() != fb_name or info.instance is None:
+                continue
+            execute = next((value for var, value in info.inputs if var.key == "execute"), None)
+            yield (place_key(info.instance, ctx.facts), text_of(info.instance),
+                   place_key(execute, ctx.facts) if execute is not None else None, call)
 
 
 def _assigns_true(ctx: PouContext, key: str | None):
