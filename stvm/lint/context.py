@@ -133,7 +133,7 @@ class _SetAnalysis:
     def join(self, a, b):
         return a & b if self.must else a | b
 
-    def widen(self, old, new):
+    def widen(self, old, new, final=False):
         return new
 
     def leq(self, a, b):

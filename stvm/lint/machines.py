@@ -297,7 +297,7 @@ class _Typestate:
     def join(self, a, b):
         return a | b
 
-    def widen(self, old, new):
+    def widen(self, old, new, final=False):
         return new
 
     def leq(self, a, b):

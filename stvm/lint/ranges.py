@@ -345,6 +345,7 @@ class RangeAnalysis:
         self.thresholds = _thresholds(cfg, facts)
         self.key_types: dict[str, t.Type] = {}
         self.parents: set[str] = set()   # keys that have (or had) sub-keys in some state
+        self.limits: dict[str, Interval] = {}  # key → its declared range, for the final widening
         self._initial_values = self._initial_values_of(self.persistent | self.fresh)
         self._fresh_values = {k: v for k, v in self._initial_values.items() if k in self.fresh}
 
@@ -356,6 +357,9 @@ class RangeAnalysis:
             value = _initial(var, self.settings)
             if value is not None:
                 out[key] = value
+                limits = self.ev.default(key, var.type)
+                if limits is not None:
+                    self.limits[key] = limits
         return out
 
     def initial(self) -> State:
@@ -386,7 +390,7 @@ class RangeAnalysis:
                 return False
         return True
 
-    def widen(self, old: State, new: State) -> State:
+    def widen(self, old: State, new: State, final: bool = False) -> State:
         out = {}
         th = self.thresholds
         for key, vn in new.items():
@@ -394,6 +398,16 @@ class RangeAnalysis:
             if vo is None:
                 continue
             lo, hi = vn
+            limits = self.limits.get(key)
+            if final and limits is not None:
+                if lo < vo[0]:
+                    lo = limits[0]
+                if hi > vo[1]:
+                    hi = limits[1]
+                out[key] = (lo, hi)
+                continue
+            if final:
+                continue   # no known limits: drop the key (its declared range)
             if lo < vo[0]:
                 i = bisect_right(th, lo) - 1
                 lo = th[i] if i >= 0 else -(1 << 64)
@@ -470,6 +484,8 @@ class RangeAnalysis:
         if value is not None:
             value = self.ev.fit(value, ty)
             declared = self.ev.default(key, ty)
+            if declared is not None:
+                self.limits[key] = declared
             if value is not None and declared is not None and not isinstance(ty, t.StringType):
                 value = meet(value, declared) or declared
         if value is None:
