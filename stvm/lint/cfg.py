@@ -14,7 +14,8 @@ Node kinds:
 | branch     | an IF/ELSIF/WHILE/UNTIL condition (2 edges)       | stmt, expr (the condition)  |
 | case       | a CASE selector (one edge per element + else)     | stmt (n.Case), expr         |
 | for_init   | `var := start` of a FOR                           | stmt (n.For)                |
-| for_test   | the FOR loop head: `var <= end` (or `>=`)         | stmt (n.For)                |
+| for_test   | a FOR test `var <= end` (or `>=`): the first one, | stmt (n.For)                |
+|            | then the loop head after each step                |                             |
 | for_step   | `var := var + step`                               | stmt (n.For)                |
 | join       | where branches meet (no effect)                   |                             |
 
@@ -150,16 +151,23 @@ class _Builder:
                 else_tails = self.block(s.else_body, else_tails)
             return out + else_tails
         if isinstance(s, n.For):
+            # two tests: the first (straight from the init: a loop whose start is within its end
+            # runs its body at least once) and the loop head (after each step)
             init = self.new("for_init", s)
             self.attach(tails, init)
+            first = self.new("for_test", s)
+            self.link(init, first)
             head = self.new("for_test", s)
             head.loop_head = True
-            self.link(init, head)
             step = self.new("for_step", s)
             after = self.new("join", s)
+            body = self.new("join", s)
+            self.link(first, body, ("for_in", s))
+            self.link(first, after, ("for_out", s))
+            self.link(head, body, ("for_in", s))
             self.link(head, after, ("for_out", s))
             self.loops.append((after, step))
-            body_tails = self.block(s.body, [(head, ("for_in", s))])
+            body_tails = self.block(s.body, [(body, None)])
             self.loops.pop()
             self.attach(body_tails, step)
             self.link(step, head)

@@ -14,8 +14,9 @@ What a call of the POU starts from (`next_call`):
 * VAR_TEMP, and every variable of a FUNCTION, start at their initial value on each call;
 * inputs, in-outs and globals can be anything of their type (the caller, other programs and
   the HMI write them);
-* Choice: variables of a PROGRAM are treated like globals: stvm's `--set`, scenarios, the HMI
-  and the debugger write them between scans, as an NJ's HMI does with published variables.
+* Choice: variables of a PROGRAM are internal and persistent like an FB's: on an NJ only global
+  variables are published to HMIs and OPC UA; stvm's `--set`, scenarios and the debugger can
+  still write them, which lint does not model.
 
 Conditions refine the state on each branch (`x < 10`, `NOT flag`, `LEN(s) > 0`, CASE labels),
 so a branch whose refined state is empty is unreachable: that is the per-path reachability the
@@ -339,7 +340,8 @@ class RangeAnalysis:
         self.ev = Evaluator(facts, settings, self.declared)
         kind = pou_info.kind
         self.persistent = {key for key, var in pou_info.variables.items()
-                           if kind == "FUNCTION_BLOCK" and var.section in (LOCAL, OUTPUT) and not var.constant}
+                           if kind in ("FUNCTION_BLOCK", "PROGRAM") and var.section in (LOCAL, OUTPUT)
+                           and not var.constant}
         fresh_sections = (LOCAL, OUTPUT, TEMP) if kind == "FUNCTION" else (TEMP,)
         self.fresh = {key for key, var in pou_info.variables.items() if var.section in fresh_sections}
         self.thresholds = _thresholds(cfg, facts)

@@ -225,8 +225,11 @@ END_FUNCTION_BLOCK""", [6]),
     ("SA402", "state set in another scan is reachable",
      fb("VAR_INPUT a : BOOL; END_VAR VAR_OUTPUT y : INT; END_VAR VAR step : INT; END_VAR",
         "CASE step OF\n0: IF a THEN step := 10; END_IF;\n10: y := 1; step := 0;\nEND_CASE;"), []),
-    ("SA402", "program variables may be set from outside",
-     "PROGRAM Main\nVAR x : INT; y : BOOL; END_VAR\nIF x > 5 THEN y := TRUE; END_IF;\nEND_PROGRAM\n", []),
+    ("SA402", "program variables are internal: never written, always their initial value",
+     "PROGRAM Main\nVAR x : INT; y : BOOL; END_VAR\nIF x > 5 THEN y := TRUE; END_IF;\nEND_PROGRAM\n", [3]),
+    ("SA402", "globals can be written by others",
+     "VAR_GLOBAL g : INT; END_VAR\nPROGRAM Main\nVAR_EXTERNAL g : INT; END_VAR VAR y : BOOL; END_VAR\n"
+     "IF g > 5 THEN y := TRUE; END_IF;\nEND_PROGRAM\n", []),
     # ---- SA403 state-overwritten
     ("SA403", "unconditional overwrite", fb("VAR step : INT; END_VAR VAR_INPUT a : BOOL; END_VAR",
                                             "CASE step OF\n0: step := 5; step := 10;\n5, 10: IF a THEN step := 0; END_IF;\nEND_CASE;"), [4]),

@@ -332,7 +332,7 @@ def for_variable_written(ctx: PouContext):
       Binary floating point rarely gives exactly the value written in decimal: 0.1 + 0.2 is not
       0.3 in REAL, and a position computed by interpolation is never exactly the target. An
       equality test then fails (or `<>` succeeds) where the author expected the opposite. Compare
-      with a tolerance: `ABS(a - b) < 0.001`.
+      with a tolerance: `ABS(a - b) < 0.001`. `x <> x` (the NaN test) is not reported.
       """,
       """
       FUNCTION_BLOCK AtTarget

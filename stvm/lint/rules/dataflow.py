@@ -227,19 +227,25 @@ def output_unassigned(ctx: PouContext):
       handshakes misbehave. Calls in exclusive branches are fine.
       """,
       """
-      PROGRAM Main
-      VAR t : TON; start, stop : BOOL; END_VAR
+      FUNCTION_BLOCK Delay
+      VAR_INPUT start, stop : BOOL; END_VAR
+      VAR_OUTPUT q : BOOL; END_VAR
+      VAR t : TON; END_VAR
       t(IN := start, PT := T#1s);
       IF stop THEN
           t(IN := FALSE);         (* second call in the same scan *)
       END_IF;
-      END_PROGRAM
+      q := t.Q;
+      END_FUNCTION_BLOCK
       """,
       """
-      PROGRAM Main
-      VAR t : TON; start, stop : BOOL; END_VAR
+      FUNCTION_BLOCK Delay
+      VAR_INPUT start, stop : BOOL; END_VAR
+      VAR_OUTPUT q : BOOL; END_VAR
+      VAR t : TON; END_VAR
       t(IN := start AND NOT stop, PT := T#1s);
-      END_PROGRAM
+      q := t.Q;
+      END_FUNCTION_BLOCK
       """)
 def fb_called_twice(ctx: PouContext):
     facts = ctx.facts
