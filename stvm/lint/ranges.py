@@ -14,9 +14,9 @@ What a call of the POU starts from (`next_call`):
 * VAR_TEMP, and every variable of a FUNCTION, start at their initial value on each call;
 * inputs, in-outs and globals can be anything of their type (the caller, other programs and
   the HMI write them);
-* Choice: variables of a PROGRAM are internal and persistent like an FB's: on an NJ only global
-  variables are published to HMIs and OPC UA; stvm's `--set`, scenarios and the debugger can
-  still write them, which lint does not model.
+* Choice: variables of a PROGRAM that the program assigns are internal and persistent like an
+  FB's (on an NJ only global variables are published to HMIs and OPC UA); one it never assigns
+  is an input set from outside (stvm's `--set`, a scenario, the debugger) and can be anything.
 
 Conditions refine the state on each branch (`x < 10`, `NOT flag`, `LEN(s) > 0`, CASE labels),
 so a branch whose refined state is empty is unreachable: that is the per-path reachability the
@@ -342,6 +342,9 @@ class RangeAnalysis:
         self.persistent = {key for key, var in pou_info.variables.items()
                            if kind in ("FUNCTION_BLOCK", "PROGRAM") and var.section in (LOCAL, OUTPUT)
                            and not var.constant}
+        if kind == "PROGRAM":
+            # a program variable the program never assigns is its input from outside
+            self.persistent &= _assigned_roots(cfg, facts)
         fresh_sections = (LOCAL, OUTPUT, TEMP) if kind == "FUNCTION" else (TEMP,)
         self.fresh = {key for key, var in pou_info.variables.items() if var.section in fresh_sections}
         self.thresholds = _thresholds(cfg, facts)
@@ -736,6 +739,13 @@ def declared_subranges(pou: n.POU, alias_ranges: dict[str, Interval]) -> dict[st
                 for name, _ in decl.names:
                     out[name.lower()] = rng
     return out
+
+
+def _assigned_roots(cfg: CFG, facts: FactsView) -> set[str]:
+    """Variables some statement of the body writes (assignment, output binding, in-out, FOR)."""
+    from stvm.lint.access import node_accesses
+    return {access.var.key for node in cfg.nodes for access in node_accesses(node, facts)
+            if access.kind != "read"}
 
 
 def _thresholds(cfg: CFG, facts: FactsView) -> list[int]:

@@ -332,7 +332,7 @@ def for_variable_written(ctx: PouContext):
       Binary floating point rarely gives exactly the value written in decimal: 0.1 + 0.2 is not
       0.3 in REAL, and a position computed by interpolation is never exactly the target. An
       equality test then fails (or `<>` succeeds) where the author expected the opposite. Compare
-      with a tolerance: `ABS(a - b) < 0.001`. `x <> x` (the NaN test) is not reported.
+      with a tolerance: `ABS(a - b) < 0.001`. `x <> x` (the NaN test) is not reported. `x <> x` (the NaN test) is not reported.
       """,
       """
       FUNCTION_BLOCK AtTarget
@@ -352,7 +352,7 @@ def real_equality(ctx: PouContext):
     for node, _state in ctx.reachable_nodes():
         for sub in node_subexprs(node):
             if isinstance(sub, n.Binary) and sub.op in ("EQ", "NE") \
-                    and isinstance(ctx.facts.operand_type(sub), t.RealType):
+                    and isinstance(ctx.facts.operand_type(sub), t.RealType) and sub.left != sub.right:
                 op = "=" if sub.op == "EQ" else "<>"
                 yield ctx.finding("SA405", f"{text_of(sub)} compares {ctx.facts.operand_type(sub).name} values "
                                            f"with {op}: use a tolerance, ABS(a - b) < eps", sub.span)

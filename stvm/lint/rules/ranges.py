@@ -194,9 +194,11 @@ def index_out_of_bounds(ctx: PouContext):
       Integer arithmetic wraps at the width the operation computes in (sysmac.md 2: the larger
       operand type; an untyped literal takes the other operand's type if it fits, else DINT).
       `Seconds * 1000000000` with a UINT `Seconds` is computed in DINT and wraps from 3 s on: the
-      result is a wrong, possibly negative, time. The rule reports products whose range, from the
-      variable's declared type or its known range, leaves the type, and constant expressions
-      that overflow.
+      result is a wrong, possibly negative, time. The rule reports constant expressions that
+      overflow, and products of a variable by a constant that leave the type: from the
+      variable's known range; from its declared range when the product is computed in a wider
+      type than the variable's (the UINT × DINT case) or the factor is at least 100. `x * 2` of
+      an INT with no known range is not reported: it overflows only near the INT limits.
       """,
       """
       FUNCTION_BLOCK Timeout
@@ -243,9 +245,18 @@ def integer_overflow(ctx: PouContext):
             factor = ctx.facts.const(constant)
             if rng is None or not isinstance(factor, int) or factor == 0:
                 continue
+            source = ctx.type_of(variable)
+            derived = rng != type_range(source)
+            widened = isinstance(source, t.IntType) and source.bits < ty.bits
+            # Choice: a product computed in the variable's own type overflows only near its
+            # limits (`x * 2`); that is reported when the range is known, or when the factor
+            # is large (>= 100: from 1 % of the range on). A product computed in a wider type
+            # than the variable's (UINT * DINT literal) is reported from the declared range:
+            # the author meant the wider type to hold it.
+            if not (derived or widened or abs(factor) >= 100):
+                continue
             limit = ty.hi if factor > 0 else ty.lo
             first = -(-(limit + (1 if factor > 0 else -1)) // factor) if factor > 0 else None
-            source = ctx.type_of(variable)
             from_where = f"{source.name}" if rng == type_range(source) else "its range here"
             detail = f" from {text_of(variable)} = {first} on" if first is not None and rng[0] < first <= rng[1] else ""
             yield ctx.finding("SA202", f"{text_of(sub)} is computed in {ty.name}: with {text_of(variable)} "
