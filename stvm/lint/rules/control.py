@@ -249,8 +249,12 @@ def state_overwritten(ctx: PouContext):
         if key in live_out:
             continue
         later = _next_write(ctx, node, key, feasible)
-        where = f" by {text_of(later.stmt.target)} := {text_of(later.stmt.value)} (line {later.stmt.span.line})" \
-            if later is not None else ""
+        if later is not None and later.kind == "for_init":
+            where = f" by FOR {text_of(later.stmt.variable)} := {text_of(later.stmt.start)} (line {later.stmt.span.line})"
+        elif later is not None:
+            where = f" by {text_of(later.stmt.target)} := {text_of(later.stmt.value)} (line {later.stmt.span.line})"
+        else:
+            where = ""
         yield ctx.finding("SA403", f"{text_of(node.stmt.target)} := {text_of(node.stmt.value)} is overwritten"
                                    f"{where} before anything reads it: the later write wins", node.stmt.span)
 
@@ -264,8 +268,8 @@ def _next_write(ctx: PouContext, start, key: str, feasible):
             if node.index in seen:
                 continue
             seen.add(node.index)
-            if node.kind == "assign" and any(a.kind == "write" and a.var.key == key
-                                             for a in node_accesses(node, ctx.facts)):
+            if node.kind in ("assign", "for_init") and any(a.kind == "write" and a.var.key == key
+                                                           for a in node_accesses(node, ctx.facts)):
                 return node
             nxt += [e.dst for e in node.succs if id(e) in feasible]
         frontier = nxt
