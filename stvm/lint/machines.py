@@ -132,9 +132,16 @@ def _initial_state_value(var, ctx: PouContext) -> int | None:
     return 0
 
 
+def identifier_words(name: str) -> list[str]:
+    """`ToError_Sts` → ['to', 'error', 'sts']; `xDone` → ['x', 'done']; `bERR` → ['b', 'err']."""
+    import re
+    return [w.lower() for w in re.findall(r"[A-Z]+(?![a-z])|[A-Z]?[a-z]+|\d+", name)]
+
+
 def _is_exit_name(name: str) -> bool:
-    low = name.lower()
-    return "err" in low or "done" in low
+    """An error or done flag by its name: a word of it is Error/Err or Done (PLCopen outputs and the
+    usual `ToError_Sts`, `bErr`, `xDone`); `Abandoned` or `Errand` are not."""
+    return any(w in ("error", "err", "done") for w in identifier_words(name))
 
 
 def exit_nodes(ctx: PouContext, machine: Machine, others: list[Machine] = ()) -> dict[int, n.Span]:

@@ -259,12 +259,15 @@ class Evaluator:
             return self.fit((0, a[1] + b[1]), ty)
         if name == "ARYTOSTRING" and len(ordered) >= 2:
             count = self.eval(ordered[1], state) or (0, MAX_STRING_BYTES)
-            return (0, max(0, min(count[1], MAX_STRING_BYTES)))
+            return (0, max(0, min(count[1], MAX_STRING_BYTES, self.elements_from(ordered[0]))))
         if name == "REALTOFORMATSTRING":
             return self.format_length(named, state)
         if name.endswith("_TO_STRING"):
             source = name[: -len("_TO_STRING")]
             if source in _DECIMAL_WIDTH:
+                value = self.eval(ordered[0], state) if ordered else None
+                if value is not None:
+                    return (_decimal_digits(value, shortest=True), _decimal_digits(value))
                 return (1, _DECIMAL_WIDTH[source])
             if source in _HEX_WIDTH:
                 width = _HEX_WIDTH[source]
@@ -304,6 +307,18 @@ class Evaluator:
             if value is not None and isinstance(source, (t.IntType, t.BoolType, t.EnumType)):
                 return self.fit(value, ty)
         return type_range(ty)
+
+    def elements_from(self, expr: n.Expr) -> int:
+        """How many array elements an array argument covers (`buf[k]`: from k to the end)."""
+        if isinstance(expr, n.Index) and len(expr.indices) == 1:
+            base = self.facts.type_of(expr.base)
+            first = self.facts.const(expr.indices[0])
+            if isinstance(base, t.ArrayType) and base.dims and len(base.dims) == 1 and isinstance(first, int):
+                return max(0, base.dims[0][1] - first + 1)
+        ty = self.facts.type_of(expr)
+        if isinstance(ty, t.ArrayType) and ty.dims:
+            return ty.length
+        return MAX_STRING_BYTES
 
     def string_length(self, expr: n.Expr, state: State) -> Interval | None:
         ty = self.facts.type_of(expr)
@@ -687,6 +702,17 @@ class RangeAnalysis:
         out = dict(state)
         self.store(out, key, (lo, hi))
         return out
+
+
+def _decimal_digits(iv: Interval, shortest: bool = False) -> int:
+    """Length of the decimal text of the longest (or shortest) value of an interval."""
+    def width(v: int) -> int:
+        return len(str(v))
+    if shortest:
+        if iv[0] <= 0 <= iv[1]:
+            return 1
+        return min(width(iv[0]), width(iv[1]))
+    return max(width(iv[0]), width(iv[1]))
 
 
 def excluded_key(key: str, value: int) -> str:

@@ -224,31 +224,35 @@ def output_unassigned(ctx: PouContext):
       between calls, an edge detector compares with its previous call, a PLCopen block starts on
       the rising edge of Execute between calls. Calling the same instance twice per scan (or in a
       loop) makes the second call see the first call's result as "previous": timers, edges and
-      handshakes misbehave. Calls in exclusive branches are fine.
+      handshakes misbehave. Calls in exclusive branches are fine, and so is a reset call
+      (`fb(Execute := FALSE)`, `IN`/`CLK` FALSE) followed by a new start: the PLCopen way to
+      restart a block within one scan.
       """,
       """
       FUNCTION_BLOCK Delay
-      VAR_INPUT start, stop : BOOL; END_VAR
+      VAR_INPUT start, fast : BOOL; END_VAR
       VAR_OUTPUT q : BOOL; END_VAR
       VAR t : TON; END_VAR
       t(IN := start, PT := T#1s);
-      IF stop THEN
-          t(IN := FALSE);         (* second call in the same scan *)
+      IF fast THEN
+          t(IN := start, PT := T#100ms);   (* second call: the timer advances twice *)
       END_IF;
       q := t.Q;
       END_FUNCTION_BLOCK
       """,
       """
       FUNCTION_BLOCK Delay
-      VAR_INPUT start, stop : BOOL; END_VAR
+      VAR_INPUT start, fast : BOOL; END_VAR
       VAR_OUTPUT q : BOOL; END_VAR
       VAR t : TON; END_VAR
-      t(IN := start AND NOT stop, PT := T#1s);
+      t(IN := start, PT := SEL(fast, T#1s, T#100ms));
       q := t.Q;
       END_FUNCTION_BLOCK
       """)
 def fb_called_twice(ctx: PouContext):
     facts = ctx.facts
+
+    resets: set[int] = set()
 
     def instance_key(node):
         if node.kind != "call":
@@ -257,24 +261,34 @@ def fb_called_twice(ctx: PouContext):
         info = facts.call(call) if isinstance(call, n.Call) else None
         if info is None or not info.is_fb or info.instance is None:
             return None
+        for var, value in info.inputs:
+            if var.key in _START_PINS and facts.const(value) is False:
+                resets.add(node.index)    # `fb(Execute := FALSE)`: the handshake's reset call
         return place_key(info.instance, facts)
 
     keys = {node.index: instance_key(node) for node in ctx.cfg.nodes}
 
     def transfer(node, state):
         key = keys[node.index]
-        return state | {key} if key is not None else state
+        if key is None:
+            return state
+        # after a reset call the next call starts a new request: that is the PLCopen way to
+        # restart an Execute-type block within one scan
+        return state - {key} if node.index in resets else state | {key}
 
     solution = solve_sets(ctx, frozenset(), transfer, must=False)
     for node in ctx.cfg.nodes:
         key = keys[node.index]
         state = solution.at(node)
-        if key is None or state is None or ctx.state_at(node) is None:
+        if key is None or state is None or ctx.state_at(node) is None or node.index in resets:
             continue
         if key in state:
             yield ctx.finding("SA104", f"'{text_of(node.stmt.call.callee)}' may already have been called in "
                                        f"this scan (the second call sees the first one's result as its "
                                        f"previous call)", node.stmt.span)
+
+
+_START_PINS = ("execute", "in", "clk", "enable")
 
 
 def _execute_inputs(ctx: PouContext) -> set[str]:
