@@ -25,25 +25,21 @@ otherwise                                       ``ID,OK`` when the script has ru
 
 from __future__ import annotations
 
-import math
-import struct
 from collections import OrderedDict, deque
-from dataclasses import dataclass, field
 from enum import Enum
 from functools import lru_cache
-from typing import Any, Callable, NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 
 from . import script as sc
+from .builtins import BLOCKING_STATEMENTS, FUNCTIONS, ArgError, ScriptContext, ScriptJob, format_value
 from .faults import NO_FAULTS, FaultPlan
 from .framing import Cperr, Frame, FrameError, encode, encode_cperr
-from .motion import (NS_PER_MS, Kinematics, Marker, MotionExecutor, PlanError, PlannedState, Planner,
-                     matrix_to_pose, pose_to_matrix)
+from .motion import NS_PER_MS, Kinematics, Marker, MotionExecutor, PlannedState, Planner, matrix_to_pose
 from .settings import DEFAULT_SETTINGS, EmulatorSettings
 
 _ID_CHARS = frozenset("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789")
-MAX_TAG = 15  # §7 QueueTag: tag 1-15
 
 
 @lru_cache(maxsize=2048)
@@ -120,41 +116,6 @@ Action = Send | Close
 _new_tuple = tuple.__new__  # builds a named tuple without its Python-level __new__
 
 
-class ArgError(Exception):
-    """A function call with invalid argument values: the function fails (spec §7)."""
-
-
-@dataclass
-class Wait:
-    kind: str  # "tag" / "delay" / "waittag" / "drain"
-    tag: int = 0
-    until_ns: int | None = None
-
-
-@dataclass
-class ScriptJob:
-    conn: int
-    script_id: str
-    parsed: sc.ParsedScript
-    pc: int = 0
-    wait: Wait | None = None
-    forced_error: bool = False
-    exiting: bool = False
-    deferred: list[tuple[int, bytes]] = field(default_factory=list)  # notify_before_ok=False
-
-
-@dataclass
-class _Ctx:
-    """Evaluation context: the real session or a dry-run copy of it."""
-
-    dry: bool
-    conn: int
-    variables: dict[str, list[Any]]  # name -> [type, is_array, value]
-    plan: PlannedState
-    line: int = 0
-    errors: list[int] = field(default_factory=list)
-
-
 class Robot:
     """A TM robot running a project whose flow sits in a Listen node."""
 
@@ -215,7 +176,7 @@ class Robot:
         self._run_until(now_ns)
         self.connections.append(conn)
         if self.settings.entry_message_on_connect and self.state == NodeState.IN_NODE:
-            self._send(conn, encode("TMSCT", "0," + self.settings.send_message))
+            self.send(conn, encode("TMSCT", "0," + self.settings.send_message))
         return self._take()
 
     def disconnect(self, conn: int, now_ns: int) -> list[Action]:
@@ -233,7 +194,7 @@ class Robot:
             self._run_until(now_ns)
         self.last_packet_ns = self.now_ns
         if isinstance(result, FrameError):
-            self._send(conn, encode_cperr(result.code))
+            self.send(conn, encode_cperr(result.code))
         elif result.header == "TMSTA":
             self._handle_tmsta(conn, result.data)
         else:
@@ -302,7 +263,8 @@ class Robot:
         out, self._out = self._out, []
         return out
 
-    def _send(self, conn: int, data: bytes) -> None:
+    def send(self, conn: int, data: bytes) -> None:
+        """Queue ``data`` for ``conn``, stamped now (the caller gets it from the public call)."""
         self._out.append(_new_tuple(Send, (conn, data, self.now_ns)))  # = Send(conn, data, now)
 
     def _motion_to_wall(self, motion_ns: int) -> int:
@@ -390,7 +352,7 @@ class Robot:
             if self.next_unsolicited_ns is not None and self.now_ns >= self.next_unsolicited_ns:
                 self.next_unsolicited_ns = self.now_ns + self.faults.unsolicited_every_ms * NS_PER_MS
                 for conn in self.connections:
-                    self._send(conn, encode("TMSTA", "90,unsolicited"))
+                    self.send(conn, encode("TMSTA", "90,unsolicited"))
                 changed = True
             state = self.state
             if timeouts and state == NodeState.IN_NODE and self._timed_out():
@@ -412,17 +374,18 @@ class Robot:
         s = self.settings
         if s.data_timeout_ms > 0 and \
                 self.now_ns >= max(self.last_packet_ns, self.node_entered_ns) + s.data_timeout_ms * NS_PER_MS:
-            self._note("data timeout: Fail path")  # §1.6
+            self.note("data timeout: Fail path")  # §1.6
             self._leave_node("Fail")
             return True
         if s.connection_timeout_ms > 0 and not self.connections and \
                 self.now_ns >= self.node_entered_ns + s.connection_timeout_ms * NS_PER_MS:
-            self._note("connection timeout: Fail path")
+            self.note("connection timeout: Fail path")
             self._leave_node("Fail")
             return True
         return False
 
-    def _note(self, text: str) -> None:
+    def note(self, text: str) -> None:
+        """Add one human-readable event to :attr:`log`."""
         self._log.append((self.now_ns, text))
 
     @property
@@ -439,16 +402,16 @@ class Robot:
         self.node_entered_ns = self.now_ns
         self.last_packet_ns = self.now_ns
         self.exit_path = ""
-        self._note("entered Listen node")
+        self.note("entered Listen node")
         for conn in self.connections:
-            self._send(conn, encode("TMSCT", "0," + self.settings.send_message))
+            self.send(conn, encode("TMSCT", "0," + self.settings.send_message))
 
     def _leave_node(self, path: str) -> None:
         """§1.7: leave via Pass/Fail.  Session variables are dropped; the TCP connections stay."""
         self.state = NodeState.RUNNING
         self.exit_path = path
         self.variables.clear()
-        self._note(f"left Listen node ({path})")
+        self.note(f"left Listen node ({path})")
         after = self.settings.after_exit
         if after == "reenter":
             self.enter_at_ns = self.now_ns + self.settings.reenter_delay_ms * NS_PER_MS
@@ -456,7 +419,7 @@ class Robot:
             self._stop_project()
 
     def _stop_project(self) -> None:
-        self._note("project stopped")
+        self.note("project stopped")
         self.executor.stop_and_clear(self.tool)
         self.plan = PlannedState(self.executor.rest_joints.copy(), self.executor.rest_tcp.copy(),
                                  self.plan.base, self.plan.tool)
@@ -475,16 +438,16 @@ class Robot:
         try:
             text = data.decode("utf-8")
         except UnicodeDecodeError:
-            self._send(conn, encode_cperr(Cperr.DATA))
+            self.send(conn, encode_cperr(Cperr.DATA))
             return
         parts = text.split(",")
         sub = parts[0]
         if sub == "00":
             # §5.1: extra params (tmr_ros2 sends "00,") are ignored.
             if self.state == NodeState.IN_NODE:
-                self._send(conn, encode("TMSTA", f"00,true,{self.settings.send_message}"))
+                self.send(conn, encode("TMSTA", f"00,true,{self.settings.send_message}"))
             else:
-                self._send(conn, encode("TMSTA", "00,false,"))
+                self.send(conn, encode("TMSTA", "00,false,"))
             return
         if sub == "01" and len(parts) >= 2 and parts[1] != "":
             tag_text = parts[1]
@@ -493,10 +456,10 @@ class Robot:
                 state = self.tags.get(int(tag_text), "none")
             shown = tag_text if self.settings.tag_reply_echo_text else \
                 (f"{int(tag_text):02d}" if tag_text.isascii() and tag_text.isdigit() else tag_text)
-            self._send(conn, encode("TMSTA", f"01,{shown},{state}"))
+            self.send(conn, encode("TMSTA", f"01,{shown},{state}"))
             return
         # §5.5 unknown SubCmd; §5.4/§11 #12 a client sending 90-99; Choice: "01" without a tag.
-        self._send(conn, encode_cperr(Cperr.DATA))
+        self.send(conn, encode_cperr(Cperr.DATA))
 
     # ================================================================ TMSCT (§4)
 
@@ -504,15 +467,15 @@ class Robot:
         try:
             text = data.decode("utf-8")
         except UnicodeDecodeError:
-            self._send(conn, encode_cperr(Cperr.DATA))
+            self.send(conn, encode_cperr(Cperr.DATA))
             return
         script_id, sep, script = text.partition(",")
         # _ID_CHARS: ASCII letters and digits, i.e. isascii() and isalnum().
         if not sep or not script_id or not (script_id.isascii() and script_id.isalnum()):
-            self._send(conn, encode_cperr(Cperr.DATA))  # §4.1 ID rule
+            self.send(conn, encode_cperr(Cperr.DATA))  # §4.1 ID rule
             return
         if self.state != NodeState.IN_NODE:
-            self._send(conn, encode_cperr(Cperr.NOT_IN_NODE))  # §4.4, §4.6 (exiting)
+            self.send(conn, encode_cperr(Cperr.NOT_IN_NODE))  # §4.4, §4.6 (exiting)
             return
         self.tmsct_count += 1
         session = tuple(sorted((name, (v[0], v[1])) for name, v in self.variables.items())) \
@@ -527,33 +490,35 @@ class Robot:
             return
         self.buffer.append(job)
 
-    def _reply(self, job: ScriptJob, status: str) -> None:
+    def reply(self, job: ScriptJob, status: str) -> None:
+        """``$TMSCT <id>,<status>`` to the script's connection, then its deferred frames (§4.2)."""
         if job.conn in self.connections:
-            self._send(job.conn, encode("TMSCT", f"{job.script_id},{status}"))
+            self.send(job.conn, encode("TMSCT", f"{job.script_id},{status}"))
         for conn, frame in job.deferred:
             if conn in self.connections:
-                self._send(conn, frame)
+                self.send(conn, frame)
         job.deferred.clear()
 
     def _run_priority(self, job: ScriptJob, command: sc.PriorityCommand) -> None:
         """§4.5: handled at once, even while another script blocks.  The interrupted script gets
         its OK first, then this packet's OK."""
-        self._note(f"priority {command.name}({command.mode})")
-        self._stop_and_clear()
+        self.note(f"priority {command.name}({command.mode})")
+        self.stop_and_clear()
         interrupted = self.current
         if command.name == "ScriptExit" or command.mode >= 1:
             if interrupted is not None:
                 self.current = None
-                self._reply(interrupted, "OK")
+                self.reply(interrupted, "OK")
             if command.name == "ScriptExit" or command.mode == 2:
                 # Choice: ScriptExit(n) clears the script buffer like StopAndClearBuffer(2); the
                 # discarded scripts never get a reply (§4.5 table).
                 self.buffer.clear()
-        self._reply(job, "OK")
+        self.reply(job, "OK")
         if command.name == "ScriptExit":
             self._leave_node("Pass" if command.mode == 1 else "Fail")
 
-    def _stop_and_clear(self) -> None:
+    def stop_and_clear(self) -> None:
+        """Stop the motion and drop the motion queue; the plan restarts from the rest pose (§8)."""
         self.executor.stop_and_clear(self.tool)
         # §8 / §11 #7: dropped tags stay "false", no notification.
         self.plan = PlannedState(self.executor.rest_joints.copy(), self.executor.rest_tcp.copy(),
@@ -587,18 +552,18 @@ class Robot:
             progressed = True
             if job.wait is None and self.current is job:
                 self.current = None
-                self._reply(job, "OK")
+                self.reply(job, "OK")
 
     def _start_job(self, job: ScriptJob) -> bool:
         """Static and dry-run checks; False if the script was answered ERROR (nothing runs)."""
         if job.forced_error:
-            self._reply(job, "ERROR;1")  # fault "error"
+            self.reply(job, "ERROR;1")  # fault "error"
             return False
         errors: Any = job.parsed.error_lines
         if not errors and self.settings.reject_invalid_args:
             errors = self._dry_run(job)
         if errors:
-            self._reply(job, "ERROR;" + ";".join(str(n) for n in sorted(set(errors))))
+            self.reply(job, "ERROR;" + ";".join(str(n) for n in sorted(set(errors))))
             return False
         return True
 
@@ -612,7 +577,7 @@ class Robot:
             static = False
         else:
             static = _dry_run_is_static(parsed)
-        ctx = _Ctx(True, job.conn, {k: list(v) for k, v in self.variables.items()}, self.plan.copy())
+        ctx = ScriptContext(True, job.conn, {k: list(v) for k, v in self.variables.items()}, self.plan.copy())
         self._execute_lines(job, ctx, dry=True)
         if entry is None or entry[0] is not parsed or entry[1] is not self.settings:
             if len(self._dry_cache) >= _DRY_CACHE_SIZE:
@@ -622,10 +587,10 @@ class Robot:
         return ctx.errors
 
     def _resume(self, job: ScriptJob) -> None:
-        ctx = _Ctx(False, job.conn, self.variables, self.plan)
+        ctx = ScriptContext(False, job.conn, self.variables, self.plan)
         self._execute_lines(job, ctx, dry=False)
 
-    def _execute_lines(self, job: ScriptJob, ctx: _Ctx, dry: bool) -> None:
+    def _execute_lines(self, job: ScriptJob, ctx: ScriptContext, dry: bool) -> None:
         lines = job.parsed.lines
         pc = 0 if dry else job.pc
         while pc < len(lines):
@@ -638,7 +603,7 @@ class Robot:
                 if dry:
                     ctx.errors.append(line.number)
                 else:
-                    self._note(f"{job.script_id} line {line.number}: {exc} (function returns false)")
+                    self.note(f"{job.script_id} line {line.number}: {exc} (function returns false)")
                 continue
             if stop and not dry:
                 job.pc = pc
@@ -662,27 +627,32 @@ class Robot:
             return self.executor.idle
         return True  # pragma: no cover
 
+    def begin_exit(self) -> None:
+        """§4.6 normal ScriptExit(): the node drains the motion queue and accepts no script."""
+        self.state = NodeState.EXITING
+        self.note("ScriptExit(): draining motion queue")
+
     def _finish_exit(self, job: ScriptJob) -> None:
         """§4.6: the motion queue drained after ScriptExit(): leave via Pass, then the OK."""
         self.current = None
         self._leave_node("Pass")
         if self.settings.script_exit_ok_after_drain:
-            self._reply(job, "OK")
+            self.reply(job, "OK")
 
     # ---------------------------------------------------------------- statements
 
-    def _exec_statement(self, job: ScriptJob, stmt: sc.Statement, ctx: _Ctx) -> str | None:
+    def _exec_statement(self, job: ScriptJob, stmt: sc.Statement, ctx: ScriptContext) -> str | None:
         """Execute one statement; return "block"/"exit" if the script must stop here."""
         if stmt.__class__ is sc.ExprStmt:  # the common case first (a function call)
             expr = stmt.expr
-            if expr.__class__ is sc.Call and expr.name in _BLOCKING_STATEMENTS:
-                return _BLOCKING_STATEMENTS[expr.name](self, job, expr, ctx)
-            self._eval(expr, ctx)
+            if expr.__class__ is sc.Call and expr.name in BLOCKING_STATEMENTS:
+                return BLOCKING_STATEMENTS[expr.name](self, job, expr, ctx)
+            self.evaluate(expr, ctx)
             return None
         if isinstance(stmt, sc.Empty):
             return None
         if isinstance(stmt, sc.Declare):
-            value = self._eval(stmt.init, ctx) if stmt.init is not None else (
+            value = self.evaluate(stmt.init, ctx) if stmt.init is not None else (
                 [] if stmt.is_array else _default_value(stmt.type_name))
             ctx.variables[stmt.name.lower()] = [stmt.type_name, stmt.is_array,
                                                 _coerce(stmt.type_name, stmt.is_array, value)]
@@ -692,13 +662,13 @@ class Robot:
             return None
         assert isinstance(stmt, sc.ExprStmt)
         expr = stmt.expr
-        if isinstance(expr, sc.Call) and expr.name in _BLOCKING_STATEMENTS:
-            return _BLOCKING_STATEMENTS[expr.name](self, job, expr, ctx)
-        self._eval(expr, ctx)
+        if isinstance(expr, sc.Call) and expr.name in BLOCKING_STATEMENTS:
+            return BLOCKING_STATEMENTS[expr.name](self, job, expr, ctx)
+        self.evaluate(expr, ctx)
         return None
 
-    def _assign(self, stmt: sc.Assign, ctx: _Ctx) -> None:
-        value = self._eval(stmt.value, ctx)
+    def _assign(self, stmt: sc.Assign, ctx: ScriptContext) -> None:
+        value = self.evaluate(stmt.value, ctx)
         target = stmt.target
         if isinstance(target, sc.Name):
             entry = ctx.variables[target.name.lower()]
@@ -707,7 +677,7 @@ class Robot:
             entry[2] = _coerce(entry[0], entry[1], value)
         elif isinstance(target, sc.Index) and isinstance(target.target, sc.Name):
             entry = ctx.variables[target.target.name.lower()]
-            idx = int(self._eval(target.index, ctx))
+            idx = int(self.evaluate(target.index, ctx))
             if not 0 <= idx < len(entry[2]):
                 raise ArgError("index out of range")
             if stmt.op != "=":
@@ -719,20 +689,21 @@ class Robot:
 
     # ---------------------------------------------------------------- expressions
 
-    def _eval(self, expr: sc.Expr, ctx: _Ctx) -> Any:
+    def evaluate(self, expr: sc.Expr, ctx: ScriptContext) -> Any:
+        """The value of a script expression; a built-in call goes to :data:`builtins.FUNCTIONS`."""
         if isinstance(expr, sc.Num):
             return expr.value
         if isinstance(expr, (sc.Str, sc.Bool)):
             return expr.value
         if isinstance(expr, sc.ArrayLit):
-            return [self._eval(item, ctx) for item in expr.items]
+            return [self.evaluate(item, ctx) for item in expr.items]
         if isinstance(expr, sc.Name):
             return ctx.variables[expr.name.lower()][2]
         if isinstance(expr, sc.Attr):
             return self._robot_member(expr.name)
         if isinstance(expr, sc.Index):
-            seq = self._eval(expr.target, ctx)
-            idx = self._eval(expr.index, ctx)
+            seq = self.evaluate(expr.target, ctx)
+            idx = self.evaluate(expr.index, ctx)
             if isinstance(expr.target, sc.Name) and expr.target.name.lower() == "robot":
                 return None  # Robot[0] itself; members are read through Attr
             if not isinstance(seq, (list, tuple)) or not isinstance(idx, (int, float)) \
@@ -740,12 +711,12 @@ class Robot:
                 raise ArgError("index out of range")
             return seq[int(idx)]
         if isinstance(expr, sc.Unary):
-            value = self._eval(expr.operand, ctx)
+            value = self.evaluate(expr.operand, ctx)
             if expr.op == "!":
                 return not value
             return -value if expr.op == "-" else +value
         if isinstance(expr, sc.Binary):
-            left, right = self._eval(expr.left, ctx), self._eval(expr.right, ctx)
+            left, right = self.evaluate(expr.left, ctx), self.evaluate(expr.right, ctx)
             return _binary(expr.op, left, right)
         if isinstance(expr, sc.Postfix):
             target = expr.target
@@ -756,8 +727,8 @@ class Robot:
                 return old
             raise ArgError("++/-- on element")
         if isinstance(expr, sc.Call):
-            args = [self._eval(a, ctx) for a in expr.args]
-            return _FUNCTIONS[expr.name](self, args, ctx)
+            args = [self.evaluate(a, ctx) for a in expr.args]
+            return FUNCTIONS[expr.name](self, args, ctx)
         raise ArgError("unsupported expression")  # pragma: no cover
 
     def _robot_member(self, name: str) -> Any:
@@ -795,9 +766,10 @@ class Robot:
         b = seg.tcp_at(t)[:3, 3]
         return float(np.linalg.norm(b - a) / (dt / 1e9))
 
-    # ================================================================ motion functions (§7)
+    # ================================================================ motion queue (§8)
 
-    def _queue(self, ctx: _Ctx, item: Any) -> None:
+    def queue_motion(self, ctx: ScriptContext, item: Any) -> None:
+        """Append a motion segment or marker to the motion queue (not in a dry run)."""
         if not ctx.dry:
             self.executor.enqueue(item)
 
@@ -807,7 +779,7 @@ class Robot:
             state = "false" if self.faults.tag_false else "true"
             if tag in self.tags:
                 self.tags[tag] = state
-            self._note(f"QueueTag {tag} reached")
+            self.note(f"QueueTag {tag} reached")
             # §5.3: "01,<nn>,true" with nn zero-padded to two digits.
             frame = encode("TMSTA", f"01,{tag:02d},{state}")
             owner = marker.owner
@@ -820,438 +792,13 @@ class Robot:
                 if defer:
                     job.deferred.append((conn, frame))  # §11 #4 alternative: OK first
                 else:
-                    self._send(conn, frame)
+                    self.send(conn, frame)
         elif marker.kind == "base":
             self.base_name, self.base = marker.value
         elif marker.kind == "tcp":
             self.tcp_name, self.tool = marker.value
         elif marker.kind == "load":
             self.payload_kg = float(marker.value)
-
-
-def _flatten(args: list[Any]) -> list[Any]:
-    flat: list[Any] = []
-    for arg in args:
-        if isinstance(arg, (list, tuple)):
-            flat.extend(arg)
-        else:
-            flat.append(arg)
-    return flat
-
-
-def _num(value: Any, what: str) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-        raise ArgError(f"{what} must be a number")
-    return float(value)
-
-
-def _boolean(value: Any, what: str) -> bool:
-    if not isinstance(value, bool):
-        raise ArgError(f"{what} must be true/false")
-    return value
-
-
-def _check_format(fmt: Any, allowed: set[str], settings: EmulatorSettings) -> str:
-    if not isinstance(fmt, str):
-        raise ArgError("format must be a string")
-    allowed_now = set(allowed)
-    if settings.accept_tmflow2_formats:
-        allowed_now |= {f.replace("A", "D", 1) for f in allowed if len(f) == 3 and f[1] == "A"}
-    if fmt not in allowed_now:
-        raise ArgError(f"format {fmt!r} not valid here")
-    return fmt
-
-
-def _motion_values(args: list[Any], counts: tuple[int, ...]) -> list[Any]:
-    flat = _flatten(args)
-    if len(flat) not in counts:
-        raise ArgError("wrong number of values (array length?)")
-    return flat
-
-
-def _speed(value: Any, is_pct: bool, settings: EmulatorSettings) -> float:
-    speed = _num(value, "speed")
-    # Choice (§7 [U]): percent in (0, 100], mm/s in (0, max_tcp_speed].
-    limit = 100.0 if is_pct else settings.max_tcp_speed_mm_s
-    if not 0.0 < speed <= limit:
-        raise ArgError("speed out of range")
-    return speed
-
-
-def _accel(value: Any) -> float:
-    accel = _num(value, "acceleration time")
-    if accel < 0:
-        raise ArgError("negative acceleration time")
-    return accel
-
-
-def _blend(value: Any, is_pct: bool) -> float:
-    blend = _num(value, "blend")
-    if blend < 0 or (is_pct and blend > 100):
-        raise ArgError("blend out of range")
-    return blend
-
-
-def _pose6(values: list[Any]) -> np.ndarray:
-    return np.array([_num(v, "coordinate") for v in values], dtype=float)
-
-
-def fn_ptp(robot: Robot, args: list[Any], ctx: _Ctx) -> bool:
-    v = _motion_values(args, (11, 14))
-    fmt = _check_format(v[0], {"JPP", "CPP"}, robot.settings)
-    target = _pose6(v[1:7])
-    speed, accel, blend = _speed(v[7], True, robot.settings), _accel(v[8]), _blend(v[9], True)
-    precise = not _boolean(v[10], "disablePrecise")
-    if len(v) == 14:
-        # §7: pose configuration only with "CPP": Config1 0/1, Config2 2/3, Config3 4/5.
-        config = [_num(x, "pose") for x in v[11:14]]
-        if fmt != "CPP" or config[0] not in (0, 1) or config[1] not in (2, 3) or config[2] not in (4, 5):
-            raise ArgError("invalid pose configuration")
-    try:
-        if fmt == "JPP":
-            joints = target
-        else:
-            joints = robot.planner.solve(ctx.plan, ctx.plan.base @ pose_to_matrix(target))
-        seg = robot.planner.joint_motion(ctx.plan, joints, speed, accel, blend, precise, f"PTP {fmt}")
-    except PlanError as exc:
-        raise ArgError(str(exc)) from None
-    robot._queue(ctx, seg)
-    return True
-
-
-def _line_like(robot: Robot, ctx: _Ctx, fmt: str, target_tcp: np.ndarray, v: list[Any], label: str) -> bool:
-    speed_is_pct = fmt[1] == "P"
-    blend_is_radius = fmt[2] == "R"
-    speed = _speed(v[7], speed_is_pct, robot.settings)
-    accel, blend = _accel(v[8]), _blend(v[9], not blend_is_radius)
-    precise = not _boolean(v[10], "disablePrecise") if len(v) > 10 else False
-    try:
-        seg = robot.planner.cart_motion(ctx.plan, target_tcp, speed, speed_is_pct, accel, blend,
-                                        blend_is_radius, precise, label)
-    except PlanError as exc:
-        raise ArgError(str(exc)) from None
-    robot._queue(ctx, seg)
-    return True
-
-
-LINE_FORMATS = {"CPP", "CPR", "CAP", "CAR"}
-
-
-def fn_line(robot: Robot, args: list[Any], ctx: _Ctx) -> bool:
-    v = _motion_values(args, (11,))
-    fmt = _check_format(v[0], LINE_FORMATS, robot.settings)
-    return _line_like(robot, ctx, fmt, ctx.plan.base @ pose_to_matrix(_pose6(v[1:7])), v, f"Line {fmt}")
-
-
-def _relative_tcp(plan: PlannedState, frame: str, delta: np.ndarray) -> np.ndarray:
-    """Target of a relative motion: ``C`` = in the current base, ``T`` = in the tool frame."""
-    if frame == "T":
-        return plan.tcp @ pose_to_matrix(delta)
-    # Choice (§7 Move_*): base-relative adds the translation and the three angles.
-    current = matrix_to_pose(np.linalg.inv(plan.base) @ plan.tcp)
-    return plan.base @ pose_to_matrix(current + delta)
-
-
-def fn_move_ptp(robot: Robot, args: list[Any], ctx: _Ctx) -> bool:
-    v = _motion_values(args, (11,))
-    fmt = _check_format(v[0], {"CPP", "TPP", "JPP"}, robot.settings)
-    delta = _pose6(v[1:7])
-    speed, accel, blend = _speed(v[7], True, robot.settings), _accel(v[8]), _blend(v[9], True)
-    precise = not _boolean(v[10], "disablePrecise")
-    try:
-        if fmt == "JPP":
-            joints = ctx.plan.joints + delta
-        else:
-            joints = robot.planner.solve(ctx.plan, _relative_tcp(ctx.plan, fmt[0], delta))
-        seg = robot.planner.joint_motion(ctx.plan, joints, speed, accel, blend, precise, f"Move_PTP {fmt}")
-    except PlanError as exc:
-        raise ArgError(str(exc)) from None
-    robot._queue(ctx, seg)
-    return True
-
-
-def fn_move_line(robot: Robot, args: list[Any], ctx: _Ctx) -> bool:
-    v = _motion_values(args, (11,))
-    fmt = _check_format(v[0], LINE_FORMATS | {"TPP", "TPR", "TAP", "TAR"}, robot.settings)
-    target = _relative_tcp(ctx.plan, fmt[0], _pose6(v[1:7]))
-    return _line_like(robot, ctx, fmt, target, v, f"Move_Line {fmt}")
-
-
-def fn_circle(robot: Robot, args: list[Any], ctx: _Ctx) -> bool:
-    v = _motion_values(args, (18,))
-    fmt = _check_format(v[0], {"CPP", "CAP"}, robot.settings)
-    via = ctx.plan.base @ pose_to_matrix(_pose6(v[1:7]))
-    end = ctx.plan.base @ pose_to_matrix(_pose6(v[7:13]))
-    speed_is_pct = fmt[1] == "P"
-    speed, accel, blend = _speed(v[13], speed_is_pct, robot.settings), _accel(v[14]), _blend(v[15], True)
-    arc = _num(v[16], "arc angle")
-    precise = not _boolean(v[17], "disablePrecise")
-    try:
-        seg = robot.planner.circle_motion(ctx.plan, via, end, arc, speed, speed_is_pct, accel, blend,
-                                          precise, f"Circle {fmt}")
-    except PlanError as exc:
-        raise ArgError(str(exc)) from None
-    robot._queue(ctx, seg)
-    return True
-
-
-def _pline(robot: Robot, args: list[Any], ctx: _Ctx, relative: bool) -> bool:
-    v = _motion_values(args, (10,))
-    allowed = {"JAP", "CAP", "TAP"} if relative else {"JAP", "CAP"}
-    fmt = _check_format(v[0], allowed, robot.settings)
-    values = _pose6(v[1:7])
-    speed, accel, blend = _speed(v[7], False, robot.settings), _accel(v[8]), _blend(v[9], True)
-    try:
-        if fmt[0] == "J":
-            # Choice: PLine "JAP" moves in joint space at speed/max_tcp_speed of full joint speed.
-            joints = ctx.plan.joints + values if relative else values
-            pct = 100.0 * speed / robot.settings.max_tcp_speed_mm_s
-            seg = robot.planner.joint_motion(ctx.plan, joints, pct, accel, blend, False, f"PLine {fmt}")
-        else:
-            target = _relative_tcp(ctx.plan, fmt[0], values) if relative else ctx.plan.base @ pose_to_matrix(values)
-            seg = robot.planner.cart_motion(ctx.plan, target, speed, False, accel, blend, False, False,
-                                            f"PLine {fmt}")
-    except PlanError as exc:
-        raise ArgError(str(exc)) from None
-    robot._queue(ctx, seg)
-    return True
-
-
-def fn_pline(robot: Robot, args: list[Any], ctx: _Ctx) -> bool:
-    return _pline(robot, args, ctx, relative=False)
-
-
-def fn_move_pline(robot: Robot, args: list[Any], ctx: _Ctx) -> bool:
-    return _pline(robot, args, ctx, relative=True)
-
-
-def fn_change_base(robot: Robot, args: list[Any], ctx: _Ctx) -> bool:
-    if len(args) == 1 and isinstance(args[0], str):
-        if args[0] not in robot.settings.known_bases:
-            raise ArgError(f"unknown base {args[0]!r}")
-        name, base = args[0], np.eye(4)  # Choice: every named base is the robot base
-    else:
-        values = _flatten(args)
-        if len(values) != 6:
-            raise ArgError("ChangeBase needs 6 values")
-        name, base = "custom", pose_to_matrix(_pose6(values))
-    ctx.plan.base = base
-    robot._queue(ctx, Marker("base", (name, base)))
-    return True
-
-
-def fn_change_tcp(robot: Robot, args: list[Any], ctx: _Ctx) -> bool:
-    if len(args) == 1 and isinstance(args[0], str):
-        if args[0] not in robot.settings.known_tcps:
-            raise ArgError(f"unknown TCP {args[0]!r}")
-        name, tool = args[0], np.eye(4)
-    else:
-        values = _flatten(args)
-        if len(values) not in (6, 7, 16):
-            raise ArgError("ChangeTCP needs 6, 7 or 16 values")
-        numbers = [_num(x, "TCP value") for x in values]
-        if len(numbers) >= 7 and numbers[6] < 0:
-            raise ArgError("negative TCP mass")
-        name, tool = "custom", pose_to_matrix(numbers[:6])
-    ctx.plan.tool = tool
-    # The TCP moves with the tool even though the joints do not.
-    ctx.plan.tcp = robot.kin.fk(ctx.plan.joints, tool)
-    robot._queue(ctx, Marker("tcp", (name, tool)))
-    return True
-
-
-def fn_change_load(robot: Robot, args: list[Any], ctx: _Ctx) -> bool:
-    kg = _num(args[0], "load")
-    if kg < 0:
-        raise ArgError("negative load")
-    robot._queue(ctx, Marker("load", kg))
-    return True
-
-
-def _tag_number(value: Any) -> int:
-    tag = _num(value, "tag")
-    if tag != int(tag) or not 1 <= tag <= MAX_TAG:
-        raise ArgError("tag outside 1-15")  # §7 QueueTag
-    return int(tag)
-
-
-def fn_queue_tag(robot: Robot, args: list[Any], ctx: _Ctx) -> bool:
-    tag = _tag_number(args[0])
-    if len(args) == 2 and _num(args[1], "wait") not in (0, 1):
-        raise ArgError("wait must be 0 or 1")
-    if not ctx.dry:
-        # §5.2: re-queuing resets the tag to false; only the most recent tags are remembered.
-        robot.tags.pop(tag, None)
-        robot.tags[tag] = "false"
-        while len(robot.tags) > robot.settings.tag_memory:
-            robot.tags.popitem(last=False)
-        robot.executor.enqueue(Marker("tag", tag, owner=ctx.conn))
-    return True
-
-
-def fn_wait_queue_tag(robot: Robot, args: list[Any], ctx: _Ctx) -> int:
-    """Expression use (not a whole statement): check once (Choice)."""
-    tag = int(_num(args[0], "tag"))
-    if tag == 0:
-        return 0
-    state = robot.tags.get(tag)
-    return -1 if state is None else (1 if state == "true" else 0)
-
-
-def fn_stop_and_clear(robot: Robot, args: list[Any], ctx: _Ctx) -> bool:
-    if args:
-        # A non-literal or out-of-range priority argument is rejected by the parser; here only
-        # the literal priority form can arrive, which the robot runs before buffering.
-        raise ArgError("priority form inside a normal script")
-    if not ctx.dry:
-        robot._stop_and_clear()
-    return True
-
-
-def fn_pause(robot: Robot, args: list[Any], ctx: _Ctx) -> bool:
-    if not ctx.dry and not robot.paused:  # §8: Pause while paused: OK, no effect
-        robot.paused = True
-        robot._note("paused")
-    return True
-
-
-def fn_resume(robot: Robot, args: list[Any], ctx: _Ctx) -> bool:
-    if not ctx.dry and robot.paused:
-        robot.paused = False
-        robot._note("resumed")
-    return True
-
-
-def fn_listen_send(robot: Robot, args: list[Any], ctx: _Ctx) -> int:
-    """§5.4: TMSTA <subcmd>,<payload> to the script's connection.  Returns 0, or -2 for a subcmd
-    outside 90-99."""
-    sub = _num(args[0], "subcmd")
-    if sub != int(sub) or not 90 <= sub <= 99:
-        return -2
-    if not ctx.dry and ctx.conn in robot.connections:
-        robot._send(ctx.conn, encode("TMSTA", f"{int(sub)},".encode("ascii") + _listen_payload(args[1])))
-    return 0
-
-
-def _listen_payload(value: Any) -> bytes:
-    """Strings as text; numbers and arrays as little-endian binary (spec §5.4 [M?]): int32 for
-    integers, float32 for floats (Choice)."""
-    if isinstance(value, str):
-        return value.encode("utf-8")
-    if isinstance(value, bool):
-        return bytes([1 if value else 0])
-    if isinstance(value, (list, tuple)):
-        return b"".join(_listen_payload(v) for v in value)
-    if isinstance(value, int):
-        return struct.pack("<i", value)
-    return struct.pack("<f", float(value))
-
-
-def format_value(value: Any) -> str:
-    """GetString formatting.  Choice: up to 7 significant digits (float32 precision), no
-    exponent for ordinary magnitudes, arrays as ``{a,b,c}``, bools as ``true``/``false``."""
-    if isinstance(value, bool):
-        return "true" if value else "false"
-    if isinstance(value, (list, tuple)):
-        return "{" + ",".join(format_value(v) for v in value) + "}"
-    if isinstance(value, int):
-        return str(value)
-    if isinstance(value, float):
-        if value == 0:
-            return "0"
-        text = f"{value:.7g}"
-        if "e" in text and 1e-4 <= abs(value) < 1e15:
-            text = f"{value:.7f}".rstrip("0").rstrip(".")
-        return text
-    return str(value)
-
-
-def fn_get_string(robot: Robot, args: list[Any], ctx: _Ctx) -> str:
-    return format_value(args[0])
-
-
-def fn_length(robot: Robot, args: list[Any], ctx: _Ctx) -> int:
-    value = args[0]
-    if isinstance(value, str):
-        return len(value.encode("utf-8"))
-    if isinstance(value, (list, tuple)):
-        return len(value)
-    raise ArgError("Length of a number")
-
-
-def fn_not_in_expression(robot: Robot, args: list[Any], ctx: _Ctx) -> bool:
-    raise ArgError("blocking function inside an expression")
-
-
-_FUNCTIONS: dict[str, Callable[[Robot, list[Any], _Ctx], Any]] = {
-    "PTP": fn_ptp, "Line": fn_line, "Move_PTP": fn_move_ptp, "Move_Line": fn_move_line,
-    "Circle": fn_circle, "PLine": fn_pline, "Move_PLine": fn_move_pline,
-    "ChangeBase": fn_change_base, "ChangeTCP": fn_change_tcp, "ChangeLoad": fn_change_load,
-    "QueueTag": fn_queue_tag, "WaitQueueTag": fn_wait_queue_tag,
-    "StopAndClearBuffer": fn_stop_and_clear, "Pause": fn_pause, "Resume": fn_resume,
-    "ScriptExit": fn_not_in_expression, "Sleep": fn_not_in_expression,
-    "ListenSend": fn_listen_send, "GetString": fn_get_string, "Length": fn_length,
-}
-
-
-# ---------------------------------------------------------------- blocking statements (§4.3)
-
-
-def st_queue_tag(robot: Robot, job: ScriptJob, call: sc.Call, ctx: _Ctx) -> str | None:
-    args = [robot._eval(a, ctx) for a in call.args]
-    fn_queue_tag(robot, args, ctx)
-    if len(args) == 2 and int(args[1]) == 1 and not ctx.dry:
-        job.wait = Wait("tag", tag=_tag_number(args[0]))
-        return "block"
-    return None
-
-
-def st_wait_queue_tag(robot: Robot, job: ScriptJob, call: sc.Call, ctx: _Ctx) -> str | None:
-    args = [robot._eval(a, ctx) for a in call.args]
-    tag = int(_num(args[0], "tag"))
-    timeout_ms = int(_num(args[1], "timeout")) if len(args) == 2 else -1
-    if ctx.dry:
-        return None
-    until = None if timeout_ms < 0 else robot.now_ns + timeout_ms * NS_PER_MS
-    if tag == 0:  # §7: tag 0 = no tag, a plain delay
-        if until is None:
-            job.wait = Wait("delay", until_ns=None)  # forever (until a priority command)
-            return "block"
-        job.wait = Wait("delay", until_ns=until)
-        return "block"
-    if timeout_ms == 0:
-        return None
-    job.wait = Wait("waittag", tag=tag, until_ns=until)
-    return "block"
-
-
-def st_sleep(robot: Robot, job: ScriptJob, call: sc.Call, ctx: _Ctx) -> str | None:
-    ms = _num(robot._eval(call.args[0], ctx), "time")
-    if ms < 0:
-        raise ArgError("negative sleep")
-    if ctx.dry:
-        return None
-    job.wait = Wait("delay", until_ns=robot.now_ns + int(ms * NS_PER_MS))
-    return "block"
-
-
-def st_script_exit(robot: Robot, job: ScriptJob, call: sc.Call, ctx: _Ctx) -> str | None:
-    """§4.6 normal ScriptExit(): wait for the motion queue to drain, then leave via Pass."""
-    if ctx.dry:
-        return "exit"
-    robot.state = NodeState.EXITING
-    robot._note("ScriptExit(): draining motion queue")
-    job.exiting = True
-    job.wait = Wait("drain")
-    if not robot.settings.script_exit_ok_after_drain:
-        robot._reply(job, "OK")  # _finish_exit sends no second OK with this setting
-    return "block"
-
-
-_BLOCKING_STATEMENTS: dict[str, Callable[[Robot, ScriptJob, sc.Call, _Ctx], str | None]] = {
-    "QueueTag": st_queue_tag, "WaitQueueTag": st_wait_queue_tag, "Sleep": st_sleep,
-    "ScriptExit": st_script_exit,
-}
 
 
 # ---------------------------------------------------------------- values

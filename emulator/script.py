@@ -5,7 +5,7 @@ lines plus the 1-based numbers of lines with errors; the robot answers ``ERROR;<
 and executes nothing of the script (spec §4.2).  Errors found here: syntax, bare CR/LF, unknown
 function, wrong argument count or types, undeclared or re-declared variable, non-literal priority
 argument.  Argument *values* (format strings, ranges, reachability) are checked by the robot when
-it dry-runs the script, see ``robot.py``.
+it dry-runs the script (``robot.py``), by the built-ins in ``builtins.py``.
 """
 
 from __future__ import annotations
