@@ -67,20 +67,10 @@ class PouContext:
             if state is not None:
                 yield node, state
 
-    @cached_property
+    @property
     def feasible_edges(self) -> set[int]:
         """ids of the CFG edges some execution can take (per the range analysis)."""
-        out: set[int] = set()
-        ranges = self.ranges
-        for node in self.cfg.nodes:
-            state = self.state_at(node)
-            if state is None:
-                continue
-            after = ranges.transfer(node, state)
-            for edge in node.succs:
-                if ranges.edge(edge, after) is not None:
-                    out.add(id(edge))
-        return out
+        return self._ranges[1].feasible
 
     def finding(self, code: str, message: str, span: n.Span) -> Finding:
         return Finding(code, message, span)

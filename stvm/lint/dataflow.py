@@ -38,9 +38,10 @@ class ForwardAnalysis(Protocol[S]):
 class Solution(Generic[S]):
     """`before[node]`: the state on entry to the node (None: the node is never reached)."""
 
-    def __init__(self, cfg: CFG, before: dict[int, S | None]) -> None:
+    def __init__(self, cfg: CFG, before: dict[int, S | None], feasible: set[int]) -> None:
         self.cfg = cfg
         self.before = before
+        self.feasible = feasible   # ids of edges some state took (states only grow: = at the fixpoint)
 
     def at(self, node: Node) -> S | None:
         return self.before.get(node.index)
@@ -60,6 +61,7 @@ def solve(cfg: CFG, analysis: ForwardAnalysis[S], scan_loop: bool = True) -> Sol
     before[cfg.entry.index] = analysis.initial()
     initial = before[cfg.entry.index]
     # worklist ordered by reverse post-order: inner nodes settle before their loop heads re-run
+    feasible: set[int] = set()
     heap = [position[cfg.entry.index]]
     queued = {cfg.entry.index}
 
@@ -99,7 +101,8 @@ def solve(cfg: CFG, analysis: ForwardAnalysis[S], scan_loop: bool = True) -> Sol
         for edge in node.succs:
             out = analysis.edge(edge, after)
             if out is not None:
+                feasible.add(id(edge))
                 offer(edge.dst, out)
         if node is cfg.exit and scan_loop:
             offer(cfg.entry, analysis.join(initial, analysis.next_call(after)))
-    return Solution(cfg, before)
+    return Solution(cfg, before, feasible)

@@ -197,11 +197,21 @@ class Leak:
 
 
 class _Typestate:
-    def __init__(self, ctx: PouContext, machine: Machine, resource: Resource, exits: dict[int, n.Span]) -> None:
+    def __init__(self, ctx: PouContext, machine: Machine, resources: list[Resource],
+                 exits: dict[int, n.Span]) -> None:
         self.ctx = ctx
         self.machine = machine
-        self.resource = resource
         self.exits = exits
+        # per node / edge: the resources it acquires and releases (indices into `resources`)
+        self.acquire_at: dict[int, frozenset] = {}
+        self.release_at: dict[int, frozenset] = {}
+        self.acquire_on: dict[int, frozenset] = {}
+        self.release_on: dict[int, frozenset] = {}
+        for index, r in enumerate(resources):
+            for table, keys in ((self.acquire_at, r.acquire_nodes), (self.release_at, r.release_nodes),
+                                (self.acquire_on, r.acquire_edges), (self.release_on, r.release_edges)):
+                for key in keys:
+                    table[key] = table.get(key, frozenset()) | {index}
         self.feasible = ctx.feasible_edges
         self.assigns: dict[int, object] = {}
         for node in ctx.cfg.nodes:
@@ -228,25 +238,24 @@ class _Typestate:
                 self.calls[node.index] = keys
 
     def initial(self):
-        return frozenset({(_initial_state_value(self.machine.var, self.ctx), False, None, False, frozenset())})
+        return frozenset({(_initial_state_value(self.machine.var, self.ctx), frozenset(), None, False, frozenset())})
 
     def next_call(self, exit_state):
         # A sequence that ended with an error while holding the resource has been reported
         # (`leaks`); carrying `held` into the next run would report every later error again.
-        return frozenset((s, held and (err is None or moved), None, False, frozenset())
+        return frozenset((s, held if err is None or moved else frozenset(), None, False, frozenset())
                          for s, held, err, moved, _a in exit_state)
 
     def transfer(self, node, state):
         i = node.index
-        r = self.resource
+        acquire = self.acquire_at.get(i, frozenset())
+        release = self.release_at.get(i, frozenset())
         out = set()
         for s, held, err, moved, assumed in state:
             if i in self.calls:
                 assumed = frozenset(a for a in assumed if a.rsplit(".", 1)[0] not in self.calls[i])
-            if i in r.acquire_nodes:
-                held = True
-            elif i in r.release_nodes:
-                held = False
+            if acquire or release:
+                held = (held - release) | acquire
             if i in self.exits:
                 steps = self.machine.branch_of.get(i) or ((s,) if s is not None else ())
                 err, moved = (i, steps), False
@@ -259,7 +268,7 @@ class _Typestate:
                     # a (re)start from outside the steps: the previous run ended, through an exit
                     # that has been checked; correlating with the state diagram that guards the
                     # restart is beyond a per-variable analysis
-                    held = False
+                    held = frozenset()
             out.add((s, held, err, moved, assumed))
         return frozenset(out)
 
@@ -293,10 +302,10 @@ class _Typestate:
                 if blocked:
                     continue
                 assumed = assumed | positives
-                if id(edge) in self.resource.acquire_edges:
-                    held = True
-                elif id(edge) in self.resource.release_edges:
-                    held = False
+                acquire = self.acquire_on.get(id(edge))
+                release = self.release_on.get(id(edge))
+                if acquire or release:
+                    held = (held - (release or frozenset())) | (acquire or frozenset())
                 out.add((s, held, err, moved, assumed))
             return frozenset(out) or None
         return state
@@ -347,28 +356,34 @@ def acquired_in(ctx: PouContext, machine: Machine, resource: Resource) -> bool:
     return False
 
 
-def leaks(ctx: PouContext, machine: Machine, resource: Resource, machines: list[Machine] = ()) -> list[Leak]:
-    if not acquired_in(ctx, machine, resource):
-        return []
+def leaks(ctx: PouContext, machine: Machine, resources: list[Resource],
+          machines: list[Machine] = ()) -> dict[int, list[Leak]]:
+    """Leaks of each resource the machine's own steps acquire: resource index → leaks.
+    One typestate solve covers all the resources of a machine."""
+    chosen = [i for i, r in enumerate(resources) if acquired_in(ctx, machine, r)]
+    if not chosen:
+        return {}
     exits = exit_nodes(ctx, machine, machines)
     if not exits:
-        return []
-    analysis = _Typestate(ctx, machine, resource, exits)
+        return {}
+    analysis = _Typestate(ctx, machine, [resources[i] for i in chosen], exits)
     solution = solve(ctx.cfg, analysis)
     at_exit = solution.at(ctx.cfg.exit)
     if not at_exit:
-        return []
-    ok_states = release_reachable(machine, resource)
-    found: dict[int, Leak] = {}
+        return {}
+    ok_states = [release_reachable(machine, resources[i]) for i in chosen]
+    found: list[dict[int, Leak]] = [{} for _ in chosen]
     for s, held, err, moved, _assumed in at_exit:
-        if not held or err is None:
-            continue
-        if moved and s is not None and s in ok_states:
+        if err is None:
             continue
         index, steps = err
-        leak = found.setdefault(index, Leak(index, exits[index]))
-        leak.states.update(v for v in steps if v is not None)
-    return sorted(found.values(), key=lambda lk: (lk.span.line, lk.span.column))
+        for local in held:
+            if moved and s is not None and s in ok_states[local]:
+                continue
+            leak = found[local].setdefault(index, Leak(index, exits[index]))
+            leak.states.update(v for v in steps if v is not None)
+    return {chosen[local]: sorted(f.values(), key=lambda lk: (lk.span.line, lk.span.column))
+            for local, f in enumerate(found) if f}
 
 
 def nonlocal_flags(ctx: PouContext, machine: Machine) -> dict[str, list]:

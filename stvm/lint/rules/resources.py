@@ -118,7 +118,7 @@ def socket_leak(ctx: PouContext):
                             frozenset(_condition_edges(ctx, f"{inst_key}.done")),
                             frozenset(_condition_edges(ctx, f"{inst_key}.error")), call.span.line)
         for machine in machines:
-            for leak in leaks(ctx, machine, resource, machines):
+            for leak in leaks(ctx, machine, [resource], machines).get(0, []):
                 closing = f" without running {close_text}" if close_text else " and nothing closes it"
                 yield ctx.finding("SA501", f"this error ends the sequence{_steps(leak.states)} with the socket of "
                                            f"{inst_text} (line {call.span.line}) still open{closing}", leak.span)
@@ -170,6 +170,7 @@ def socket_leak(ctx: PouContext):
 def flag_not_cleared(ctx: PouContext):
     machines = step_machines(ctx)
     for machine in machines:
+        resources, texts, first_sets = [], [], []
         for key, nodes in nonlocal_flags(ctx, machine).items():
             acquire, release = set(), set()
             first_set = None
@@ -186,9 +187,13 @@ def flag_not_cleared(ctx: PouContext):
             if not release:
                 continue   # never cleared by this POU: a latch by design, not a held flag
             text = text_of(nodes[0].stmt.target)
-            resource = Resource(text, frozenset(acquire), frozenset(release),
-                                acquire_line=first_set.line if first_set else 0)
-            for leak in leaks(ctx, machine, resource, machines):
+            resources.append(Resource(text, frozenset(acquire), frozenset(release),
+                                      acquire_line=first_set.line if first_set else 0))
+            texts.append(text)
+            first_sets.append(first_set)
+        for index, found in leaks(ctx, machine, resources, machines).items():
+            text, first_set = texts[index], first_sets[index]
+            for leak in found:
                 where = f", set TRUE at line {first_set.line}," if first_set else ""
                 yield ctx.finding("SA502", f"{text}{where} is still TRUE when this path ends the "
                                            f"sequence{_steps(leak.states)}: nothing clears it afterwards",
