@@ -58,6 +58,21 @@ def lint_analysis(analysis, settings: SysmacSettings, rules: Iterable[Rule], inc
     return findings
 
 
+def _reported_files(paths: Sequence[str | Path], loaded: list[str]) -> set[str]:
+    """Findings are reported for the files named and the files of the folders named; the other
+    files of a file's project (its stvm.toml) are loaded for their declarations only."""
+    wanted: set[Path] = set()
+    folders: list[Path] = []
+    for raw in paths:
+        path = Path(raw).resolve()
+        if path.is_dir():
+            folders.append(path)
+        else:
+            wanted.add(path)
+    return {name for name in loaded
+            if Path(name).resolve() in wanted or Path(name).resolve().parent in folders}
+
+
 def lint(paths: Sequence[str | Path], settings: SysmacSettings = DEFAULT_SETTINGS,
          select: Iterable[str] | None = None, ignore: Iterable[str] = (), use_cache: bool = True,
          texts: dict[str, str] | None = None, config: LintConfig | None = None,
@@ -74,7 +89,7 @@ def lint(paths: Sequence[str | Path], settings: SysmacSettings = DEFAULT_SETTING
     if loaded.analysis is None:
         return report
     findings = lint_analysis(loaded.analysis, settings, rules, include_stdlib,
-                             None if include_stdlib else set(loaded.files))
+                             None if include_stdlib else _reported_files(paths, loaded.files))
     kept = []
     for f in findings:
         if suppressed(f, loaded.sources, config):

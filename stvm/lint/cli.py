@@ -50,7 +50,7 @@ def _settings(args):
 
 def cmd_lint(args) -> int:
     from stvm.lint.config import ConfigError
-    from stvm.lint.registry import SelectionError, all_rules, select_rules
+    from stvm.lint.registry import SelectionError, select_rules
     from stvm.lint.report import explain
     if args.explain:
         try:
@@ -95,7 +95,6 @@ def cmd_lint(args) -> int:
         if errors:
             summary += f"; {errors} error(s): fix them to lint"
         print(summary, file=sys.stderr)
-    del all_rules
     return EXIT_FINDINGS if report.findings or errors else EXIT_CLEAN
 
 

@@ -184,3 +184,10 @@ def test_lint_runs_as_a_subprocess():
                            "--select", "SA202"], capture_output=True, text=True)
     assert proc.returncode == 1
     assert "CBT_Connect.st:490:52: warning[SA202]: ConnectionTimeOut * 100000000 is computed in DINT" in proc.stdout
+
+
+def test_a_file_of_a_project_is_linted_with_its_project_but_reported_alone():
+    rc, out, _ = run(["lint", str(ROOT / "st_src" / "CBT_Connect.st")])
+    assert rc == 1
+    files = {line.split(":")[0] for line in out.splitlines() if "warning[" in line}
+    assert files == {str(ROOT / "st_src" / "CBT_Connect.st")}
