@@ -22,7 +22,6 @@ S = TypeVar("S")
 
 _PLAIN_JOINS = 3   # joins at a loop head before widening starts
 _PLAIN_JOINS_ENTRY = 1   # at the call entry (the scan loop): each pass re-runs the whole body
-_THRESHOLD_ROUNDS = 5    # widenings to the next program constant before widening to the limits
 
 
 class ForwardAnalysis(Protocol[S]):
@@ -31,7 +30,7 @@ class ForwardAnalysis(Protocol[S]):
     def transfer(self, node: Node, state: S) -> S: ...
     def edge(self, edge: Edge, state: S) -> S | None: ...
     def join(self, a: S, b: S) -> S: ...
-    def widen(self, old: S, new: S, final: bool = False) -> S: ...
+    def widen(self, old: S, new: S, rounds: int = 1) -> S: ...
     def leq(self, a: S, b: S) -> bool: ...
 
 
@@ -84,9 +83,10 @@ def solve(cfg: CFG, analysis: ForwardAnalysis[S], scan_loop: bool = True) -> Sol
             visits[target.index] = count
             plain = _PLAIN_JOINS_ENTRY if target is cfg.entry else _PLAIN_JOINS
             if count > plain:
-                # threshold widening first (ranges settle on program constants); past a few
-                # rounds, widen to the limits so a counter does not climb threshold by threshold
-                merged = analysis.widen(old, merged, count > plain + _THRESHOLD_ROUNDS)
+                # `rounds`: the how-many-th widening at this point; the analysis widens to program
+                # constants first and to the declared limits after a few rounds, so a counter
+                # does not climb threshold by threshold
+                merged = analysis.widen(old, merged, count - plain)
         before[target.index] = merged
         push(target.index)
 

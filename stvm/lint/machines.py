@@ -313,7 +313,7 @@ class _Typestate:
     def join(self, a, b):
         return a | b
 
-    def widen(self, old, new, final=False):
+    def widen(self, old, new, rounds=1):
         return new
 
     def leq(self, a, b):

@@ -47,6 +47,8 @@ _DECIMAL_WIDTH = {"SINT": 4, "INT": 6, "DINT": 11, "LINT": 20, "USINT": 3, "UINT
 _HEX_WIDTH = {"BYTE": 2, "WORD": 4, "DWORD": 8, "LWORD": 16}
 _REAL_WIDTH = {"REAL": 15, "LREAL": 25}   # REAL_TO_STRING: shortest round-trip text with exponent
 MAX_STRING_BYTES = t.STRING.max_bytes      # 1985: Sysmac's string function result limit
+_INT_ROUNDS = 2       # threshold widenings of an integer before it widens to its declared limits
+_STRING_ROUNDS = 4    # plain joins of a string length before it widens to the declared size
 
 
 def type_range(ty: t.Type | None) -> Interval | None:
@@ -366,6 +368,8 @@ class RangeAnalysis:
         self.key_types: dict[str, t.Type] = {}
         self.parents: set[str] = set()   # keys that have (or had) sub-keys in some state
         self.limits: dict[str, Interval] = {}  # key → its declared range, for the final widening
+        self.string_keys: set[str] = {key for key, var in pou_info.variables.items()
+                                      if isinstance(var.type, t.StringType)}
         self._initial_values = self._initial_values_of(self.persistent | self.fresh)
         self._fresh_values = {k: v for k, v in self._initial_values.items() if k in self.fresh}
 
@@ -410,7 +414,10 @@ class RangeAnalysis:
                 return False
         return True
 
-    def widen(self, old: State, new: State, final: bool = False) -> State:
+    def widen(self, old: State, new: State, rounds: int = 1) -> State:
+        """Integers: to the next program constant for the first rounds, then to the declared
+        limits. String lengths: plain joins (a chain of CONCATs across steps settles in a few
+        scans), then the declared size (a string that grows every scan)."""
         out = {}
         th = self.thresholds
         for key, vn in new.items():
@@ -419,6 +426,11 @@ class RangeAnalysis:
                 continue
             lo, hi = vn
             limits = self.limits.get(key)
+            is_string = key in self.string_keys
+            final = rounds > (_STRING_ROUNDS if is_string else _INT_ROUNDS)
+            if is_string and not final:
+                out[key] = vn
+                continue
             if final and limits is not None:
                 if lo < vo[0]:
                     lo = limits[0]
@@ -506,6 +518,8 @@ class RangeAnalysis:
             declared = self.ev.default(key, ty)
             if declared is not None:
                 self.limits[key] = declared
+            if isinstance(ty, t.StringType):
+                self.string_keys.add(key)
             if value is not None and declared is not None and not isinstance(ty, t.StringType):
                 value = meet(value, declared) or declared
         if value is None:
