@@ -100,6 +100,14 @@ class _Collector:
 
 
 def node_accesses(node, facts: FactsView) -> list[Access]:
+    """The accesses of a CFG node, computed once per node."""
+    cached = getattr(node, "_accesses", None)
+    if cached is None:
+        cached = node._accesses = _node_accesses(node, facts)
+    return cached
+
+
+def _node_accesses(node, facts: FactsView) -> list[Access]:
     c = _Collector(facts)
     stmt, kind = node.stmt, node.kind
     if kind == "assign":

@@ -65,9 +65,15 @@ class CFG:
     nodes: list[Node]
     entry: Node
     exit: Node
+    _rpo: list[Node] | None = field(default=None, repr=False)
 
     def rpo(self) -> list[Node]:
         """Nodes in reverse post-order from the entry (unreachable nodes last, in creation order)."""
+        if self._rpo is None:
+            self._rpo = self._compute_rpo()
+        return self._rpo
+
+    def _compute_rpo(self) -> list[Node]:
         seen: set[int] = set()
         order: list[Node] = []
         stack: list[tuple[Node, int]] = [(self.entry, 0)]

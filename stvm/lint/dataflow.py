@@ -49,7 +49,9 @@ class Solution(Generic[S]):
         return self.before.get(node.index) is not None
 
 
-def solve(cfg: CFG, analysis: ForwardAnalysis[S], scan_loop: bool = True) -> Solution[S]:
+def solve(cfg: CFG, analysis: ForwardAnalysis[S], scan_loop: bool = True,
+          record_edges: bool = False) -> Solution[S]:
+    """Solve to the fixpoint; `record_edges`: collect the ids of the edges some state took."""
     order = cfg.rpo()
     position = {node.index: i for i, node in enumerate(order)}
     before: dict[int, S | None] = {node.index: None for node in cfg.nodes}
@@ -101,7 +103,8 @@ def solve(cfg: CFG, analysis: ForwardAnalysis[S], scan_loop: bool = True) -> Sol
         for edge in node.succs:
             out = analysis.edge(edge, after)
             if out is not None:
-                feasible.add(id(edge))
+                if record_edges:
+                    feasible.add(id(edge))
                 offer(edge.dst, out)
         if node is cfg.exit and scan_loop:
             offer(cfg.entry, analysis.join(initial, analysis.next_call(after)))

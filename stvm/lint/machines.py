@@ -79,6 +79,14 @@ def _label_values(ctx: PouContext, labels) -> tuple[int, ...]:
 
 
 def step_machines(ctx: PouContext) -> list[Machine]:
+    """The POU's step machines (computed once per POU context)."""
+    cached = getattr(ctx, "_machines", None)
+    if cached is None:
+        cached = ctx._machines = _step_machines(ctx)
+    return cached
+
+
+def _step_machines(ctx: PouContext) -> list[Machine]:
     if ctx.info.kind == "FUNCTION":
         return []
     by_stmt: dict[int, list] = {}
@@ -236,6 +244,9 @@ class _Typestate:
                         keys.add(key)
             if keys:
                 self.calls[node.index] = keys
+        self.active = (set(self.acquire_at) | set(self.release_at) | set(self.exits) | set(self.assigns)
+                       | set(self.calls))
+        self.positives: dict[int, frozenset] = {}
 
     def initial(self):
         return frozenset({(_initial_state_value(self.machine.var, self.ctx), frozenset(), None, False, frozenset())})
@@ -248,6 +259,8 @@ class _Typestate:
 
     def transfer(self, node, state):
         i = node.index
+        if i not in self.active:
+            return state
         acquire = self.acquire_at.get(i, frozenset())
         release = self.release_at.get(i, frozenset())
         out = set()
@@ -291,7 +304,11 @@ class _Typestate:
                     out.add((s, held, err, moved, assumed))
             return frozenset(out) or None
         if label[0] == "true":
-            positives = _positive_members(label[1], self.ctx)
+            positives = self.positives.get(id(edge))
+            if positives is None:
+                positives = self.positives[id(edge)] = _positive_members(label[1], self.ctx)
+            if not positives and id(edge) not in self.acquire_on and id(edge) not in self.release_on:
+                return state
             for tup in state:
                 s, held, err, moved, assumed = tup
                 blocked = False

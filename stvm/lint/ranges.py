@@ -398,18 +398,16 @@ class RangeAnalysis:
     def join(self, a: State, b: State) -> State:
         if a is b:
             return a
-        out = {}
-        for key, va in a.items():
-            vb = b.get(key)
-            if vb is not None:
-                out[key] = va if va == vb else (min(va[0], vb[0]), max(va[1], vb[1]))
-        return out
+        get = b.get
+        return {key: va if va == vb else (va[0] if va[0] < vb[0] else vb[0], va[1] if va[1] > vb[1] else vb[1])
+                for key, va in a.items() if (vb := get(key)) is not None}
 
     def leq(self, a: State, b: State) -> bool:
         if a is b:
             return True
+        get = a.get
         for key, vb in b.items():
-            va = a.get(key)
+            va = get(key)
             if va is None or va[0] < vb[0] or va[1] > vb[1]:
                 return False
         return True
@@ -805,4 +803,4 @@ def _thresholds(cfg: CFG, facts: FactsView) -> list[int]:
 def analyze_ranges(cfg: CFG, pou_info, facts: FactsView, settings,
                    alias_ranges: dict[str, Interval] | None = None) -> tuple[RangeAnalysis, Solution]:
     analysis = RangeAnalysis(cfg, pou_info, facts, settings, alias_ranges)
-    return analysis, solve(cfg, analysis)
+    return analysis, solve(cfg, analysis, record_edges=True)

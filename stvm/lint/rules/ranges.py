@@ -7,7 +7,7 @@ from declarations, subranges, assignments, loop bounds and the conditions on the
 from __future__ import annotations
 
 from stvm.lint.context import PouContext
-from stvm.lint.facts import node_calls, node_subexprs, NOT_CONST, iter_exprs, node_exprs, place_key, text_of
+from stvm.lint.facts import node_calls, node_subexprs, NOT_CONST, place_key, text_of
 from stvm.lint.ranges import excluded_key, fmt, type_range
 from stvm.lint.registry import rule
 from stvm.semantics import types as t
@@ -271,14 +271,13 @@ def _implicit_conversions(ctx: PouContext, node):
         target = ctx.type_of(stmt.target)
         if target is not None:
             yield stmt.value, target, f"assigning to {text_of(stmt.target)}"
-    for expr in node_exprs(stmt, node.kind, node.expr):
-        for call in (e for e in iter_exprs(expr) if isinstance(e, n.Call)):
-            info = ctx.facts.call(call)
-            if info is None or info.pou.generic:
-                continue
-            for var, value in info.inputs:
-                if var.section == "VAR_INPUT" and not isinstance(var.type, t.GenericType):
-                    yield value, var.type, f"passing it to {var.name} of {info.pou.name}"
+    for call in node_calls(node):
+        info = ctx.facts.call(call)
+        if info is None or info.pou.generic:
+            continue
+        for var, value in info.inputs:
+            if var.section == "VAR_INPUT" and not isinstance(var.type, t.GenericType):
+                yield value, var.type, f"passing it to {var.name} of {info.pou.name}"
 
 
 @rule("SA203", "narrowing-conversion",
