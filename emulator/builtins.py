@@ -87,6 +87,7 @@ class ScriptHost(Protocol):
     tags: OrderedDict[int, str]  # tag -> "true"/"false", oldest first (§5.2)
     paused: bool
     now_ns: int
+    io: dict[str, dict[str, list[int]]]  # module -> "DI"/"DO" -> channel values (io_read/io_write)
 
     def evaluate(self, expr: sc.Expr, ctx: ScriptContext) -> Any: ...
     def queue_motion(self, ctx: ScriptContext, item: Any) -> None: ...
@@ -504,6 +505,60 @@ def format_value(value: Any) -> str:
             text = f"{value:.7f}".rstrip("0").rstrip(".")
         return text
     return str(value)
+
+
+# ---------------------------------------------------------------- digital I/O objects
+
+#: Digital channels per I/O module (TM5 control box: 16 DI / 16 DO; end module: 4 DI / 4 DO).
+IO_CHANNELS = {"ControlBox": 16, "EndModule": 4}
+
+
+def new_io() -> dict[str, dict[str, list[int]]]:
+    """All digital inputs and outputs of a robot at project start: 0 (Low)."""
+    return {module: {"DI": [0] * count, "DO": [0] * count} for module, count in IO_CHANNELS.items()}
+
+
+def _io_module(module: Any) -> str:
+    if not isinstance(module, str) or module not in IO_CHANNELS:
+        raise ArgError(f"unknown IO module {module!r}")  # Choice: names are case-sensitive (manual 7.5)
+    return module
+
+
+def io_read(robot: ScriptHost, module: Any, member: str) -> list[int]:
+    """``IO["<module>"].DI`` / ``.DO`` / ``.InstantDO`` read as a byte array (TM Expression Editor
+    manual 7.5 IO, p.222-224: ``byte[] var_di = IO["ControlBox"].DI``); ``[n]`` picks a channel.
+    ``InstantDO`` reads the same outputs as ``DO``."""
+    name = _io_module(module)
+    kind = "DI" if member.lower() == "di" else "DO"
+    return list(robot.io[name][kind])
+
+
+def io_write(robot: ScriptHost, ctx: ScriptContext, module: Any, member: str, channel: Any, value: Any) -> None:
+    """``IO["<module>"].DO[n] = v`` / ``.InstantDO[n] = v`` (manual 7.5 IO, p.222-224).
+
+    ``DO`` is a queued command: it goes into the motion queue and is written when the motions queued
+    before it have finished (spec §8 "queued DO writes"; TMflow manual p.144 "IO value assignment
+    ... placed in the queue and executed in order"). ``InstantDO`` is written when the script line
+    runs. The value is 0 (Low) or 1 (High); anything else, or a channel outside the module, fails."""
+    name = _io_module(module)
+    index = _num(channel, "IO channel")
+    if index != int(index) or not 0 <= index < IO_CHANNELS[name]:
+        raise ArgError(f"IO channel outside 0-{IO_CHANNELS[name] - 1}")
+    level = _num(value, "IO value")
+    if level not in (0, 1):
+        raise ArgError("IO value must be 0 or 1")
+    if member.lower() == "do":
+        robot.queue_motion(ctx, Marker("do", (name, int(index), int(level))))
+    elif not ctx.dry:
+        robot.io[name]["DO"][int(index)] = int(level)
+        robot.note(f"IO[{name}].InstantDO[{int(index)}] = {int(level)}")
+
+
+def apply_io_marker(robot: ScriptHost, marker: Marker) -> None:
+    """A queued ``DO`` write reached in the motion queue (see :func:`io_write`)."""
+    name, index, level = marker.value
+    robot.io[name]["DO"][index] = level
+    robot.note(f"IO[{name}].DO[{index}] = {level}")
 
 
 def fn_get_string(robot: ScriptHost, args: list[Any], ctx: ScriptContext) -> str:

@@ -283,9 +283,9 @@ class Segment:
 
 @dataclass
 class Marker:
-    """A non-motion queue item, applied when reached: a QueueTag, base/TCP/load change."""
+    """A non-motion queue item, applied when reached: a QueueTag, base/TCP/load change, DO write."""
 
-    kind: str  # "tag" / "base" / "tcp" / "load"
+    kind: str  # "tag" / "base" / "tcp" / "load" / "do"
     value: Any
     owner: int | None = None  # connection that queued it (tag notifications, spec §5.3)
 

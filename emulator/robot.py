@@ -33,11 +33,12 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from . import script as sc
-from .builtins import BLOCKING_STATEMENTS, FUNCTIONS, ArgError, ScriptContext, ScriptJob, format_value
+from .builtins import (BLOCKING_STATEMENTS, FUNCTIONS, ArgError, ScriptContext, ScriptJob, apply_io_marker,
+                       format_value, io_read, io_write, new_io)
 from .faults import NO_FAULTS, FaultPlan
 from .framing import Cperr, Frame, FrameError, encode, encode_cperr
 from .motion import NS_PER_MS, Kinematics, Marker, MotionExecutor, PlannedState, Planner, matrix_to_pose
-from .settings import DEFAULT_SETTINGS, EmulatorSettings
+from .settings import DEFAULT_SETTINGS, AfterExit, EmulatorSettings
 
 _ID_CHARS = frozenset("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789")
 
@@ -133,6 +134,7 @@ class Robot:
         self.tool = np.eye(4)
         self.tcp_name = "NOTOOL"
         self.payload_kg = 0.0
+        self.io = new_io()  # digital I/O (builtins.io_read / io_write)
         self.now_ns = now_ns
         self.start_ns = now_ns
         self.motion_ns = 0
@@ -255,6 +257,7 @@ class Robot:
             "base": self.base_name,
             "tcp": self.tcp_name,
             "tags": dict(self.tags),
+            "do": {module: list(values["DO"]) for module, values in self.io.items()},
         }
 
     # ================================================================ time
@@ -413,9 +416,9 @@ class Robot:
         self.variables.clear()
         self.note(f"left Listen node ({path})")
         after = self.settings.after_exit
-        if after == "reenter":
+        if after is AfterExit.REENTER:
             self.enter_at_ns = self.now_ns + self.settings.reenter_delay_ms * NS_PER_MS
-        elif after == "stop":
+        elif after is AfterExit.STOP:
             self._stop_project()
 
     def _stop_project(self) -> None:
@@ -675,6 +678,10 @@ class Robot:
             if stmt.op != "=":
                 value = _arith(stmt.op[0], entry[2], value)
             entry[2] = _coerce(entry[0], entry[1], value)
+        elif isinstance(target, sc.Index) and sc.io_member(target.target) is not None:
+            member = target.target
+            module = self.evaluate(member.target.index, ctx)
+            io_write(self, ctx, module, member.name, self.evaluate(target.index, ctx), value)
         elif isinstance(target, sc.Index) and isinstance(target.target, sc.Name):
             entry = ctx.variables[target.target.name.lower()]
             idx = int(self.evaluate(target.index, ctx))
@@ -700,12 +707,14 @@ class Robot:
         if isinstance(expr, sc.Name):
             return ctx.variables[expr.name.lower()][2]
         if isinstance(expr, sc.Attr):
+            if sc.io_member(expr) is not None:
+                return io_read(self, self.evaluate(expr.target.index, ctx), expr.name)
             return self._robot_member(expr.name)
         if isinstance(expr, sc.Index):
+            if isinstance(expr.target, sc.Name) and expr.target.name.lower() in ("robot", "io"):
+                return None  # Robot[0] / IO["..."] itself; members are read through Attr
             seq = self.evaluate(expr.target, ctx)
             idx = self.evaluate(expr.index, ctx)
-            if isinstance(expr.target, sc.Name) and expr.target.name.lower() == "robot":
-                return None  # Robot[0] itself; members are read through Attr
             if not isinstance(seq, (list, tuple)) or not isinstance(idx, (int, float)) \
                     or not 0 <= int(idx) < len(seq):
                 raise ArgError("index out of range")
@@ -799,6 +808,8 @@ class Robot:
             self.tcp_name, self.tool = marker.value
         elif marker.kind == "load":
             self.payload_kg = float(marker.value)
+        elif marker.kind == "do":
+            apply_io_marker(self, marker)
 
 
 # ---------------------------------------------------------------- values

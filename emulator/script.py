@@ -405,6 +405,22 @@ PRIORITY_FUNCTIONS = {"scriptexit": (0, 1), "stopandclearbuffer": (0, 1, 2)}
 ROBOT_MEMBERS = {"coordrobot": "A", "coordbase": "A", "joint": "A", "tcpforce3d": "N",
                  "tcpspeed3d": "N", "basename": "S", "tcpname": "S", "payload": "N"}
 
+# Digital I/O objects (TM Expression Editor manual 7.5 IO, p.222-224): IO["<module>"].<member>,
+# the members the emulator models (lower case -> writable). Analog I/O and the Safety module are
+# not modelled (ERROR). Modules and channel counts are checked when the script runs
+# (builtins.io_channels).
+IO_MEMBERS = {"di": False, "do": True, "instantdo": True}
+
+
+def _is_io(expr: Expr) -> bool:
+    """``IO[<module>]``."""
+    return isinstance(expr, Index) and isinstance(expr.target, Name) and expr.target.name.lower() == "io"
+
+
+def io_member(expr: Expr) -> Attr | None:
+    """The ``IO[<module>].<member>`` of an expression that is one, else None."""
+    return expr if isinstance(expr, Attr) and _is_io(expr.target) else None
+
 
 # ----------------------------------------------------------------------------- static checks
 
@@ -434,6 +450,9 @@ class _Checker:
                 raise ScriptSyntaxError(f"undeclared variable {expr.name}")
             return "A" if entry[1] else _TYPE_KIND[entry[0]]
         if isinstance(expr, Index):
+            if _is_io(expr):
+                self.expect(expr.index, "S")
+                return "X"
             self.expect(expr.index, "N")
             if isinstance(expr.target, Name) and expr.target.name.lower() == "robot":
                 return "X"
@@ -444,6 +463,11 @@ class _Checker:
                 return _TYPE_KIND[self.vars[expr.target.name.lower()][0]]
             return "X"
         if isinstance(expr, Attr):
+            if _is_io(expr.target):
+                self.kind_of(expr.target)
+                if expr.name.lower() not in IO_MEMBERS:
+                    raise ScriptSyntaxError(f"unknown IO member {expr.name}")
+                return "A"
             if (isinstance(expr.target, Index) and isinstance(expr.target.target, Name)
                     and expr.target.target.name.lower() == "robot"):
                 self.expect(expr.target.index, "N")
@@ -505,7 +529,10 @@ class _Checker:
         if isinstance(stmt, Assign):
             want = self.kind_of(stmt.target)
             if isinstance(stmt.target, Attr):
-                raise ScriptSyntaxError("Robot members are read-only")
+                raise ScriptSyntaxError("Robot members and whole IO arrays are read-only")
+            io = io_member(stmt.target.target) if isinstance(stmt.target, Index) else None
+            if io is not None and (not IO_MEMBERS[io.name.lower()] or stmt.op != "="):
+                raise ScriptSyntaxError(f"IO {io.name} cannot be assigned this way")
             got = self.kind_of(stmt.value)
             if stmt.op != "=" and not (want in ("N", "X") or (want == "S" and stmt.op == "+=")):
                 raise ScriptSyntaxError(f"{stmt.op} on non-number")

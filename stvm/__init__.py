@@ -11,8 +11,7 @@ __version__ = "0.1.0"
 
 def load(paths, settings=None, use_cache=True):
     from stvm.project import load as _load
-    from stvm.settings import DEFAULT_SETTINGS
-    return _load(paths, settings or DEFAULT_SETTINGS, use_cache)
+    return _load(paths, settings, use_cache)   # None: the project's settings (stvm.toml [sysmac])
 
 
 def __getattr__(name):

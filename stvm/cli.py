@@ -10,8 +10,6 @@ import signal
 import sys
 from pathlib import Path
 
-from stvm.settings import DEFAULT_SETTINGS
-
 EXIT_OK, EXIT_COMPILE, EXIT_USAGE, EXIT_FAULT = 0, 1, 2, 3
 
 
@@ -27,8 +25,9 @@ class _Parser(argparse.ArgumentParser):
 
 
 def _settings(args):
+    from stvm.project import project_settings
     try:
-        return DEFAULT_SETTINGS.with_overrides(getattr(args, "sysmac", None) or [])
+        return project_settings(args.files, getattr(args, "sysmac", None) or [])
     except ValueError as exc:
         raise _UsageError(str(exc)) from exc
 
@@ -163,6 +162,19 @@ def cmd_run(args) -> int:
         if demo is not None:
             demo.stop()
         raise _UsageError(str(exc)) from exc
+    hmi = None
+    if args.hmi:
+        try:
+            hmi = _start_hmi(args.hmi, project, vm, demo)
+        except BaseException:
+            if demo is not None:
+                demo.stop()
+            raise
+        if hmi is None:
+            if demo is not None:
+                demo.stop()
+            vm.close()
+            return EXIT_COMPILE
     status = EXIT_OK
     interrupted = False
     previous = signal.getsignal(signal.SIGINT)
@@ -186,6 +198,8 @@ def cmd_run(args) -> int:
             status = EXIT_FAULT
     finally:
         signal.signal(signal.SIGINT, previous)
+        if hmi is not None:
+            hmi.stop()
         vm.close()
         if demo is not None:
             demo.stop()
@@ -204,6 +218,25 @@ def cmd_run(args) -> int:
     if interrupted:
         print(f"stopped after {vm.scan_count} scans", file=sys.stderr)
     return status
+
+
+def _start_hmi(address: str, project, vm, demo=None):
+    """`--hmi`: the web HMI beside the run (stvm/hmi); None after page-file errors (reported)."""
+    from stvm.hmi.cli import HmiUsageError, report_load_error, start_hmi
+    from stvm.hmi.pages import HmiLoadError
+    pose = parameters = None
+    if demo is not None and demo.robot_address is not None:
+        parameters = {"robot_host": demo.robot_address[0], "robot_port": demo.robot_address[1]}
+        if demo.server is not None:
+            from stvm.hmi.robot import from_tcp_server
+            pose = from_tcp_server(demo.server)
+    try:
+        return start_hmi(project, vm, address, pose=pose, run_parameters=parameters)
+    except HmiUsageError as exc:
+        raise _UsageError(str(exc)) from exc
+    except HmiLoadError as exc:
+        report_load_error(exc)
+        return None
 
 
 def _print_realtime(vm) -> None:
@@ -260,6 +293,9 @@ def build_parser() -> argparse.ArgumentParser:
     demo.add_argument("--pnp-cycles", type=int, metavar="N", help="stop after N complete PnP cycles")
     demo.add_argument("--no-demo", action="store_true", help="run the project without the demo driver")
     demo.add_argument("--virtual-clock", action="store_true", help="demo on the virtual clock (default: real time)")
+    run.add_argument("--hmi", metavar="[HOST:]PORT",
+                     help="serve the project's HMI pages (stvm.toml [hmi], docs/hmi.md) while the VM runs; "
+                          "host 127.0.0.1 unless given, any other host needs the token printed at start-up")
     run.add_argument("--sysmac", action="append", metavar="NAME=VALUE", help=sysmac_help)
     run.set_defaults(func=cmd_run)
     _register_extensions(sub)

@@ -70,12 +70,18 @@ class Demo:
         self.cycle_from = self.config.get("cycle_from")
         self.cycle_to = self.config.get("cycle_to")
         self.status_paths = list(self.config.get("status", []))
+        # the manifest names its demo (libraries other than the thesis's have one each)
+        self.title = str(self.config.get("title", "thesis PnP demo"))
         self.started = time.monotonic()
 
     # ---- setup
     def start(self) -> None:
         root = self.project.root or Path(".")
-        scenario_path = self.args.scenario or (root / self.config["scenario"] if "scenario" in self.config else None)
+        config_scenario = self.config.get("scenario")
+        hmi_table = self.project.manifest.get("hmi", {})
+        if getattr(self.args, "hmi", None) and isinstance(hmi_table, dict) and "scenario" in hmi_table:
+            config_scenario = hmi_table["scenario"]   # the operator drives the cell from the pages
+        scenario_path = self.args.scenario or (root / config_scenario if config_scenario else None)
         scenario = load_scenario(scenario_path) if scenario_path else None
         if self.args.robot:
             self.robot_address = parse_robot(self.args.robot)
@@ -168,7 +174,7 @@ def run_with_status(demo: Demo, run_scans, stream=None) -> None:
         from rich.table import Table
 
         def render() -> Table:
-            table = Table(title="stvm — thesis PnP demo (Ctrl-C to stop)", show_header=False)
+            table = Table(title=f"stvm — {demo.title} (Ctrl-C to stop)", show_header=False)
             table.add_column("what", style="bold")
             table.add_column("value")
             for name, value in demo.status_rows():

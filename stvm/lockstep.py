@@ -28,7 +28,9 @@ Use::
     transport.frames                     # every frame, as `FrameRecord`s
 
 Any host and port connect to the one emulated robot (the address is not checked); a scenario's
-`[robot]` globals receive `LOCKSTEP_HOST` and `LOCKSTEP_PORT`.
+`[robot]` globals receive `LOCKSTEP_HOST` and `LOCKSTEP_PORT`. A cell of several robots:
+`transport.add_robot(host, port)` adds another emulated robot, reached by connections to exactly
+that address, stepped on the same clock (`transport.robots[i]`; frames carry `robot`, the index).
 """
 
 from __future__ import annotations
@@ -57,13 +59,15 @@ class FrameRecord:
     direction: str
     data: bytes
     conn: int
+    robot: int = 0    # index in `LockstepTransport.robots` (0: the default robot)
 
 
 class EmulatorLink:
     """One socket of the PLC, as a `sockets.Link` over an in-process `ClientEndpoint`."""
 
-    def __init__(self, transport: "LockstepTransport", src_port: int, host: str, port: int) -> None:
-        self._endpoint = transport.link.endpoint()
+    def __init__(self, transport: "LockstepTransport", robot: InProcessLink, src_port: int, host: str,
+                 port: int) -> None:
+        self._endpoint = robot.endpoint()
         self.failure: str | None = None
         self.local_address = ("", 0)
         self.remote_address = (host, port)
@@ -121,26 +125,43 @@ class LockstepTransport(SocketTable):
         if latency_scans < 0 or (latency_ns is not None and latency_ns < 0):
             raise ValueError("latency must not be negative")
         self.latency_scans = latency_scans
-        self.link = InProcessLink(settings=settings, faults=faults,
-                                  latency_ns=latency_ns if latency_ns is not None else 0,
-                                  log_path=log_path)
         self._explicit_latency = latency_ns is not None
         self.frames: list[FrameRecord] = []
         self.on_frame: list[Callable[[FrameRecord], None]] = []
         self._ephemeral = 49152   # IANA dynamic range start (Choice: deterministic, counts up)
-        original_log = self.link.core.frame_log
-        self._original_log = original_log
+        self.robots: list[InProcessLink] = []
+        self._by_address: dict[tuple[str, int], InProcessLink] = {}
+        self.link = self._new_robot(settings, faults, latency_ns if latency_ns is not None else 0, log_path)
+        self.vm = None
+
+    def _new_robot(self, settings: EmulatorSettings, faults: FaultPlan, latency_ns: int,
+                   log_path: str | None) -> InProcessLink:
+        link = InProcessLink(settings=settings, faults=faults, latency_ns=latency_ns, log_path=log_path)
+        index = len(self.robots)
+        original_log = link.core.frame_log
 
         def frame_log(t_ns: int, direction: str, data: bytes, conn: int) -> None:
             if original_log is not None:
                 original_log(t_ns, direction, data, conn)
-            record = FrameRecord(t_ns, direction, bytes(data), conn)
+            record = FrameRecord(t_ns, direction, bytes(data), conn, index)
             self.frames.append(record)
             for callback in self.on_frame:
                 callback(record)
 
-        self.link.core.frame_log = frame_log
-        self.vm = None
+        link.core.frame_log = frame_log
+        self.robots.append(link)
+        return link
+
+    def add_robot(self, host: str, port: int, settings: EmulatorSettings = DEFAULT_SETTINGS,
+                  faults: FaultPlan = NO_FAULTS) -> InProcessLink:
+        """Another emulated robot, reached by connections to exactly (`host`, `port`) (before `attach`)."""
+        if self.vm is not None:
+            raise ValueError("add_robot: add the robots before attach")
+        if (host, port) in self._by_address:
+            raise ValueError(f"add_robot: {host}:{port} has a robot already")
+        link = self._new_robot(settings, faults, self.link.latency_ns, None)
+        self._by_address[(host, port)] = link
+        return link
 
     # --- wiring -----------------------------------------------------------------------------
 
@@ -151,16 +172,18 @@ class LockstepTransport(SocketTable):
         if self.vm is not None:
             raise ValueError("attach: already attached to a VM")
         self.vm = vm
-        if not self._explicit_latency:
-            self.link.latency_ns = self.latency_scans * vm.base_ns
-        if self.link.now_ns < vm.now_ns:
-            self.link.advance_to(vm.now_ns)
+        for robot in self.robots:
+            if not self._explicit_latency:
+                robot.latency_ns = self.latency_scans * vm.base_ns
+            if robot.now_ns < vm.now_ns:
+                robot.advance_to(vm.now_ns)
         vm.on_scan_end.append(self.after_scan)
         return self
 
     def after_scan(self, vm) -> None:
-        """VM hook: advance the emulator to the start of the next scan."""
-        self.link.advance_to(vm.now_ns + vm.base_ns)
+        """VM hook: advance the emulated robots to the start of the next scan."""
+        for robot in self.robots:
+            robot.advance_to(vm.now_ns + vm.base_ns)
 
     @property
     def latency_ns(self) -> int:
@@ -172,9 +195,10 @@ class LockstepTransport(SocketTable):
         return port
 
     def _open_link(self, src_port: int, host: str, port: int, now_ns: int) -> EmulatorLink:
-        if self.link.now_ns < now_ns:
-            self.link.advance_to(now_ns)  # a VM used without attach: keep the clocks together
-        return EmulatorLink(self, src_port, host, port)
+        for robot in self.robots:
+            if robot.now_ns < now_ns:
+                robot.advance_to(now_ns)  # a VM used without attach: keep the clocks together
+        return EmulatorLink(self, self._by_address.get((host, port), self.link), src_port, host, port)
 
     # --- faults -----------------------------------------------------------------------------
 
@@ -198,7 +222,8 @@ class LockstepTransport(SocketTable):
 
     def close_all(self) -> None:
         super().close_all()
-        self.link.close()
+        for robot in self.robots:
+            robot.close()
 
 
 def start_lockstep(project, scan: str | int = "1ms", latency_scans: int = 1, latency_ns: int | None = None,

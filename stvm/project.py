@@ -77,8 +77,8 @@ def parse_duration(text: str) -> int:
 
 
 def expand_paths(paths: Sequence[str | Path]) -> tuple[list[Path], dict, Path | None]:
-    """Files to load. A folder means its *.st files; a lone file in a folder with `stvm.toml`
-    means the project that manifest describes (so `stvm run st_src/PnP_Example.st` loads the
+    """Files to load. A folder means the files its `stvm.toml` lists, else its *.st files; a lone
+    file in a folder with `stvm.toml` means the project that manifest describes (so `stvm run st_src/PnP_Example.st` loads the
     whole thesis project)."""
     out: list[Path] = []
     manifest: dict = {}
@@ -86,9 +86,13 @@ def expand_paths(paths: Sequence[str | Path]) -> tuple[list[Path], dict, Path | 
     for raw in paths:
         path = Path(raw)
         if path.is_dir():
-            out += sorted(path.glob("*.st"))
+            listed = None
             if (path / MANIFEST).exists():
                 manifest, root = _read_manifest(path / MANIFEST), path
+                listed = manifest.get("project", {}).get("files")
+            # a folder with a manifest that lists its files is that project (the files may be in
+            # other folders, e.g. a library the project builds on); else every *.st in it
+            out += [path / f for f in listed] if listed else sorted(path.glob("*.st"))
         else:
             out.append(path)
     if len(paths) == 1 and not Path(paths[0]).is_dir():
@@ -109,8 +113,33 @@ def expand_paths(paths: Sequence[str | Path]) -> tuple[list[Path], dict, Path | 
 
 
 def _read_manifest(path: Path) -> dict:
-    with path.open("rb") as fh:
-        return tomllib.load(fh)
+    try:
+        with path.open("rb") as fh:
+            return tomllib.load(fh)
+    except OSError as exc:
+        raise ManifestError(f"{path}: cannot read the project manifest: {exc.strerror or exc}") from exc
+    except tomllib.TOMLDecodeError as exc:
+        raise ManifestError(f"{path}: not valid TOML: {exc}") from exc
+
+
+class ManifestError(ValueError):
+    """A project manifest (`stvm.toml`) that cannot be used; the message names the file."""
+
+
+def project_settings(paths: Sequence[str | Path], overrides: Sequence[str] = ()) -> SysmacSettings:
+    """The Sysmac settings of a run on `paths`: the spec's defaults, then the `[sysmac]` table of
+    the project's `stvm.toml` (when the files belong to one), then `--sysmac NAME=VALUE`
+    overrides; the last one wins. Raises ValueError (SettingError, ManifestError) that names
+    the setting, the file and the allowed values."""
+    _, manifest, root = expand_paths(paths)
+    settings = DEFAULT_SETTINGS
+    table = manifest.get("sysmac")
+    if table is not None:
+        where = f"{Path(root or '.') / MANIFEST}: [sysmac]"
+        if not isinstance(table, dict):
+            raise ManifestError(f"{where} must be a table of NAME = VALUE")
+        settings = settings.with_table(table, where)
+    return settings.with_overrides(list(overrides))
 
 
 def _stdlib(settings: SysmacSettings = DEFAULT_SETTINGS) -> list[tuple[str, str]]:
@@ -170,9 +199,12 @@ def _read_all(paths: Sequence[Path]) -> tuple[list[tuple[str, str]], list[Diagno
     return texts, diags
 
 
-def check(paths: Sequence[str | Path], settings: SysmacSettings = DEFAULT_SETTINGS, generate: bool = False):
+def check(paths: Sequence[str | Path], settings: SysmacSettings | None = None, generate: bool = False):
     """Parse and check: (analysis or None, diagnostics sorted, sources). With `generate`, also
-    lower and compile, so limits that only code generation meets are reported too."""
+    lower and compile, so limits that only code generation meets are reported too. Without
+    `settings`, the project's own (`project_settings`)."""
+    if settings is None:
+        settings = project_settings(paths)
     files, _, _ = expand_paths(paths)
     texts, diags = _read_all(files)
     analysis, diags, sources = _check_texts(texts, diags, settings)
@@ -269,8 +301,11 @@ def _too_deep(file: str) -> Diagnostic:
                             Span(file, 1, 1, 1, 2), "E003")
 
 
-def load(paths: Sequence[str | Path], settings: SysmacSettings = DEFAULT_SETTINGS, use_cache: bool = True) -> Project:
-    """Load a runnable project from ST files (raises LoadError with every diagnostic)."""
+def load(paths: Sequence[str | Path], settings: SysmacSettings | None = None, use_cache: bool = True) -> Project:
+    """Load a runnable project from ST files (raises LoadError with every diagnostic). Without
+    `settings`, the project's own: `stvm.toml` `[sysmac]` over the defaults (`project_settings`)."""
+    if settings is None:
+        settings = project_settings(paths)
     files, manifest, root = expand_paths(paths)
     texts, read_diags = _read_all(files)
     if read_diags:

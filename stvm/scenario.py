@@ -90,16 +90,14 @@ class Scenario:
 
     def emulator_plan(self):
         """The emulator's (settings, initial fault plan) for this scenario."""
-        from dataclasses import fields as dc_fields, replace
         from emulator import DEFAULT_SETTINGS, parse_faults
-        known = {f.name for f in dc_fields(DEFAULT_SETTINGS)}
-        unknown = set(self.emulator_settings) - known
-        if unknown:
-            raise ScenarioError(f"{self.path}: [emulator] settings: unknown {', '.join(sorted(unknown))}")
-        values = {k: tuple(v) if isinstance(v, list) else v for k, v in self.emulator_settings.items()}
         try:
-            return replace(DEFAULT_SETTINGS, **values), parse_faults(self.faults)
-        except (TypeError, ValueError) as exc:
+            settings = DEFAULT_SETTINGS.with_table(self.emulator_settings)
+        except ValueError as exc:
+            raise ScenarioError(f"{self.path}: {exc}") from exc
+        try:
+            return settings, parse_faults(self.faults)
+        except ValueError as exc:
             raise ScenarioError(f"{self.path}: [emulator]: {exc}") from exc
 
 
@@ -195,6 +193,11 @@ def _parse_emulator(scenario: Scenario, emu: Any, name: str) -> None:
     settings = emu.get("settings", {})
     if not isinstance(settings, dict):
         raise ScenarioError(f"{name}: [emulator] settings must be a table")
+    from emulator.settings import DEFAULT_SETTINGS as EMULATOR_DEFAULTS
+    try:
+        EMULATOR_DEFAULTS.with_table(settings)   # checked now, so a bad value is never ignored
+    except ValueError as exc:
+        raise ScenarioError(f"{name}: {exc}") from exc
     scenario.emulator_settings = dict(settings)
 
 

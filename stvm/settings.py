@@ -1,21 +1,294 @@
 """Settings for every point the Sysmac spec marks UNCERTAIN (shared/spec/sysmac.md, section 9).
 
-Each UNCERTAIN behaviour is exactly one named field here, with the spec's default. The VM, the
-checker and the stdlib read them from the one `SysmacSettings` instance a run carries
-(`ctx.settings`), so switching a behaviour is one line: `SysmacSettings(int_literal_type="lint")`,
-or on the command line `stvm run --sysmac int_literal_type=lint ...`.
+Each UNCERTAIN behaviour is exactly one field of `SysmacSettings`, declared once: its type (an
+Enum of the allowed values, a bounded integer, or a table), its default (the spec's) and its spec
+section. The checker, the code generator, the VM and the stdlib read them from the one instance a
+run carries (`ctx.settings`) and compare with the Enum members, never with free strings.
+
+Values come from three places, all checked here, all failing with `SettingError` (a ValueError
+whose message lists the allowed values; the CLI turns it into a usage error, exit 2):
+
+* Python: `SysmacSettings(int_literal_type="lint")` (the spelling or the Enum member);
+* the command line: `stvm run --sysmac int_literal_type=lint ...` (`with_overrides`);
+* the project manifest: a `[sysmac]` table in `stvm.toml` (`with_table`).
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, fields, replace
+import difflib
+from dataclasses import MISSING, dataclass, field, fields, replace
+from enum import Enum
+from typing import Any, Callable, Mapping
+
+
+class SettingError(ValueError):
+    """A setting name or value that is not allowed; the message lists what is."""
+
+
+# ---- the allowed values, one Enum per setting (value = the spelling on the command line) ------
+
+class SktProgressWithoutCall(Enum):
+    """A busy socket request progresses between calls of its FB."""
+    ON = "on"                   # the request completes in the background; seen at the next call
+    CANCEL = "cancel"           # a scan without a call cancels the request
+
+
+class EnumDefault(Enum):
+    """Initial value of an enum variable without initialiser."""
+    FIRST = "first"             # the first enumerator
+    ZERO = "zero"               # the value 0
+
+
+class FunErrorPolicy(Enum):
+    """A function's instruction error (ENO FALSE)."""
+    SKIP_ASSIGNMENT = "skip_assignment"   # the receiving assignment is skipped, a warning once per site
+    FAULT = "fault"                       # the task stops
+
+
+class ArrayOob(Enum):
+    """An array index out of range in user code."""
+    FAULT = "fault"             # the task stops with the ST location (the spec's default)
+    # Choice (sysmac.md 1, 9 give no alternative): W501 6-6-3 lists an access beyond the array
+    # range among the *instruction errors*, so the alternative treats it like a function's
+    # instruction error under `fun_error_policy=skip_assignment`: the statement is not executed,
+    # a warning `FILE:LINE:COL: warning: ...` is printed once per statement, the scan goes on.
+    SKIP_STATEMENT = "skip_statement"
+
+
+class IntDivZero(Enum):
+    """Integer `/` and MOD, DIV(), TIME / INT, TIME / REAL and DIV_TIME by zero (one meaning everywhere)."""
+    FAULT = "fault"             # the task stops with the ST location
+    ZERO = "zero"               # the result is 0
+
+
+class IntLiteralType(Enum):
+    """Type of an untyped integer literal."""
+    DINT = "dint"               # DINT if it fits, else LINT
+    LINT = "lint"               # always LINT (no 32-bit overflow)
+
+
+class StringLengthUnit(Enum):
+    """What string lengths and positions count."""
+    UTF8 = "utf8"               # UTF-8 characters (an invalid byte counts 1)
+    BYTES = "bytes"
+
+
+class StringOverflow(Enum):
+    """A text longer than STRING[n] holds, assigned to it."""
+    TRUNCATE_WARN = "truncate_warn"   # cut to n-1 bytes, `FILE:LINE:COL: warning: ...` once per site
+    ERROR = "error"                   # a constant: a check-time error; at run time: a fault
+
+
+class BareEnumerators(Enum):
+    """An enumerator written without `Type#`."""
+    RESOLVE_UNIQUE = "resolve_unique"  # looked up in every visible enum; ambiguity is an error
+    REQUIRE_TYPE = "require_type"      # always an error
+
+
+class DollarN(Enum):
+    """The `$N` escape."""
+    LF = "lf"
+    CRLF = "crlf"
+
+
+class InvalidDollarEscape(Enum):
+    """An unknown `$x` escape."""
+    ERROR = "error"             # a build error
+    LITERAL = "literal"         # kept as the two characters
+
+
+class DoubleQuoteStrings(Enum):
+    """A double-quoted STRING literal."""
+    ACCEPT_WARN = "accept_warn"
+    ERROR = "error"
+
+
+class ForEndEval(Enum):
+    """When a FOR loop evaluates its end expression."""
+    ONCE = "once"               # before the first iteration
+    EACH = "each"               # before every iteration
+
+
+class SktSendCopy(Enum):
+    """When SktTCPSend copies its data bytes."""
+    AT_START = "at_start"       # at the call that starts the request
+    AT_SERVICE = "at_service"   # when the request is serviced
+
+
+class SktErrorIdReset(Enum):
+    """When ErrorID goes back to 0."""
+    START_AND_CLEAR = "start_and_clear"   # at a start and when Error clears
+    START_ONLY = "start_only"
+
+
+class SockaddrPortnoType(Enum):
+    """The type of `_sSOCKET_ADDRESS.PortNo`."""
+    UINT = "UINT"
+    UDINT = "UDINT"             # as printed in the thesis
+
+
+class SktConnectSrcport0(Enum):
+    """SktTCPConnect with SrcTcpPort 0."""
+    EPHEMERAL = "ephemeral"     # the system picks a port
+    ERROR = "error"             # error 16#0400
+
+
+class SktSocketAfterClose(Enum):
+    """The Socket output of SktTCPConnect after the socket is closed."""
+    UNCHANGED = "unchanged"
+    ZEROED = "zeroed"
+
+
+class SktStatusClosedHandle(Enum):
+    """SktGetTCPStatus on a handle closed by SktClose."""
+    DONE_CLOSED = "done_closed"  # Done with `_CLOSED`
+    ERROR = "error"              # error 16#2007
+
+
+class SktSendSize0(Enum):
+    """SktTCPSend with Size 0."""
+    DONE = "done"               # Done, nothing sent
+    ERROR = "error"             # error 16#0400
+
+
+class SktRcvTimeout0(Enum):
+    """SktTCPRcv with TimeOut 0."""
+    FOREVER = "forever"                  # wait forever
+    ERROR_IF_EMPTY = "error_if_empty"    # error 16#2006 when nothing is buffered
+
+
+class SktRcvPeerClosed(Enum):
+    """SktTCPRcv after the peer's FIN with nothing buffered."""
+    DONE_ZERO = "done_zero"     # Done, RcvSize 0
+    ERROR = "error"             # error 16#2003
+
+
+class ToarybyteStringModel(Enum):
+    """The bytes ToAryByte writes for a STRING."""
+    TEXT_NUL = "text_nul"       # the text bytes and one 16#00
+    TEXT = "text"               # the text bytes only
+    IMAGE = "image"             # the whole declared storage
+
+
+class ToarybyteWideOrder(Enum):
+    """Word order of 4/8-byte values in ToAryByte."""
+    BIG_ENDIAN = "big_endian"
+    WORD_SWAPPED = "word_swapped"
+
+
+class ArytostringOversize(Enum):
+    """AryToString with Size > 1985 or more than the elements left."""
+    ERROR = "error"
+    TRUNCATE = "truncate"
+
+
+class RtfsRounding(Enum):
+    """RealToFormatString rounding of a tie."""
+    HALF_AWAY = "half_away"     # half away from zero
+    HALF_EVEN = "half_even"
+
+
+class RtfsNegativeZero(Enum):
+    """RealToFormatString of a negative value that rounds to 0, with Sign TRUE."""
+    MINUS = "minus"             # '-0'
+    PLUS = "plus"               # '+0'
+
+
+class ByteToStringFormat(Enum):
+    """BYTE/WORD/DWORD/LWORD_TO_STRING."""
+    HEX_NOPAD = "hex_nopad"     # 16#0A -> 'A'
+    HEX_PAD2 = "hex_pad2"       # 16#0A -> '0A'
+    DECIMAL = "decimal"         # 16#0A -> '10'
+
+
+class StouTrailing(Enum):
+    """STRING_TO_UINT with characters after the number."""
+    ERROR = "error"
+    IGNORE_BLANKS = "ignore_blanks"
+
+
+class StouPlus(Enum):
+    """STRING_TO_UINT with a leading `+`."""
+    ACCEPT = "accept"
+    ERROR = "error"
+
+
+class SectodtRange(Enum):
+    """SecToDt outside 0 .. 4,294,943,999."""
+    ERROR = "error"
+    CLAMP = "clamp"
+
+
+class TimerClock(Enum):
+    """The clock the timers read."""
+    SCAN_START = "scan_start"   # the VM clock at the start of the scan
+    CALL_TIME = "call_time"     # the clock at the call (a free-running clock)
+
+
+class RtrigFirstCall(Enum):
+    """R_TRIG's first call with CLK TRUE."""
+    FIRE = "fire"
+    NO_FIRE = "no_fire"
+
+
+class TonPtBelowEt(Enum):
+    """TON whose PT drops below ET while timing."""
+    Q_TRUE = "q_true"           # Q TRUE, ET := PT
+    KEEP_TIMING = "keep_timing"
+
+
+class TonNonpositivePtEt(Enum):
+    """ET of a TON with PT <= 0 once IN is TRUE."""
+    ZERO = "zero"
+    PT = "pt"
+
+
+class IecPinAliases(Enum):
+    """Omron pin spellings (Reset, Load, Set1, Reset1) as aliases of IEC pins."""
+    ON = "on"
+    OFF = "off"
+
+
+class StringResultOverflow(Enum):
+    """A string function whose result exceeds 1985 bytes."""
+    ERROR = "error"             # a function error
+    TRUNCATE = "truncate"
+
+
+class StringFnRange(Enum):
+    """A string function position out of range."""
+    ERROR = "error"             # a function error
+    CLAMP = "clamp"
+
+
+class ConcatArity(Enum):
+    """CONCAT with one input."""
+    ONE_WARNS = "one_warns"     # 1..32 inputs; one input is the identity, with a warning
+    TWO_OR_MORE = "two_or_more"
+
+
+class FindEmpty(Enum):
+    """FIND(s, '')."""
+    ZERO = 0
+    ONE = 1
+
+
+# ---- tables ------------------------------------------------------------------------------------
+
+CONNECTION_STATES = ("_CLOSED", "_LISTEN", "_SYN_SENT", "_SYN_RECEIVED", "_ESTABLISHED", "_CLOSE_WAIT",
+                     "_FIN_WAIT1", "_CLOSING", "_LAST_ACK", "_FIN_WAIT2", "_TIME_WAIT")
+BYTE_ORDERS = ("_LOW_HIGH", "_HIGH_LOW")
+SOCKET_ERROR_KINDS = ("out_of_range", "too_few_elements", "port_in_use", "unresolvable",
+                      "wrong_state", "timeout", "bad_handle", "too_many_sockets")
 
 
 def _bsd_connection_states() -> dict[str, int]:
     # Choice (spec 5, `connection_state_values`): BSD order of the TCP states.
-    names = ["_CLOSED", "_LISTEN", "_SYN_SENT", "_SYN_RECEIVED", "_ESTABLISHED", "_CLOSE_WAIT",
-             "_FIN_WAIT1", "_CLOSING", "_LAST_ACK", "_FIN_WAIT2", "_TIME_WAIT"]
-    return {name: value for value, name in enumerate(names)}
+    return {name: value for value, name in enumerate(CONNECTION_STATES)}
+
+
+def _default_byte_orders() -> dict[str, int]:
+    return {"_LOW_HIGH": 0, "_HIGH_LOW": 1}
 
 
 def _default_skt_error_codes() -> dict[str, int]:
@@ -33,84 +306,247 @@ def _default_skt_error_codes() -> dict[str, int]:
 
 
 @dataclass(frozen=True)
+class Table:
+    """A setting whose value is a name → integer table (settable from Python or `stvm.toml`)."""
+
+    keys: tuple[str, ...]
+    lo: int
+    hi: int
+    distinct: bool       # an enum's values must differ
+
+    def check(self, name: str, value: object) -> dict[str, int]:
+        if not isinstance(value, Mapping):
+            raise SettingError(f"{name} is a table of {', '.join(self.keys)}; got {value!r}")
+        out: dict[str, int] = {}
+        for key, number in value.items():
+            if key not in self.keys:
+                raise SettingError(f"{name}: unknown entry {key!r}; allowed: {', '.join(self.keys)}")
+            if isinstance(number, bool) or not isinstance(number, int) or not self.lo <= number <= self.hi:
+                raise SettingError(f"{name}.{key}: {number!r} is not allowed; allowed: an integer "
+                                   f"{self.lo}..{self.hi}")
+            out[key] = number
+        if self.distinct and len(set(out.values())) != len(out):
+            raise SettingError(f"{name}: the values must differ (they are an enum's), got {out}")
+        return out
+
+
+_DINT = (-2**31, 2**31 - 1)
+
+
+def setting(default: Any = None, spec: str = "", *, lo: int | None = None, hi: int | None = None,
+            table: Table | None = None, factory: Callable[[], Any] | None = None, doc: str = "") -> Any:
+    """Declare one setting: its default, its spec section (of sysmac.md), for a number its range,
+    and what it means (an Enum setting says that in the Enum's docstring)."""
+    meta = {"spec": spec, "lo": lo, "hi": hi, "table": table, "doc": doc}
+    if factory is not None:
+        return field(default_factory=factory, metadata=meta)
+    return field(default=default, metadata=meta)
+
+
+@dataclass(frozen=True)
 class SysmacSettings:
-    """One field per UNCERTAIN item of the Sysmac spec; defaults are the spec's."""
+    """One field per UNCERTAIN item of the Sysmac spec; defaults are the spec's (section 9)."""
 
     # section 1: execution model
-    skt_progress_without_call: str = "on"          # on | cancel
-    enum_default: str = "first"                    # first | zero
-    fun_error_policy: str = "skip_assignment"      # skip_assignment | fault
-    array_oob: str = "fault"
-    int_div_zero: str = "fault"                    # fault | zero
+    skt_progress_without_call: SktProgressWithoutCall = setting(SktProgressWithoutCall.ON, "1")
+    enum_default: EnumDefault = setting(EnumDefault.FIRST, "1")
+    fun_error_policy: FunErrorPolicy = setting(FunErrorPolicy.SKIP_ASSIGNMENT, "1")
+    array_oob: ArrayOob = setting(ArrayOob.FAULT, "1")
+    int_div_zero: IntDivZero = setting(IntDivZero.FAULT, "1")
     # section 2: types
-    int_literal_type: str = "dint"                 # dint | lint
-    string_length_unit: str = "utf8"               # utf8 | bytes
-    string_overflow: str = "truncate_warn"         # truncate_warn | error
+    int_literal_type: IntLiteralType = setting(IntLiteralType.DINT, "2")
+    string_length_unit: StringLengthUnit = setting(StringLengthUnit.UTF8, "2")
+    string_overflow: StringOverflow = setting(StringOverflow.TRUNCATE_WARN, "2")
     # section 3: dialect
-    bare_enumerators: str = "resolve_unique"       # resolve_unique | require_type
-    dollar_n: str = "lf"                           # lf | crlf
-    invalid_dollar_escape: str = "error"           # error | literal
-    double_quote_strings: str = "accept_warn"      # accept_warn | error
-    for_end_eval: str = "once"                     # once | each
+    bare_enumerators: BareEnumerators = setting(BareEnumerators.RESOLVE_UNIQUE, "3 #3")
+    dollar_n: DollarN = setting(DollarN.LF, "3 #7")
+    invalid_dollar_escape: InvalidDollarEscape = setting(InvalidDollarEscape.ERROR, "3 #7")
+    double_quote_strings: DoubleQuoteStrings = setting(DoubleQuoteStrings.ACCEPT_WARN, "3 #8")
+    for_end_eval: ForEndEval = setting(ForEndEval.ONCE, "9")
     # section 4/5: sockets
-    skt_send_copy: str = "at_start"                # at_start | at_service
-    skt_errorid_reset: str = "start_and_clear"     # start_and_clear | start_only
-    skt_min_latency_calls: int = 1
-    sockaddr_portno_type: str = "UINT"             # UINT | UDINT
-    connection_state_values: dict = field(default_factory=_bsd_connection_states)
-    byte_order_values: dict = field(default_factory=lambda: {"_LOW_HIGH": 0, "_HIGH_LOW": 1})
-    skt_connect_srcport0: str = "ephemeral"        # ephemeral | error
-    skt_socket_after_close: str = "unchanged"      # unchanged | zeroed
-    skt_status_closed_handle: str = "done_closed"  # done_closed | error
-    skt_send_size0: str = "done"                   # done | error
-    skt_send_max: int = 2000
-    skt_rcv_timeout0: str = "forever"              # forever | error_if_empty
-    skt_rcv_timeout_unit_ns: int = 100_000_000
-    skt_rcv_peer_closed: str = "done_zero"         # done_zero | error
-    skt_error_codes: dict = field(default_factory=_default_skt_error_codes)
+    skt_send_copy: SktSendCopy = setting(SktSendCopy.AT_START, "4 #2")
+    skt_errorid_reset: SktErrorIdReset = setting(SktErrorIdReset.START_AND_CLEAR, "4 #2")
+    skt_min_latency_calls: int = setting(1, "4 #3", lo=0, hi=1000,
+                                         doc="Calls after the starting call before a socket request can complete")
+    sockaddr_portno_type: SockaddrPortnoType = setting(SockaddrPortnoType.UINT, "5")
+    connection_state_values: dict = setting(spec="5", factory=_bsd_connection_states,
+                                            table=Table(CONNECTION_STATES, *_DINT, distinct=False),
+                                            doc="Values of `_eCONNECTION_STATE` (default: BSD order)")
+    byte_order_values: dict = setting(spec="5", factory=_default_byte_orders,
+                                      table=Table(BYTE_ORDERS, *_DINT, distinct=True),
+                                      doc="Values of `_eBYTE_ORDER`")
+    skt_connect_srcport0: SktConnectSrcport0 = setting(SktConnectSrcport0.EPHEMERAL, "5")
+    skt_socket_after_close: SktSocketAfterClose = setting(SktSocketAfterClose.UNCHANGED, "5")
+    skt_status_closed_handle: SktStatusClosedHandle = setting(SktStatusClosedHandle.DONE_CLOSED, "5")
+    skt_send_size0: SktSendSize0 = setting(SktSendSize0.DONE, "5")
+    skt_send_max: int = setting(2000, "5", lo=0, hi=65535,               # Size is a UINT
+                                doc="Largest SktTCPSend Size; above it error 16#0400")
+    skt_rcv_timeout0: SktRcvTimeout0 = setting(SktRcvTimeout0.FOREVER, "5")
+    skt_rcv_timeout_unit_ns: int = setting(100_000_000, "5", lo=1, hi=2**63 - 1,
+                                           doc="What one unit of SktTCPRcv TimeOut is, in ns")
+    skt_rcv_peer_closed: SktRcvPeerClosed = setting(SktRcvPeerClosed.DONE_ZERO, "5")
+    skt_error_codes: dict = setting(spec="5", factory=_default_skt_error_codes,
+                                    table=Table(SOCKET_ERROR_KINDS, 0, 0xFFFF, distinct=False),
+                                    doc="ErrorID of each socket failure (default: the spec's table)")
     # section 6: Omron functions
-    toarybyte_string_model: str = "text_nul"       # text_nul | text | image
-    toarybyte_wide_order: str = "big_endian"       # big_endian | word_swapped
-    arytostring_oversize: str = "error"            # error | truncate
-    rtfs_rounding: str = "half_away"               # half_away | half_even
-    rtfs_negative_zero: str = "minus"              # minus | plus
-    rtfs_max_minlen: int = 24                      # `rtfs_limits`
-    rtfs_max_decplace: int = 7                     # `rtfs_limits`
-    byte_to_string_format: str = "hex_nopad"       # hex_nopad | hex_pad2 | decimal
-    stou_trailing: str = "error"                   # error | ignore_blanks
-    stou_plus: str = "accept"                      # accept | error
-    gettime_resolution_ns: int = 1_000_000
-    sectodt_range: str = "error"                   # error | clamp
+    toarybyte_string_model: ToarybyteStringModel = setting(ToarybyteStringModel.TEXT_NUL, "6")
+    toarybyte_wide_order: ToarybyteWideOrder = setting(ToarybyteWideOrder.BIG_ENDIAN, "6")
+    arytostring_oversize: ArytostringOversize = setting(ArytostringOversize.ERROR, "6")
+    rtfs_rounding: RtfsRounding = setting(RtfsRounding.HALF_AWAY, "6")
+    rtfs_negative_zero: RtfsNegativeZero = setting(RtfsNegativeZero.MINUS, "6")
+    rtfs_max_minlen: int = setting(24, "6", lo=0, hi=255,         # MinLen is a USINT
+                                   doc="Largest RealToFormatString MinLen (`rtfs_limits`)")
+    rtfs_max_decplace: int = setting(7, "6", lo=0, hi=255,        # DecPlace is a USINT
+                                     doc="Largest RealToFormatString DecPlace (`rtfs_limits`)")
+    byte_to_string_format: ByteToStringFormat = setting(ByteToStringFormat.HEX_NOPAD, "6")
+    stou_trailing: StouTrailing = setting(StouTrailing.ERROR, "6")
+    stou_plus: StouPlus = setting(StouPlus.ACCEPT, "6")
+    gettime_resolution_ns: int = setting(1_000_000, "6", lo=1, hi=86_400_000_000_000,
+                                         doc="GetTime's resolution in ns")
+    sectodt_range: SectodtRange = setting(SectodtRange.ERROR, "6")
     # section 7: IEC library
-    timer_clock: str = "scan_start"                # scan_start | call_time
-    rtrig_first_call: str = "fire"                 # fire | no_fire
-    ton_pt_below_et: str = "q_true"                # q_true | keep_timing
-    ton_nonpositive_pt_et: str = "zero"            # zero | pt
-    iec_pin_aliases: str = "on"                    # on | off
-    string_result_overflow: str = "error"          # error | truncate
-    string_fn_range: str = "error"                 # error | clamp
-    concat_arity: str = "one_warns"                # one_warns | two_or_more
-    find_empty: int = 0                            # 0 | 1
+    timer_clock: TimerClock = setting(TimerClock.SCAN_START, "7")
+    rtrig_first_call: RtrigFirstCall = setting(RtrigFirstCall.FIRE, "7")
+    ton_pt_below_et: TonPtBelowEt = setting(TonPtBelowEt.Q_TRUE, "7")
+    ton_nonpositive_pt_et: TonNonpositivePtEt = setting(TonNonpositivePtEt.ZERO, "7")
+    iec_pin_aliases: IecPinAliases = setting(IecPinAliases.ON, "7")
+    string_result_overflow: StringResultOverflow = setting(StringResultOverflow.ERROR, "7")
+    string_fn_range: StringFnRange = setting(StringFnRange.ERROR, "7")
+    concat_arity: ConcatArity = setting(ConcatArity.ONE_WARNS, "7")
+    find_empty: FindEmpty = setting(FindEmpty.ZERO, "7")
 
-    def with_overrides(self, assignments: list[str]) -> "SysmacSettings":
+    def __post_init__(self) -> None:
+        # every value is checked (and a spelling turned into its Enum member) at construction,
+        # so no code ever sees a value the declaration does not allow
+        for name, declared in _declarations().items():
+            object.__setattr__(self, name, declared.coerce(getattr(self, name)))
+
+    def with_overrides(self, assignments: list[str] | tuple[str, ...]) -> "SysmacSettings":
         """Return a copy with `name=value` strings applied (from `--sysmac name=value`)."""
-        known = {f.name: f for f in fields(self)}
         changes: dict[str, object] = {}
         for item in assignments:
             name, sep, text = item.partition("=")
             name = name.strip()
-            if not sep or name not in known:
-                raise ValueError(f"unknown Sysmac setting {item!r}; known: {', '.join(sorted(known))}")
-            current = getattr(self, name)
-            if isinstance(current, bool):
-                changes[name] = text.strip().lower() in ("1", "true", "on", "yes")
-            elif isinstance(current, int):
-                changes[name] = int(text.strip().replace("_", ""), 0)
-            elif isinstance(current, str):
-                changes[name] = text.strip()
-            else:
-                raise ValueError(f"setting {name} is a table; set it from the Python API")
+            if not sep:
+                raise SettingError(f"--sysmac needs NAME=VALUE, got {item!r}")
+            changes[name] = declaration(name).parse_text(text.strip())
         return replace(self, **changes)
+
+    def with_table(self, table: Mapping[str, object], where: str = "[sysmac]") -> "SysmacSettings":
+        """Return a copy with a TOML table applied (`[sysmac]` of `stvm.toml`); a table-valued
+        setting given as a sub-table changes only the entries it names."""
+        changes: dict[str, object] = {}
+        for name, value in table.items():
+            try:
+                declared = declaration(name)
+                if declared.table is not None and isinstance(value, Mapping):
+                    value = {**getattr(self, name), **value}
+                changes[name] = declared.coerce(value)
+            except SettingError as exc:
+                raise SettingError(f"{where}: {exc}") from None
+        return replace(self, **changes)
+
+
+# ---- the declarations, read from the dataclass ---------------------------------------------------
+
+@dataclass(frozen=True)
+class Declaration:
+    """What one field declares: name, type, default, spec section, range."""
+
+    name: str
+    kind: Any                      # an Enum class, int or dict
+    default: Any
+    spec: str
+    lo: int | None
+    hi: int | None
+    table: Table | None
+    doc: str
+
+    @property
+    def meaning(self) -> str:
+        """What the setting decides (the Enum's docstring, or the declaration's `doc`)."""
+        return self.doc or (self.kind.__doc__ or "").strip()
+
+    @property
+    def choices(self) -> tuple[Enum, ...]:
+        return tuple(self.kind) if isinstance(self.kind, type) and issubclass(self.kind, Enum) else ()
+
+    def allowed(self) -> str:
+        """The allowed values in words (for error messages and the README)."""
+        if self.choices:
+            return ", ".join(f"{member.value} (default)" if member is self.default else str(member.value)
+                             for member in self.choices)
+        if self.table is not None:
+            return f"a table of {', '.join(self.table.keys)} (stvm.toml [sysmac.{self.name}] or Python)"
+        return f"an integer {self.lo}..{self.hi} (default {self.default})"
+
+    def coerce(self, value: object) -> object:
+        """`value` as the declared type (an Enum member from its spelling too); else SettingError."""
+        if self.choices:
+            if isinstance(value, self.kind):
+                return value
+            for member in self.choices:
+                if value == member.value or (isinstance(value, str) and isinstance(member.value, str)
+                                             and value.lower() == member.value.lower()):
+                    if not isinstance(value, bool):
+                        return member
+            raise SettingError(f"{self.name}: {value!r} is not allowed; allowed: {self.allowed()}")
+        if self.table is not None:
+            return self.table.check(self.name, value)
+        if isinstance(value, bool) or not isinstance(value, int):
+            raise SettingError(f"{self.name}: {value!r} is not allowed; allowed: {self.allowed()}")
+        assert self.lo is not None and self.hi is not None
+        if not self.lo <= value <= self.hi:
+            raise SettingError(f"{self.name}: {value} is out of range; allowed: {self.allowed()}")
+        return value
+
+    def parse_text(self, text: str) -> object:
+        """A value typed on the command line."""
+        if self.table is not None:
+            raise SettingError(f"{self.name} is a table: set it in stvm.toml [sysmac.{self.name}] "
+                               "or from the Python API")
+        if self.choices:
+            by_text = {str(member.value).lower(): member for member in self.choices}
+            member = by_text.get(text.lower())
+            if member is None:
+                raise SettingError(f"{self.name}: {text!r} is not allowed; allowed: {self.allowed()}")
+            return member
+        try:
+            number = int(text.replace("_", ""), 0)
+        except ValueError:
+            raise SettingError(f"{self.name}: {text!r} is not an integer; allowed: {self.allowed()}") from None
+        return self.coerce(number)
+
+
+_DECLARATIONS: dict[str, Declaration] = {}
+
+
+def _declarations() -> dict[str, Declaration]:
+    if not _DECLARATIONS:
+        for f in fields(SysmacSettings):
+            default = f.default_factory() if f.default_factory is not MISSING else f.default
+            # the kind is the default's type (an Enum class, int or dict): the same as the
+            # annotation, without evaluating 50 annotation strings at every start-up
+            kind = type(default)
+            meta = f.metadata
+            _DECLARATIONS[f.name] = Declaration(f.name, kind, default, meta["spec"], meta["lo"], meta["hi"],
+                                                meta["table"], meta["doc"])
+    return _DECLARATIONS
+
+
+def declarations() -> list[Declaration]:
+    """Every setting's declaration, in declaration order."""
+    return list(_declarations().values())
+
+
+def declaration(name: str) -> Declaration:
+    """The declaration of setting `name`; SettingError (naming close matches) if there is none."""
+    found = _declarations().get(name)
+    if found is None:
+        close = difflib.get_close_matches(name, list(_declarations()), n=3)
+        hint = f"; did you mean {' or '.join(close)}?" if close else ""
+        raise SettingError(f"unknown Sysmac setting {name!r}{hint} (known: {', '.join(_declarations())})")
+    return found
 
 
 DEFAULT_SETTINGS = SysmacSettings()

@@ -34,6 +34,9 @@ def register(subparsers) -> None:
     debug.add_argument("--realtime", action="store_true", help="sleep to each deadline (default: virtual clock)")
     debug.add_argument("--sysmac", action="append", default=[], metavar="NAME=VALUE",
                        help="override a Sysmac UNCERTAIN setting")
+    debug.add_argument("--hmi", metavar="[HOST:]PORT",
+                       help="serve the project's HMI pages while debugging (values between scans, "
+                            "writes at the next scan start; docs/hmi.md)")
     debug.set_defaults(func=cmd_debug)
 
     dap = subparsers.add_parser(
@@ -78,10 +81,40 @@ def cmd_debug(args) -> int:
         sys.stderr.write(render(warning, session.build.project.sources))
     if session.robot != "none":
         print(f"robot: {session.robot}" + (f" on port {session.server.port}" if session.server else ""))
+    hmi = None
     try:
+        if getattr(args, "hmi", None):
+            hmi = _start_hmi(args.hmi, session)
+            if hmi is None:
+                return EXIT_COMPILE
         return Console(session.engine).run(commands)
+    except ValueError as exc:   # HmiUsageError
+        return _error(str(exc))
     finally:
+        if hmi is not None:
+            hmi.stop()
         session.close()
+
+
+def _start_hmi(address: str, session):
+    """`--hmi`: the web HMI on the debugged VM; the robot view reads the session's emulator."""
+    from stvm.hmi.cli import report_load_error, start_hmi
+    from stvm.hmi.pages import HmiLoadError
+    from stvm.hmi.robot import from_lockstep, from_tcp_server
+    pose = parameters = None
+    if session.transport is not None:
+        from stvm.lockstep import LOCKSTEP_HOST, LOCKSTEP_PORT
+        pose = from_lockstep(session.transport)
+        parameters = {"robot_host": LOCKSTEP_HOST, "robot_port": LOCKSTEP_PORT}
+    elif session.server is not None:
+        pose = from_tcp_server(session.server)
+        parameters = {"robot_host": "127.0.0.1", "robot_port": session.server.port}
+    try:
+        return start_hmi(session.build.project, session.engine.vm, address, pose=pose,
+                         run_parameters=parameters, stream=sys.stdout)
+    except HmiLoadError as exc:
+        report_load_error(exc)
+        return None
 
 
 def cmd_dap(args) -> int:

@@ -19,7 +19,6 @@ from typing import Any, Sequence
 
 from stvm.debug.build import DebugBuild, load_debug
 from stvm.debug.engine import Engine
-from stvm.settings import DEFAULT_SETTINGS
 
 
 @dataclass
@@ -58,9 +57,9 @@ class Session:
 def open_session(options: SessionOptions, build: DebugBuild | None = None) -> Session:
     """Load (unless `build` is given) and prepare a session; raises LoadError, ValueError (bad
     options) or ScenarioError. The engine is not started yet."""
-    from stvm.project import parse_duration
+    from stvm.project import parse_duration, project_settings
     from stvm.scenario import Scenario, load_scenario
-    settings = DEFAULT_SETTINGS.with_overrides(list(options.sysmac))
+    settings = project_settings(options.files, list(options.sysmac))
     scenario = load_scenario(options.scenario) if options.scenario else Scenario()
     scan_ns = parse_duration(options.scan or scenario.scan or "10ms")
     if scan_ns <= 0:

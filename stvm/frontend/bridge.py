@@ -5,12 +5,17 @@ variable itself:
 
 * **Reads** come from a `Snapshot`: the values of a `Watch`'s paths, all taken by the VM thread at
   the end of one scan, so every value in it belongs to the same instant. A watch samples at most
-  once per scan and at least `every_ns` of VM time apart; sampling costs the scan loop one getter
-  call per path and nothing when no watch is due.
+  once per scan, at least `every_ns` of VM time apart and, if asked, `every_wall_ns` of wall-clock
+  time apart (on the virtual clock VM time may run many times faster than a display needs);
+  sampling costs the scan loop one getter call per path and nothing when no watch is due.
 * **Writes** are submitted as a batch `{path: value}`. The batch is checked against the variables'
   types in the caller's thread (a bad value is rejected at once, the VM untouched), queued, and
   applied by the VM thread at the start of the next scan, all of it or none of it, never in the
-  middle of a scan (as an NA HMI's variable mapping or an NJ's OPC UA server writes).
+  middle of a scan (as an NA HMI's variable mapping or an NJ's OPC UA server writes). A scan
+  applies the batches queued before it started, in order; a batch submitted after an earlier one
+  was applied therefore lands in a later scan (a momentary button's TRUE is seen by at least one
+  scan before its FALSE). `parse(path, text)` turns IEC literal text (`TRUE`, `16#FF`, `'abc'`,
+  `T#1s`, `PTP`) into the value `submit` takes.
 
 The queue is bounded: a front end that floods writes gets `WriteRejected("busy")` instead of slowing
 the scan. Nothing here blocks the VM thread.
@@ -20,6 +25,7 @@ from __future__ import annotations
 
 import queue
 import threading
+import time
 from concurrent.futures import Future
 from dataclasses import dataclass
 from typing import Any, Callable, Iterable, Mapping
@@ -55,13 +61,15 @@ class Watch:
     """A set of paths sampled by the VM thread; `latest()` is safe from any thread."""
 
     def __init__(self, bridge: "VariableBridge", paths: list[str], every_ns: int,
-                 on_snapshot: Callable[[Snapshot], None] | None) -> None:
+                 on_snapshot: Callable[[Snapshot], None] | None, every_wall_ns: int = 0) -> None:
         self.bridge = bridge
         self.paths = list(paths)
         self.every_ns = max(0, int(every_ns))
+        self.every_wall_ns = max(0, int(every_wall_ns))
         self.on_snapshot = on_snapshot
         self._accessors = [bridge.vm.accessor(p) for p in self.paths]
         self._next_ns = 0
+        self._next_wall_ns = 0
         self._version = 0
         self._latest: Snapshot | None = None
 
@@ -104,12 +112,13 @@ class VariableBridge:
         return self.vm.accessor(path).type
 
     def watch(self, paths: Iterable[str], every_ns: int = 0,
-              on_snapshot: Callable[[Snapshot], None] | None = None) -> Watch:
-        """Sample `paths` between scans, at most once per scan and `every_ns` VM-time apart.
+              on_snapshot: Callable[[Snapshot], None] | None = None, every_wall_ns: int = 0) -> Watch:
+        """Sample `paths` between scans, at most once per scan, `every_ns` VM-time apart and
+        `every_wall_ns` wall-clock time apart (0: no limit).
 
         `on_snapshot` runs in the VM thread: it must only hand the snapshot over (for example
         `loop.call_soon_threadsafe`), never block."""
-        watch = Watch(self, list(paths), every_ns, on_snapshot)
+        watch = Watch(self, list(paths), every_ns, on_snapshot, every_wall_ns)
         with self._lock:
             self._watches = self._watches + [watch]
         return watch
@@ -124,12 +133,42 @@ class VariableBridge:
 
     def _sample_due(self, vm: VM) -> None:
         now = vm.now_ns
+        wall = 0
         for watch in self._watches:   # the list is replaced, never mutated: no lock needed here
             if now >= watch._next_ns:
+                if watch.every_wall_ns:
+                    wall = wall or time.monotonic_ns()
+                    if wall < watch._next_wall_ns:
+                        continue
+                    watch._next_wall_ns = wall + watch.every_wall_ns
                 watch._next_ns = now + watch.every_ns
                 watch._sample(vm)
 
     # ---- writes
+    def parse(self, path: str, text: str) -> Any:
+        """IEC literal `text` (as `--set` takes it) as the Python value `submit` takes for `path`.
+
+        Raises `WriteRejected` for an unknown path or text that is no literal of the type."""
+        from stvm.cli import literal_value   # Choice: the one literal reader `--set` uses
+        try:
+            ty = self.vm.accessor(path).type
+        except PathError as exc:
+            raise WriteRejected(str(exc), path) from None
+        try:
+            value = literal_value(text, ty)
+        except ValueError as exc:
+            raise WriteRejected(str(exc), path) from None
+        if isinstance(ty, t.StringType):
+            # Choice: a front end's text that does not fit is refused, not cut to the length
+            # (an ST assignment truncates; an operator should see that the text was too long)
+            data = value.encode("utf-8") if isinstance(value, str) else bytes(value)
+            if len(data) > ty.max_bytes:
+                raise WriteRejected(f"{len(data)} bytes is longer than {ty.name} ({ty.max_bytes} bytes)", path)
+        try:
+            return coerce_python_value(value, ty)
+        except ValueError as exc:
+            raise WriteRejected(str(exc), path) from None
+
     def submit(self, values: Mapping[str, Any]) -> Future:
         """Queue `{path: Python value}` for the start of the next scan.
 
@@ -155,7 +194,9 @@ class VariableBridge:
 
     def _apply_pending(self, vm: VM) -> None:
         pending = self._pending
-        while True:
+        # only the batches queued before this scan started: one submitted while these are applied
+        # (say, in reply to an earlier one being done) waits for the next scan
+        for _ in range(pending.qsize()):
             try:
                 checked, future = pending.get_nowait()
             except queue.Empty:

@@ -20,6 +20,7 @@ from stvm.semantics.checker import Analysis, CallInfo
 from stvm.semantics.model import EXTERNAL, GLOBAL, IN_OUT, INPUT, OUTPUT, TEMP, POUInfo, Variable
 from stvm.lower.names import unit_name, var_attr
 from stvm.syntax import nodes as n
+from stvm.settings import ArrayOob, EnumDefault, ForEndEval, IntDivZero
 
 
 @dataclass
@@ -59,7 +60,7 @@ class LoweredProject:
     natives: dict[str, str]            # Python name → native registry key (functions)
     native_fbs: dict[str, str]         # Python class name → native FB registry key
     types: list[t.Type]                # `_T[i]` constants
-    sites: list[n.Span]                # `_fun_error(e, i)` call sites
+    sites: list[n.Span]                # spans of `_fun_error(e, i)` and `_oob_skipped(e, i)` calls
     globals_class: str = "G_globals"
 
 
@@ -180,7 +181,7 @@ class Lowerer:
     def enum_default(self, ty: t.EnumType) -> int:
         if ty.default is not None:
             return ty.default
-        if self.settings.enum_default == "zero" or not ty.members:
+        if self.settings.enum_default is EnumDefault.ZERO or not ty.members:
             return 0
         return ty.members[0][1]
 
@@ -385,15 +386,26 @@ class Lowerer:
     def statement(self, s: n.Statement) -> None:
         self.w.span = s.span
         guarded = isinstance(s, (n.Assign, n.CallStatement)) and self.has_native_call(s)
-        if guarded:
+        # array_oob=skip_statement: a statement with an array access is skipped when an index
+        # is out of range (a compound one only for its own expressions: inner statements skip
+        # themselves)
+        skippable = self.settings.array_oob is ArrayOob.SKIP_STATEMENT and self.has_index(s)
+        if guarded or skippable:
             self.w.line("try:")
             self.w.indent += 1
         getattr(self, "st_" + type(s).__name__)(s)
-        if guarded:
+        if guarded or skippable:
             self.w.indent -= 1
-            self.sites.append(s.span)
             self.w.span = s.span
+        if guarded:
+            self.sites.append(s.span)
             self.w.line(f"except _FunctionError as _e: _fun_error(_e, {len(self.sites) - 1})")
+        if skippable:
+            self.sites.append(s.span)
+            self.w.line(f"except _ArrayIndexError as _e: _oob_skipped(_e, {len(self.sites) - 1})")
+
+    def has_index(self, node: object) -> bool:
+        return any(isinstance(x, n.Index) for x in _walk((node,)))
 
     def has_native_call(self, node: object) -> bool:
         """Does this statement call a FUNCTION (which may raise an instruction error)?"""
@@ -478,7 +490,7 @@ class Lowerer:
             self.w.line(f"{step} = {self.expr_as(s.step, var_type)}")  # type: ignore[arg-type]
             cond = f"({read} <= {end} if {step} > 0 else {read} >= {end})"
         increment = self.store_code(s.variable, _wrap(f"{read} + {step}", var_type), var_type)
-        if self.settings.for_end_eval == "each":
+        if self.settings.for_end_eval is ForEndEval.EACH:
             cond = cond.replace(end, f"({self.expr_as(s.end, var_type)})")
         self.w.line(f"while {cond}:")
         self.w.indent += 1
@@ -498,7 +510,7 @@ class Lowerer:
         is a genuinely endless loop, reported as a fault instead of hanging)."""
         if not isinstance(step, int) or isinstance(step, bool) or step == 0:
             return False
-        if self.settings.for_end_eval != "once":
+        if self.settings.for_end_eval is not ForEndEval.ONCE:
             return False
         ref = self.facts.names.get(id(s.variable))
         if ref is None or ref.kind != "var" or ref.variable is None or ref.variable.key not in self.cached:
@@ -782,7 +794,7 @@ class Lowerer:
             converted = self.convert_const(value, ty)
             if converted is not None:
                 return _lit(converted)
-        return self.coerce(self.expr(e), src, ty)
+        return self.coerce(self.expr(e), src, ty, e.span)
 
     def convert_const(self, value: object, ty: t.Type) -> object:
         if isinstance(ty, t.RealType) and isinstance(value, (int, float)) and not isinstance(value, bool):
@@ -797,7 +809,7 @@ class Lowerer:
             return value
         return None
 
-    def coerce(self, code: str, src: t.Type, dst: t.Type) -> str:
+    def coerce(self, code: str, src: t.Type, dst: t.Type, span: n.Span | None = None) -> str:
         if src == dst:
             return code
         if isinstance(dst, t.IntType) and isinstance(src, t.IntType):
@@ -809,7 +821,11 @@ class Lowerer:
         if isinstance(dst, t.StringType) and isinstance(src, t.StringType):
             if src.size <= dst.size:
                 return code
-            return f"_strfit({code}, {dst.max_bytes})"
+            if span is None:
+                return f"_strfit({code}, {dst.max_bytes})"
+            # string_overflow: a fault, or a cut and one warning per site (the site's location
+            # is passed, not an index, so debugger expressions lowered on their own work too)
+            return f"_str_overflow({code}, {dst.max_bytes}, {span.file!r}, {span.line}, {span.column})"
         return code
 
     def expr(self, e: n.Expr) -> str:
@@ -854,7 +870,13 @@ class Lowerer:
         code = self.expr(e.base)
         assert isinstance(base_type, t.ArrayType)
         if base_type.dims is None:
-            return code, self.expr(e.indices[0])
+            # an ARRAY[*] parameter: index 0 .. elements passed - 1, checked like any array
+            # access in user code (`array_oob`); ArrayRef's own check is the instructions'
+            ix = self.expr(e.indices[0])
+            if not ix.replace(".", "").replace("_", "").isalnum():
+                tmp = self.new_tmp("i")
+                return code, f"{tmp} if 0 <= ({tmp} := {ix}) < len({code}) else _oob({tmp}, 0, len({code}) - 1)"
+            return code, f"{ix} if 0 <= {ix} < len({code}) else _oob({ix}, 0, len({code}) - 1)"
         subscripts = []
         if len(e.indices) == 1 and len(base_type.dims) == 1:
             for key in self.unchecked:
@@ -924,10 +946,10 @@ class Lowerer:
         right = self.expr_as(e.right, ty)
         if isinstance(ty, t.IntType):
             if op == "SLASH":
-                div = "_idiv" if self.settings.int_div_zero == "fault" else "_idiv0"
+                div = "_idiv" if self.settings.int_div_zero is IntDivZero.FAULT else "_idiv0"
                 return _wrap(f"{div}({left}, {right})", ty)
             if op == "MOD":
-                mod = "_imod" if self.settings.int_div_zero == "fault" else "_imod0"
+                mod = "_imod" if self.settings.int_div_zero is IntDivZero.FAULT else "_imod0"
                 return f"{mod}({left}, {right})"
             pyop = {"PLUS": "+", "MINUS": "-", "STAR": "*"}[op]
             if self.in_range_without_wrap(e, ty):
@@ -984,9 +1006,10 @@ class Lowerer:
             if isinstance(lt, t.RealType) or isinstance(rt, t.RealType):
                 return f"int({left} * {right})"
             return _wrap(f"{left} * {right}", t.LINT)  # type: ignore[arg-type]
+        zero = self.settings.int_div_zero is IntDivZero.ZERO   # TIME / 0 is an integer division by 0
         if isinstance(rt, t.RealType):
-            return f"int(_fdiv({left}, {right}))"
-        return _wrap(f"_idiv({left}, {right})", t.LINT)  # type: ignore[arg-type]
+            return f"{'_tdiv0' if zero else '_tdiv'}({left}, {right})"
+        return _wrap(f"{'_idiv0' if zero else '_idiv'}({left}, {right})", t.LINT)  # type: ignore[arg-type]
 
     # ---- calls
     def ex_Call(self, e: n.Call) -> str:
@@ -1061,7 +1084,8 @@ class Lowerer:
         for var, target, negate in info.outputs:
             ref = self.ref_code(target)
             target_type = self.facts.types.get(id(target))
-            convert = "(not v)" if negate else self.coerce("v", var.type, target_type) if target_type is not None else "v"
+            convert = "(not v)" if negate else self.coerce("v", var.type, target_type, target.span) \
+                if target_type is not None else "v"
             if convert != "v":
                 ref = f"_MapRef({ref}, lambda v: {convert})"
             args.append(f"o_{var_attr(var.name)}={ref}")
@@ -1097,7 +1121,7 @@ class Lowerer:
             if negate:
                 value = f"(not {value})"
             elif target_type is not None:
-                value = self.coerce(value, var.type, target_type)
+                value = self.coerce(value, var.type, target_type, target.span)
             self.store(target, value, target_type)
 
 

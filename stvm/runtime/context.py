@@ -39,3 +39,16 @@ class RunContext:
             self.warn_sink(message)
         else:
             print(f"warning: {message}", file=sys.stderr)
+
+    def warn_at(self, span: Any, message: str, once_key: object | None = None) -> None:
+        """Report a runtime warning at an ST location as `FILE:LINE:COL: warning: message`,
+        the diagnostics' format (once per `once_key` when given)."""
+        if once_key is not None:
+            if once_key in self._warned:
+                return
+            self._warned.add(once_key)
+        text = f"{span.file}:{span.line}:{span.column}: warning: {message}"
+        if self.warn_sink is not None:
+            self.warn_sink(text)
+        else:
+            print(text, file=sys.stderr)

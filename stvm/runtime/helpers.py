@@ -8,7 +8,7 @@ from __future__ import annotations
 import math
 import struct
 
-from stvm.runtime.values import ArrayRef, AttrRef, FunctionError, ItemRef, MapRef, STFault
+from stvm.runtime.values import ArrayIndexError, ArrayRef, AttrRef, FunctionError, ItemRef, MapRef, STFault
 
 _pack_f = struct.Struct("<f")
 
@@ -47,9 +47,33 @@ def _imod(a: int, b: int) -> int:
 
 
 def _imod0(a: int, b: int) -> int:
+    """`int_div_zero=zero`: MOD 0 gives 0."""
     if b == 0:
         return 0
     return a - b * _idiv(a, b)
+
+
+def _tdiv(duration_ns: int, divisor: float) -> int:
+    """TIME / REAL, truncated to whole ns."""
+    # Choice (sysmac.md 1, `int_div_zero`): dividing a TIME by 0.0 is an integer division by
+    # zero (the result is a TIME, an integer), as DIV_TIME already treats it
+    if divisor == 0:
+        raise STFault("integer division by zero (TIME / 0.0)")
+    return _time_of(duration_ns / divisor)
+
+
+def _tdiv0(duration_ns: int, divisor: float) -> int:
+    """`int_div_zero=zero`: TIME / 0.0 gives T#0s."""
+    if divisor == 0:
+        return 0
+    return _time_of(duration_ns / divisor)
+
+
+def _time_of(ns: float) -> int:
+    """A float number of ns as a TIME: truncated, wrapped modulo 2^64 like all TIME arithmetic."""
+    if ns != ns or ns in (math.inf, -math.inf):
+        raise STFault("TIME division result is not a number")
+    return ((int(ns) + 2**63) & (2**64 - 1)) - 2**63
 
 
 def _fdiv(a: float, b: float) -> float:
@@ -75,7 +99,7 @@ def _expt(a: float, b: float) -> float:
 
 
 def _oob(index: int, lo: int, hi: int) -> int:
-    raise STFault(f"array index {index} out of bounds {lo}..{hi}")
+    raise ArrayIndexError(f"array index {index} out of bounds {lo}..{hi}")
 
 
 def _endless_for(end: int, step: int, type_name: str) -> None:
@@ -133,8 +157,8 @@ class _Frame:
 
 HELPERS = {
     "_f32": _f32, "_idiv": _idiv, "_idiv0": _idiv0, "_imod": _imod, "_imod0": _imod0, "_fdiv": _fdiv,
-    "_expt": _expt, "_oob": _oob, "_endless_for": _endless_for, "_strfit": _strfit, "_copy_value": _copy_value,
+    "_tdiv": _tdiv, "_tdiv0": _tdiv0, "_expt": _expt, "_oob": _oob, "_endless_for": _endless_for, "_strfit": _strfit, "_copy_value": _copy_value,
     "_assign_array": _assign_array, "_setbit": _setbit, "_with": _with, "_Frame": _Frame,
     "_AttrRef": AttrRef, "_MapRef": MapRef, "_ItemRef": ItemRef, "_ArrayRef": ArrayRef, "_FunctionError": FunctionError,
-    "_STFault": STFault,
+    "_STFault": STFault, "_ArrayIndexError": ArrayIndexError,
 }

@@ -11,6 +11,8 @@ these few wrappers:
 * `FunctionError`: raised by a native function to report an instruction error (ENO := FALSE); the
   VM then applies `SysmacSettings.fun_error_policy` (default: skip the receiving assignment).
 * `STFault`: a major fault (division by zero, index out of range); stops the task.
+* `ArrayIndexError`: an array index out of range in user code; a fault unless
+  `SysmacSettings.array_oob` is `skip_statement` (then the generated code skips the statement).
 """
 
 from __future__ import annotations
@@ -22,6 +24,10 @@ class FunctionError(Exception):
 
 class STFault(Exception):
     """A major fault: the task stops; the VM adds the ST location, task and scan."""
+
+
+class ArrayIndexError(STFault):
+    """An array index out of range in user code (sysmac.md 1, `array_oob`)."""
 
 
 class ArrayRef:

@@ -22,9 +22,10 @@ from typing import Any, Callable
 from stvm.runtime.context import RunContext
 from stvm.runtime.format import format_time, format_value
 from stvm.runtime.helpers import HELPERS
-from stvm.runtime.values import AttrRef, FunctionError, ItemRef, MapRef, STFault
+from stvm.runtime.values import ArrayIndexError, AttrRef, FunctionError, ItemRef, MapRef, STFault
 from stvm.semantics import types as t
 from stvm.syntax.nodes import Span
+from stvm.settings import FunErrorPolicy, StringOverflow
 
 GENERATED_FILENAME = "<stvm-generated>"
 
@@ -85,10 +86,12 @@ _PATH_TOKEN = re.compile(r"\s*(?:([A-Za-z_][A-Za-z0-9_]*)|\[([^\]]*)\]|(\.))")
 
 class VM:
     def __init__(self, project, scan_ns: int = 10_000_000, realtime: bool = False,
-                 start_dt_ns: int = 0, transport: Any = None, settings=None) -> None:
+                 start_dt_ns: int = 0, transport: Any = None) -> None:
         self.project = project
         self.model = project.model
-        self.settings = settings or project.settings
+        # the settings the project was compiled with: the generated code decided some of them
+        # (int_div_zero, array_oob, ...), so the stdlib and the VM must read the same ones
+        self.settings = project.settings
         self.ctx = RunContext(settings=self.settings, start_dt_ns=start_dt_ns, realtime=realtime,
                               transport=transport)
         self.realtime = realtime
@@ -107,6 +110,8 @@ class VM:
         ns["_T"] = lowered.types
         ns["_ctx"] = self.ctx
         ns["_fun_error"] = self._fun_error
+        ns["_str_overflow"] = self._string_overflow
+        ns["_oob_skipped"] = self._index_skipped
         ns["__stvm_unit__"] = lowered
         exec(project.code, ns)
         self.namespace = ns
@@ -157,10 +162,31 @@ class VM:
     # ---- running
     def _fun_error(self, error: FunctionError, site: int) -> None:
         span = self.project.lowered.sites[site]
-        if self.settings.fun_error_policy == "fault":
+        if self.settings.fun_error_policy is FunErrorPolicy.FAULT:
             raise STFault(f"instruction error: {error}")
         self.ctx.warn(f"{span.file}:{span.line}:{span.column}: instruction error (ENO FALSE, assignment skipped): {error}",
                       once_key=(site, str(error)))
+
+    def _string_overflow(self, value: bytes, max_bytes: int, file: str, line: int, column: int) -> bytes:
+        """A store into STRING[max_bytes + 1] of a value that may not fit (sysmac.md 2,
+        `string_overflow`): a fault, or cut to `max_bytes` with one warning per site."""
+        if len(value) <= max_bytes:
+            return value
+        destination = f"STRING[{max_bytes + 1}]"
+        if self.settings.string_overflow is StringOverflow.ERROR:
+            raise STFault(f"a string of {len(value)} bytes does not fit {destination} "
+                          f"({max_bytes} bytes; string_overflow=error)")
+        self.ctx.warn_at(Span(file, line, column, line, column),
+                         f"a string of {len(value)} bytes is truncated to the {max_bytes} bytes of "
+                         f"{destination} (string_overflow=truncate_warn; reported once)",
+                         once_key=("string_overflow", file, line, column))
+        return HELPERS["_strfit"](value, max_bytes)   # the cut the generated code makes
+
+    def _index_skipped(self, error: ArrayIndexError, site: int) -> None:
+        """`array_oob=skip_statement`: the statement with the bad index was not executed."""
+        self.ctx.warn_at(self.project.lowered.sites[site],
+                         f"{error}: statement skipped (array_oob=skip_statement; reported once)",
+                         once_key=("array_oob", site))
 
     def _build_schedule(self) -> None:
         """Which tasks run at each tick of the hyperperiod, in priority order, as plain lists
@@ -363,11 +389,27 @@ class VM:
 
     def set(self, path: str, value: Any) -> None:
         container, key, ty = self.resolve(path)
+        if isinstance(ty, t.StringType):
+            self._check_string_fits(path, value, ty)
         value = coerce_python_value(value, ty)
         if isinstance(key, int):
             container[key] = value
         else:
             setattr(container, key, value)
+
+    def _check_string_fits(self, path: str, value: Any, ty: t.StringType) -> None:
+        """A string given from outside (API, `--set`, scenario) is stored like an ST assignment:
+        too long is an error (`string_overflow=error`) or a warning and a cut."""
+        data = value.encode("utf-8") if isinstance(value, str) else value
+        if not isinstance(data, (bytes, bytearray)):
+            return   # coerce_python_value rejects it
+        length = len(bytes(data).split(b"\x00", 1)[0])
+        if length <= ty.max_bytes:
+            return
+        if self.settings.string_overflow is StringOverflow.ERROR:
+            raise ValueError(f"a string of {length} bytes does not fit {ty.name} ({ty.max_bytes} bytes; "
+                             "string_overflow=error)")
+        self.ctx.warn(f"{path}: a string of {length} bytes is truncated to the {ty.max_bytes} bytes of {ty.name}")
 
     def __getitem__(self, path: str) -> Any:
         return self.get(path)

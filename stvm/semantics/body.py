@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING
 from stvm.semantics import types as t
 from stvm.semantics.model import EXTERNAL, IN_OUT, INPUT, OUTPUT, POUInfo, Variable
 from stvm.syntax import nodes as n
+from stvm.settings import IntLiteralType
 
 if TYPE_CHECKING:
     from stvm.semantics.checker import Checker
@@ -27,7 +28,7 @@ OP_TEXT = {**_ARITH, **_COMPARE, **_LOGIC, "NOT": "NOT"}
 
 
 def int_literal_type(value: int, settings) -> t.Type:
-    if settings.int_literal_type == "lint":
+    if settings.int_literal_type is IntLiteralType.LINT:
         return t.LINT
     if t.DINT.lo <= value <= t.DINT.hi:
         return t.DINT
@@ -369,12 +370,22 @@ class _BodyChecker:
                     return
             if isinstance(value, float) and isinstance(dst, t.RealType):
                 return
+        if isinstance(dst, t.StringType) and isinstance(src, t.StringType):
+            self.string_constant_fits(expr, dst, span)
         if implicit_ok(src, dst):
             return
         if isinstance(src, t.IntType) and isinstance(dst, t.IntType):
             self.error(f"cannot assign {src.name} to {dst.name} implicitly (value may not fit){conversion_hint(src, dst)}", span, "E052")
             return
         self.error(f"type mismatch: cannot assign {src.name} to {dst.name}{conversion_hint(src, dst)}", span, "E052")
+
+    def string_constant_fits(self, expr: n.Expr, dst: t.StringType, span: n.Span) -> None:
+        """A constant text that provably overflows STRING[n] (sysmac.md 2, `string_overflow`):
+        the code generator cuts it at build time, so the check-time diagnostic is its only
+        report (a warning, or an error under `string_overflow=error`)."""
+        value = self.facts.consts.get(id(expr))
+        if isinstance(value, bytes) and len(value) > dst.max_bytes:
+            self.c.string_overflow(len(value), dst, span)
 
     # ---- expressions
     def expr(self, e: n.Expr, expected: t.Type | None = None, statement: bool = False) -> t.Type | None:

@@ -15,7 +15,7 @@ from stvm.diagnostics import Diagnostic
 from stvm.semantics import types as t
 from stvm.semantics.model import (EXTERNAL, GLOBAL, IN_OUT, INPUT, LOCAL, POUInfo,
                                   ProjectModel, TaskInfo, Variable)
-from stvm.settings import DEFAULT_SETTINGS, SysmacSettings
+from stvm.settings import BareEnumerators, DEFAULT_SETTINGS, StringOverflow, SysmacSettings
 from stvm.syntax import nodes as n
 
 # Reserved words that the contextual lexer may still let through as names.
@@ -103,8 +103,20 @@ class Checker:
     def error(self, message: str, span: n.Span, code: str = "") -> None:
         self.diags.append(Diagnostic.error(message, span, code))
 
-    def warning(self, message: str, span: n.Span) -> None:
-        self.diags.append(Diagnostic.warning(message, span))
+    def warning(self, message: str, span: n.Span, code: str = "") -> None:
+        self.diags.append(Diagnostic.warning(message, span, code))
+
+    def string_overflow(self, length: int, dst: t.StringType, span: n.Span, initial: bool = False) -> None:
+        """A constant of `length` bytes stored into `dst` (sysmac.md 2, `string_overflow`): a
+        warning (the value is cut at build time), or an error under `string_overflow=error`."""
+        if self.settings.string_overflow is StringOverflow.ERROR:
+            self.error(f"a string of {length} bytes does not fit {dst.name} ({dst.max_bytes} bytes; "
+                       "string_overflow=error)", span, "E054")
+        elif initial:
+            self.warning(f"initial value truncated to {dst.max_bytes} bytes of {dst.name}", span)
+        else:
+            self.warning(f"a string of {length} bytes is truncated to the {dst.max_bytes} bytes of {dst.name}",
+                         span)
 
     # ---- indexing
     def build_index(self) -> None:
@@ -505,7 +517,7 @@ class Checker:
         cands = self.enumerators.get(name.lower(), [])
         if not cands:
             return None
-        if self.settings.bare_enumerators == "require_type":
+        if self.settings.bare_enumerators is BareEnumerators.REQUIRE_TYPE:
             if report:
                 self.error(f"enumerator '{name}' needs its type: write Type#{name}", span, "E021")
             return None
@@ -632,7 +644,7 @@ class Checker:
         elif isinstance(ty, t.StringType):
             if isinstance(value, bytes):
                 if len(value) > ty.max_bytes:
-                    self.warning(f"initial value truncated to {ty.max_bytes} bytes of {ty.name}", span)
+                    self.string_overflow(len(value), ty, span, initial=True)
                     return value[: ty.max_bytes]
                 return value
         elif isinstance(ty, t.TimeType):

@@ -16,7 +16,7 @@ from __future__ import annotations
 from functools import lru_cache
 from importlib import resources
 
-from stvm.settings import DEFAULT_SETTINGS, SysmacSettings
+from stvm.settings import DEFAULT_SETTINGS, IecPinAliases, RtrigFirstCall, SockaddrPortnoType, SysmacSettings
 
 # Importing the implementation modules registers the natives.
 from stvm.stdlib import conversions, numeric, omron, sockets, strings, timefns, timers  # noqa: F401
@@ -41,16 +41,16 @@ def _rewrite(text: str, marker_line: str, replacement: str) -> str:
 
 def _apply_settings(name: str, text: str, settings: SysmacSettings) -> str:
     if name == "iec_standard.st":
-        if settings.rtrig_first_call == "no_fire":
+        if settings.rtrig_first_call is RtrigFirstCall.NO_FIRE:
             # M starting TRUE makes a first call with CLK TRUE see no rising edge
             text = _rewrite(text, "M : BOOL := FALSE; (* sysmac: rtrig_first_call *)",
                             "M : BOOL := TRUE; (* sysmac: rtrig_first_call = no_fire *)")
-        if settings.iec_pin_aliases == "off":
+        if settings.iec_pin_aliases is IecPinAliases.OFF:
             text = "\n".join(line for line in text.splitlines()
                              if not line.startswith("{alias"))
-    if name == "sockets.st" and settings.sockaddr_portno_type != "UINT":
+    if name == "sockets.st" and settings.sockaddr_portno_type is not SockaddrPortnoType.UINT:
         text = _rewrite(text, "PortNo : UINT; (* sysmac: sockaddr_portno_type *)",
-                        f"PortNo : {settings.sockaddr_portno_type}; "
+                        f"PortNo : {settings.sockaddr_portno_type.value}; "
                         "(* sysmac: sockaddr_portno_type *)")
     return text
 

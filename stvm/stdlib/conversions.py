@@ -30,6 +30,7 @@ from stvm.runtime.values import FunctionError
 from stvm.semantics.types import ELEMENTARY, BoolType, IntType, RealType, StringType, TimeType, Type
 from stvm.stdlib.registry import native_function
 from stvm.stdlib.typeops import coerce, real_to_integer
+from stvm.settings import ByteToStringFormat, StouPlus, StouTrailing
 
 NUMERIC_TYPES = ["BOOL", "SINT", "INT", "DINT", "LINT", "USINT", "UINT", "UDINT", "ULINT",
                  "BYTE", "WORD", "DWORD", "LWORD", "REAL", "LREAL"]
@@ -47,9 +48,9 @@ DATE_LAST_NS = 49_710 * NS_PER_DAY - 1
 def bits_to_text(ctx, value: int, bits: int) -> bytes:
     """BYTE/WORD/DWORD/LWORD_TO_STRING (sysmac.md 6, `byte_to_string_format`)."""
     style = ctx.settings.byte_to_string_format
-    if style == "decimal":
+    if style is ByteToStringFormat.DECIMAL:
         return str(value).encode()
-    if style == "hex_pad2":
+    if style is ByteToStringFormat.HEX_PAD2:
         # Choice: `hex_pad2` pads to two digits per byte of the type ('0A', '00FF')
         return f"{value:0{bits // 4}X}".encode()
     return f"{value:X}".encode()
@@ -132,7 +133,7 @@ def _strip_trailing(ctx, what: str, text: str, end: int) -> None:
     rest = text[end:]
     if not rest:
         return
-    if ctx.settings.stou_trailing == "ignore_blanks" and not rest.strip(" "):
+    if ctx.settings.stou_trailing is StouTrailing.IGNORE_BLANKS and not rest.strip(" "):
         return
     raise FunctionError(f"{what}: unexpected characters {rest!r} after the number")
 
@@ -145,7 +146,7 @@ def text_to_integer(ctx, text: bytes, target: IntType, what: str) -> int:
     """STRING_TO_UINT and its siblings (W502 2-271, sysmac.md 6): leading blanks, a sign, digits
     with leading zeros and `_`; the value must fit the target."""
     chars = text.decode("latin-1")
-    if target.bitstring and ctx.settings.byte_to_string_format != "decimal":
+    if target.bitstring and ctx.settings.byte_to_string_format is not ByteToStringFormat.DECIMAL:
         match = _HEX_TEXT.match(chars)
         if match is None:
             raise FunctionError(f"{what}: {text!r} is not a hexadecimal number")
@@ -155,7 +156,7 @@ def text_to_integer(ctx, text: bytes, target: IntType, what: str) -> int:
         if match is None:
             raise FunctionError(f"{what}: {text!r} is not a number")
         sign = match.group(1)
-        if sign == "+" and ctx.settings.stou_plus == "error":
+        if sign == "+" and ctx.settings.stou_plus is StouPlus.ERROR:
             raise FunctionError(f"{what}: a leading '+' is not accepted")
         value = int(match.group(2).replace("_", ""))
         if sign == "-":

@@ -16,6 +16,7 @@ from stvm.runtime.values import FunctionError, STFault
 from stvm.semantics.types import BoolType, IntType, RealType, Type, DINT, LINT
 from stvm.stdlib.registry import native_function
 from stvm.stdlib.typeops import coerce, common_type, real_to_integer
+from stvm.settings import IntDivZero
 
 
 def _first_argument_type(arg_types) -> Type:
@@ -64,7 +65,7 @@ def expt(ctx, result_type, base, exponent):
 
 
 def _integer_division_by_zero(ctx, what: str) -> int:
-    if ctx.settings.int_div_zero == "zero":
+    if ctx.settings.int_div_zero is IntDivZero.ZERO:
         return 0
     raise STFault(f"integer division by zero in {what}")
 

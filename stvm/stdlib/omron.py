@@ -19,6 +19,9 @@ from stvm.semantics.types import (
 )
 from stvm.stdlib.registry import native_function
 from stvm.stdlib.typeops import STRING_MAX_BYTES
+from stvm.settings import (
+    ArytostringOversize, RtfsNegativeZero, RtfsRounding, SectodtRange, ToarybyteStringModel, ToarybyteWideOrder,
+)
 
 NS_PER_S = 1_000_000_000
 SECTODT_MAX_S = 4_294_943_999  # 2106-02-06-23:59:59 (sysmac.md 6)
@@ -52,9 +55,9 @@ def _element_bytes(value, element_type: Type) -> bytes:
 def _string_bytes(ctx, text: bytes, string_type: Type) -> bytes:
     """A STRING's bytes per `toarybyte_string_model` (sysmac.md 6)."""
     model = ctx.settings.toarybyte_string_model
-    if model == "text":
+    if model is ToarybyteStringModel.TEXT:
         return text
-    if model == "image":
+    if model is ToarybyteStringModel.IMAGE:
         size = string_type.size if isinstance(string_type, StringType) else len(text) + 1
         return text + bytes(size - len(text))
     return text + b"\x00"  # text_nul: the text and its terminating NUL
@@ -71,7 +74,7 @@ def _flatten(value) -> list:
 
 def _high_low(ctx, chunk: bytes) -> bytes:
     """One value in `_HIGH_LOW` order: big-endian; 4/8-byte values per `toarybyte_wide_order`."""
-    if ctx.settings.toarybyte_wide_order == "word_swapped" and len(chunk) > 2:
+    if ctx.settings.toarybyte_wide_order is ToarybyteWideOrder.WORD_SWAPPED and len(chunk) > 2:
         # Choice: 16-bit words in little-endian order, each word big-endian (33 44 11 22)
         return b"".join(chunk[i:i + 2][::-1] for i in range(0, len(chunk), 2))
     return chunk[::-1]
@@ -122,7 +125,7 @@ def ary_to_string(ctx, ary_in, size: int) -> bytes:
     source = as_array_ref(ary_in)
     limit = min(STRING_MAX_BYTES, len(source))
     if size > limit:
-        if ctx.settings.arytostring_oversize != "truncate":
+        if ctx.settings.arytostring_oversize is not ArytostringOversize.TRUNCATE:
             raise FunctionError(f"AryToString: Size {size} exceeds "
                                 f"{'1985 bytes' if size > STRING_MAX_BYTES else f'the {len(source)} elements passed'}")
         size = limit
@@ -133,7 +136,7 @@ def ary_to_string(ctx, ary_in, size: int) -> bytes:
 
 # --- RealToFormatString ------------------------------------------------------------------------
 
-_ROUNDING = {"half_away": ROUND_HALF_UP, "half_even": ROUND_HALF_EVEN}  # ROUND_HALF_UP is away from 0
+_ROUNDING = {RtfsRounding.HALF_AWAY: ROUND_HALF_UP, RtfsRounding.HALF_EVEN: ROUND_HALF_EVEN}  # ROUND_HALF_UP is away from 0
 
 
 def format_real(ctx, value: float, exponent: bool, sign: bool, min_len: int, dec_place: int) -> bytes:
@@ -177,7 +180,7 @@ def _format_finite(settings, value: float, exponent: bool, dec_place: int,
         body = f"{abs(rounded):f}"
         rounded_zero = rounded == 0
     negative = value < 0
-    if negative and rounded_zero and settings.rtfs_negative_zero == "plus":
+    if negative and rounded_zero and settings.rtfs_negative_zero is RtfsNegativeZero.PLUS:
         negative = False  # '-0' only under the default `rtfs_negative_zero = minus`
     return body, negative
 
@@ -209,7 +212,7 @@ def get_time(ctx) -> int:
 @native_function("SecToDt")
 def sec_to_dt(ctx, seconds: int) -> int:
     if not 0 <= seconds <= SECTODT_MAX_S:
-        if ctx.settings.sectodt_range != "clamp":
+        if ctx.settings.sectodt_range is not SectodtRange.CLAMP:
             raise FunctionError(f"SecToDt: {seconds} s is outside 0..{SECTODT_MAX_S}")
         seconds = max(0, min(seconds, SECTODT_MAX_S))
     return seconds * NS_PER_S

@@ -29,6 +29,10 @@ from typing import Callable, Protocol
 from stvm.runtime.values import FunctionError
 from stvm.stdlib.omron import as_array_ref
 from stvm.stdlib.registry import native_fb
+from stvm.settings import (
+    SktConnectSrcport0, SktErrorIdReset, SktProgressWithoutCall, SktRcvPeerClosed, SktRcvTimeout0,
+    SktSendCopy, SktSendSize0, SktSocketAfterClose, SktStatusClosedHandle,
+)
 
 MAX_SOCKETS = 16                       # sysmac.md 5, CONFIRMED
 RECEIVE_BUFFER_BYTES = 9_000           # per socket, overflow discarded (CONFIRMED)
@@ -410,7 +414,7 @@ class SocketRequestFB:
         self._previous_execute = execute
         if (self._phase == HELD and not execute) or self._phase == SHOWN_ONCE:
             self._clear_outputs(inst, settings)
-        if (self._phase == BUSY and settings.skt_progress_without_call == "cancel"
+        if (self._phase == BUSY and settings.skt_progress_without_call is SktProgressWithoutCall.CANCEL
                 and self._last_scan is not None and ctx.scan > self._last_scan + 1):
             # `skt_progress_without_call = cancel`: a request not called in some scan is dropped
             self._guarded(self._cancel, inst, ctx)
@@ -454,7 +458,7 @@ class SocketRequestFB:
 
     def _clear_outputs(self, inst, settings) -> None:
         inst.v_done = False
-        if inst.v_error and settings.skt_errorid_reset == "start_and_clear":
+        if inst.v_error and settings.skt_errorid_reset is SktErrorIdReset.START_AND_CLEAR:
             inst.v_errorid = 0
         inst.v_error = False
         self._phase = IDLE
@@ -500,7 +504,7 @@ class SktTCPConnect(SocketRequestFB):
 
     def call(self, inst, ctx) -> None:
         super().call(inst, ctx)
-        if (ctx.settings.skt_socket_after_close == "zeroed" and self._published_handle
+        if (ctx.settings.skt_socket_after_close is SktSocketAfterClose.ZEROED and self._published_handle
                 and inst.v_socket.v_handle == self._published_handle
                 and self._transport_closed(ctx, self._published_handle)):
             _write_socket(inst.v_socket, 0, ("", 0), ("", 0))
@@ -515,7 +519,7 @@ class SktTCPConnect(SocketRequestFB):
         self._start_ns = ctx.now_ns
         if inst.v_dsttcpport == 0:
             raise SocketError("out_of_range", "DstTcpPort 0")
-        if inst.v_srctcpport == 0 and ctx.settings.skt_connect_srcport0 == "error":
+        if inst.v_srctcpport == 0 and ctx.settings.skt_connect_srcport0 is SktConnectSrcport0.ERROR:
             raise SocketError("out_of_range", "SrcTcpPort 0")
         host = inst.v_dstadr.decode("latin-1").strip()
         self._handle = transport.open_connection(inst.v_srctcpport, host, inst.v_dsttcpport,
@@ -586,7 +590,7 @@ class SktGetTCPStatus(SocketRequestFB):
         names = ctx.settings.connection_state_values
         if transport.was_closed(self._handle):
             # a handle once valid, now closed (`skt_status_closed_handle`)
-            if ctx.settings.skt_status_closed_handle == "error":
+            if ctx.settings.skt_status_closed_handle is SktStatusClosedHandle.ERROR:
                 return "bad_handle"
             inst.v_tcpstatus = names.get("_CLOSED", 0)
             inst.v_datrcvflag = False
@@ -609,13 +613,13 @@ class SktTCPSend(SocketRequestFB):
         self._data: bytes | None = None
         if self._size > settings.skt_send_max:
             raise SocketError("out_of_range", f"Size {self._size} > {settings.skt_send_max}")
-        if self._size == 0 and settings.skt_send_size0 == "error":
+        if self._size == 0 and settings.skt_send_size0 is SktSendSize0.ERROR:
             raise SocketError("out_of_range", "Size 0")
         source = as_array_ref(inst.v_senddat)
         if self._size > len(source):
             raise SocketError("too_few_elements", f"Size {self._size} > {len(source)} elements")
         _require_connected(transport, self._handle, ctx.now_ns)
-        if settings.skt_send_copy == "at_start":
+        if settings.skt_send_copy is SktSendCopy.AT_START:
             self._data = bytes(source.read(self._size))
             self._send(transport)
 
@@ -662,14 +666,14 @@ class SktTCPRcv(SocketRequestFB):
             inst.v_rcvsize = count
             return DONE
         if state == PEER_CLOSED:
-            if settings.skt_rcv_peer_closed == "error":
+            if settings.skt_rcv_peer_closed is SktRcvPeerClosed.ERROR:
                 return "wrong_state"
             inst.v_rcvsize = 0  # `skt_rcv_peer_closed = done_zero`
             return DONE
         if state in (RESET, FAILED):
             return "wrong_state"
         if self._timeout_ns == 0:
-            return "timeout" if settings.skt_rcv_timeout0 == "error_if_empty" else None
+            return "timeout" if settings.skt_rcv_timeout0 is SktRcvTimeout0.ERROR_IF_EMPTY else None
         if ctx.now_ns - self._start_ns >= self._timeout_ns:
             return "timeout"
         return None

@@ -12,6 +12,7 @@ from stvm.runtime.values import FunctionError, STFault
 from stvm.semantics.types import LINT
 from stvm.stdlib.conversions import DATE_LAST_NS, NS_PER_DAY
 from stvm.stdlib.registry import native_function
+from stvm.settings import IntDivZero
 
 
 def _time(ns: int) -> int:
@@ -42,7 +43,7 @@ def mul_time(ctx, duration: int, factor: float) -> int:
 @native_function("DIV_TIME")
 def div_time(ctx, duration: int, divisor: float) -> int:
     if divisor == 0:
-        if ctx.settings.int_div_zero == "zero":
+        if ctx.settings.int_div_zero is IntDivZero.ZERO:
             return 0
         raise STFault("DIV_TIME by zero")
     return _time(round(duration / divisor))

@@ -10,6 +10,7 @@ Pins: IN BOOL, PT TIME → Q BOOL, ET TIME (Omron spells IN as `In`; names are c
 from __future__ import annotations
 
 from stvm.stdlib.registry import native_fb
+from stvm.settings import TimerClock, TonNonpositivePtEt, TonPtBelowEt
 
 
 def timer_now(ctx) -> int:
@@ -19,7 +20,7 @@ def timer_now(ctx) -> int:
     Choice: without that hook (virtual time has no finer clock than the scan) both settings read
     the scan start.
     """
-    if ctx.settings.timer_clock == "call_time":
+    if ctx.settings.timer_clock is TimerClock.CALL_TIME:
         call_time = getattr(ctx, "call_time_ns", None)
         if callable(call_time):
             return call_time()
@@ -47,7 +48,7 @@ class _PresetTracker:
 
     def update(self, ctx, preset: int, elapsed: int) -> int:
         if preset != self.last_seen:
-            if preset >= elapsed or ctx.settings.ton_pt_below_et == "q_true":
+            if preset >= elapsed or ctx.settings.ton_pt_below_et is TonPtBelowEt.Q_TRUE:
                 self.effective = preset
             self.last_seen = preset
         return self.effective
@@ -55,7 +56,7 @@ class _PresetTracker:
 
 def _elapsed_at_end(ctx, preset: int) -> int:
     """ET when a timer ends: PT; for PT ≤ 0, 0 or PT (sysmac.md 7, `ton_nonpositive_pt_et`)."""
-    if preset <= 0 and ctx.settings.ton_nonpositive_pt_et == "zero":
+    if preset <= 0 and ctx.settings.ton_nonpositive_pt_et is TonNonpositivePtEt.ZERO:
         return 0
     return preset
 

@@ -12,6 +12,7 @@ import struct
 from stvm.semantics.types import (
     BoolType, EnumType, IntType, RealType, StringType, TimeType, Type, LINT,
 )
+from stvm.settings import StringLengthUnit, StringResultOverflow
 
 STRING_MAX_BYTES = 1985
 """Bytes of text a plain STRING holds (1986 bytes with the NUL, sysmac.md 2)."""
@@ -98,9 +99,9 @@ def string_result(ctx, text: bytes, what: str) -> bytes:
     if len(text) <= STRING_MAX_BYTES:
         return text
     from stvm.runtime.values import FunctionError
-    if ctx.settings.string_result_overflow == "truncate":
+    if ctx.settings.string_result_overflow is StringResultOverflow.TRUNCATE:
         cut = STRING_MAX_BYTES
-        if ctx.settings.string_length_unit == "utf8":
+        if ctx.settings.string_length_unit is StringLengthUnit.UTF8:
             # do not split a UTF-8 character: back off over continuation bytes
             while cut > STRING_MAX_BYTES - 3 and 0x80 <= text[cut] <= 0xBF:
                 cut -= 1

@@ -10,7 +10,7 @@ import calendar
 import re
 from fractions import Fraction
 
-from stvm.settings import SysmacSettings
+from stvm.settings import DollarN, InvalidDollarEscape, SysmacSettings
 
 _ESCAPES = {"$": b"$", "'": b"'", '"': b'"', "L": b"\n", "P": b"\f", "R": b"\r", "T": b"\t"}
 _TIME_UNITS = [("d", 86_400_000_000_000), ("h", 3_600_000_000_000), ("ms", 1_000_000),
@@ -42,14 +42,14 @@ def decode_string(token_text: str, settings: SysmacSettings) -> tuple[bytes, lis
             i += 2
         elif nxt.upper() == "N":
             # Choice (sysmac.md 3 #7, `dollar_n`): $N is a newline
-            out += b"\n" if settings.dollar_n == "lf" else b"\r\n"
+            out += b"\n" if settings.dollar_n is DollarN.LF else b"\r\n"
             i += 2
         elif re.fullmatch(r"[0-9A-Fa-f]{%d}" % hex_digits, body[i + 1:i + 1 + hex_digits] or "x"):
             code = int(body[i + 1:i + 1 + hex_digits], 16)
             out += bytes([code]) if hex_digits == 2 else chr(code).encode("utf-8")
             i += 1 + hex_digits
         else:
-            if settings.invalid_dollar_escape == "error":
+            if settings.invalid_dollar_escape is InvalidDollarEscape.ERROR:
                 raise LiteralError(f"invalid escape '${nxt}' in string literal (valid: $$ $' $L $N $P $R $T $hh)")
             out += b"$"
             i += 1

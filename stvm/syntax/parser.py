@@ -16,7 +16,7 @@ from lark import Lark, Token, Transformer
 from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken
 
 from stvm.diagnostics import Diagnostic
-from stvm.settings import DEFAULT_SETTINGS, SysmacSettings
+from stvm.settings import DEFAULT_SETTINGS, DoubleQuoteStrings, SysmacSettings
 from stvm.syntax import nodes as n
 
 _GRAMMAR_FILE = "st.lark"
@@ -461,7 +461,7 @@ class _ToNodes(Transformer):
             value = b""
         double = text.startswith('"')
         if double:
-            if self.settings.double_quote_strings == "error":
+            if self.settings.double_quote_strings is DoubleQuoteStrings.ERROR:
                 self._error('double-quoted text is a WSTRING; write STRING literals in single quotes', span)
             else:
                 self.diagnostics.append(Diagnostic.warning(

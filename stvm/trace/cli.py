@@ -28,7 +28,8 @@ def register(subparsers) -> None:
                        help="variables to record: paths with globs (* one level, ** any depth); repeatable")
     trace.add_argument("--scenario", help="scenario TOML (inputs, events, faults, [record] watch)")
     trace.add_argument("-o", "--output", action="append", metavar="OUT",
-                       help="trace file(s) to write: .jsonl .csv .vcd .json (WaveDrom); repeatable")
+                       help="trace file(s) to write: .jsonl .csv .vcd .json (WaveDrom), or .svg/.png: "
+                            "a picture of the robot's TCP path (top and side view; needs matplotlib); repeatable")
     trace.add_argument("--compare", metavar="GOLDEN", help="golden trace (.jsonl or .csv) to compare with (exit 4 if different)")
     trace.add_argument("--context", type=int, default=3, metavar="K", help="scans shown before a divergence (default 3)")
     trace.add_argument("--latency-scans", type=int, default=None, metavar="N",
@@ -48,9 +49,8 @@ def _usage(message: str) -> int:
 
 
 def cmd_trace(args) -> int:
-    from stvm.project import LoadError, load
+    from stvm.project import LoadError, load, project_settings
     from stvm.scenario import ScenarioError
-    from stvm.settings import DEFAULT_SETTINGS
     from stvm.trace.golden import compare, locate_writer, render_report
     from stvm.trace.run import TraceSpec, run_trace
     from stvm.trace.signals import WatchError
@@ -61,10 +61,18 @@ def cmd_trace(args) -> int:
             return _usage(f"no such file: {f}")
     outputs = args.output or []
     if not outputs and not args.compare:
-        return _usage("give -o OUT (.jsonl .csv .vcd .json) and/or --compare GOLDEN")
+        return _usage("give -o OUT (.jsonl .csv .vcd .json .svg .png) and/or --compare GOLDEN")
+    from stvm.trace.tcp_path import PICTURE_SUFFIXES
+    pictures = [o for o in outputs if Path(o).suffix.lower() in PICTURE_SUFFIXES]
+    outputs = [o for o in outputs if o not in pictures]
     for out in outputs:
         if Path(out).suffix.lower() not in SUFFIXES:
-            return _usage(f"-o {out}: unknown trace format (use {', '.join(SUFFIXES)})")
+            return _usage(f"-o {out}: unknown trace format (use {', '.join(SUFFIXES + PICTURE_SUFFIXES)})")
+    if pictures:
+        try:
+            import matplotlib  # noqa: F401
+        except ImportError:
+            return _usage("-o .svg/.png draws the TCP path with matplotlib: pip install 'stvm[plot]'")
     if args.svg and not any(Path(o).suffix.lower() == ".json" for o in outputs):
         return _usage("--svg renders the WaveDrom output: add -o NAME.json")
     if args.cycles is not None and args.cycles < 0:
@@ -76,7 +84,7 @@ def cmd_trace(args) -> int:
     if args.compare and not Path(args.compare).exists():
         return _usage(f"no such golden trace: {args.compare} (record one with -o {args.compare})")
     try:
-        settings = DEFAULT_SETTINGS.with_overrides(args.sysmac or [])
+        settings = project_settings(args.files, args.sysmac or [])
         if args.scan is not None:
             from stvm.project import parse_duration
             if parse_duration(args.scan) <= 0:
@@ -88,7 +96,8 @@ def cmd_trace(args) -> int:
     watch = [p for group in (args.watch or []) for p in group]
     spec = TraceSpec(files=args.files, scan=args.scan, cycles=args.cycles, watch=watch, scenario=args.scenario,
                      latency_scans=args.latency_scans, faults=args.fault or [],
-                     settings_overrides=args.sysmac or [], use_cache=not args.no_cache)
+                     settings_overrides=args.sysmac or [], use_cache=not args.no_cache,
+                     record_tcp=bool(pictures))
     try:
         project = load(args.files, settings, use_cache=not args.no_cache)
     except LoadError as exc:
@@ -106,6 +115,10 @@ def cmd_trace(args) -> int:
             for written in write_trace(run.trace, out, svg=args.svg and Path(out).suffix.lower() == ".json",
                                        max_columns=args.max_columns):
                 print(f"wrote {written}", file=sys.stderr)
+        for out in pictures:
+            from stvm.trace.tcp_path import render_tcp_path
+            name = Path(str(args.scenario or args.files[0])).stem
+            print(f"wrote {render_tcp_path(run.tcp_path, out, title=f'TCP path of {name}')}", file=sys.stderr)
     except TraceFormatError as exc:
         return _usage(str(exc))
     except OSError as exc:

@@ -36,6 +36,7 @@ class TraceSpec:
     settings_overrides: Sequence[str] = ()     # `--sysmac NAME=VALUE`
     use_cache: bool = True
     record_frames: bool = True
+    record_tcp: bool = False                   # sample the robot's TCP (stvm trace -o path.svg)
 
 
 @dataclass
@@ -47,6 +48,7 @@ class TraceRun:
     fault: Exception | None = None
     scenario: object = None
     signals: list = field(default_factory=list)
+    tcp_path: object = None                    # a TcpPathRecorder when `record_tcp`
 
 
 class _Prepared:
@@ -55,12 +57,13 @@ class _Prepared:
 
     def __init__(self, spec: TraceSpec, project=None) -> None:
         from stvm.lockstep import LOCKSTEP_HOST, LOCKSTEP_PORT, LockstepTransport
-        from stvm.project import load
+        from stvm.project import load, project_settings
         from stvm.scenario import Scenario, ScenarioDriver, load_scenario
-        from stvm.settings import DEFAULT_SETTINGS
         self.spec = spec
-        settings = DEFAULT_SETTINGS.with_overrides(list(spec.settings_overrides)) if spec.settings_overrides else DEFAULT_SETTINGS
-        self.project = project if project is not None else load(list(spec.files), settings, use_cache=spec.use_cache)
+        if project is None:
+            settings = project_settings(list(spec.files), list(spec.settings_overrides))
+            project = load(list(spec.files), settings, use_cache=spec.use_cache)
+        self.project = project
         self.scenario = load_scenario(spec.scenario) if spec.scenario else Scenario()
         scenario = self.scenario
         emu_settings, plan = scenario.emulator_plan()
@@ -107,7 +110,17 @@ def run_trace(spec: TraceSpec, project=None, progress: Callable[[int], None] | N
         raise WatchError("nothing to record: give --watch PATTERN (or [record] watch in the scenario)")
     signals = select_signals(vm, patterns)
     recorder = Recorder(vm, signals)
-    prepared.wire(recorder.sample)
+    tcp_path = None
+    if spec.record_tcp:
+        from stvm.trace.tcp_path import TcpPathRecorder
+        tcp_path = TcpPathRecorder(prepared.transport)
+
+        def sample(vm, recorder_sample=recorder.sample) -> None:
+            recorder_sample(vm)
+            tcp_path.sample(vm)
+        prepared.wire(sample)
+    else:
+        prepared.wire(recorder.sample)
     if spec.record_frames:
         prepared.transport.on_frame.append(recorder.on_frame)
     fault = None
@@ -131,4 +144,4 @@ def run_trace(spec: TraceSpec, project=None, progress: Callable[[int], None] | N
     }
     trace = recorder.finish(meta)
     vm.close()
-    return TraceRun(trace, vm, prepared.transport, prepared.project, fault, prepared.scenario, signals)
+    return TraceRun(trace, vm, prepared.transport, prepared.project, fault, prepared.scenario, signals, tcp_path)

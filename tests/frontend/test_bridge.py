@@ -99,3 +99,39 @@ def test_catalog_lists_programs_globals_and_members(vm):
     assert paths["g_pts[3].x"].kind == "member" and paths["g_pts[3].x"].leaf
     assert paths["Main.timer.Q"].in_fb
     assert "Main.g_count" not in paths            # externals are listed once, under the globals
+
+
+def test_wall_clock_interval_limits_sampling_on_a_fast_virtual_clock(vm):
+    bridge = VariableBridge(vm)
+    seen = []
+    bridge.watch(["Main.n"], every_wall_ns=3600 * 10**9, on_snapshot=seen.append)
+    vm.run(cycles=50)   # 50 ms of VM time in far less than an hour of wall time
+    assert [s.scan for s in seen] == [0]
+
+
+def test_batch_submitted_after_an_earlier_one_was_applied_lands_in_a_later_scan(vm):
+    # a momentary button: the release is sent once the press is applied; the program must see
+    # the press in at least one scan even when both reach the bridge around the same scan start
+    bridge = VariableBridge(vm)
+    watch = bridge.watch(["Main.run"])
+    seen = []
+    watch.on_snapshot = lambda snap: seen.append(snap.values["Main.run"])
+    press = bridge.submit({"Main.run": True})
+    press.add_done_callback(lambda _: bridge.submit({"Main.run": False}))  # runs inside the apply
+    vm.run(cycles=3)
+    assert seen == [True, False, False]
+
+
+def test_parse_reads_iec_literals_for_the_path_type(vm):
+    bridge = VariableBridge(vm)
+    assert bridge.parse("Main.run", "TRUE") is True
+    assert bridge.parse("g_count", "16#FF") == 255
+    assert bridge.parse("g_pts[2].x", "-1.5") == -1.5
+    assert bridge.parse("Main.timer.PT", "T#1s500ms") == 1_500_000_000
+    with pytest.raises(WriteRejected) as exc:
+        bridge.parse("Main.n", "70000")
+    assert exc.value.path == "Main.n" and "out of range" in exc.value.reason
+    with pytest.raises(WriteRejected):
+        bridge.parse("Main.nope", "1")
+    with pytest.raises(WriteRejected):
+        bridge.parse("Main.run", "maybe")

@@ -152,6 +152,9 @@ def test_real_to_format_string_specials_and_limits():
     with pytest.raises(FunctionError):
         rtfs(1.0, dec_place=8)
     assert rtfs(1.0, dec_place=8, rtfs_max_decplace=9) == b"+1.00000000"
+    assert rtfs(1.0, min_len=25, rtfs_max_minlen=30) == b"+1".rjust(25)
+    with pytest.raises(FunctionError):
+        rtfs(1.0, min_len=11, rtfs_max_minlen=10)
 
 
 def test_get_time_is_start_dt_plus_virtual_time_at_1_ms():

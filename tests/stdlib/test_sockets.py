@@ -817,3 +817,43 @@ def test_no_fb_raises_on_transport_surprises(plc):
         runner = plc.fb(name, Socket=socket_value(1))
         plc.execute(runner)
         assert runner.Error
+
+
+# --- settings without a test of their own above ------------------------------------------------
+
+def test_send_max_setting(peer):
+    plc = Plc(RealTcpTransport(), skt_send_max=10)
+    sock = plc.connect(peer.port)
+    server_side = peer.accept()
+    for size, error in ((10, False), (11, True)):
+        send = plc.fb("SktTCPSend", Socket=sock, SendDat=[0x42] * 20, Size=size)
+        plc.execute(send)
+        assert (send.Error, send.ErrorID) == ((True, CODES["out_of_range"]) if error else (False, 0)), size
+        plc.finish(send)
+    assert read_exactly(server_side, 10) == b"B" * 10
+    plc.ctx.transport.close_all()
+
+
+def test_receive_timeout_unit_setting(peer):
+    plc = Plc(RealTcpTransport(), skt_rcv_timeout_unit_ns=MS)   # TimeOut counts ms, not 0.1 s
+    sock = plc.connect(peer.port)
+    peer.accept()
+    rcv = plc.fb("SktTCPRcv", Socket=sock, Size=10, RcvDat=[0] * 10, TimeOut=5)
+    rcv.step(Execute=True)
+    plc.next_scan(ms=4)
+    rcv.step()
+    assert rcv.Busy
+    plc.next_scan(ms=1)
+    rcv.step()
+    assert rcv.Error and rcv.ErrorID == CODES["timeout"]
+    plc.ctx.transport.close_all()
+
+
+def test_error_codes_table_setting(plc):
+    codes = dict(CODES, bad_handle=0x7777)
+    custom = Plc(RealTcpTransport(), skt_error_codes=codes)
+    for controller, expected in ((plc, CODES["bad_handle"]), (custom, 0x7777)):
+        send = controller.fb("SktTCPSend", Socket=socket_value(0), SendDat=[1], Size=1)
+        controller.execute(send)
+        assert send.Error and send.ErrorID == expected
+    custom.ctx.transport.close_all()

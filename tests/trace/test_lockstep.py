@@ -78,3 +78,25 @@ def test_identical_runs_give_identical_frames(project):
     first = run(project)[1].frames
     second = run(project)[1].frames
     assert first == second and first
+
+
+def test_several_robots_each_reached_at_its_own_address():
+    """`add_robot(host, port)`: connections to that address reach that robot, anything else the
+    default robot; all are stepped on the VM clock and their frames carry the robot's index."""
+    import stvm
+    source = Path(__file__).parent / "st" / "two_robots.st"
+    transport = LockstepTransport(latency_scans=1)
+    second = transport.add_robot("127.0.0.1", 6000)
+    with pytest.raises(ValueError, match="has a robot already"):
+        transport.add_robot("127.0.0.1", 6000)
+    vm = stvm.load([source]).start(scan="1ms", transport=transport)
+    transport.attach(vm)
+    with pytest.raises(ValueError, match="before attach"):
+        transport.add_robot("127.0.0.1", 6001)
+    vm.set("Main.go", True)
+    vm.run(cycles=40)
+    assert transport.robots == [transport.link, second]
+    assert second.robot.connections and transport.link.robot.connections
+    by_robot = {(f.robot, f.direction) for f in transport.frames}
+    assert by_robot == {(0, "rx"), (0, "tx"), (1, "rx"), (1, "tx")}
+    assert vm.get("Main.replies") == 2

@@ -1,0 +1,17 @@
+"""Operator HMI: the project's touch-screen pages as a web HMI on the live VM.
+
+    hmi = load_pages(["st_src/hmi/Main.toml", …], bridge.type_of)   # checked page data
+    server = HmiServer(hmi, bridge, port=8080, pose=from_lockstep(transport)).start()
+    print(server.url)                                                 # …/?token=… off loopback
+    server.stop()
+
+`stvm run FILES --hmi [HOST:]PORT` and `stvm debug … --hmi` do this for the pages listed in the
+project's `stvm.toml` (`[hmi] pages = [...]`). The page format is in docs/hmi.md; the web contract
+(URLs, `data-var`/`data-action` attributes, `/api/vars`) in `stvm/hmi/server.py`.
+"""
+
+from stvm.hmi.pages import Hmi, HmiLoadError, load_pages
+from stvm.hmi.robot import PoseSource, from_lockstep, from_tcp_server
+from stvm.hmi.server import HmiServer
+
+__all__ = ["Hmi", "HmiLoadError", "HmiServer", "PoseSource", "from_lockstep", "from_tcp_server", "load_pages"]

@@ -1,0 +1,433 @@
+"""The web HMI: a Starlette app served by uvicorn in a thread beside the scan loop.
+
+The VM stays the owner of time. Everything the server shows comes from `VariableBridge`
+snapshots (taken by the VM thread between two scans), everything it writes goes through
+`VariableBridge.submit` (applied at the start of the next scan, all of a batch or none of it).
+
+Threads and queues (why a slow browser never slows the scan):
+
+    VM thread       bridge watch → `_on_snapshot`: keeps the newest snapshot (and, in lockstep,
+                    the robot pose of the same instant) and wakes the event loop once; it never
+                    waits for the loop, formats nothing and touches no socket
+    event loop      `_publish`: compares with what was published, formats the changed values
+                    only, merges them into each client's pending dict (latest value per path:
+                    a client that cannot keep up skips intermediate values, its backlog is
+                    bounded by the number of paths) and wakes each client's sender task
+    sender tasks    one per WebSocket, sends what is pending, with a timeout; a client that
+                    vanished or stalls is dropped
+
+The watch covers only the pages that have a browser open, and of a page's pop-ups only the one
+open (`{"popup": ID}` / `{"popup": null}` from the page); with no browser the scan pays nothing. It
+samples at most every `update_ns` of VM time and of wall-clock time (20 per second by default).
+
+HTTP contract (docs/hmi.md; kept stable for black-box tests):
+
+    GET  /                       → redirect to /page/<start page>
+    GET  /page/<Name>            the page (server-side HTML; widgets carry data-var/data-action)
+    GET  /api/vars?path=P&…      {P: IEC literal} (variables some page shows)
+    POST /api/vars {P: literal}  write (variables some page writes; others 403), 4xx + reason
+    POST /api/presets/<name>     apply a preset (its steps in consecutive scans)
+    GET  /api/pages              the pages and what they map (JSON)
+    WS   /ws?page=<Name>         live values of that page: changed values only
+"""
+
+from __future__ import annotations
+
+import asyncio
+import ipaddress
+import json
+import secrets
+import socket
+import threading
+from collections import deque
+from pathlib import Path
+from typing import Any
+from urllib.parse import parse_qs
+
+from stvm.frontend import VariableBridge, WriteRejected
+from stvm.hmi.pages import Hmi, RunParameter, check_limits
+from stvm.hmi.robot import PoseSource, robot_state
+from stvm.semantics import types as t
+
+MAX_BODY_BYTES = 64 * 1024         # a page write is a few hundred bytes; a preset a few KiB
+MAX_PATHS_PER_REQUEST = 512
+MAX_WEBSOCKETS = 1000              # more are refused (503); 200 open ones are a tested load
+WS_MAX_MESSAGE_BYTES = 64 * 1024   # clients only ever send small messages
+SEND_TIMEOUT_S = 10.0              # a client that cannot take one message in this time is dropped
+WRITE_WAIT_S = 2.0                 # a write answers 200 once applied, 202 if the VM did not scan by then
+UPDATE_NS = 50_000_000             # 20 updates per second (the issue asks for at least 10)
+TOKEN_COOKIE = "stvm_hmi_token"
+PACKAGE = Path(__file__).resolve().parent
+
+
+class HmiServer:
+    """Serve `hmi` for the VM behind `bridge`. `start()` binds (raises OSError if it cannot) and
+    returns once the server accepts connections; `stop()` ends it and its thread."""
+
+    def __init__(self, hmi: Hmi, bridge: VariableBridge, host: str = "127.0.0.1", port: int = 0,
+                 token: str | None = None, pose: PoseSource | None = None,
+                 run_parameters: dict[str, Any] | None = None, update_ns: int = UPDATE_NS) -> None:
+        self.hmi = hmi
+        self.bridge = bridge
+        self.host = host
+        self.requested_port = port
+        self.port = port
+        self.token = token if token is not None else (None if is_loopback(host) else secrets.token_urlsafe(18))
+        self.pose = pose
+        self.run_parameters = dict(run_parameters or {})
+        self.update_ns = update_ns
+        self.loop: asyncio.AbstractEventLoop | None = None
+        self.clients: set[_Client] = set()
+        self._raw: dict[str, Any] = {}
+        self._shown: dict[str, Any] = {}
+        self._scan = -1
+        self._now_ns = 0
+        self._robot: dict[str, Any] | None = None
+        self._history_s = max((w.history_s for p in hmi.pages.values() for w in p.widgets()
+                               if w.kind == "robot_view"), default=0.0)
+        self._path: deque = deque(maxlen=20_000)
+        self._watch = None
+        self._watch_paths: tuple[str, ...] = ()
+        self._latest: tuple | None = None
+        self._wake_pending = False
+        self._server = None
+        self._socket: socket.socket | None = None
+        self._thread: threading.Thread | None = None
+        self._ready = threading.Event()
+        self._failure: BaseException | None = None
+        self.stats = {"published": 0, "dropped_clients": 0}
+        from stvm.hmi.render import PageRenderer
+        self.renderer = PageRenderer(hmi)
+
+    # ------------------------------------------------------------------ lifecycle
+    @property
+    def url(self) -> str:
+        host = f"[{self.host}]" if ":" in self.host else self.host
+        base = f"http://{host}:{self.port}/"
+        return base + (f"?token={self.token}" if self.token else "")
+
+    def start(self) -> "HmiServer":
+        import uvicorn
+        family = socket.AF_INET6 if ":" in self.host else socket.AF_INET
+        sock = socket.socket(family, socket.SOCK_STREAM)
+        try:
+            sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+            sock.bind((self.host, self.requested_port))
+            sock.listen(128)
+        except OSError:
+            sock.close()
+            raise
+        sock.setblocking(False)
+        self._socket = sock
+        self.port = sock.getsockname()[1]
+        config = uvicorn.Config(self._app(), log_level="warning", access_log=False, lifespan="off",
+                                ws="websockets-sansio", ws_max_size=WS_MAX_MESSAGE_BYTES, ws_ping_interval=20.0,
+                                ws_ping_timeout=20.0, timeout_graceful_shutdown=1, server_header=False,
+                                h11_max_incomplete_event_size=16 * 1024)
+        self._server = uvicorn.Server(config)
+        self._thread = threading.Thread(target=self._serve, name=f"stvm-hmi:{self.port}", daemon=True)
+        self._thread.start()
+        self._ready.wait(10)
+        if self._failure is not None:
+            raise RuntimeError(f"HMI server did not start: {self._failure}")
+        return self
+
+    def _serve(self) -> None:
+        async def main() -> None:
+            self.loop = asyncio.get_running_loop()
+            self._ready.set()
+            await self._server.serve(sockets=[self._socket])
+        try:
+            asyncio.run(main())
+        except BaseException as exc:   # noqa: BLE001 - reported by start()/stop(), never silently
+            self._failure = exc
+            self._ready.set()
+
+    def stop(self, timeout_s: float = 5.0) -> None:
+        if self._server is not None:
+            self._server.should_exit = True
+        if self._thread is not None:
+            self._thread.join(timeout_s)
+            self._thread = None
+        if self._watch is not None:
+            self._watch.close()
+            self._watch = None
+        if self._socket is not None:
+            self._socket.close()
+            self._socket = None
+
+    # ------------------------------------------------------------------ VM thread
+    def _on_snapshot(self, snapshot) -> None:
+        pose = self.pose.read() if self.pose is not None and self.pose.in_vm_thread else None
+        self._latest = (snapshot, pose)
+        if not self._wake_pending:
+            self._wake_pending = True
+            try:
+                self.loop.call_soon_threadsafe(self._publish)
+            except RuntimeError:   # the loop has closed (shutting down)
+                pass
+
+    # ------------------------------------------------------------------ event loop
+    def _publish(self) -> None:
+        self._wake_pending = False
+        latest, self._latest = self._latest, None
+        if latest is None:
+            return
+        snapshot, pose = latest
+        if pose is None and self.pose is not None and not self.pose.in_vm_thread:
+            pose = self.pose.read()
+        changed: dict[str, Any] = {}
+        raw_seen = self._raw
+        for path, value in snapshot.values.items():
+            if path not in raw_seen or raw_seen[path] != value or type(raw_seen[path]) is not type(value):
+                raw_seen[path] = value
+                shown = self._display(path, value)
+                self._shown[path] = shown
+                changed[path] = shown
+        self._scan, self._now_ns = snapshot.scan, snapshot.now_ns
+        robot = robot_state(pose)
+        new_points: list = []
+        if robot is not None:
+            self._robot = robot
+            point = [round(snapshot.now_ns / 1e9, 3)] + robot["pose"][:3]
+            if not self._path or self._path[-1][1:] != point[1:]:
+                self._path.append(point)
+                new_points.append(point)
+            horizon = point[0] - self._history_s
+            while self._path and self._path[0][0] < horizon:
+                self._path.popleft()
+        self.stats["published"] += 1
+        for client in list(self.clients):
+            client.offer(self, changed, robot, new_points)
+
+    def _display(self, path: str, value: Any) -> Any:
+        """A value as the page shows it: BOOL → true/false, integers → numbers, STRING → its
+        text, enumerations → the member name, anything else (REAL, TIME, …) → its IEC literal."""
+        ty = self.hmi.types.get(path)
+        if value is None:
+            return None
+        if isinstance(ty, t.BoolType):
+            return bool(value)
+        if isinstance(ty, t.IntType):
+            return int(value)
+        if isinstance(ty, t.StringType):
+            return bytes(value).decode("utf-8", "replace")
+        if isinstance(ty, t.EnumType):
+            return ty.name_of(value) or str(value)
+        return self.bridge.format(path, value)
+
+    def _update_watch(self) -> None:
+        """Watch exactly the paths of the pages that have a client (none: no watch at all)."""
+        wanted: dict[str, None] = {}
+        for client in self.clients:
+            for path in client.paths:
+                wanted[path] = None
+        paths = tuple(wanted)
+        if set(paths) == set(self._watch_paths) and (self._watch is not None or not paths):
+            return
+        if self._watch is not None:
+            self._watch.close()
+            self._watch = None
+        self._watch_paths = paths
+        if paths:
+            self._watch = self.bridge.watch(paths, every_ns=self.update_ns, every_wall_ns=self.update_ns,
+                                            on_snapshot=self._on_snapshot)
+
+    async def read_now(self, paths: list[str]) -> tuple[dict[str, Any], int] | None:
+        """Raw values of `paths` from one snapshot: the live watch's if it covers them, else a
+        one-off watch (None if the VM does not scan within WRITE_WAIT_S, e.g. a debugger stop)."""
+        if self._watch is not None and all(p in self._watch_paths for p in paths):
+            snap = self._watch.latest()
+            if snap is not None:
+                return {p: snap.values[p] for p in paths}, snap.scan
+        future: asyncio.Future = self.loop.create_future()
+
+        def deliver(snap) -> None:
+            self.loop.call_soon_threadsafe(lambda: future.done() or future.set_result(snap))
+        watch = self.bridge.watch(paths, on_snapshot=deliver)
+        try:
+            snap = await asyncio.wait_for(future, WRITE_WAIT_S)
+        except asyncio.TimeoutError:
+            return None
+        finally:
+            watch.close()
+        return dict(snap.values), snap.scan
+
+    # ------------------------------------------------------------------ writes
+    def check_writes(self, body: Any) -> tuple[dict[str, Any], dict[str, str]]:
+        """Validate a POST /api/vars body: ({path: value}, {path: literal}) or raise `_Refused`."""
+        if not isinstance(body, dict):
+            raise _Refused(400, "the body must be a JSON object {\"<variable path>\": \"<IEC literal>\"}")
+        if not body:
+            raise _Refused(400, "nothing to write: the object is empty")
+        if len(body) > MAX_PATHS_PER_REQUEST:
+            raise _Refused(413, f"too many variables in one write ({len(body)} > {MAX_PATHS_PER_REQUEST})")
+        values: dict[str, Any] = {}
+        literals: dict[str, str] = {}
+        for path, raw in body.items():
+            limits = self.hmi.writable.get(path)
+            if limits is None:
+                known = path in self.hmi.types
+                raise _Refused(403, f"{path}: not written by any HMI page" if known else
+                               f"{path}: not a variable any HMI page maps", path)
+            if isinstance(raw, bool):
+                text = "TRUE" if raw else "FALSE"
+            elif isinstance(raw, (int, float)):
+                text = repr(raw)
+            elif isinstance(raw, str):
+                text = raw.strip()
+            else:
+                raise _Refused(400, f"{path}: the value must be an IEC literal string, got {type(raw).__name__}", path)
+            if len(text) > 4096:
+                raise _Refused(413, f"{path}: value too long", path)
+            try:
+                value = self.bridge.parse(path, text)
+            except WriteRejected as exc:
+                raise _Refused(422, f"{path}: {exc.reason}", path) from None
+            problem = self._limit_problem(limits, path, value, text)
+            if problem:
+                raise _Refused(422, f"{path}: {problem}", path)
+            values[path] = value
+            literals[path] = text
+        return values, literals
+
+    @staticmethod
+    def _limit_problem(limits, path: str, value: Any, text: str) -> str | None:
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            return None
+        return check_limits(limits, path, value)
+
+    async def submit(self, values: dict[str, Any]) -> int | None:
+        """Submit one batch; the scan count once applied (None: not applied within WRITE_WAIT_S)."""
+        future = self.bridge.submit(values)   # raises WriteRejected (checked again, busy)
+        try:
+            # shielded: a timeout answers 202 and the batch stays queued (cancelling the wait
+            # must not cancel the write, or "queued" would be a lie)
+            await asyncio.wait_for(asyncio.shield(asyncio.wrap_future(future)), WRITE_WAIT_S)
+        except asyncio.TimeoutError:
+            return None
+        return self.bridge.vm.scan_count
+
+    def preset_steps(self, name: str) -> list[dict[str, Any]]:
+        preset = self.hmi.presets.get(name)
+        if preset is None:
+            raise _Refused(404, f"no preset named {name!r}")
+        steps = []
+        for batch in preset.steps:
+            values = {}
+            for path, item in batch:
+                if isinstance(item, RunParameter):
+                    if item.name not in self.run_parameters:
+                        raise _Refused(409, f"preset {name}: {path} takes the run's {item.name}, "
+                                            f"and this run has none (no robot)")
+                    item = self.run_parameters[item.name]
+                    values[path] = item.encode() if isinstance(item, str) else item
+                else:
+                    values[path] = self.bridge.parse(path, item)
+            steps.append(values)
+        return steps
+
+    # ------------------------------------------------------------------ the web app
+    def _app(self):
+        from stvm.hmi.app import build_app
+        return build_app(self)
+
+
+class _Refused(Exception):
+    """A request refused with an HTTP status and a reason the page shows."""
+
+    def __init__(self, status: int, reason: str, path: str | None = None) -> None:
+        super().__init__(reason)
+        self.status = status
+        self.reason = reason
+        self.path = path
+
+
+class _Client:
+    """One WebSocket: the paths of its page, what is waiting to be sent, its sender task."""
+
+    def __init__(self, websocket, page) -> None:
+        self.websocket = websocket
+        self.page = page
+        self.paths = page.base_paths
+        self._path_set = set(self.paths)
+        self.popup: str | None = None
+        self.robot = page.has_robot_view
+        self.pending: dict[str, Any] = {}
+        self.robot_pending: dict[str, Any] | None = None
+        self.points: list = []
+        self.full = True             # the next message carries every value (and the whole path)
+        self.reset_path = False
+        self.scan, self.now_ns = -1, 0
+        self.wake = asyncio.Event()
+
+    def open_popup(self, popup_id: str | None) -> bool:
+        """Watch the fields of the pop-up the page opened (None: closed); False if unknown."""
+        extra = self.page.popup_paths(popup_id) if popup_id else ()
+        if popup_id and not extra:
+            return False
+        self.popup = popup_id
+        self.paths = self.page.base_paths + tuple(p for p in extra if p not in self.page.base_paths)
+        self._path_set = set(self.paths)
+        self.full = True     # the next update carries every value of the page and pop-up
+        return True
+
+    def offer(self, server: HmiServer, changed: dict[str, Any], robot, new_points: list) -> None:
+        if self.full:
+            self.pending = {p: server._shown[p] for p in self.paths if p in server._shown}
+            if self.robot:
+                self.points = list(server._path)
+                self.robot_pending = robot or server._robot
+            self.full = False
+            self.reset_path = True
+        else:
+            for path, value in changed.items():
+                if path in self._path_set:
+                    self.pending[path] = value
+            if self.robot and robot is not None:
+                self.robot_pending = robot
+                self.points.extend(new_points)
+                if len(self.points) > 2000:          # a stalled client: keep the newest points
+                    del self.points[:-2000]
+        self.scan, self.now_ns = server._scan, server._now_ns
+        if self.pending or self.robot_pending is not None:
+            self.wake.set()
+
+    def take(self) -> dict[str, Any]:
+        message: dict[str, Any] = {"scan": self.scan, "t": round(self.now_ns / 1e9, 3), "values": self.pending}
+        self.pending = {}
+        if self.robot_pending is not None:
+            message["robot"] = dict(self.robot_pending, points=self.points,
+                                    reset=self.reset_path)
+            self.robot_pending = None
+            self.points = []
+            self.reset_path = False
+        return message
+
+
+def is_loopback(host: str) -> bool:
+    if host == "localhost":
+        return True
+    try:
+        return ipaddress.ip_address(host).is_loopback
+    except ValueError:
+        return False
+
+
+def token_from(headers: dict[str, str], query: str) -> str | None:
+    """The token a request carries: `?token=`, `Authorization: Bearer`, or the page's cookie."""
+    values = parse_qs(query).get("token")
+    if values:
+        return values[0]
+    auth = headers.get("authorization", "")
+    if auth.lower().startswith("bearer "):
+        return auth[7:].strip()
+    for part in headers.get("cookie", "").split(";"):
+        name, _, value = part.strip().partition("=")
+        if name == TOKEN_COOKIE:
+            return value
+    return None
+
+
+def json_dumps(data: Any) -> str:
+    return json.dumps(data, separators=(",", ":"), ensure_ascii=False)

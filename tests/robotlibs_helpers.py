@@ -1,0 +1,236 @@
+"""Shared machinery of the robot-library tests (tests/cbt_v2, tests/rockwell, tests/kuka, tests/cell).
+
+The libraries under ``st_src/<folder>/`` are ST only; the tests load them with stvm, add a small
+harness PROGRAM of their own where an FB is exercised alone, and run them against the TM emulator:
+
+* in lockstep (:class:`Cell`): VM and emulated robots in one process on the VM's virtual clock,
+  no sockets, bit-identical runs; one or several robots (``LockstepTransport.add_robot``);
+* over loopback with real sockets where a scripted robot is needed (``thesis_harness.FakeRobot``,
+  reused from the thesis tests).
+
+Expected frames are computed here from ``shared/spec/tm_protocol.md`` section 2 (two-digit
+checksum, LENGTH in bytes), independently of both the ST code and ``emulator.framing``.
+"""
+
+from __future__ import annotations
+
+import re
+import sys
+import tempfile
+import tomllib
+from functools import lru_cache
+from pathlib import Path
+from typing import Any, Callable, Iterable, Sequence
+
+import stvm
+
+REPO = Path(__file__).resolve().parents[1]
+ST_SRC = REPO / "st_src"
+V2 = ST_SRC / "cbt_v2"
+ROCKWELL = ST_SRC / "rockwell"
+KUKA = ST_SRC / "kuka"
+THESIS_TESTS = Path(__file__).resolve().parent / "thesis"
+if str(THESIS_TESTS) not in sys.path:
+    sys.path.insert(0, str(THESIS_TESTS))
+
+# the six PnP targets every library's demo drives (the thesis demo's, st_src/scenarios/pnp_demo.toml)
+with (ST_SRC / "scenarios" / "pnp_demo.toml").open("rb") as _fh:
+    _DEMO = tomllib.load(_fh)["set"]
+PNP_TARGETS = [tuple(_DEMO[f"PnP_MoveParameters[{i}].TargetPosition.{k}"] for k in ("X", "Y", "Z", "RX", "RY", "RZ"))
+               for i in range(6)]
+PNP_SPEEDS = [_DEMO[f"PnP_MoveParameters[{i}].Speed"] for i in range(6)]
+PNP_ACCEL_MS = [_DEMO[f"PnP_MoveParameters[{i}].AccelTime"] for i in range(6)]
+
+
+# ====================================================================== frames (spec section 2)
+
+
+def tm_frame(header: str, data: str) -> bytes:
+    """tm_protocol.md 2: $HEADER,LEN,DATA,*CS CR LF with LEN in bytes and CS two hex digits."""
+    payload = data.encode("utf-8")
+    body = header.encode("ascii") + b"," + str(len(payload)).encode("ascii") + b"," + payload + b","
+    checksum = 0
+    for byte in body:
+        checksum ^= byte
+    return b"$" + body + b"*" + f"{checksum:02X}".encode("ascii") + b"\r\n"
+
+
+def script_of(frame: bytes) -> tuple[str, str]:
+    """(ID, script) of a $TMSCT frame."""
+    first = frame.index(b",")
+    second = frame.index(b",", first + 1)
+    length = int(frame[first + 1:second])
+    data = frame[second + 1:second + 1 + length].decode("utf-8")
+    ident, _, script = data.partition(",")
+    return ident, script
+
+
+MOTIONS = ("PTP", "Line", "Circle", "Move_PTP", "Move_Line", "PLine", "Move_PLine")
+_CALL = re.compile(r"^(\w+)\((.*)\)$")
+
+
+def statements(script: str) -> list[tuple[str, list[Any]]]:
+    """The calls of a TM script, one per CRLF line: (name, arguments) with numbers as floats,
+    strings unquoted, true/false as bools (enough for the scripts the libraries send)."""
+    out = []
+    for line in script.split("\r\n"):
+        match = _CALL.match(line.strip())
+        if not match:
+            out.append((line.strip(), []))
+            continue
+        args: list[Any] = []
+        for raw in _split_args(match.group(2)):
+            raw = raw.strip()
+            if raw.startswith('"'):
+                args.append(raw.strip('"'))
+            elif raw.lower() in ("true", "false"):
+                args.append(raw.lower() == "true")
+            elif raw:
+                try:
+                    args.append(float(raw))
+                except ValueError:
+                    args.append(raw)          # an expression (e.g. GetString(...)): as written
+        out.append((match.group(1), args))
+    return out
+
+
+def _split_args(text: str) -> list[str]:
+    parts, depth, current = [], 0, ""
+    for ch in text:
+        if ch in "({":
+            depth += 1
+        elif ch in ")}":
+            depth -= 1
+        if ch == "," and depth == 0:
+            parts.append(current)
+            current = ""
+        else:
+            current += ch
+    if current:
+        parts.append(current)
+    return parts
+
+
+def motion_commands(frames: Iterable[bytes]) -> list[tuple[str, list[Any]]]:
+    """Every motion call the PLC sent, in order (IDs, QueueTags and other statements dropped)."""
+    out = []
+    for frame in frames:
+        if frame.startswith(b"$TMSCT"):
+            out += [(name, args) for name, args in statements(script_of(frame)[1]) if name in MOTIONS]
+    return out
+
+
+def free_high_port() -> int:
+    """A free loopback TCP port above 32767 (which an INT port variable cannot hold)."""
+    import random
+    import socket
+    for port in random.Random().sample(range(32768, 61000), 200):
+        with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as probe:
+            try:
+                probe.bind(("127.0.0.1", port))
+            except OSError:
+                continue
+            return port
+    raise RuntimeError("no free port above 32767")
+
+
+# ====================================================================== projects
+
+
+def manifest_files(folder: Path) -> list[Path]:
+    with (folder / "stvm.toml").open("rb") as fh:
+        return [folder / name for name in tomllib.load(fh)["project"]["files"]]
+
+
+_HARNESS_DIR = Path(tempfile.mkdtemp(prefix="stvm-robotlibs-harness-"))
+
+
+@lru_cache(maxsize=None)
+def load_library(folder: Path, harness: str = "", drop: tuple[str, ...] = ()) :
+    """The library's manifest files minus `drop` (file names), plus a harness program (ST text)."""
+    files = [f for f in manifest_files(folder) if f.name not in drop]
+    if harness:
+        name = f"harness_{abs(hash((str(folder), harness))):x}.st"
+        path = _HARNESS_DIR / name
+        path.write_text(harness, encoding="utf-8")
+        files.append(path)
+    return stvm.load([str(f) for f in files])
+
+
+# ====================================================================== lockstep runs
+
+
+class Cell:
+    """A fresh VM of `project` in lockstep with emulated robots: robot 0 answers any address, each
+    of `robots` ((host, port) pairs) only its own. `settings`/`faults` apply to every robot."""
+
+    def __init__(self, project, scan: str = "1ms", settings=None, faults: Sequence[str] = (),
+                 robots: Sequence[tuple[str, int]] = (), latency_scans: int = 1) -> None:
+        import emulator
+        from stvm.lockstep import LockstepTransport
+        settings = settings or emulator.EmulatorSettings()
+        plan = emulator.parse_faults(list(faults))
+        self.transport = LockstepTransport(latency_scans=latency_scans, settings=settings, faults=plan)
+        for host, port in robots:
+            self.transport.add_robot(host, port, settings=settings, faults=plan)
+        self.vm = project.start(scan=scan, transport=self.transport)
+        self.transport.attach(self.vm)
+        self.samples: list[dict[str, Any]] = []
+        self.watch: dict[str, str] = {}
+
+    # ---- driving
+    def set(self, path: str, value: Any) -> None:
+        self.vm.set(path, value)
+
+    def set_many(self, prefix: str, values: dict[str, Any]) -> None:
+        for key, value in values.items():
+            self.vm.set(f"{prefix}.{key}", value)
+
+    def get(self, path: str) -> Any:
+        """The value of `path`; STRING values as str (the VM holds them as bytes)."""
+        value = self.vm.get(path)
+        return value.decode("latin-1") if isinstance(value, bytes) else value
+
+    def scan(self, n: int = 1) -> None:
+        for _ in range(n):
+            self.vm.scan()
+            if self.watch:
+                self.samples.append({k: self.get(p) for k, p in self.watch.items()} | {"scan": self.vm.scan_count - 1})
+
+    def until(self, predicate: Callable[[], bool], max_scans: int = 30000, what: str = "condition") -> int:
+        """Scan until `predicate()`; returns the number of scans run. Fails after `max_scans`."""
+        for i in range(max_scans):
+            self.scan()
+            if predicate():
+                return i + 1
+        raise AssertionError(f"{what} not reached within {max_scans} scans")
+
+    # ---- robot side
+    def robot(self, index: int = 0):
+        return self.transport.robots[index].robot
+
+    def frames(self, direction: str, robot: int = 0) -> list[bytes]:
+        return [f.data for f in self.transport.frames if f.direction == direction and f.robot == robot]
+
+    def rx(self, robot: int = 0) -> list[bytes]:
+        """Frames the PLC sent to robot `robot`, byte for byte."""
+        return self.frames("rx", robot)
+
+    def tx(self, robot: int = 0) -> list[bytes]:
+        return self.frames("tx", robot)
+
+    def pose(self, robot: int = 0) -> list[float]:
+        return self.robot(robot).snapshot()["pose"]
+
+    def close(self) -> None:
+        self.vm.close()
+
+
+def states(samples: list[dict], keys: Sequence[str]) -> list[tuple]:
+    """Consecutive distinct values of `keys` over the samples (run-length collapsed)."""
+    out: list[tuple] = []
+    for sample in samples:
+        state = tuple(sample[k] for k in keys)
+        if not out or out[-1] != state:
+            out.append(state)
+    return out
