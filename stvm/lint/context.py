@@ -123,7 +123,7 @@ class _SetAnalysis:
     def join(self, a, b):
         return a & b if self.must else a | b
 
-    def widen(self, old, new, rounds=1):
+    def widen(self, old, new, rounds=1, at=None):
         return new
 
     def leq(self, a, b):

@@ -30,7 +30,7 @@ class ForwardAnalysis(Protocol[S]):
     def transfer(self, node: Node, state: S) -> S: ...
     def edge(self, edge: Edge, state: S) -> S | None: ...
     def join(self, a: S, b: S) -> S: ...
-    def widen(self, old: S, new: S, rounds: int = 1) -> S: ...
+    def widen(self, old: S, new: S, rounds: int = 1, at: Node | None = None) -> S: ...
     def leq(self, a: S, b: S) -> bool: ...
 
 
@@ -50,8 +50,10 @@ class Solution(Generic[S]):
 
 
 def solve(cfg: CFG, analysis: ForwardAnalysis[S], scan_loop: bool = True,
-          record_edges: bool = False) -> Solution[S]:
-    """Solve to the fixpoint; `record_edges`: collect the ids of the edges some state took."""
+          record_edges: bool = False, narrow: int = 0) -> Solution[S]:
+    """Solve to the fixpoint; `record_edges`: collect the ids of the edges some state took;
+    `narrow`: passes of plain re-evaluation after widening (each keeps a sound result and
+    takes back what widening gave away, e.g. `r := i` inside `FOR i := 0 TO 7`)."""
     order = cfg.rpo()
     position = {node.index: i for i, node in enumerate(order)}
     before: dict[int, S | None] = {node.index: None for node in cfg.nodes}
@@ -88,7 +90,7 @@ def solve(cfg: CFG, analysis: ForwardAnalysis[S], scan_loop: bool = True,
                 # `rounds`: the how-many-th widening at this point; the analysis widens to program
                 # constants first and to the declared limits after a few rounds, so a counter
                 # does not climb threshold by threshold
-                merged = analysis.widen(old, merged, count - plain)
+                merged = analysis.widen(old, merged, count - plain, target)
         before[target.index] = merged
         push(target.index)
 
@@ -108,4 +110,29 @@ def solve(cfg: CFG, analysis: ForwardAnalysis[S], scan_loop: bool = True,
                 offer(edge.dst, out)
         if node is cfg.exit and scan_loop:
             offer(cfg.entry, analysis.join(initial, analysis.next_call(after)))
+    for _ in range(narrow):
+        feasible = set()
+        outputs: dict[int, S | None] = {}
+        for node in order:
+            index = node.index
+            incoming = []
+            if node is cfg.entry:
+                incoming.append(initial)
+            for edge in node.preds:
+                src = edge.src.index
+                if before[src] is None:
+                    continue
+                if src not in outputs:
+                    outputs[src] = analysis.transfer(edge.src, before[src])
+                out = analysis.edge(edge, outputs[src])
+                if out is not None:
+                    feasible.add(id(edge))
+                    incoming.append(out)
+            if node is cfg.entry and scan_loop and before[cfg.exit.index] is not None:
+                incoming.append(analysis.next_call(analysis.transfer(cfg.exit, before[cfg.exit.index])))
+            state = None
+            for item in incoming:
+                state = item if state is None else analysis.join(state, item)
+            before[index] = state
+            outputs.pop(index, None)
     return Solution(cfg, before, feasible)

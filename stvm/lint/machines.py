@@ -330,7 +330,7 @@ class _Typestate:
     def join(self, a, b):
         return a | b
 
-    def widen(self, old, new, rounds=1):
+    def widen(self, old, new, rounds=1, at=None):
         return new
 
     def leq(self, a, b):

@@ -48,6 +48,7 @@ _HEX_WIDTH = {"BYTE": 2, "WORD": 4, "DWORD": 8, "LWORD": 16}
 _REAL_WIDTH = {"REAL": 15, "LREAL": 25}   # REAL_TO_STRING: shortest round-trip text with exponent
 MAX_STRING_BYTES = t.STRING.max_bytes      # 1985: Sysmac's string function result limit
 _INT_ROUNDS = 2       # threshold widenings of an integer before it widens to its declared limits
+_LOOP_INT_ROUNDS = 4  # the same at a loop head (inside one call: cheap, and loop bounds are constants)
 _STRING_ROUNDS = 4    # plain joins of a string length before it widens to the declared size
 
 
@@ -368,6 +369,7 @@ class RangeAnalysis:
         self.key_types: dict[str, t.Type] = {}
         self.parents: set[str] = set()   # keys that have (or had) sub-keys in some state
         self.limits: dict[str, Interval] = {}  # key → its declared range, for the final widening
+        self._loop_writes: dict[int, set[str]] = {}
         self.string_keys: set[str] = {key for key, var in pou_info.variables.items()
                                       if isinstance(var.type, t.StringType)}
         self._initial_values = self._initial_values_of(self.persistent | self.fresh)
@@ -412,20 +414,25 @@ class RangeAnalysis:
                 return False
         return True
 
-    def widen(self, old: State, new: State, rounds: int = 1) -> State:
+    def widen(self, old: State, new: State, rounds: int = 1, at: Node | None = None) -> State:
         """Integers: to the next program constant for the first rounds, then to the declared
         limits. String lengths: plain joins (a chain of CONCATs across steps settles in a few
-        scans), then the declared size (a string that grows every scan)."""
+        scans), then the declared size (a string that grows every scan). At a loop head only
+        what the loop writes is widened: the rest settles with the enclosing loop (or scan)."""
         out = {}
         th = self.thresholds
+        written = self.loop_writes(at) if at is not None and at.loop_head else None
         for key, vn in new.items():
             vo = old.get(key)
             if vo is None:
                 continue
+            if written is not None and key.split(".", 1)[0].split("[", 1)[0] not in written:
+                out[key] = vn
+                continue
             lo, hi = vn
             limits = self.limits.get(key)
             is_string = key in self.string_keys
-            final = rounds > (_STRING_ROUNDS if is_string else _INT_ROUNDS)
+            final = rounds > (_STRING_ROUNDS if is_string else _INT_ROUNDS if written is None else _LOOP_INT_ROUNDS)
             if is_string and not final:
                 out[key] = vn
                 continue
@@ -446,6 +453,17 @@ class RangeAnalysis:
                 hi = th[i] if i < len(th) else (1 << 64)
             out[key] = (lo, hi)
         return out
+
+    def loop_writes(self, head: Node) -> set[str]:
+        """Root variables that the loop of this head writes (its body, its own FOR step)."""
+        cached = self._loop_writes.get(head.index)
+        if cached is None:
+            from stvm.lint.access import node_accesses
+            inner = {id(s) for s in _statements_in(head.stmt)}
+            cached = {a.var.key for node in self.cfg.nodes if id(node.stmt) in inner
+                      for a in node_accesses(node, self.facts) if a.kind != "read"}
+            self._loop_writes[head.index] = cached
+        return cached
 
     # ---- transfer
     def transfer(self, node: Node, state: State) -> State:
@@ -779,6 +797,27 @@ def declared_subranges(pou: n.POU, alias_ranges: dict[str, Interval]) -> dict[st
     return out
 
 
+def _statements_in(stmt) -> list:
+    """A statement and every statement nested in it."""
+    out = [stmt]
+    if isinstance(stmt, n.If):
+        for _, body in stmt.branches:
+            for inner in body:
+                out += _statements_in(inner)
+        for inner in stmt.else_body or ():
+            out += _statements_in(inner)
+    elif isinstance(stmt, n.Case):
+        for _, body in stmt.elements:
+            for inner in body:
+                out += _statements_in(inner)
+        for inner in stmt.else_body or ():
+            out += _statements_in(inner)
+    elif isinstance(stmt, (n.For, n.While, n.Repeat)):
+        for inner in stmt.body:
+            out += _statements_in(inner)
+    return out
+
+
 def _assigned_roots(cfg: CFG, facts: FactsView) -> set[str]:
     """Variables some statement of the body writes (assignment, output binding, in-out, FOR)."""
     from stvm.lint.access import node_accesses
@@ -803,4 +842,4 @@ def _thresholds(cfg: CFG, facts: FactsView) -> list[int]:
 def analyze_ranges(cfg: CFG, pou_info, facts: FactsView, settings,
                    alias_ranges: dict[str, Interval] | None = None) -> tuple[RangeAnalysis, Solution]:
     analysis = RangeAnalysis(cfg, pou_info, facts, settings, alias_ranges)
-    return analysis, solve(cfg, analysis, record_edges=True)
+    return analysis, solve(cfg, analysis, record_edges=True, narrow=2)
