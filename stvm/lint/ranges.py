@@ -34,6 +34,7 @@ from stvm.lint.facts import (EXTERNAL, GLOBAL, IN_OUT, LOCAL, NOT_CONST, OUTPUT,
                              node_calls, node_subexprs, place_key,
                              root_expr)
 from stvm.semantics import types as t
+from stvm.settings import ByteToStringFormat, EnumDefault
 from stvm.syntax import nodes as n
 
 Interval = tuple[int, int]
@@ -274,7 +275,7 @@ class Evaluator:
                 return (1, _DECIMAL_WIDTH[source])
             if source in _HEX_WIDTH:
                 width = _HEX_WIDTH[source]
-                fixed = getattr(self.settings, "byte_to_string_format", "hex_nopad") == "hex_pad2"
+                fixed = self.settings.byte_to_string_format is ByteToStringFormat.HEX_PAD2
                 return (width if fixed else 1, width)
             if source == "BOOL":
                 return (4, 5)
@@ -770,7 +771,7 @@ def _initial(var, settings) -> Interval | None:
             return (value, value)
         if ty.default is not None:
             return (ty.default, ty.default)
-        if getattr(settings, "enum_default", "first") == "zero":
+        if settings.enum_default is EnumDefault.ZERO:
             return (0, 0)
         return (ty.members[0][1],) * 2 if ty.members else None
     if isinstance(ty, t.StringType):

@@ -272,3 +272,18 @@ def test_every_rule_has_a_targeted_positive_and_negative_case():
     for r in RULES:
         mine = [c for c in CASES if c[0] == r.code]
         assert any(c[3] for c in mine) and any(not c[3] for c in mine), r.code
+
+
+def test_setting_dependent_rules_follow_the_sysmac_settings():
+    from stvm.settings import DEFAULT_SETTINGS
+    source = fb("VAR_INPUT b : BYTE; END_VAR VAR_OUTPUT s : STRING[8]; END_VAR", "s := BYTE_TO_STRING(b);")
+    [finding] = findings(source, "SA301")
+    assert "hexadecimal without leading zeros (byte_to_string_format=hex_nopad)" in finding.message
+    padded = DEFAULT_SETTINGS.with_overrides(["byte_to_string_format=hex_pad2"])
+    assert findings(source, "SA301", settings=padded) == []
+    checksum = next(r for r in RULES if r.code == "SA201").example
+    [finding] = findings(checksum, "SA201")
+    assert "the terminating 16#00 ToAryByte adds (toarybyte_string_model=text_nul)" in finding.message
+    stale = DEFAULT_SETTINGS.with_overrides(["toarybyte_string_model=text"])
+    [finding] = findings(checksum, "SA201", settings=stale)
+    assert "a stale byte (toarybyte_string_model=text)" in finding.message

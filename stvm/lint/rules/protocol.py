@@ -7,6 +7,7 @@ from stvm.lint.facts import node_calls, node_subexprs, iter_exprs, node_exprs, p
 from stvm.lint.ranges import MAX_STRING_BYTES, fmt, is_point
 from stvm.lint.registry import rule
 from stvm.semantics import types as t
+from stvm.settings import ByteToStringFormat
 from stvm.syntax import nodes as n
 
 _HEX_DIGITS = {"BYTE": 2, "WORD": 4, "DWORD": 8, "LWORD": 16}
@@ -102,8 +103,8 @@ def _length_checked(ctx: PouContext) -> set[str]:
       thesis="`str_Checksum:=BYTE_TO_STRING(Send_Checksum[0])` in every command FB (st_src/README.md 8.2, "
              "ERRATA.md Q2, FIDELITY_FINDINGS 8.2; CBT_MoveAbsolute.st:480).")
 def hex_unpadded(ctx: PouContext):
-    style = getattr(ctx.settings, "byte_to_string_format", "hex_nopad")
-    if style == "hex_pad2":
+    style = ctx.settings.byte_to_string_format
+    if style is ByteToStringFormat.HEX_PAD2:
         return
     checked = _length_checked(ctx)
     for node, state, call, info in _calls(ctx):
@@ -122,12 +123,12 @@ def hex_unpadded(ctx: PouContext):
             continue
         if node.kind == "assign" and node.stmt.value is call and place_key(node.stmt.target, ctx.facts) in checked:
             continue
-        form = "hexadecimal without leading zeros" if style == "hex_nopad" else "decimal"
+        form = "hexadecimal without leading zeros" if style is ByteToStringFormat.HEX_NOPAD else "decimal"
         example = "'A', not '0A'" if source == "BYTE" else "fewer digits"
         share = f"values below 16#{full:X}"
         if rng is not None and rng[1] < full:
             share = f"every value here ({fmt(rng)})"
-        yield ctx.finding("SA301", f"{text_of(call)} writes {form} (byte_to_string_format={style}): "
+        yield ctx.finding("SA301", f"{text_of(call)} writes {form} (byte_to_string_format={style.value}): "
                                    f"{share} give fewer than {digits} digits ({example})", call.span)
 
 

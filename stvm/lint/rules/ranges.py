@@ -11,6 +11,7 @@ from stvm.lint.facts import node_calls, node_subexprs, NOT_CONST, place_key, tex
 from stvm.lint.ranges import excluded_key, fmt, type_range
 from stvm.lint.registry import rule
 from stvm.semantics import types as t
+from stvm.settings import ToarybyteStringModel
 from stvm.syntax import nodes as n
 
 
@@ -153,7 +154,7 @@ def index_out_of_bounds(ctx: PouContext):
     fills = _buffer_fills(ctx)
     if not fills:
         return
-    model = getattr(ctx.settings, "toarybyte_string_model", "text_nul")
+    model = ctx.settings.toarybyte_string_model
     for loop, body_nodes in _loops_over(ctx):
         var_key = place_key(loop.variable, ctx.facts)
         end = _linear(loop.end, ctx)
@@ -177,14 +178,15 @@ def index_out_of_bounds(ctx: PouContext):
                 if past < 0:
                     continue
                 reported.add(id(sub))
-                byte = {"text_nul": "the terminating 16#00 ToAryByte adds", "text": "a stale byte",
-                        "image": "the string's unused storage"}.get(model, "a byte after the text")
+                byte = {ToarybyteStringModel.TEXT_NUL: "the terminating 16#00 ToAryByte adds",
+                        ToarybyteStringModel.TEXT: "a stale byte",
+                        ToarybyteStringModel.IMAGE: "the string's unused storage"}[model]
                 last = (f"{fill[1]} + " if fill[1] else "") + f"LEN({fill[3]})" + (f" + {past}" if past else "")
                 yield ctx.finding(
                     "SA201",
                     f"{text_of(sub)} reaches index {last} when {text_of(loop.variable)} reaches "
                     f"its end: past the LEN({fill[3]}) bytes that ToAryByte copied from element {fill[1]} "
-                    f"(line {fill[2].line}); that element is {byte} (toarybyte_string_model={model})",
+                    f"(line {fill[2].line}); that element is {byte} (toarybyte_string_model={model.value})",
                     sub.span)
 
 
