@@ -147,7 +147,7 @@ def cmd_run(args) -> int:
             raise _UsageError(str(exc)) from exc
         except ValueError as exc:
             raise _UsageError(f"--set {name}: {exc}") from exc
-    demo = None
+    demo = opcua = None
     try:
         if demo_mode:
             from stvm.demo import Demo
@@ -158,7 +158,9 @@ def cmd_run(args) -> int:
             driver = ScenarioDriver(load_scenario(args.scenario), vm)
             driver.apply_initial()
             vm.on_scan_end.append(driver.after_scan)
-    except (ValueError, KeyError) as exc:
+        from stvm.opcua.cli import start_server
+        opcua = start_server(args, project, vm, args.files)
+    except (ValueError, KeyError, RuntimeError) as exc:
         if demo is not None:
             demo.stop()
         raise _UsageError(str(exc)) from exc
@@ -167,10 +169,14 @@ def cmd_run(args) -> int:
         try:
             hmi = _start_hmi(args.hmi, project, vm, demo)
         except BaseException:
+            if opcua is not None:
+                opcua.stop()
             if demo is not None:
                 demo.stop()
             raise
         if hmi is None:
+            if opcua is not None:
+                opcua.stop()
             if demo is not None:
                 demo.stop()
             vm.close()
@@ -200,6 +206,8 @@ def cmd_run(args) -> int:
         signal.signal(signal.SIGINT, previous)
         if hmi is not None:
             hmi.stop()
+        if opcua is not None:
+            opcua.stop()
         vm.close()
         if demo is not None:
             demo.stop()
@@ -287,6 +295,8 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--scenario", help="scenario TOML applied to the run (see README)")
     run.add_argument("--watchdog", type=float, default=5.0, metavar="SECONDS",
                      help="fault when one scan runs longer than this wall-clock time (default 5)")
+    from stvm.opcua.cli import add_option
+    add_option(run)
     demo = run.add_argument_group("demo (projects whose stvm.toml has [demo], e.g. st_src/)")
     demo.add_argument("--robot", metavar="HOST:PORT", help="talk to this robot instead of the bundled emulator")
     demo.add_argument("--emulator-log", metavar="FILE", help="write the emulator's frame log (JSON lines)")

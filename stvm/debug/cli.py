@@ -37,6 +37,8 @@ def register(subparsers) -> None:
     debug.add_argument("--hmi", metavar="[HOST:]PORT",
                        help="serve the project's HMI pages while debugging (values between scans, "
                             "writes at the next scan start; docs/hmi.md)")
+    from stvm.opcua.cli import add_option
+    add_option(debug)
     debug.set_defaults(func=cmd_debug)
 
     dap = subparsers.add_parser(
@@ -82,6 +84,14 @@ def cmd_debug(args) -> int:
     if session.robot != "none":
         print(f"robot: {session.robot}" + (f" on port {session.server.port}" if session.server else ""))
     hmi = None
+    opcua = None
+    try:
+        from stvm.opcua.cli import start_server
+        # the debugger is the run control: no Runtime.Scan/Pause/Resume beside it
+        opcua = start_server(args, session.build.project, session.engine.vm, args.files, run_control=False)
+    except (ValueError, RuntimeError) as exc:
+        session.close()
+        return _error(str(exc))
     try:
         if getattr(args, "hmi", None):
             hmi = _start_hmi(args.hmi, session)
@@ -93,6 +103,8 @@ def cmd_debug(args) -> int:
     finally:
         if hmi is not None:
             hmi.stop()
+        if opcua is not None:
+            opcua.stop()
         session.close()
 
 

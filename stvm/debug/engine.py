@@ -546,7 +546,10 @@ class Engine:
                           self._stack(frame) if frame is not None else [], breakpoints or [], message)
         self._pause = False
         self._publish(event, STOPPED)
-        mode, count = self._commands.get()
+        if in_scan:
+            mode, count = self._commands.get()
+        else:
+            mode, count = self._wait_between_scans()
         if mode == "terminate" or self._terminate:
             raise _Terminate()
         if self.vm.realtime:
@@ -562,6 +565,16 @@ class Engine:
         self._attention = mode in (STEP, NEXT, FINISH) or self._pause or self._terminate
         if self._attention:
             self._arm(frame)
+
+    def _wait_between_scans(self) -> tuple[str, int]:
+        """The next command; meanwhile the VM's idle hooks run (front ends beside the debugger,
+        `stvm debug --opcua`, read and write a VM stopped between two scans)."""
+        while True:
+            try:
+                return self._commands.get(timeout=0.01 if self.vm.on_idle else None)
+            except queue.Empty:
+                for hook in self.vm.on_idle:
+                    hook(self.vm)
 
     def _publish(self, event: StopEvent, state: str) -> None:
         with self._changed:

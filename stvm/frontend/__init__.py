@@ -4,11 +4,14 @@
     watch = bridge.watch(["Cobot.Connected", "Main.x"], every_ns=50_000_000)
     snap = watch.latest()                    # Snapshot taken between two scans
     future = bridge.submit({"Main.x": 5})    # applied at the start of the next scan, all or nothing
+    bridge.sample(["Main.y"])                # one snapshot at the next point between scans
+    control = RunControl(vm)                 # pause / resume / step(n) from another thread
 
 `catalog(vm)` lists every variable a front end may publish, as a tree of `VariableInfo`.
 """
 
 from stvm.frontend.bridge import Snapshot, VariableBridge, Watch, WriteRejected
 from stvm.frontend.catalog import VariableInfo, catalog
+from stvm.frontend.control import RunControl
 
-__all__ = ["Snapshot", "VariableBridge", "Watch", "WriteRejected", "VariableInfo", "catalog"]
+__all__ = ["Snapshot", "VariableBridge", "Watch", "WriteRejected", "VariableInfo", "catalog", "RunControl"]

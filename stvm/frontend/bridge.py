@@ -7,7 +7,8 @@ variable itself:
   the end of one scan, so every value in it belongs to the same instant. A watch samples at most
   once per scan, at least `every_ns` of VM time apart and, if asked, `every_wall_ns` of wall-clock
   time apart (on the virtual clock VM time may run many times faster than a display needs);
-  sampling costs the scan loop one getter call per path and nothing when no watch is due.
+  sampling costs the scan loop one call of a generated reader (about 0.05 µs a value) and nothing
+  when no watch is due.
 * **Writes** are submitted as a batch `{path: value}`. The batch is checked against the variables'
   types in the caller's thread (a bad value is rejected at once, the VM untouched), queued, and
   applied by the VM thread at the start of the next scan, all of it or none of it, never in the
@@ -19,6 +20,11 @@ variable itself:
 
 The queue is bounded: a front end that floods writes gets `WriteRejected("busy")` instead of slowing
 the scan. Nothing here blocks the VM thread.
+
+* **One-shot reads** (`sample(paths)`) are answered by the VM thread at the next point between two
+  scans: the end of the running scan, or at once when the VM is held between scans (a paused
+  `RunControl`, a debugger stopped after a scan: they call the `vm.on_idle` hooks). A front end that reads values nobody watches (an OPC UA Read) costs the
+  scan loop only those paths, once.
 """
 
 from __future__ import annotations
@@ -37,6 +43,9 @@ from stvm.semantics import types as t
 MAX_PENDING_WRITES = 1024
 """Write batches queued for the next scan; more are rejected (a front end cannot stall the VM)."""
 
+MAX_PENDING_SAMPLES = 1024
+"""One-shot read requests waiting for the next point between scans; more are rejected ("busy")."""
+
 
 class WriteRejected(ValueError):
     """A write batch that was not applied; `path` names the offending variable (None: the batch)."""
@@ -51,7 +60,7 @@ class WriteRejected(ValueError):
 class Snapshot:
     """Values of one watch, all read between the same two scans."""
 
-    scan: int                   # the scan (0-based) whose end state this is
+    scan: int                   # the scan (0-based) whose end state this is; -1: before the first scan
     now_ns: int                 # that scan's start time on the VM clock (virtual or real time)
     values: Mapping[str, Any]   # path → Python value (see stvm.semantics.types for the table)
     version: int                # increases with every new snapshot of this watch
@@ -61,13 +70,16 @@ class Watch:
     """A set of paths sampled by the VM thread; `latest()` is safe from any thread."""
 
     def __init__(self, bridge: "VariableBridge", paths: list[str], every_ns: int,
-                 on_snapshot: Callable[[Snapshot], None] | None, every_wall_ns: int = 0) -> None:
+                 on_snapshot: Callable[[Snapshot], None] | None, every_wall_ns: int = 0,
+                 changes_only: bool = False) -> None:
         self.bridge = bridge
         self.paths = list(paths)
         self.every_ns = max(0, int(every_ns))
         self.every_wall_ns = max(0, int(every_wall_ns))
         self.on_snapshot = on_snapshot
-        self._accessors = [bridge.vm.accessor(p) for p in self.paths]
+        self.changes_only = changes_only
+        self._read = bridge._reader(self.paths)   # raises PathError for an unknown path
+        self._last: tuple | None = None
         self._next_ns = 0
         self._next_wall_ns = 0
         self._version = 0
@@ -80,19 +92,29 @@ class Watch:
     def close(self) -> None:
         self.bridge._remove_watch(self)
 
-    def _sample(self, vm: VM) -> None:
-        # VM thread, between scans. A path through a VAR_IN_OUT not bound yet reads as None.
-        values = {}
-        for path, accessor in zip(self.paths, self._accessors):
-            try:
-                values[path] = accessor.get()
-            except UnboundInOut:
-                values[path] = None
+    def _sample(self, scan: int, now_ns: int) -> None:
+        # VM thread, between scans.
+        values = self._read()
+        if self.changes_only:
+            if values == self._last:
+                return          # nothing changed: no snapshot, nothing handed over
+            self._last = values
         self._version += 1
-        snapshot = Snapshot(vm.scan_count, vm.now_ns, values, self._version)
+        snapshot = Snapshot(scan, now_ns, dict(zip(self.paths, values)), self._version)
         self._latest = snapshot   # one reference assignment: readers see the old or the new one
         if self.on_snapshot is not None:
             self.on_snapshot(snapshot)
+
+
+def _read_all(paths: list[str], accessors: list) -> dict[str, Any]:
+    """VM thread, between scans. A path through a VAR_IN_OUT not bound yet reads as None."""
+    values = {}
+    for path, accessor in zip(paths, accessors):
+        try:
+            values[path] = accessor.get()
+        except UnboundInOut:
+            values[path] = None
+    return values
 
 
 class VariableBridge:
@@ -101,10 +123,13 @@ class VariableBridge:
     def __init__(self, vm: VM, max_pending: int = MAX_PENDING_WRITES) -> None:
         self.vm = vm
         self._pending: queue.Queue = queue.Queue(maxsize=max_pending)
+        self._samples: queue.Queue = queue.Queue(maxsize=MAX_PENDING_SAMPLES)
         self._watches: list[Watch] = []
+        self._routes: dict | None = None   # path → (type, root, steps), built on the first watch
         self._lock = threading.Lock()
         vm.on_scan_start.append(self._apply_pending)
         vm.on_scan_end.append(self._sample_due)
+        vm.on_idle.append(self.serve_between_scans)
 
     # ---- reads
     def type_of(self, path: str) -> t.Type:
@@ -112,16 +137,58 @@ class VariableBridge:
         return self.vm.accessor(path).type
 
     def watch(self, paths: Iterable[str], every_ns: int = 0,
-              on_snapshot: Callable[[Snapshot], None] | None = None, every_wall_ns: int = 0) -> Watch:
+              on_snapshot: Callable[[Snapshot], None] | None = None, every_wall_ns: int = 0,
+              changes_only: bool = False) -> Watch:
         """Sample `paths` between scans, at most once per scan, `every_ns` VM-time apart and
         `every_wall_ns` wall-clock time apart (0: no limit).
 
         `on_snapshot` runs in the VM thread: it must only hand the snapshot over (for example
-        `loop.call_soon_threadsafe`), never block."""
-        watch = Watch(self, list(paths), every_ns, on_snapshot, every_wall_ns)
+        `loop.call_soon_threadsafe`), never block. With `changes_only`, a sample equal to the
+        previous one makes no snapshot (a subscriber that forwards changes pays one comparison)."""
+        watch = Watch(self, list(paths), every_ns, on_snapshot, every_wall_ns, changes_only)
         with self._lock:
             self._watches = self._watches + [watch]
         return watch
+
+    def read_now(self, paths: Iterable[str]) -> dict[str, Any]:
+        """The values of `paths` read at once: only in the VM's thread between two scans, or before
+        the run starts (a front end's initial values). Raises `PathError` for an unknown path."""
+        paths = list(paths)
+        return dict(zip(paths, self._reader(paths)()))
+
+    def _reader(self, paths: list[str]) -> Callable[[], tuple]:
+        """A function returning the values of `paths` as a tuple, for the VM thread.
+
+        Paths the trace's compiled sampler can reach (every variable the catalog lists) are read
+        by one generated function, one attribute or item access per step from the globals or a
+        program instance (~0.05 µs a value instead of a path lookup per value); the rest (paths
+        through a VAR_IN_OUT) through their accessors."""
+        from stvm.trace.signals import Signal, all_nodes, make_sampler
+        if self._routes is None:
+            self._routes = {name.lower().replace(" ", ""): (ty, root, steps)
+                            for name, ty, root, steps in all_nodes(self.vm)}
+        fast: list[Signal] = []
+        slow: list[int] = []
+        for index, path in enumerate(paths):
+            route = self._routes.get(path.lower().replace(" ", ""))
+            if route is None or route[0].kind not in ("bool", "int", "real", "time", "string", "enum"):
+                slow.append(index)
+            else:
+                fast.append(Signal(path, *route))
+        sampler = make_sampler(fast) if fast else (lambda: ())
+        if not slow:
+            return sampler
+        slow_paths = [paths[i] for i in slow]
+        slow_accessors = [self.vm.accessor(p) for p in slow_paths]
+        order = [i for i in range(len(paths)) if i not in set(slow)] + slow
+
+        def read() -> tuple:
+            merged = sampler() + tuple(_read_all(slow_paths, slow_accessors).values())
+            values = [None] * len(paths)
+            for position, value in zip(order, merged):
+                values[position] = value
+            return tuple(values)
+        return read
 
     def _remove_watch(self, watch: Watch) -> None:
         with self._lock:
@@ -130,6 +197,34 @@ class VariableBridge:
     def format(self, path: str, value: Any) -> str:
         """`value` of `path` as the IEC literal `--print` shows (safe from any thread)."""
         return format_value(value, self.type_of(path), self.vm.model.pous)
+
+    def sample(self, paths: Iterable[str]) -> Future:
+        """One snapshot of `paths`, taken by the VM thread at the next point between two scans.
+
+        Raises `PathError` at once for an unknown path and `WriteRejected("busy")` when too many
+        requests wait; the future's result is a `Snapshot` (version 0). It stays pending while
+        the VM is stopped inside a scan (a debugger breakpoint): callers wait with a timeout."""
+        paths = list(paths)
+        accessors = [self.vm.accessor(p) for p in paths]
+        future: Future = Future()
+        try:
+            self._samples.put_nowait((paths, accessors, future))
+        except queue.Full:
+            raise WriteRejected("busy: too many reads waiting for the next scan") from None
+        return future
+
+    def serve_between_scans(self, vm: VM) -> None:
+        """Apply queued writes and answer one-shot reads now (a `vm.on_idle` hook: called by a loop
+        holding the VM between two scans, a paused `RunControl` or a debugger stopped after a scan),
+        so a paused controller still reads and writes. Watches sample again after a write, so their
+        snapshots show the written values."""
+        # the VM waits before scan `vm.scan_count`: the state is the end of the scan before it
+        scan, now_ns = vm.scan_count - 1, max(0, vm.now_ns - vm.base_ns)
+        if not self._pending.empty():
+            self._apply_pending(vm)
+            for watch in self._watches:
+                watch._sample(scan, now_ns)
+        self._answer_samples(scan, now_ns)
 
     def _sample_due(self, vm: VM) -> None:
         now = vm.now_ns
@@ -142,7 +237,18 @@ class VariableBridge:
                         continue
                     watch._next_wall_ns = wall + watch.every_wall_ns
                 watch._next_ns = now + watch.every_ns
-                watch._sample(vm)
+                watch._sample(vm.scan_count, now)
+        if not self._samples.empty():
+            self._answer_samples(vm.scan_count, now)
+
+    def _answer_samples(self, scan: int, now_ns: int) -> None:
+        while True:
+            try:
+                paths, accessors, future = self._samples.get_nowait()
+            except queue.Empty:
+                return
+            if future.set_running_or_notify_cancel():
+                future.set_result(Snapshot(scan, now_ns, _read_all(paths, accessors), 0))
 
     # ---- writes
     def parse(self, path: str, text: str) -> Any:

@@ -27,6 +27,7 @@ class VariableInfo:
     section: str                  # the declaring section of the root variable (VAR_INPUT, VAR_GLOBAL, …)
     kind: str                     # program | global | variable | member | element
     in_fb: bool = False           # lies inside an FB instance (an "FB internal")
+    constant: bool = False        # declared CONSTANT (the root variable or the FB member)
     children: list["VariableInfo"] = field(default_factory=list)
 
     @property
@@ -51,29 +52,30 @@ def catalog(vm: VM) -> list[VariableInfo]:
             if var.section in (TEMP, EXTERNAL):
                 continue   # TEMP lives only during a call; EXTERNAL is listed under the globals
             node.children.append(_node(vm, var.name, f"{name}.{var.name}", var.type, var.section,
-                                       "variable", False))
+                                       "variable", False, var.constant))
         roots.append(node)
     for var in vm.model.globals.values():
-        roots.append(_node(vm, var.name, var.name, var.type, GLOBAL, "global", False))
+        roots.append(_node(vm, var.name, var.name, var.type, GLOBAL, "global", False, var.constant))
     return roots
 
 
-def _node(vm: VM, name: str, path: str, ty: t.Type, section: str, kind: str, in_fb: bool) -> VariableInfo:
-    node = VariableInfo(name, path, ty, section, kind, in_fb)
+def _node(vm: VM, name: str, path: str, ty: t.Type, section: str, kind: str, in_fb: bool,
+          constant: bool = False) -> VariableInfo:
+    node = VariableInfo(name, path, ty, section, kind, in_fb, constant)
     if isinstance(ty, t.StructType):
         for field_name, field_type in ty.fields:
             node.children.append(_node(vm, field_name, f"{path}.{field_name}", field_type, section,
-                                       "member", in_fb))
+                                       "member", in_fb, constant))
     elif isinstance(ty, t.ArrayType) and ty.dims and ty.length <= MAX_ARRAY_ELEMENTS:
         for index in product(*(range(lo, hi + 1) for lo, hi in ty.dims)):
             text = ", ".join(str(i) for i in index)
             node.children.append(_node(vm, f"[{text}]", f"{path}[{text}]", ty.element, section,
-                                       "element", in_fb))
+                                       "element", in_fb, constant))
     elif isinstance(ty, t.FBType) and not ty.is_program:
         pou = vm.model.pous.get(ty.qualname.lower())
         for var in (pou.variables.values() if pou else ()):
             if var.section in (TEMP, EXTERNAL, IN_OUT):
                 continue   # an in-out is a reference to a variable listed elsewhere
             node.children.append(_node(vm, var.name, f"{path}.{var.name}", var.type, var.section,
-                                       "member", True))
+                                       "member", True, constant or var.constant))
     return node

@@ -128,6 +128,10 @@ class VM:
         self.collect_stats = True   # per-scan durations (for --stats); benchmarks switch it off
         self.on_scan_start: list[Callable[["VM"], None]] = []   # front ends' queued writes
         self.on_scan_end: list[Callable[["VM"], None]] = []
+        self.held = False           # a front end's run control holds the VM between two scans
+        # called by a loop that holds the VM between two scans (a paused run control, a debugger
+        # stopped after a scan): front ends answer reads and apply writes from there
+        self.on_idle: list[Callable[["VM"], None]] = []
         self._rt_start: float | None = None
         self.jitter_ns = array("q")
 

@@ -44,7 +44,8 @@ class Watchdog:
         since = time.monotonic()
         period = min(0.5, self.limit_s / 4)
         while not self._stop.wait(period):
-            if self.vm.scan_count != last_scan or self.vm.fault is not None:
+            # a VM held between scans by a front end's run control is paused, not hanging
+            if self.vm.scan_count != last_scan or self.vm.fault is not None or self.vm.held:
                 last_scan, since = self.vm.scan_count, time.monotonic()
                 continue
             if time.monotonic() - since > self.limit_s:

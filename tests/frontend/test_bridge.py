@@ -101,6 +101,64 @@ def test_catalog_lists_programs_globals_and_members(vm):
     assert "Main.g_count" not in paths            # externals are listed once, under the globals
 
 
+def test_one_shot_sample_is_answered_at_the_end_of_the_next_scan(vm):
+    bridge = VariableBridge(vm)
+    vm["Main.run"] = True
+    vm.run(cycles=2)
+    future = bridge.sample(["Main.n", "g_pts[1].x"])
+    assert not future.done()
+    vm.scan()
+    snap = future.result(timeout=0)
+    assert (snap.scan, dict(snap.values)) == (2, {"Main.n": 3, "g_pts[1].x": 0.0})
+    with pytest.raises(KeyError):
+        bridge.sample(["Main.nope"])
+
+
+def test_catalog_marks_constants(tmp_path):
+    path = tmp_path / "c.st"
+    path.write_text("VAR_GLOBAL CONSTANT LIMIT : INT := 5; END_VAR\nVAR_GLOBAL g : INT; END_VAR\n"
+                    "PROGRAM Main VAR x : INT; END_VAR x := LIMIT; END_PROGRAM\n")
+    vm = stvm.load([str(path)]).start()
+    paths = {node.path: node for root in catalog(vm) for node in root.walk()}
+    assert paths["LIMIT"].constant and not paths["g"].constant and not paths["Main.x"].constant
+
+
+def test_changes_only_watch_hands_over_changed_samples_only(vm):
+    bridge = VariableBridge(vm)
+    seen = []
+    bridge.watch(["Main.n", "g_count"], changes_only=True, on_snapshot=seen.append)
+    vm.run(cycles=3)                      # nothing changes: one first sample only
+    vm["Main.run"] = True
+    vm.run(cycles=2)
+    assert [(s.scan, s.values["Main.n"]) for s in seen] == [(0, 0), (3, 1), (4, 2)]
+
+
+STRUCTS = """
+TYPE Pose : STRUCT x : REAL; tag : STRING[8]; END_STRUCT; END_TYPE
+VAR_GLOBAL poses : ARRAY[0..1] OF Pose; END_VAR
+PROGRAM Main
+VAR current : Pose; i : INT; END_VAR
+VAR_EXTERNAL poses : ARRAY[0..1] OF Pose; END_VAR
+current := poses[i];
+i := 1 - i;
+END_PROGRAM
+"""
+
+
+def test_watch_follows_struct_assignment(tmp_path):
+    """A struct assigned as a whole is a new object: the sampler walks from the roots each time."""
+    path = tmp_path / "s.st"
+    path.write_text(STRUCTS)
+    vm = stvm.load([str(path)]).start()
+    vm["poses[0].x"], vm["poses[1].x"], vm["poses[1].tag"] = 1.5, 2.5, "b"
+    bridge = VariableBridge(vm)
+    watch = bridge.watch(["Main.current.x", "Main.current.tag", "poses[1].x"])
+    vm.scan()
+    assert watch.latest().values == {"Main.current.x": 1.5, "Main.current.tag": b"", "poses[1].x": 2.5}
+    vm.scan()
+    assert watch.latest().values == {"Main.current.x": 2.5, "Main.current.tag": b"b", "poses[1].x": 2.5}
+
+
 def test_wall_clock_interval_limits_sampling_on_a_fast_virtual_clock(vm):
     bridge = VariableBridge(vm)
     seen = []

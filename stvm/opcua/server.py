@@ -1,0 +1,740 @@
+"""The OPC UA server: asyncua in its own thread beside the scan loop, on the front-end bridge.
+
+What the VM thread does for it, and nothing more (design: "the VM owns time"):
+
+* **Monitored items** become bridge watches, grouped by sampling interval: a watch samples at
+  the end of a scan, at most once per scan and no faster than the interval the client asked for
+  (0 or -1: every scan). Its callback only drops the snapshot into a slot and, if none is
+  pending, wakes the server loop (`call_soon_threadsafe`).
+* **Reads** of variable values ask the bridge for a one-shot snapshot of exactly the nodes read,
+  answered at the end of the running scan (or at once while a `RunControl` holds the VM), so a
+  Read is a consistent snapshot between two scans. Only if no scan ends within `READ_WAIT_S`
+  (the debugger stopped inside a scan) does the Read return the last values the server has.
+* **Writes** are checked in the server thread against the ST type (BadTypeMismatch,
+  BadOutOfRange) and the publish rules (BadNotWritable), then submitted as one bridge batch per
+  Write request: applied together at the start of the next scan, or not at all.
+
+The server loop forwards the newest snapshot of every watch at most every `FORWARD_S` of wall
+time and puts only changed values into the nodes, so a fast virtual-clock run does not flood it:
+between two forwards a client sees the newest sample, not every scan's.
+
+Time stamps (Source and Server) are the VM clock of the sampled scan's start: on the virtual clock
+`start DT + VM time` (1970-01-01T00:00:00Z + VM time by default: a client sees virtual time,
+starting in 1970, advancing by the scan period per scan however fast the run goes); on the
+real-time clock the host's UTC time of the scan's start.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextvars
+import dataclasses
+import gc
+import hashlib
+import hmac
+import logging
+import os
+import shutil
+import socket
+import threading
+import time
+from pathlib import Path
+from typing import Any
+
+from asyncua import Server, ua
+from asyncua.crypto import uacrypto
+from asyncua.crypto.permission_rules import User, UserRole
+from asyncua.server.internal_session import InternalSession
+
+from stvm.frontend import RunControl, Snapshot, VariableBridge, WriteRejected, catalog
+from stvm.opcua.config import OpcUaConfig
+from stvm.opcua.datatypes import BadWrite, datetime_of
+from stvm.opcua.nodes import GLOBALS_ID, RUNTIME_ID, NodeBuilder, PublishedVariable, describe, select, \
+    walk_published
+from stvm.semantics import types as t
+
+FORWARD_S = 0.02          # newest snapshots go into the nodes at most this often (wall time)
+READ_WAIT_S = 1.0         # a Read waits this long for a scan to end before answering from the cache
+WRITE_WAIT_S = 1.0        # a Write waits this long to see its batch applied (then answers Good: queued)
+MAX_READS_WAITING = 32    # more concurrent Reads answer from the cache at once
+MAX_SCAN_STEP = 10_000_000
+HEARTBEAT_NS = 1_000_000_000   # Runtime.ScanCount / Time refresh without a subscription, in VM time
+
+_REQUESTED_INTERVALS: contextvars.ContextVar[dict | None] = contextvars.ContextVar("stvm_sampling", default=None)
+# the identity token being activated: asyncua hands its user manager the secure channel's client
+# certificate for every token kind, so the manager must know whether that is the identity
+_TOKEN_KIND: contextvars.ContextVar[str] = contextvars.ContextVar("stvm_token", default="anonymous")
+_log = logging.getLogger("stvm.opcua")
+
+
+class OpcUaServer:
+    """Serve `vm`'s variables over OPC UA. Create it before the run starts, in the VM's thread;
+    `start()` returns once the endpoint listens, `stop()` when the run has ended."""
+
+    def __init__(self, vm, config: OpcUaConfig, bridge: VariableBridge | None = None,
+                 run_control: bool = True) -> None:
+        self.vm = vm
+        self.config = config
+        self.roots = catalog(vm)
+        self.selection = select(self.roots, config)   # first: a bad rule leaves the VM untouched
+        self.variables: dict[str, PublishedVariable] = self.selection.variables
+        self.bridge = bridge or VariableBridge(vm)
+        self.control = RunControl(vm) if run_control and not vm.realtime else None
+        self.base_ns = vm.base_ns
+        self.realtime = vm.realtime
+        self.start_dt_ns = vm.ctx.start_dt_ns
+        self._initial = self._read_initial_values()
+        self._by_nodeid: dict[ua.NodeId, PublishedVariable] = {}
+        self._loop: asyncio.AbstractEventLoop | None = None
+        self._thread: threading.Thread | None = None
+        self._ready = threading.Event()
+        self._startup_error: BaseException | None = None
+        self._server: Server | None = None
+        self.url = config.endpoint.url
+        self.ns = 0
+        self._wall_offset_ns = 0
+        # monitored items (server loop only)
+        self._monitors: dict[int, tuple[str, int]] = {}     # callback handle → (path, every_ns)
+        self._watches: dict[tuple, Any] = {}            # (every_ns, paths) → bridge watch
+        self._group_handles: dict[tuple, dict[str, list[int]]] = {}   # watch key → path → handles
+        self._group_sent: dict[tuple, dict[str, Any]] = {}  # watch key → path → value last notified
+        self._heartbeat = None
+        self._rebuild_pending = False
+        # snapshot hand-over (VM thread writes slots, the loop pops them)
+        self._inbox: dict[Any, Snapshot] = {}
+        self._drain_pending = False
+        self._last_drain = 0.0
+        self._reads_waiting = 0
+        self._runtime: dict[str, Any] = {}
+        self._runtime_ids: set = set()
+        self._stopping = False
+        if config.start_paused and self.control is not None:
+            self.control.pause()
+
+    def _read_initial_values(self) -> dict[str, Any]:
+        # the run has not started: the VM thread is this thread, idle
+        return self.bridge.read_now(self.variables)
+
+    # ================================================================ lifecycle (caller's thread)
+    @property
+    def writable_count(self) -> int:
+        return sum(v.writable for v in self.variables.values())
+
+    def start(self, timeout: float = 120.0) -> str:
+        """Start the server thread; returns the endpoint URL (with the port chosen if it was 0).
+        Raises RuntimeError (the cause chained) if the server cannot start."""
+        if logging.getLogger("asyncua").level == logging.NOTSET:
+            # asyncua warns about setups we make on purpose (no encryption on loopback …)
+            logging.getLogger("asyncua").setLevel(logging.ERROR)
+        self._wall_offset_ns = time.time_ns()
+        self._thread = threading.Thread(target=self._thread_main, name="stvm-opcua", daemon=True)
+        self._thread.start()
+        if not self._ready.wait(timeout):
+            raise RuntimeError("the OPC UA server did not start in time")
+        if self._startup_error is not None:
+            raise RuntimeError(f"the OPC UA server could not start on {self.config.endpoint.url}: "
+                               f"{self._startup_error}") from self._startup_error
+        return self.url
+
+    def stop(self) -> None:
+        """Stop serving (idempotent); the VM is released if it was held."""
+        if self.control is not None:
+            self.control.close()
+        loop, self._loop = self._loop, None
+        if loop is None or self._thread is None:
+            return
+        self._stopping = True
+        try:
+            loop.call_soon_threadsafe(loop.stop)
+        except RuntimeError:
+            pass
+        self._thread.join(15)
+
+    def __enter__(self) -> "OpcUaServer":
+        self.start()
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.stop()
+
+    # ================================================================ server thread
+    def _thread_main(self) -> None:
+        loop = asyncio.new_event_loop()
+        asyncio.set_event_loop(loop)
+        try:
+            loop.run_until_complete(self._setup())
+        except BaseException as exc:   # noqa: BLE001 - reported by start()
+            self._startup_error = exc
+            self._ready.set()
+            loop.close()
+            return
+        self._loop = loop
+        self._ready.set()
+        try:
+            loop.run_forever()
+        finally:
+            for watch in list(self._watches.values()) + ([self._heartbeat] if self._heartbeat else []):
+                watch.close()
+            self._watches = {}
+            try:
+                # asyncua's clock task sleeps 1 s between updates and stop() waits for it: cancel it
+                time_task = self._server.iserver.time_task
+                if time_task is not None:
+                    time_task.cancel()
+                    self._server.iserver.time_task = None
+                loop.run_until_complete(self._server.stop())
+                # sessions of clients still connected keep timeout and publish tasks: end them
+                # here, not with "Task was destroyed but it is pending!" when the loop closes
+                pending = [task for task in asyncio.all_tasks(loop) if not task.done()]
+                for task in pending:
+                    task.cancel()
+                loop.run_until_complete(asyncio.gather(*pending, return_exceptions=True))
+            except Exception:   # noqa: BLE001 - shutting down anyway
+                pass
+            loop.close()
+
+    async def _setup(self) -> None:
+        config = self.config
+        endpoint = config.endpoint
+        port = endpoint.port or _free_port(endpoint.host)
+        host = f"[{endpoint.host}]" if ":" in endpoint.host else endpoint.host
+        self.url = f"opc.tcp://{host}:{port}{endpoint.path or ''}"
+        server = Server(user_manager=_UserManager(config))
+        await _init_with_cached_address_space(server)
+        server.set_endpoint(self.url + "/")
+        server.set_server_name(f"stvm {config.project_name}")
+        await server.set_application_uri(f"urn:stvm:{config.project_name}:server")
+        if config.secure:
+            await server.load_certificate(str(config.certificate))
+            await server.load_private_key(str(config.private_key))
+        policies, tokens = security_plan(config)
+        server.set_security_policy(policies)
+        server.set_identity_tokens(tokens)
+        self.ns = await server.register_namespace(config.namespace_uri)
+        self._server = server
+        collecting = gc.isenabled()
+        gc.disable()   # ~15 objects a node, none of them garbage: the collector would only re-scan them
+        try:
+            await self._build_address_space(server)
+        finally:
+            if collecting:
+                gc.enable()
+        self._hook_sessions(server)
+        self._hook_monitoring(server)
+        await server.start()
+        self._heartbeat = self.bridge.watch([], HEARTBEAT_NS, self._handover_for("heartbeat"))
+
+    async def _build_address_space(self, server: Server) -> None:
+        ns = self.ns
+        aspace = server.iserver.aspace
+        objects = server.nodes.objects
+        builder = NodeBuilder(aspace, ns, self.base_ns / 1e6)
+        enum_types = await self._enum_datatypes(server)
+        globals_folder = await objects.add_folder(ua.NodeId(GLOBALS_ID, ns), ua.QualifiedName("Globals", ns))
+        parents: dict[str, ua.NodeId] = {}
+        for root in self.roots:
+            if root.kind == "program":
+                folder = await objects.add_folder(ua.NodeId(root.path, ns), ua.QualifiedName(root.name, ns))
+                parents[root.path] = folder.nodeid
+        stamp = self._timestamp(0)
+        for node, parent in walk_published(self.roots, self.selection):
+            parent_id = parents[parent.path] if parent is not None else globals_folder.nodeid
+            var = self.variables.get(node.path)
+            if var is None:
+                parents[node.path] = builder.add_object(parent_id, node.path, node.name, describe(node)).nodeid
+                continue
+            datatype = var.uatype.datatype or enum_types[var.info.type.qualname or var.info.type.name]
+            value = self._initial.get(node.path)
+            var.last = value
+            dv = ua.DataValue(ua.Variant(var.uatype.to_ua(value), var.uatype.variant),
+                              SourceTimestamp=stamp, ServerTimestamp=stamp) if value is not None else \
+                ua.DataValue(StatusCode=ua.StatusCode(ua.StatusCodes.BadWaitingForInitialData))
+            builder.add_variable(parent_id, var, node.name, datatype, dv)
+            self._by_nodeid[var.nodeid] = var
+        await self._add_runtime(server, objects)
+
+    async def _enum_datatypes(self, server: Server) -> dict[str, ua.NodeId]:
+        """One Enumeration DataType per ST enum type that a published variable has."""
+        found: dict[str, t.EnumType] = {}
+        for var in self.variables.values():
+            ty = var.info.type
+            if isinstance(ty, t.EnumType):
+                found.setdefault(ty.qualname or ty.name, ty)
+        ns = self.ns
+        result = {}
+        for key, ty in found.items():
+            name = ty.name
+            dtype = await server.nodes.enum_data_type.add_data_type(ua.NodeId(f"@Type.{key}", ns),
+                                                                   ua.QualifiedName(name, ns))
+            definition = ua.EnumDefinition(Fields=[ua.EnumField(Name=member, Value=value,
+                                                                DisplayName=ua.LocalizedText(member))
+                                                   for member, value in ty.members])
+            await dtype.write_data_type_definition(definition)
+            values = [value for _, value in ty.members]
+            if values == list(range(len(values))):
+                await dtype.add_property(ua.NodeId(f"@Type.{key}.EnumStrings", ns), ua.QualifiedName("EnumStrings", 0),
+                                         [ua.LocalizedText(member) for member, _ in ty.members],
+                                         ua.VariantType.LocalizedText, ua.NodeId(ua.ObjectIds.LocalizedText))
+            else:
+                await dtype.add_property(ua.NodeId(f"@Type.{key}.EnumValues", ns), ua.QualifiedName("EnumValues", 0),
+                                         [ua.EnumValueType(Value=value, DisplayName=ua.LocalizedText(member))
+                                          for member, value in ty.members],
+                                         ua.VariantType.ExtensionObject, ua.NodeId(ua.ObjectIds.EnumValueType))
+            result[key] = dtype.nodeid
+        return result
+
+    async def _add_runtime(self, server: Server, objects) -> None:
+        ns = self.ns
+        runtime = await objects.add_object(ua.NodeId(RUNTIME_ID, ns), ua.QualifiedName("Runtime", ns))
+        initial = {"ScanCount": ua.Variant(0, ua.VariantType.UInt64),
+                   "Time": ua.Variant(self._timestamp(0), ua.VariantType.DateTime),
+                   "Paused": ua.Variant(bool(self.config.start_paused and self.control), ua.VariantType.Boolean),
+                   "Clock": ua.Variant("real-time" if self.realtime else "virtual", ua.VariantType.String)}
+        for name, variant in initial.items():
+            node = await runtime.add_variable(ua.NodeId(f"{RUNTIME_ID}.{name}", ns), ua.QualifiedName(name, ns), variant)
+            self._runtime[name] = node.nodeid
+        self._runtime_ids = set(self._runtime.values())
+        if self.control is None:
+            return   # stepping only on the virtual clock, and not under the debugger
+        count = ua.Argument(Name="Scans", DataType=ua.NodeId(ua.ObjectIds.UInt32), ValueRank=-1,
+                            Description=ua.LocalizedText(f"number of scans to run (1..{MAX_SCAN_STEP})"))
+        done = ua.Argument(Name="ScanCount", DataType=ua.NodeId(ua.ObjectIds.UInt64), ValueRank=-1,
+                           Description=ua.LocalizedText("scans run since the start, once the steps are done"))
+        await runtime.add_method(ua.NodeId(f"{RUNTIME_ID}.Scan", ns), ua.QualifiedName("Scan", ns),
+                                 self._method_scan, [count], [done])
+        await runtime.add_method(ua.NodeId(f"{RUNTIME_ID}.Pause", ns), ua.QualifiedName("Pause", ns),
+                                 self._method_pause, [], [])
+        await runtime.add_method(ua.NodeId(f"{RUNTIME_ID}.Resume", ns), ua.QualifiedName("Resume", ns),
+                                 self._method_resume, [], [])
+
+    # ---------------------------------------------------------------- time
+    def _timestamp(self, now_ns: int):
+        if self.realtime:
+            return datetime_of(self._wall_offset_ns + now_ns)
+        return datetime_of(self.start_dt_ns + now_ns)
+
+    # ---------------------------------------------------------------- snapshots → nodes
+    def _handover_for(self, key):
+        def handover(snapshot: Snapshot) -> None:   # VM thread: hand over, never block
+            self._inbox[key] = snapshot
+            if not self._drain_pending and not self._stopping:
+                self._drain_pending = True
+                loop = self._loop
+                try:
+                    loop.call_soon_threadsafe(self._schedule_drain)
+                except (RuntimeError, AttributeError):   # the loop is closing: the run ends
+                    pass
+        return handover
+
+    def _schedule_drain(self) -> None:
+        delay = self._last_drain + FORWARD_S - time.monotonic()
+        if delay > 0:
+            self._loop.call_later(delay, self._start_drain)
+        else:
+            self._start_drain()
+
+    def _start_drain(self) -> None:
+        asyncio.ensure_future(self._drain())
+
+    async def _drain(self) -> None:
+        self._drain_pending = False           # first: a snapshot arriving from now on wakes us again
+        self._last_drain = time.monotonic()
+        snapshots = []
+        for key in list(self._inbox):
+            snapshot = self._inbox.pop(key, None)
+            if snapshot is not None:
+                snapshots.append((snapshot, key))
+        snapshots.sort(key=lambda pair: (pair[0].scan, pair[0].version))
+        for snapshot, key in snapshots:
+            await self._apply(snapshot, key)
+
+    async def _apply(self, snapshot: Snapshot, key=None) -> None:
+        """Put the snapshot's changed values into the nodes. The sample of a subscription watch
+        (`key`) notifies only the monitored items of that sampling interval, each when its value
+        differs from the one that group last sent: a node monitored every scan and every 100 ms
+        notifies each at its own rate. One-shot samples (reads) notify nobody."""
+        stamp = self._timestamp(snapshot.now_ns)
+        handles = self._group_handles.get(key) if key is not None else None
+        sent = self._group_sent.setdefault(key, {}) if handles is not None else None
+        for path, value in snapshot.values.items():
+            var = self.variables.get(path)
+            if var is None or value is None:
+                continue
+            dv = None
+            if value != var.last:
+                var.last = value
+                dv = var.value_attr.value = ua.DataValue(
+                    ua.Variant(var.uatype.to_ua(value), var.uatype.variant), SourceTimestamp=stamp,
+                    ServerTimestamp=stamp)
+            if handles is None or sent.get(path, _NOTHING) == value:
+                continue
+            sent[path] = value
+            dv = dv or ua.DataValue(ua.Variant(var.uatype.to_ua(value), var.uatype.variant),
+                                    SourceTimestamp=stamp, ServerTimestamp=stamp)
+            callbacks = var.value_attr.datachange_callbacks
+            for handle in handles.get(path, ()):
+                callback = callbacks.get(handle)
+                if callback is not None:
+                    await _notify(callback, handle, dv)
+        await self._set_runtime("ScanCount", ua.Variant(snapshot.scan + 1, ua.VariantType.UInt64), stamp)
+        await self._set_runtime("Time", ua.Variant(stamp, ua.VariantType.DateTime), stamp)
+        if self.control is not None:
+            await self._set_runtime("Paused", ua.Variant(self.control.paused, ua.VariantType.Boolean), stamp)
+
+    async def _set_runtime(self, name: str, variant: ua.Variant, stamp) -> None:
+        attr = self._server.iserver.aspace[self._runtime[name]].attributes[ua.AttributeIds.Value]
+        old = attr.value
+        if old is not None and old.Value == variant:
+            return
+        await self._set_value(attr, ua.DataValue(variant, SourceTimestamp=stamp, ServerTimestamp=stamp))
+
+    @staticmethod
+    async def _set_value(attr, dv: ua.DataValue) -> None:
+        attr.value = dv
+        for handle, callback in list(attr.datachange_callbacks.items()):
+            await _notify(callback, handle, dv)
+
+    async def _fresh(self, paths: list[str]) -> Snapshot | None:
+        """A one-shot snapshot of `paths` put into the nodes; None if no scan ended in time."""
+        if self._reads_waiting >= MAX_READS_WAITING:
+            return None
+        try:
+            future = self.bridge.sample(paths)
+        except WriteRejected:
+            return None
+        self._reads_waiting += 1
+        try:
+            snapshot = await asyncio.wait_for(asyncio.wrap_future(future), READ_WAIT_S)
+        except asyncio.TimeoutError:
+            return None
+        finally:
+            self._reads_waiting -= 1
+        await self._apply(snapshot)
+        return snapshot
+
+    # ---------------------------------------------------------------- services
+    def _hook_sessions(self, server: Server) -> None:
+        iserver = server.iserver
+        owner = self
+
+        class Session(InternalSession):
+            def activate_session(self, params: ua.ActivateSessionParameters, peer_certificate):
+                token = params.UserIdentityToken
+                kind = "username" if isinstance(token, ua.UserNameIdentityToken) else \
+                    "certificate" if isinstance(token, ua.X509IdentityToken) else "anonymous"
+                reset = _TOKEN_KIND.set(kind)
+                try:
+                    return super().activate_session(params, peer_certificate)
+                finally:
+                    _TOKEN_KIND.reset(reset)
+
+            async def read(self, params: ua.ReadParameters) -> list[ua.DataValue]:
+                return await owner._read(self, params)
+
+            async def write(self, params: ua.WriteParameters) -> list[ua.StatusCode]:
+                return await owner._write(self, params)
+
+            async def create_monitored_items(self, params: ua.CreateMonitoredItemsParameters):
+                return await owner._create_monitored_items(self, params)
+
+        def create_session(name: str, user: User = User(role=UserRole.Anonymous), external: bool = False):
+            return Session(iserver, iserver.aspace, iserver.subscription_service, name, user=user, external=external)
+        iserver.create_session = create_session
+
+    async def _read(self, session: InternalSession, params: ua.ReadParameters) -> list[ua.DataValue]:
+        ours = [(i, var) for i, item in enumerate(params.NodesToRead)
+                if item.AttributeId == ua.AttributeIds.Value and (var := self._by_nodeid.get(item.NodeId))]
+        runtime = any(item.NodeId in self._runtime_ids for item in params.NodesToRead)
+        snapshot = await self._fresh(list(dict.fromkeys(var.path for _, var in ours))) \
+            if ours or runtime else None
+        results = await InternalSession.read(session, params)
+        if snapshot is not None:
+            stamp = self._timestamp(snapshot.now_ns)
+            for i, _ in ours:
+                if results[i].StatusCode is None or results[i].StatusCode.is_good():
+                    results[i] = dataclasses.replace(results[i], ServerTimestamp=stamp)
+        return results
+
+    async def _write(self, session: InternalSession, params: ua.WriteParameters) -> list[ua.StatusCode]:
+        items = params.NodesToWrite
+        results: list[ua.StatusCode | None] = [None] * len(items)
+        batch: dict[str, Any] = {}
+        index_of: dict[str, list[int]] = {}
+        others: list[int] = []
+        for i, item in enumerate(items):
+            var = self._by_nodeid.get(item.NodeId)
+            if var is None:
+                others.append(i)
+                continue
+            status = self._check_write(session, var, item)
+            if status is None:
+                try:
+                    batch[var.path] = var.uatype.from_ua(item.Value.Value if item.Value else None)
+                    index_of.setdefault(var.path, []).append(i)
+                    continue
+                except BadWrite as bad:
+                    _log.info("write %s refused: %s", var.path, bad)
+                    status = bad.status
+                except (AttributeError, TypeError, ValueError):
+                    status = ua.StatusCodes.BadTypeMismatch
+            results[i] = ua.StatusCode(status)
+        if others:
+            sub = ua.WriteParameters(NodesToWrite=[items[i] for i in others])
+            for i, status in zip(others, await InternalSession.write(session, sub)):
+                results[i] = status
+        if batch:
+            for path, status in (await self._submit(batch)).items():
+                for i in index_of[path]:
+                    results[i] = ua.StatusCode(status)
+        return results   # type: ignore[return-value]
+
+    @staticmethod
+    def _check_write(session: InternalSession, var: PublishedVariable, item: ua.WriteValue) -> int | None:
+        if item.AttributeId != ua.AttributeIds.Value:
+            return ua.StatusCodes.BadNotWritable
+        if item.IndexRange:
+            return ua.StatusCodes.BadWriteNotSupported
+        if not var.writable:
+            return ua.StatusCodes.BadNotWritable
+        user = session.user
+        if user is None or user.role not in (UserRole.User, UserRole.Admin):
+            return ua.StatusCodes.BadUserAccessDenied
+        if item.Value is None or item.Value.Value is None:
+            return ua.StatusCodes.BadTypeMismatch
+        return None
+
+    async def _submit(self, batch: dict[str, Any]) -> dict[str, int]:
+        """Submit one all-or-nothing batch; the status per path."""
+        statuses = {path: ua.StatusCodes.Good for path in batch}
+        while batch:
+            try:
+                future = self.bridge.submit(batch)
+                break
+            except WriteRejected as exc:
+                if exc.path is None or exc.path not in batch:   # "busy": the whole request waits too long
+                    return {path: ua.StatusCodes.BadResourceUnavailable for path in statuses}
+                statuses[exc.path] = ua.StatusCodes.BadOutOfRange if "range" in exc.reason \
+                    else ua.StatusCodes.BadTypeMismatch
+                batch = {p: v for p, v in batch.items() if p != exc.path}
+        else:
+            return statuses
+        try:
+            await asyncio.wait_for(asyncio.shield(asyncio.wrap_future(future)), WRITE_WAIT_S)
+        except asyncio.TimeoutError:
+            return statuses   # queued: applied when the next scan starts (the debugger is stopped)
+        except WriteRejected:
+            return {path: ua.StatusCodes.BadInvalidState if status == ua.StatusCodes.Good else status
+                    for path, status in statuses.items()}
+        asyncio.ensure_future(self._fresh(list(batch)))   # monitored items see the new values
+        return statuses
+
+    # ---------------------------------------------------------------- monitored items
+    async def _create_monitored_items(self, session: InternalSession, params: ua.CreateMonitoredItemsParameters):
+        requested = {item.ItemToMonitor.NodeId: item.RequestedParameters.SamplingInterval
+                     for item in params.ItemsToCreate}
+        token = _REQUESTED_INTERVALS.set(requested)
+        try:
+            results = await InternalSession.create_monitored_items(session, params)
+        finally:
+            _REQUESTED_INTERVALS.reset(token)
+        for item, result in zip(params.ItemsToCreate, results):
+            if result.StatusCode.is_good() and item.ItemToMonitor.NodeId in self._by_nodeid:
+                result.RevisedSamplingInterval = self._every_ns(item.RequestedParameters.SamplingInterval) / 1e6 \
+                    or self.base_ns / 1e6
+        return results
+
+    def _every_ns(self, requested_ms: float) -> int:
+        """Sampling interval in VM time: the client's if slower than a scan, else every scan (0)."""
+        if requested_ms is None or requested_ms <= 0:
+            return 0
+        every = int(requested_ms * 1e6)
+        return every if every > self.base_ns else 0
+
+    def _hook_monitoring(self, server: Server) -> None:
+        aspace = server.iserver.aspace
+        add, delete = aspace.add_datachange_callback, aspace.delete_datachange_callback
+
+        def add_datachange_callback(nodeid, attr, callback):
+            status, handle = add(nodeid, attr, callback)
+            var = self._by_nodeid.get(nodeid)
+            if status.is_good() and var is not None and attr == ua.AttributeIds.Value:
+                requested = (_REQUESTED_INTERVALS.get() or {}).get(nodeid, 0.0)
+                self._monitors[handle] = (var.path, self._every_ns(requested))
+                self._rebuild_soon()
+            return status, handle
+
+        def delete_datachange_callback(handle):
+            delete(handle)
+            if self._monitors.pop(handle, None) is not None:
+                self._rebuild_soon()
+
+        aspace.add_datachange_callback = add_datachange_callback
+        aspace.delete_datachange_callback = delete_datachange_callback
+
+    def _rebuild_soon(self) -> None:
+        # many items come in one request (or leave with one session): one rebuild for all
+        if not self._rebuild_pending:
+            self._rebuild_pending = True
+            asyncio.get_running_loop().call_later(0.005, self._rebuild_watches)
+
+    def _rebuild_watches(self) -> None:
+        """One watch per sampling interval in use, over the paths monitored at that interval."""
+        self._rebuild_pending = False
+        groups: dict[int, dict[str, list[int]]] = {}
+        for handle, (path, every) in self._monitors.items():
+            groups.setdefault(every, {}).setdefault(path, []).append(handle)
+        watches, handles = {}, {}
+        for every, by_path in groups.items():
+            key = (every, tuple(sorted(by_path)))
+            watch = self._watches.pop(key, None)
+            if watch is None:
+                watch = self.bridge.watch(list(key[1]), every, self._handover_for(key), changes_only=True)
+            watches[key] = watch
+            handles[key] = by_path
+        for old in self._watches.values():
+            old.close()
+        self._group_sent = {key: sent for key, sent in self._group_sent.items() if key in watches}
+        self._watches, self._group_handles = watches, handles
+
+    @property
+    def monitored_paths(self) -> set[str]:
+        """Paths sampled for subscriptions right now (for tests and the bench)."""
+        return {path for key in self._watches for path in key[1]}
+
+    # ---------------------------------------------------------------- Runtime methods
+    async def _method_scan(self, parent, count=None):
+        scans = count.Value if isinstance(count, ua.Variant) else count
+        if not isinstance(scans, int) or isinstance(scans, bool):
+            return ua.StatusCode(ua.StatusCodes.BadTypeMismatch)
+        if not 1 <= scans <= MAX_SCAN_STEP:
+            return ua.StatusCode(ua.StatusCodes.BadOutOfRange)
+        try:
+            done = await asyncio.wrap_future(self.control.step(scans))
+        except RuntimeError:
+            return ua.StatusCode(ua.StatusCodes.BadInvalidState)   # paused, resumed or ended meanwhile
+        await self._drain()   # the last scan's snapshots are in the inbox: into the nodes before we answer
+        await self._set_runtime("Paused", ua.Variant(True, ua.VariantType.Boolean), self._timestamp(0))
+        return [ua.Variant(done, ua.VariantType.UInt64)]
+
+    async def _method_pause(self, parent):
+        self.control.pause()
+        deadline = time.monotonic() + 5.0
+        while not self.control.paused:
+            if time.monotonic() > deadline:
+                return ua.StatusCode(ua.StatusCodes.BadTimeout)   # the run is stopped inside a scan
+            await asyncio.sleep(0.001)
+        await self._drain()
+        await self._set_runtime("Paused", ua.Variant(True, ua.VariantType.Boolean), self._timestamp(0))
+        return []
+
+    async def _method_resume(self, parent):
+        self.control.resume()
+        await self._set_runtime("Paused", ua.Variant(False, ua.VariantType.Boolean), self._timestamp(0))
+        return []
+
+
+def security_plan(config: OpcUaConfig) -> tuple[list, list[type]]:
+    """(security policies, identity token kinds) the endpoint offers: SecurityPolicy None and
+    anonymous clients only on loopback; Basic256Sha256 whenever a certificate is configured."""
+    loopback = config.endpoint.loopback
+    policies = [ua.SecurityPolicyType.NoSecurity] if loopback else []
+    if config.secure:
+        policies += [ua.SecurityPolicyType.Basic256Sha256_SignAndEncrypt, ua.SecurityPolicyType.Basic256Sha256_Sign]
+    tokens: list[type] = [ua.AnonymousIdentityToken] if loopback else []
+    if config.users:
+        tokens.append(ua.UserNameIdentityToken)
+    if config.trusted_clients:
+        tokens.append(ua.X509IdentityToken)
+    return policies, tokens
+
+
+_NOTHING = object()
+
+
+async def _notify(callback, handle: int, dv: ua.DataValue) -> None:
+    try:
+        await callback(handle, dv)
+    except Exception:   # noqa: BLE001 - one broken subscription must not stop the others
+        _log.exception("data change notification failed")
+
+
+class _UserManager:
+    """Anonymous clients only on loopback; users by password digest; clients by certificate."""
+
+    def __init__(self, config: OpcUaConfig) -> None:
+        self.users = dict(config.users)
+        self.loopback = config.endpoint.loopback
+        self.trusted: dict[bytes, str] = {}
+        for path in config.trusted_clients:
+            der = path.read_bytes()
+            if der.startswith(b"-----BEGIN"):
+                der = uacrypto.der_from_x509(uacrypto.x509_from_pem(der))
+            self.trusted[der] = path.stem
+
+    def get_user(self, iserver, username=None, password=None, certificate=None):
+        kind = _TOKEN_KIND.get()
+        if kind == "username":
+            digest = self.users.get(username)
+            if digest is None or password is None:
+                return None
+            raw = password if isinstance(password, bytes) else str(password).encode("utf-8")
+            if hmac.compare_digest(hashlib.sha256(raw).hexdigest(), digest):
+                return User(role=UserRole.User, name=username)
+            return None
+        if kind == "certificate":
+            if not certificate:
+                return None
+            der = certificate if isinstance(certificate, bytes) else _der(certificate)
+            name = self.trusted.get(der)
+            return User(role=UserRole.User, name=name) if name is not None else None
+        return User(role=UserRole.User, name="anonymous") if self.loopback else None
+
+
+def _der(certificate) -> bytes:
+    return uacrypto.der_from_x509(certificate)
+
+
+def _free_port(host: str) -> int:
+    family = socket.AF_INET6 if ":" in host else socket.AF_INET
+    with socket.socket(family, socket.SOCK_STREAM) as probe:
+        probe.bind((host, 0))
+        return probe.getsockname()[1]
+
+
+def _cache_dir() -> Path:
+    base = os.environ.get("STVM_CACHE_DIR")
+    if base:
+        return Path(base)
+    return Path(os.environ.get("XDG_CACHE_HOME", Path.home() / ".cache")) / "stvm"
+
+
+async def _init_with_cached_address_space(server: Server) -> None:
+    """`server.init()` with asyncua's standard address space from a shelf in stvm's cache.
+
+    Building the ~6,000 standard nodes takes 2–3 s; a shelf loads them lazily in ~0.3 s. The shelf
+    is built once per asyncua version into a private folder renamed into place, so parallel
+    starts never see half a shelf. asyncua looks for the file named by the shelf path, which
+    Python's portable dbm does not create (it writes .dat/.dir), hence the marker file."""
+    import asyncua
+    folder = _cache_dir() / f"asyncua-{asyncua.__version__}-aspace"
+    shelf = folder / "aspace"
+    if shelf.is_file():
+        try:
+            await server.init(shelf_file=shelf)
+            return
+        except Exception:   # noqa: BLE001 - a damaged cache: rebuild it
+            shutil.rmtree(folder, ignore_errors=True)
+            server.iserver.aspace.clear()
+    building = folder.with_name(f"{folder.name}.tmp-{os.getpid()}-{threading.get_ident()}")
+    try:
+        building.mkdir(parents=True, exist_ok=True)
+        await server.init(shelf_file=building / "aspace")
+        (building / "aspace").touch()
+        try:
+            building.rename(folder)
+        except OSError:
+            shutil.rmtree(building, ignore_errors=True)   # another process was first
+    except OSError:
+        shutil.rmtree(building, ignore_errors=True)
+        if not server.iserver.aspace.keys():
+            await server.init()
