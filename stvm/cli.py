@@ -388,7 +388,7 @@ def build_parser() -> argparse.ArgumentParser:
 def _register_extensions(sub) -> None:
     """Commands living in their own modules (demo, trace, debug) register themselves here."""
     import importlib
-    for module_name in ("stvm.demo.cli", "stvm.trace.cli", "stvm.debug.cli"):
+    for module_name in ("stvm.demo.cli", "stvm.trace.cli", "stvm.debug.cli", "stvm.lint.cli"):
         try:
             module = importlib.import_module(module_name)
         except ModuleNotFoundError as exc:

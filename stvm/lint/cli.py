@@ -1,0 +1,111 @@
+"""`stvm lint` and `stvm lsp`.
+
+    stvm lint FILE|DIR... [--select CODES] [--ignore CODES] [--format text|json|sarif]
+              [--output F] [--sysmac NAME=VALUE]... [--no-cache]
+    stvm lint --explain SAnnn|ALL
+    stvm lsp                     (language server on stdio: check + lint diagnostics)
+
+Exit codes: 0 no findings, 1 findings (or compile errors), 2 usage error.
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+EXIT_CLEAN, EXIT_FINDINGS, EXIT_USAGE = 0, 1, 2
+
+
+def register(subparsers) -> None:
+    lint = subparsers.add_parser(
+        "lint", help="static analysis: find bugs the checker accepts (rule codes SAnnn)",
+        description="Analyse ST files (a folder: its *.st; a file of a folder with stvm.toml: that project) "
+                    "and report findings as FILE:LINE:COL: warning[SAnnn]: message. Exit 1 if there are "
+                    "findings, 0 if none, 2 on a usage error.")
+    lint.add_argument("files", nargs="*", help="ST files or folders")
+    lint.add_argument("--select", action="append", metavar="CODES", default=[],
+                      help="only these rules: codes, prefixes (SA2) or names, comma-separated; repeatable")
+    lint.add_argument("--ignore", action="append", metavar="CODES", default=[],
+                      help="skip these rules (same forms as --select); repeatable")
+    lint.add_argument("--format", choices=("text", "json", "sarif"), default="text", help="output format (default text)")
+    lint.add_argument("--output", "-o", metavar="FILE", help="write the report to FILE instead of stdout")
+    lint.add_argument("--explain", metavar="CODE", help="print a rule's rationale and examples (ALL: every rule)")
+    lint.add_argument("--no-cache", action="store_true", help="do not use the parse cache")
+    lint.add_argument("--sysmac", action="append", metavar="NAME=VALUE", help="override a Sysmac UNCERTAIN setting")
+    lint.set_defaults(func=cmd_lint)
+    lsp = subparsers.add_parser("lsp", help="language server on stdio: check and lint diagnostics for editors")
+    lsp.add_argument("--sysmac", action="append", metavar="NAME=VALUE", help="override a Sysmac UNCERTAIN setting")
+    lsp.set_defaults(func=cmd_lsp)
+
+
+def _usage(message: str) -> int:
+    print(f"stvm: error: {message}", file=sys.stderr)
+    return EXIT_USAGE
+
+
+def _settings(args):
+    from stvm.settings import DEFAULT_SETTINGS
+    return DEFAULT_SETTINGS.with_overrides(getattr(args, "sysmac", None) or [])
+
+
+def cmd_lint(args) -> int:
+    from stvm.lint.config import ConfigError
+    from stvm.lint.registry import SelectionError, select_rules
+    from stvm.lint.report import explain
+    if args.explain:
+        try:
+            chosen = select_rules([args.explain])
+        except SelectionError as exc:
+            return _usage(str(exc))
+        sys.stdout.write("\n".join(explain(r) for r in chosen))
+        return EXIT_CLEAN
+    if not args.files:
+        return _usage("lint needs FILE or DIR arguments (or --explain CODE)")
+    for f in args.files:
+        if not Path(f).exists():
+            return _usage(f"no such file: {f}")
+    try:
+        settings = _settings(args)
+    except ValueError as exc:
+        return _usage(str(exc))
+    from stvm.lint import lint
+    from stvm.lint.report import render_json, render_sarif, render_text
+    try:
+        report = lint(args.files, settings, select=args.select, ignore=args.ignore, use_cache=not args.no_cache)
+    except (SelectionError, ConfigError) as exc:
+        return _usage(str(exc))
+    if args.format == "json":
+        text = render_json(report.findings, report.diagnostics, report.rules)
+    elif args.format == "sarif":
+        text = render_sarif(report.findings, report.diagnostics, base=Path.cwd())
+    else:
+        text = render_text(report.findings, report.diagnostics, report.sources)
+    if args.output:
+        try:
+            Path(args.output).write_text(text, encoding="utf-8")
+        except OSError as exc:
+            return _usage(f"cannot write {args.output}: {exc.strerror or exc}")
+    else:
+        sys.stdout.write(text)
+    errors = sum(d.is_error for d in report.diagnostics)
+    if args.format == "text" or args.output:
+        summary = f"{len(report.findings)} finding(s)"
+        if report.suppressed:
+            summary += f", {report.suppressed} suppressed"
+        if errors:
+            summary += f"; {errors} error(s): fix them to lint"
+        print(summary, file=sys.stderr)
+    return EXIT_FINDINGS if report.findings or errors else EXIT_CLEAN
+
+
+def cmd_lsp(args) -> int:
+    try:
+        settings = _settings(args)
+    except ValueError as exc:
+        return _usage(str(exc))
+    try:
+        from stvm.lint.lsp import serve
+    except ImportError as exc:
+        return _usage(f"the language server needs pygls: pip install 'stvm[lsp]' ({exc})")
+    serve(settings)
+    return EXIT_CLEAN

@@ -1,0 +1,136 @@
+"""Per-POU analysis context shared by the rules: the CFG and the range solution are built
+once, on first use, whatever number of rules ask for them."""
+
+from __future__ import annotations
+
+from functools import cached_property
+
+from stvm.lint.cfg import CFG, Node, build_cfg
+from stvm.lint.facts import FactsView
+from stvm.lint.ranges import Interval, RangeAnalysis, State, analyze_ranges
+from stvm.lint.registry import Finding
+from stvm.semantics import types as t
+from stvm.syntax import nodes as n
+
+
+class ProjectContext:
+    """What every POU context shares: the checked project and the settings."""
+
+    def __init__(self, analysis, settings) -> None:
+        self.analysis = analysis
+        self.facts = FactsView(analysis)
+        self.settings = settings
+        self.alias_ranges = _alias_subranges(analysis.units)
+
+    def pou_contexts(self, include_stdlib: bool = False) -> list["PouContext"]:
+        out = []
+        for key, node in self.analysis.pou_nodes.items():
+            info = self.analysis.model.pous.get(key)
+            if info is None or info.native or not node.body:
+                continue
+            if node.span.file.startswith("<stdlib") and not include_stdlib:
+                continue
+            out.append(PouContext(self, node, info))
+        return out
+
+
+class PouContext:
+    def __init__(self, project: ProjectContext, node: n.POU, info) -> None:
+        self.project = project
+        self.node = node
+        self.info = info
+        self.facts = project.facts
+        self.settings = project.settings
+
+    @cached_property
+    def cfg(self) -> CFG:
+        return build_cfg(self.node)
+
+    @cached_property
+    def _ranges(self):
+        return analyze_ranges(self.cfg, self.info, self.facts, self.settings, self.project.alias_ranges)
+
+    @property
+    def ranges(self) -> RangeAnalysis:
+        return self._ranges[0]
+
+    def state_at(self, node: Node) -> State | None:
+        """The range state before `node` (None: the node is unreachable)."""
+        return self._ranges[1].at(node)
+
+    def value(self, expr: n.Expr, state: State) -> Interval | None:
+        return self.ranges.ev.eval(expr, state)
+
+    def reachable_nodes(self):
+        for node in self.cfg.nodes:
+            state = self.state_at(node)
+            if state is not None:
+                yield node, state
+
+    @property
+    def feasible_edges(self) -> set[int]:
+        """ids of the CFG edges some execution can take (per the range analysis)."""
+        return self._ranges[1].feasible
+
+    def finding(self, code: str, message: str, span: n.Span) -> Finding:
+        return Finding(code, message, span)
+
+    def variable(self, name: str):
+        return self.info.variables.get(name.lower())
+
+    @property
+    def is_fb(self) -> bool:
+        return self.info.kind == "FUNCTION_BLOCK"
+
+    def type_of(self, expr: n.Expr) -> t.Type | None:
+        return self.facts.type_of(expr)
+
+
+def _alias_subranges(units) -> dict[str, Interval]:
+    """`TYPE Percent : INT(0..100); END_TYPE` → {'percent': (0, 100), 'ns\\percent': …}."""
+    out: dict[str, Interval] = {}
+    for unit in units:
+        for decl in unit.types:
+            body = decl.body
+            if isinstance(body, n.AliasDecl) and isinstance(body.type_spec, n.SubrangeTypeSpec):
+                rng = (body.type_spec.low, body.type_spec.high)
+                out[decl.name.lower()] = rng
+                out["\\".join(decl.namespace + (decl.name,)).lower()] = rng
+    return out
+
+
+class _SetAnalysis:
+    """A may (union) or must (intersection) analysis over sets, on the feasible edges only."""
+
+    def __init__(self, ctx: PouContext, initial: frozenset, transfer, must: bool, scan_reset: bool = True) -> None:
+        self.ctx = ctx
+        self._initial = initial
+        self._transfer = transfer
+        self.must = must
+
+    def initial(self):
+        return self._initial
+
+    def next_call(self, exit_state):
+        return self._initial
+
+    def transfer(self, node, state):
+        return self._transfer(node, state)
+
+    def edge(self, edge, state):
+        return state if id(edge) in self.ctx.feasible_edges else None
+
+    def join(self, a, b):
+        return a & b if self.must else a | b
+
+    def widen(self, old, new, rounds=1, at=None):
+        return new
+
+    def leq(self, a, b):
+        return a >= b if self.must else a <= b
+
+
+def solve_sets(ctx: PouContext, initial: frozenset, transfer, must: bool):
+    """Solve a set analysis for one call of the POU (no state carried between scans)."""
+    from stvm.lint.dataflow import solve
+    return solve(ctx.cfg, _SetAnalysis(ctx, initial, transfer, must), scan_loop=False)
