@@ -10,6 +10,7 @@ runs the same properties with many more (STVM_FUZZ_EXAMPLES).
 
 from __future__ import annotations
 
+import contextlib
 import io
 import json
 import os
@@ -264,7 +265,8 @@ def test_random_emulator_command_lines(argv):
     from emulator.cli import main
     argv = list(argv) + ["--quiet", "--duration", "0.05", "--port", "0", "--host", "127.0.0.1"]
     err = io.StringIO()
-    with watchdog("tm-emulator"), contextlib_redirect(err):
+    # `--log NAME` writes NAME relative to the working directory: keep it in a fresh folder
+    with watchdog("tm-emulator"), contextlib_redirect(err), contextlib.chdir(fresh_folder()):
         try:
             rc = main(argv)
         except SystemExit as exc:
@@ -275,7 +277,6 @@ def test_random_emulator_command_lines(argv):
 
 @contextmanager
 def contextlib_redirect(err):
-    import contextlib
     with contextlib.redirect_stderr(err), contextlib.redirect_stdout(io.StringIO()):
         yield
 
