@@ -264,6 +264,7 @@ def test_unexpected_feedback_when_the_robot_refuses_a_segment(bench):
     diag, ext, msg = b.path_diag()
     assert (diag, ext) == ("UnexpectedProgramBehavior", "UnexpectedFeedback") and "Command rejected" in msg
     refused = int(msg.split()[1].rstrip(":"))
+    assert b.get("S.Robot.udiFaultSegmentId") == refused
     # nothing after the refused segment was sent; the robot was stopped
     assert len(motion_frames(b)) == refused
     assert any(b"StopAndClearBuffer" in f for f in b.rx())
@@ -275,6 +276,7 @@ def test_unexpected_feedback_when_the_robot_reports_a_motion_failed(bench):
     pick_path(b)
     b.until_path_end()
     assert b.path_diag() == ("UnexpectedProgramBehavior", "UnexpectedFeedback", "The robot reports segment 1 failed")
+    assert b.get("S.Robot.udiFaultSegmentId") == 1
 
 
 def test_connection_lost_mid_path_is_reported_and_no_motion_half_sent(bench):
