@@ -145,6 +145,17 @@ def test_change_while_the_robot_moves_and_back_to_the_robot_frame(bench):
     assert robot_frame_tcp(b)[:3] == pytest.approx(list(PNP_TARGETS[4][:3]), abs=0.05)
 
 
+def test_of_two_changes_at_one_boundary_the_later_one_is_sent(bench):
+    b = bench()
+    user_frame(b, 1, (10.0, 20.0, 0.0, 0.0, 0.0, 0.0))
+    pick_path(b, hold=True)
+    assert b.issue(set_cs("User1"), change(3, 0.0, 3, 0.0), set_cs("Robot"), change(3, 0.0, 3, 0.0),
+                   execute(True)) == [OK] * 5
+    b.until_path_end()
+    assert [n for n, _ in statements(motion_frames(b)[2])] == ["ChangeBase", "PTP", "QueueTag"]
+    assert statements(motion_frames(b)[2])[0] == ("ChangeBase", ["RobotBase"])
+
+
 def test_without_set_coordinate_system_the_last_one_stays(bench):
     b = bench()
     pick_path(b, hold=True)
