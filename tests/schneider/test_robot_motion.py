@@ -227,6 +227,15 @@ def test_path_position_start_already_passed(bench):
     assert d[2][:2] == ("ExecutionAborted", "PathPositionStartAlreadyPassed")
 
 
+def test_path_position_start_already_passed_inside_a_finished_segment(bench):
+    b = bench()
+    pick_path(b)
+    b.until(lambda: b.get("S.Robot.udiCurrentSegmentId") == 3, 5000, "segment 3 running")
+    # 50 mm into segment 2 would change at the 2/3 boundary, but the robot finished segment 2
+    assert b.issue(set_cs("Robot"), change(2, 50.0, 3, 0.0))[1] == (
+        "ExecutionAborted", "PathPositionStartAlreadyPassed", "Segment 2 already finished")
+
+
 def test_path_position_start_invalid_before_a_previous_change(bench):
     b = bench()
     pick_path(b, hold=True)
