@@ -309,8 +309,10 @@ class _BodyChecker:
             if isinstance(var.type, t.FBType):
                 self.error(f"cannot assign to function block instance '{target.text}'", target.span, "E050")
                 return None
-            self.facts.types[id(target)] = var.type
-            return var.type
+            self.facts.types[id(target)] = self.implicit_deref(target, var.type)
+            return self.facts.types[id(target)]
+        if isinstance(target, n.Deref):
+            return self.expr(target)
         if isinstance(target, n.Member):
             base_type = self.expr(target.base)
             if base_type is None:
@@ -372,6 +374,15 @@ class _BodyChecker:
                 return
         if isinstance(dst, t.StringType) and isinstance(src, t.StringType):
             self.string_constant_fits(expr, dst, span)
+        if isinstance(src, t.RefType) or isinstance(dst, t.RefType):
+            if isinstance(src, t.RefType) and self.refs_assignable(src, dst):
+                return
+            if isinstance(dst, t.RefType) and not isinstance(src, t.RefType):
+                self.error(f"type mismatch: cannot assign {src.name} to {dst.name}; take a reference with "
+                           f"{'ADR' if dst.flavour == 'POINTER' else 'REF'}(…)", span, "E052")
+                return
+            self.error(f"type mismatch: cannot assign {src.name} to {dst.name}", span, "E052")
+            return
         if implicit_ok(src, dst):
             return
         if isinstance(src, t.IntType) and isinstance(dst, t.IntType):
@@ -430,6 +441,10 @@ class _BodyChecker:
             if len(e.parts) == 1 and isinstance(expected, t.EnumType) and expected.value_of(e.parts[0]) is not None:
                 from stvm.semantics.checker import NameRef
                 ref = NameRef("enum", value=expected.value_of(e.parts[0]), variable=Variable(e.parts[0], "ENUM", expected))
+            elif len(e.parts) == 1 and not e.rooted and e.parts[0].upper() == "NULL":
+                from stvm.semantics.checker import NameRef
+                self.facts.names[id(e)] = NameRef("null")  # type: ignore[assignment]
+                return t.NULL_REF
             else:
                 self.undeclared(e)
                 return None
@@ -442,7 +457,7 @@ class _BodyChecker:
         var: Variable = ref.variable  # type: ignore[attr-defined]
         if var.constant and var.init is not None and not isinstance(var.init, (list, dict)):
             self.facts.consts[id(e)] = var.init
-        return var.type
+        return self.implicit_deref(e, var.type)
 
     def expr_Member(self, e: n.Member, expected) -> t.Type | None:
         base = self.expr(e.base)
@@ -507,8 +522,120 @@ class _BodyChecker:
         return base.element
 
     def expr_Deref(self, e: n.Deref, expected) -> t.Type | None:
-        self.error("pointer dereference (^) is not supported", e.span, "E037")
+        base = self.expr(e.base)
+        if base is None:
+            return None
+        if not isinstance(base, t.RefType) or base.flavour == "REFERENCE":
+            self.error(f"'^' needs a reference (REF_TO or POINTER TO), but '{self.describe(e.base)}' is {base.name}",
+                       e.span, "E037")
+            return None
+        if base.is_null:
+            self.error("NULL cannot be dereferenced", e.span, "E037")
+            return None
+        return self.canonical(base.target)
+
+    def canonical(self, ty: t.Type) -> t.Type:
+        """A struct named inside its own declaration (`next : REF_TO Node`) was resolved to a
+        placeholder without fields; the finished type replaces it."""
+        if isinstance(ty, t.StructType):
+            return self.c.structs.get(ty.qualname.lower(), ty)
+        return ty
+
+    # ---- references (REF_TO / POINTER TO / REFERENCE TO)
+    def implicit_deref(self, e: n.Expr, ty: t.Type) -> t.Type:
+        """A REFERENCE TO variable stands for its target wherever it is used (CODESYS)."""
+        if isinstance(ty, t.RefType) and ty.flavour == "REFERENCE":
+            self.facts.auto_deref.add(id(e))
+            return self.canonical(ty.target)
+        return ty
+
+    def reference_of(self, e: n.Call) -> t.Type | None:
+        """REF(x) (IEC) / ADR(x) (CODESYS): a reference to the variable x, never to a value."""
+        word = e.callee.parts[0].upper()  # type: ignore[attr-defined]
+        if len(e.args) != 1 or e.args[0].kind != "positional":
+            self.check_args_loosely(e)
+            self.error(f"{word}() takes one variable", e.span, "E055")
+            return None
+        arg = e.args[0].value
+        ty = self.expr(arg)
+        if ty is None:
+            return None
+        if not isinstance(arg, (n.Name, n.Member, n.Index, n.Deref)):
+            what = "a single bit, which has no reference" if isinstance(arg, n.BitAccess) else "a temporary value"
+            shown = self.describe(arg)
+            shown = "this expression" if shown == "expression" else f"'{shown}'"
+            self.error(f"{word}() needs a variable; {shown} is {what}", arg.span, "E055")
+            return None
+        root: n.Expr = arg
+        while isinstance(root, (n.Member, n.Index)):
+            if isinstance(root, n.Member):
+                base_type = self.facts.types.get(id(root.base))
+                if isinstance(base_type, t.FBType):
+                    self.facts.addressed.add((base_type.qualname.lower(), root.name.lower()))
+            root = root.base
+        if isinstance(root, n.Name):
+            ref = self.facts.names.get(id(root))
+            kind = getattr(ref, "kind", None)
+            if kind in ("enum", "null", "result"):
+                self.error(f"{word}() needs a variable; '{root.text}' is a value", arg.span, "E055")
+                return None
+            var = ref.variable  # type: ignore[union-attr]
+            if var.constant:
+                self.error(f"{word}() of constant '{root.text}': a constant cannot be written through a reference",
+                           arg.span, "E055")
+                return None
+            if kind == "var":
+                self.facts.addressed.add((self.pou.key, var.key))
+        self.facts.ref_calls.add(id(e))
+        return t.ref_type(ty, "POINTER" if word == "ADR" else "REF_TO")
+
+    def stmt_RefAssign(self, s: n.RefAssign) -> None:
+        target = s.target
+        raw = None
+        if isinstance(target, (n.Name, n.Member)):
+            self.lvalue(target)
+            if id(target) in self.facts.auto_deref:
+                if isinstance(target, n.Name):
+                    raw = self.facts.names[id(target)].variable.type  # type: ignore[attr-defined]
+                else:
+                    raw = self.member_raw_type(target)
+        if raw is None:
+            self.expr(s.value)
+            self.error("REF= needs a REFERENCE TO variable on its left", target.span, "E056")
+            return
+        self.facts.types[id(target)] = raw
+        value_type = self.expr(s.value)
+        if value_type is None:
+            return
+        if isinstance(value_type, t.RefType) and value_type.is_null:
+            return
+        if not isinstance(s.value, (n.Name, n.Member, n.Index, n.Deref)):
+            self.error("REF= needs a variable; this expression is a temporary value", s.value.span, "E055")
+            return
+        if not t.same_type(value_type, raw.target):
+            self.error(f"REF= binds {raw.name} to a {value_type.name}", s.value.span, "E052")
+            return
+        root: n.Expr = s.value
+        while isinstance(root, (n.Member, n.Index)):
+            root = root.base
+        ref = self.facts.names.get(id(root)) if isinstance(root, n.Name) else None
+        if ref is not None and getattr(ref, "kind", None) == "var":
+            self.facts.addressed.add((self.pou.key, ref.variable.key))  # type: ignore[union-attr]
+
+    def member_raw_type(self, target: n.Member) -> t.Type | None:
+        base = self.facts.types.get(id(target.base))
+        if isinstance(base, t.StructType):
+            return base.field_type(target.name)
+        if isinstance(base, t.FBType):
+            fb = self.c.pous.get(base.qualname.lower())
+            var = fb.pin(target.name) if fb else None
+            return var.type if var else None
         return None
+
+    def refs_assignable(self, src: t.RefType, dst: t.Type) -> bool:
+        if not isinstance(dst, t.RefType):
+            return False
+        return src.is_null or t.same_type(src.target, dst.target)
 
     def expr_Unary(self, e: n.Unary, expected) -> t.Type | None:
         ty = self.expr(e.operand, expected)
@@ -637,6 +764,8 @@ class _BodyChecker:
             return True
         if isinstance(lt, t.TimeType) and isinstance(rt, t.TimeType):
             return lt.name == rt.name
+        if isinstance(lt, t.RefType) and isinstance(rt, t.RefType) and op in ("EQ", "NE"):
+            return lt.is_null or rt.is_null or t.same_type(lt.target, rt.target)
         return False
 
     def time_arith(self, e: n.Binary, lt: t.Type, rt: t.Type) -> t.Type | None:
@@ -668,6 +797,10 @@ class _BodyChecker:
             return f"{self.describe(e.base)}.{e.name}"
         if isinstance(e, n.Index):
             return f"{self.describe(e.base)}[…]"
+        if isinstance(e, n.Deref):
+            return f"{self.describe(e.base)}^"
+        if isinstance(e, n.Call):
+            return f"{self.describe(e.callee)}(…)"
         return "expression"
 
     # ---- calls
@@ -676,6 +809,9 @@ class _BodyChecker:
         callee = e.callee
         pou: POUInfo | None = None
         instance: n.Expr | None = None
+        if isinstance(callee, n.Name) and len(callee.parts) == 1 and callee.parts[0].upper() in ("REF", "ADR") \
+                and self.resolve_name(callee) is None and self.lookup_callable(callee) is None:
+            return self.reference_of(e)
         if isinstance(callee, n.Name):
             ref = self.resolve_name(callee) if len(callee.parts) == 1 else None
             if ref is not None and getattr(ref, "variable", None) is not None and isinstance(ref.variable.type, t.FBType):  # type: ignore[attr-defined]

@@ -60,6 +60,9 @@ class Facts:
     consts: dict[int, object] = field(default_factory=dict)  # compile-time values of constant exprs
     array_from_element: set[int] = field(default_factory=set)  # Index exprs passed as "array from here"
     operand_types: dict[int, t.Type] = field(default_factory=dict)  # comparisons: the type compared in
+    ref_calls: set[int] = field(default_factory=set)      # REF(x) / ADR(x) calls
+    auto_deref: set[int] = field(default_factory=set)     # names of REFERENCE TO variables (used as the target)
+    addressed: set[tuple[str, str]] = field(default_factory=set)  # (POU key, variable key) whose reference is taken
     keep: list = field(default_factory=list)              # keeps nodes alive so ids stay unique
 
 
@@ -483,8 +486,13 @@ class Checker:
             # Choice: a subrange is its base type (range checks at run time are not modelled).
             return base
         if isinstance(spec, n.RefTypeSpec):
-            self.error("REF_TO/POINTER TO are not supported by stvm", spec.span, "E019")
-            return None
+            target = self.resolve_type_spec(spec.target, namespace)
+            if target is None:
+                return None
+            if isinstance(target, t.RefType) and spec.flavour == "REFERENCE":
+                self.error("REFERENCE TO a reference is not allowed", spec.span, "E019")
+                return None
+            return t.ref_type(target, spec.flavour)
         self.error("unsupported type specification", getattr(spec, "span", n.NO_SPAN), "E019")
         return None
 

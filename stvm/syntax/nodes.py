@@ -167,6 +167,15 @@ class Assign(Statement):
 
 
 @dataclass(frozen=True)
+class RefAssign(Statement):
+    """CODESYS `target REF= value`: bind the REFERENCE TO variable `target` to the variable `value`."""
+
+    target: Expr
+    value: Expr
+    span: Span = _span()
+
+
+@dataclass(frozen=True)
 class CallStatement(Statement):
     call: Expr
     span: Span = _span()
@@ -282,6 +291,7 @@ class SubrangeTypeSpec(TypeSpec):
 @dataclass(frozen=True)
 class RefTypeSpec(TypeSpec):
     target: TypeSpec
+    flavour: str = "REF_TO"   # REF_TO (IEC), POINTER (POINTER TO), REFERENCE (REFERENCE TO)
     span: Span = _span()
 
 

@@ -206,7 +206,13 @@ class _ToNodes(Transformer):
         return n.SubrangeTypeSpec(items[0][1], items[1], items[2], self._s(meta))
 
     def ref_spec(self, meta, items):
-        return n.RefTypeSpec(items[-1], self._s(meta))
+        return n.RefTypeSpec(items[-1], "REF_TO", self._s(meta))
+
+    def pointer_spec(self, meta, items):
+        return n.RefTypeSpec(items[-1], "POINTER", self._s(meta))
+
+    def reference_spec(self, meta, items):
+        return n.RefTypeSpec(items[-1], "REFERENCE", self._s(meta))
 
     def initializer(self, meta, items):
         return n.ExprInit(items[0], self._s(meta))
@@ -263,6 +269,9 @@ class _ToNodes(Transformer):
 
     def assignment(self, meta, items):
         return n.Assign(items[0], items[1], self._s(meta))
+
+    def ref_assignment(self, meta, items):
+        return n.RefAssign(items[0], items[2], self._s(meta))
 
     def call_statement(self, meta, items):
         return n.CallStatement(items[0], self._s(meta))
