@@ -881,6 +881,8 @@ class _BodyChecker:
             self.error("mix of formal (name := value) and positional arguments", e.span, "E047")
         generic_types: list[t.Type] = []
         bound: set[str] = set()
+        if not positional and not formal and pou.variadic and not fb:
+            self.error(f"{pou.name} takes at least {max(len(params) - 1, 1)} arguments, got 0", e.span, "E048")
         if positional:
             if fb:
                 self.error(f"function block {pou.name} needs formal arguments (Name := value)", e.span, "E047")
@@ -952,6 +954,13 @@ class _BodyChecker:
         elif generic_types:
             typed = [ty for ty, untyped in generic_types if not untyped]
             info.generic_type = self.common_generic(typed or [ty for ty, _ in generic_types], e)
+
+    def untyped_bits_literal(self, e: n.Expr, ptype: t.GenericType) -> bool:
+        """An untyped non-negative integer literal (16#FF00) may stand for a bit string: it takes
+        the type of the call's typed arguments (AND(w, 16#FF00) is WORD)."""
+        value = self.facts.consts.get(id(e))
+        return (ptype.name == "ANY_BIT" and id(e) in self.facts.untyped and isinstance(value, int)
+                and not isinstance(value, bool) and value >= 0)
 
     def variadic_pin(self, pou: POUInfo, name: str) -> Variable | None:
         params = pou.params()
@@ -1025,7 +1034,7 @@ class _BodyChecker:
         if ty is None:
             return
         if isinstance(ptype, t.GenericType):
-            if not ptype.accepts(ty):
+            if not ptype.accepts(ty) and not self.untyped_bits_literal(arg.value, ptype):
                 self.error(f"'{var.name}' of {pou.name} needs {ptype.name}, got {ty.name}", arg.value.span, "E052")
             else:
                 # untyped literals only decide the type when no typed argument does

@@ -395,6 +395,12 @@ class _ToNodes(Transformer):
         args = tuple(a for a in items[1:] if a is not None)
         return n.Call(items[0], args, self._s(meta))
 
+    def keyword_call(self, meta, items):
+        # MOD(a, b), AND(a, b, …): the operators' function forms call the stdlib's `__MOD`, `__AND`
+        word = items[0]
+        callee = n.Name(("__" + str(word).upper(),), False, _tok_span(self.file, word))
+        return n.Call(callee, tuple(a for a in items[1:] if a is not None), self._s(meta))
+
     def deref(self, meta, items):
         return n.Deref(items[0], self._s(meta))
 
