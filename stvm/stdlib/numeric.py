@@ -231,8 +231,13 @@ def _chain(test):
 
 
 for _name, _test in (("GT", lambda a, b: a > b), ("GE", lambda a, b: a >= b), ("EQ", lambda a, b: a == b),
-                     ("LE", lambda a, b: a <= b), ("LT", lambda a, b: a < b), ("NE", lambda a, b: a != b)):
-    native_function(_name, generic=True, variadic=_name != "NE")(_chain(_test))
+                     ("LE", lambda a, b: a <= b), ("LT", lambda a, b: a < b)):
+    native_function(_name, generic=True, variadic=True)(_chain(_test))
+
+
+@native_function("NE", generic=True)
+def ne(ctx, result_type, first, second):
+    return first != second
 
 
 @native_function("__MOD", generic=True)
