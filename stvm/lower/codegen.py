@@ -819,7 +819,9 @@ class Lowerer:
         if isinstance(ty, t.StringType) and isinstance(value, bytes):
             from stvm.runtime.helpers import _strfit
             return _strfit(value, ty.max_bytes)
-        if isinstance(ty, (t.BoolType, t.TimeType, t.EnumType)) and isinstance(value, (bool, int)):
+        if isinstance(ty, t.BoolType) and isinstance(value, int):
+            return bool(value)   # IEC: 0 and 1 are BOOL literals
+        if isinstance(ty, (t.TimeType, t.EnumType)) and isinstance(value, (bool, int)):
             return value
         return None
 

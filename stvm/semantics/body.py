@@ -370,6 +370,8 @@ class _BodyChecker:
                     return
                 if isinstance(dst, t.RealType):
                     return
+                if isinstance(dst, t.BoolType) and value in (0, 1):
+                    return   # IEC 61131-3 ed. 3 6.3.3 table 5: 0 and 1 are BOOL literals
             if isinstance(value, float) and isinstance(dst, t.RealType):
                 return
         if isinstance(dst, t.StringType) and isinstance(src, t.StringType):
@@ -684,6 +686,12 @@ class _BodyChecker:
         ru = id(e.right) in self.facts.untyped
         op = e.op
         sym = OP_TEXT.get(op, op)
+        if op in _LOGIC or op in ("EQ", "NE"):
+            # IEC: 0 and 1 are BOOL literals (`b AND 1`, `b = 0`)
+            if isinstance(lt, t.BoolType) and self.bool_literal(e.right):
+                rt = t.BOOL
+            elif isinstance(rt, t.BoolType) and self.bool_literal(e.left):
+                lt = t.BOOL
         if op in _COMPARE:
             if self.comparable(lt, rt, e.left, e.right, op):
                 self.facts.types[id(e)] = t.BOOL
@@ -726,6 +734,14 @@ class _BodyChecker:
             return self.operand_type(lt, rt, lu, ru, e)
         self.error(f"operator {sym} cannot be applied to {lt.name} and {rt.name}", e.span, "E039")
         return None
+
+    def bool_literal(self, e: n.Expr) -> bool:
+        if id(e) in self.facts.untyped and self.facts.consts.get(id(e)) in (0, 1) \
+                and not isinstance(self.facts.consts.get(id(e)), float):
+            self.facts.types[id(e)] = t.BOOL
+            self.facts.consts[id(e)] = bool(self.facts.consts[id(e)])
+            return True
+        return False
 
     def operand_type(self, lt: t.Type, rt: t.Type, lu: bool, ru: bool, e: n.Binary) -> t.Type | None:
         """The type a binary operation on these operands computes in."""

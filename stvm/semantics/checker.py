@@ -681,6 +681,8 @@ class Checker:
         if isinstance(ty, t.BoolType):
             if isinstance(value, bool):
                 return value
+            if isinstance(expr, n.IntLiteral) and value in (0, 1):
+                return bool(value)   # IEC 61131-3 ed. 3 table 5: 0 and 1 are BOOL literals
         elif isinstance(ty, t.IntType):
             if isinstance(value, int) and not isinstance(value, bool):
                 if not ty.lo <= value <= ty.hi:
