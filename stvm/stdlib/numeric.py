@@ -260,3 +260,9 @@ def _bitwise(operation):
 native_function("__AND", generic=True, variadic=True)(_bitwise(lambda a, b: a & b))
 native_function("__OR", generic=True, variadic=True)(_bitwise(lambda a, b: a | b))
 native_function("__XOR", generic=True, variadic=True)(_bitwise(lambda a, b: a ^ b))
+
+
+@native_function("ATAN2", generic=True)
+def atan2(ctx, result_type, y, x):
+    """CODESYS ATAN2(Y, X): the angle of (X, Y) in radians, -pi..pi (atan2(0, 0) = 0)."""
+    return coerce(math.atan2(float(y), float(x)), result_type)
