@@ -674,6 +674,14 @@ class Lowerer:
         if isinstance(target, n.Index):
             place = self.index_code(target)
             return [self.assign_into(place, value, ty)]
+        if isinstance(target, n.PartialAccess):
+            current = self.expr(target.base)
+            base_type = self.facts.types[id(target.base)]
+            shift, mask = target.bit * target.width, (1 << target.width) - 1
+            merged = f"(({current}) & {~(mask << shift) & ((1 << base_type.bits) - 1)}) | (({value}) << {shift})"  # type: ignore[attr-defined]
+            if base_type.signed:  # type: ignore[attr-defined]
+                merged = _wrap(merged, base_type)  # type: ignore[arg-type]
+            return self.store_code(target.base, merged, base_type)
         if isinstance(target, n.BitAccess):
             current = self.expr(target.base)
             base_type = self.facts.types[id(target.base)]
@@ -914,6 +922,9 @@ class Lowerer:
     def ex_Member(self, e: n.Member) -> str:
         base_type = self.facts.types[id(e.base)]
         return f"{self.expr(e.base)}.{var_attr(self.member_name(base_type, e.name))}"
+
+    def ex_PartialAccess(self, e: n.PartialAccess) -> str:
+        return f"((({self.expr(e.base)}) >> {e.bit * e.width}) & {(1 << e.width) - 1})"
 
     def ex_BitAccess(self, e: n.BitAccess) -> str:
         return f"((({self.expr(e.base)}) >> {e.bit}) & 1 == 1)"

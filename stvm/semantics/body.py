@@ -499,6 +499,22 @@ class _BodyChecker:
             return None
         return t.BOOL
 
+    def expr_PartialAccess(self, e: n.PartialAccess, expected) -> t.Type | None:
+        base = self.expr(e.base)
+        if base is None:
+            return None
+        part = {8: t.BYTE, 16: t.WORD, 32: t.DWORD}[e.width]
+        letter = {8: "B", 16: "W", 32: "D"}[e.width]
+        if not isinstance(base, t.IntType):
+            self.error(f"%{letter} access needs a bit string or integer, not {base.name}", e.span, "E035")
+            return None
+        count = base.bits // e.width
+        if e.bit >= count:
+            what = f"{base.name} has no {part.name}s" if count == 0 else f"{base.name} has {part.name}s 0..{count - 1}"
+            self.error(f"%{letter}{e.bit} is outside {base.name}: {what}", e.span, "E035")
+            return None
+        return part
+
     def expr_Index(self, e: n.Index, expected) -> t.Type | None:
         base = self.expr(e.base)
         for ix in e.indices:

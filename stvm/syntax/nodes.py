@@ -109,6 +109,14 @@ class BitAccess(Expr):
 
 
 @dataclass(frozen=True)
+class PartialAccess(BitAccess):
+    """`d.%B1`, `l.%W0`, `l.%D1`: part `bit` (counted from the least significant) of `width` bits.
+    A BitAccess, so every walk over variable paths treats it as one (`w.%X3` is a BitAccess)."""
+
+    width: int = 8
+
+
+@dataclass(frozen=True)
 class Index(Expr):
     base: Expr
     indices: tuple[Expr, ...]

@@ -395,6 +395,14 @@ class _ToNodes(Transformer):
         args = tuple(a for a in items[1:] if a is not None)
         return n.Call(items[0], args, self._s(meta))
 
+    def partial_access(self, meta, items):
+        text = str(items[1])
+        index = int(text[2:])
+        letter = text[1].upper()
+        if letter == "X":
+            return n.BitAccess(items[0], index, self._s(meta))
+        return n.PartialAccess(items[0], index, self._s(meta), width={"B": 8, "W": 16, "D": 32}[letter])
+
     def keyword_call(self, meta, items):
         # MOD(a, b), AND(a, b, …): the operators' function forms call the stdlib's `__MOD`, `__AND`
         word = items[0]
