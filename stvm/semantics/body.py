@@ -93,6 +93,14 @@ def conversion_hint(src: t.Type, dst: t.Type) -> str:
     return ""
 
 
+def trunc_result_from_context(settings) -> bool:
+    """Does TRUNC take its integer result type from the context (IEC ed. 3 table 22: ANY_REAL ->
+    ANY_INT, so `i : INT := TRUNC(r)`)? Sysmac's TRUNC gives DINT for REAL, LINT for LREAL (W502
+    2-284) — that rule remains when the context expects no integer or under a dialect where this
+    returns False. The single dialect switch for it (lang-dialects: False under sysmac)."""
+    return True
+
+
 def native_result_rule(pou: POUInfo):
     """The stdlib's result-type rule for a generic native (SHL, MUX, TRUNC, …), if it has one."""
     if not pou.native or pou.kind != "FUNCTION":
@@ -890,7 +898,11 @@ class _BodyChecker:
             return t.VOID
         assert pou is not None
         info = CallInfo(pou, False, None)
-        self.bind_args(e, pou, info, fb=False)
+        outer, self.call_expected = getattr(self, "call_expected", None), expected
+        try:
+            self.bind_args(e, pou, info, fb=False)
+        finally:
+            self.call_expected = outer
         self.facts.calls[id(e)] = info
         ret = pou.return_type
         if isinstance(ret, t.GenericType):
@@ -979,13 +991,42 @@ class _BodyChecker:
         info.arg_types = tuple(arg_types)
         rule = native_result_rule(pou)
         if rule is not None:
+            exprs = [given.get(p.key) for p in params
+                     if not (pou.variadic and p is params[-1] and info.extra and p.key not in given)]
+            exprs += list(info.extra)
             try:
-                info.generic_type = rule(info.arg_types)
+                info.generic_type = rule(self.literal_context_types(pou, info.arg_types, exprs))
+                expected = getattr(self, "call_expected", None)
+                if pou.qualname.upper() == "TRUNC" and isinstance(expected, t.IntType) \
+                        and not expected.bitstring and trunc_result_from_context(self.settings):
+                    info.generic_type = expected   # IEC: TRUNC is ANY_REAL -> ANY_INT
             except Exception as exc:  # a rule rejecting its arguments is a type error in the user's call
                 self.error(f"{pou.name}: {exc}", e.span, "E046")
         elif generic_types:
             typed = [ty for ty, untyped in generic_types if not untyped]
             info.generic_type = self.common_generic(typed or [ty for ty, _ in generic_types], e)
+
+    def literal_context_types(self, pou: POUInfo, arg_types: tuple, exprs: list) -> tuple:
+        """The argument types a result rule sees: an untyped literal takes the type of the typed
+        arguments it is mixed with (SEL(c, 0, i) is INT, MUX(k, 0.5, r) is REAL), or, when all are
+        literals, the type the context expects (j : SINT := SEL(c, 1, 2)) if the literal fits."""
+        typed = [ty for ty, ex in zip(arg_types, exprs)
+                 if ex is not None and id(ex) not in self.facts.untyped and isinstance(ty, (t.IntType, t.RealType))]
+        expected = getattr(self, "call_expected", None)
+        out = []
+        for ty, ex in zip(arg_types, exprs):
+            if ex is None or id(ex) not in self.facts.untyped or not isinstance(ty, (t.IntType, t.RealType)):
+                out.append(ty)
+                continue
+            candidates = [c for c in typed if self.literal_fits(ex, c) and (isinstance(c, t.RealType) or isinstance(ty, t.IntType))]
+            if candidates:
+                out.append(candidates[0])
+            elif not typed and isinstance(expected, (t.IntType, t.RealType)) and self.literal_fits(ex, expected) \
+                    and (isinstance(expected, t.RealType) or isinstance(ty, t.IntType)):
+                out.append(expected)
+            else:
+                out.append(ty)
+        return tuple(out)
 
     def untyped_bits_literal(self, e: n.Expr, ptype: t.GenericType) -> bool:
         """An untyped non-negative integer literal (16#FF00) may stand for a bit string: it takes

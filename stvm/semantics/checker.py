@@ -255,11 +255,15 @@ class Checker:
     def alias_init(self, spec: n.TypeSpec, namespace: tuple[str, ...], seen: frozenset = frozenset()) -> object:
         """The initial value an alias type declares (`TYPE T : INT := 7;`), for variables of type
         T that have no initialiser of their own; None if there is none."""
+        if isinstance(spec, n.SubrangeTypeSpec):
+            return spec.low   # IEC 6.4.4.3: a subrange variable starts at its lower bound
         if not isinstance(spec, n.NamedTypeSpec):
             return None
         key = self.lookup_type_key(spec.parts, spec.rooted, namespace)
         if key is None or key in seen or not isinstance(self.index.type_decls[key].body, n.AliasDecl):
             return None  # a cycle is reported by resolve_declared_type
+        if key not in self.resolved_types:
+            self.resolve_declared_type(key)   # its own initial value is known once it is resolved
         inits = self.type_inits.get(key, {})
         if "" in inits:
             return inits[""]
@@ -292,6 +296,7 @@ class Checker:
                 info.return_type = self.resolve_type_spec(pou.return_type, pou.namespace, allow_generic=native) or t.DINT
         elif pou.return_type is not None:
             self.error(f"a {pou.kind} has no return type", pou.span, "E014")
+        early = self.declare_local_constants(pou, info)
         for block in pou.var_blocks:
             kind = block.kind
             if kind == "VAR_STAT":
@@ -300,6 +305,8 @@ class Checker:
                 self.error("VAR_GLOBAL is not allowed inside a POU; declare globals at top level", block.span, "E012")
                 continue
             for decl in block.decls:
+                if id(decl) in early:
+                    continue
                 vtype = self.resolve_type_spec(decl.type_spec, pou.namespace, allow_generic=native,
                                                allow_open_array=kind in (IN_OUT, INPUT))
                 for name, span in decl.names:
@@ -322,8 +329,37 @@ class Checker:
                             self.error(f"VAR_IN_OUT '{name}' cannot have an initial value", span, "E013")
                         else:
                             var.init = self.initial_value(decl.init, vtype, pou.namespace, info)
+        if early:   # back to declaration order (positional parameters, formatting, traces)
+            order = [name.lower() for block in pou.var_blocks for decl in block.decls for name, _ in decl.names]
+            rank = {key: i for i, key in reversed(list(enumerate(order)))}
+            info.variables = dict(sorted(info.variables.items(), key=lambda kv: rank.get(kv[0], len(order))))
         self.declaring = None
         return info
+
+    def declare_local_constants(self, pou: n.POU, info: POUInfo) -> set[int]:
+        """Declare the POU's elementary VAR CONSTANT entries before anything else, so an array
+        bound or STRING size may use a constant declared further down (IEC: declaration order
+        does not matter). Returns the ids of the declarations done here."""
+        done: set[int] = set()
+        for block in pou.var_blocks:
+            if not block.constant or block.kind not in (LOCAL, "VAR_STAT"):
+                continue
+            for decl in block.decls:
+                spec = decl.type_spec
+                if not (isinstance(spec, n.NamedTypeSpec) and len(spec.parts) == 1
+                        and spec.parts[0].upper() in t.ELEMENTARY) or decl.init is None:
+                    continue
+                vtype = t.ELEMENTARY[spec.parts[0].upper()]
+                fresh = [(name, span) for name, span in decl.names if name.lower() not in info.variables]
+                if len(fresh) != len(decl.names):
+                    continue   # a duplicate: the main pass reports it
+                for name, span in fresh:
+                    self.check_identifier(name, span)
+                    var = Variable(name, LOCAL, vtype, True, span)
+                    var.init = self.initial_value(decl.init, vtype, pou.namespace, info)
+                    info.variables[name.lower()] = var
+                done.add(id(decl))
+        return done
 
     # ---- types
     def lookup_type_key(self, parts: tuple[str, ...], rooted: bool, namespace: tuple[str, ...]) -> str | None:
