@@ -416,7 +416,40 @@ class Lowerer:
                     return True
         return False
 
+    def with_en_eno(self, call: n.Expr, emit) -> bool:
+        """Emit `emit()` under the call's EN (run only when TRUE) and set its ENO: FALSE before
+        the call (an instruction error leaves it FALSE), TRUE after it, FALSE when EN is FALSE.
+        False when the call has neither."""
+        info = self.facts.calls.get(id(call)) if isinstance(call, n.Call) else None
+        if info is None or (info.en is None and info.eno is None):
+            return False
+
+        def set_eno(value: bool) -> None:
+            if info.eno is not None:
+                target, negate = info.eno
+                self.store(target, repr(value != negate), t.BOOL)
+        if info.en is not None:
+            self.w.line(f"if {self.expr_as(info.en, t.BOOL)}:")
+            self.w.indent += 1
+        set_eno(False)
+        emit()
+        set_eno(True)
+        if info.en is not None:
+            self.w.indent -= 1
+            self.w.line("else:")
+            self.w.indent += 1
+            set_eno(False)
+            if info.eno is None:
+                self.w.line("pass")
+            self.w.indent -= 1
+        return True
+
     def st_Assign(self, s: n.Assign) -> None:
+        if self.with_en_eno(s.value, lambda: self.plain_assign(s)):
+            return
+        self.plain_assign(s)
+
+    def plain_assign(self, s: n.Assign) -> None:
         target_type = self.facts.types.get(id(s.target))
         if target_type is None and isinstance(s.target, n.Name):
             target_type = self.pou.return_type  # type: ignore[union-attr]
@@ -424,6 +457,11 @@ class Lowerer:
         self.store(s.target, value, target_type)
 
     def st_CallStatement(self, s: n.CallStatement) -> None:
+        if self.with_en_eno(s.call, lambda: self.plain_call(s)):
+            return
+        self.plain_call(s)
+
+    def plain_call(self, s: n.CallStatement) -> None:
         info = self.facts.calls[id(s.call)]
         if info.is_fb:
             self.fb_call(s.call, info)  # type: ignore[arg-type]

@@ -142,6 +142,7 @@ class _BodyChecker:
         method(s)
 
     def stmt_Assign(self, s: n.Assign) -> None:
+        self.en_call = s.value   # EN/ENO are allowed on this call (bind_en_eno)
         target_type = self.lvalue(s.target)
         value_type = self.expr(s.value, expected=target_type)
         if target_type is not None and value_type is not None:
@@ -155,6 +156,7 @@ class _BodyChecker:
                 self.expr(s.call)
                 self.error("this statement does nothing: expected an assignment (:=) or a call", s.span, "E040")
             return
+        self.en_call = s.call
         self.expr(s.call, statement=True)
 
     def condition(self, expr: n.Expr, what: str) -> None:
@@ -945,6 +947,8 @@ class _BodyChecker:
                     self.bind_one(pou, last, arg, info, generic_types, extra=True)
         for arg in formal:
             assert arg.name is not None
+            if self.bind_en_eno(pou, arg, info, e):
+                continue
             if arg.kind == "input":
                 var = pou.pin(arg.name)
                 if var is None and pou.variadic and params:
@@ -1034,6 +1038,27 @@ class _BodyChecker:
         value = self.facts.consts.get(id(e))
         return (ptype.name == "ANY_BIT" and id(e) in self.facts.untyped and isinstance(value, int)
                 and not isinstance(value, bool) and value >= 0)
+
+    def bind_en_eno(self, pou: POUInfo, arg: n.Argument, info, call: n.Call) -> bool:
+        """IEC 6.6.1.6 / 6.6.2.5: `EN := c` and `ENO => v` on any function or FB call (unless the
+        POU declares pins of those names). True when `arg` was one of them."""
+        word = (arg.name or "").upper()
+        if word == "EN" and arg.kind == "input" and pou.pin("EN") is None:
+            ty = self.expr(arg.value, expected=t.BOOL)
+            if ty is not None:
+                self.require_assignable(arg.value, ty, t.BOOL, arg.value.span)
+            info.en = arg.value
+        elif word == "ENO" and arg.kind in ("output", "output_not") and pou.pin("ENO") is None:
+            ty = self.lvalue(arg.value)
+            if ty is not None and not isinstance(ty, t.BoolType):
+                self.error(f"ENO is BOOL; cannot bind it to {ty.name}", arg.span, "E052")
+            info.eno = (arg.value, arg.kind == "output_not")
+        else:
+            return False
+        if getattr(self, "en_call", None) is not call:
+            self.error("EN/ENO need a call that is a statement or the whole right side of an assignment",
+                       arg.span, "E047")
+        return True
 
     def variadic_pin(self, pou: POUInfo, name: str) -> Variable | None:
         params = pou.params()

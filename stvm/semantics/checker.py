@@ -49,6 +49,8 @@ class CallInfo:
     extra: list[n.Expr] = field(default_factory=list)     # variadic extras, in order
     generic_type: t.Type | None = None
     arg_types: tuple[t.Type, ...] = ()                    # per parameter (+ extras), for typed natives
+    en: n.Expr | None = None                              # `EN := c`: the call runs only when c is TRUE
+    eno: tuple[n.Expr, bool] | None = None                # `ENO => v` / `NOT ENO => v`: (target, negate)
 
 
 @dataclass
