@@ -1,4 +1,4 @@
-"""Shared machinery of the robot-library tests (tests/cbt_v2, tests/rockwell, tests/kuka, tests/cell).
+"""Shared machinery of the robot-library tests (tests/cbt_v2, tests/rockwell, tests/kuka, tests/schneider, tests/cell).
 
 The libraries under ``st_src/<folder>/`` are ST only; the tests load them with stvm, add a small
 harness PROGRAM of their own where an FB is exercised alone, and run them against the TM emulator:

@@ -114,3 +114,24 @@ def test_the_cli_prints_one_warning_line(private_cache):
     rc, out, err = cli(["run", str(source), "--cycles", "1"])
     assert rc == 0
     assert err.count("stvm: warning: compile cache not used") == 1, err
+
+
+def test_the_lint_parse_cache_never_unpickles_a_forged_entry(private_cache, tmp_path, monkeypatch):
+    from stvm.lint import loader
+    from stvm.settings import SysmacSettings
+    folder, key, source = private_cache
+    monkeypatch.setattr(loader, "_CACHES", {})
+    monkeypatch.setattr(loader, "_MEMO", {})
+    settings = SysmacSettings()
+    loader.parse_cached(PROGRAM, "main.st", settings)
+    entries = list((folder / "lint-ast").glob("*.pickle"))
+    assert entries and all(e.stat().st_mode & 0o077 == 0 for e in entries)
+    loader._MEMO.clear()
+    unit, _ = loader.parse_cached(PROGRAM, "main.st", settings)     # from the signed entry
+    assert unit is not None
+    marker = tmp_path / "pwned"
+    for entry in entries:
+        entry.write_bytes(pickle.dumps(_Payload(marker)))
+    loader._MEMO.clear()
+    unit, _ = loader.parse_cached(PROGRAM, "main.st", settings)
+    assert not marker.exists() and unit is not None               # parsed again, nothing ran

@@ -2,19 +2,21 @@
 
 Lint needs the checked syntax tree and the checker's per-expression facts, which the compile
 cache does not keep; parsing is most of the time (Lark in Python), so each file's tree is
-pickled under the stvm cache directory, keyed by its text, the settings and stvm's own code.
+pickled under the stvm cache directory, keyed by its text, the settings and stvm's own code. The
+entries go through the signed cache (stvm/cache.py): a pickle is only loaded when it carries the
+user's HMAC tag, so a shared or CI `STVM_CACHE_DIR` cannot hand lint a forged pickle.
 The checker then runs on the cached trees (fast) and gives the facts.
 """
 
 from __future__ import annotations
 
 import hashlib
-import os
 import pickle
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Sequence
 
+from stvm.cache import SignedCache, default_folder
 from stvm.diagnostics import Diagnostic, has_errors, sort_key
 from stvm.settings import SysmacSettings
 from stvm.syntax.nodes import Span
@@ -30,11 +32,15 @@ class Loaded:
     root: Path | None = None
 
 
-def _cache_dir() -> Path:
-    base = os.environ.get("STVM_CACHE_DIR")
-    if base:
-        return Path(base)
-    return Path(os.environ.get("XDG_CACHE_HOME", Path.home() / ".cache")) / "stvm"
+_CACHES: dict[Path, SignedCache] = {}
+
+
+def _cache() -> SignedCache:
+    folder = default_folder() / "lint-ast"
+    cached = _CACHES.get(folder)
+    if cached is None:
+        cached = _CACHES[folder] = SignedCache(folder)
+    return cached
 
 
 _CODE_DIGEST: list[str] = []
@@ -65,25 +71,22 @@ def parse_cached(text: str, name: str, settings: SysmacSettings, use_cache: bool
     if key in _MEMO:
         unit, diags = _MEMO[key]
         return unit, list(diags)
-    path = _cache_dir() / "lint-ast" / f"{key}.pickle"
+    name_in_cache = f"{key}.pickle"
     if use_cache:
-        try:
-            with path.open("rb") as fh:
-                unit, diags = pickle.load(fh)
-            _MEMO[key] = (unit, diags)
-            return unit, list(diags)
-        except Exception:  # missing or unreadable: parse again
-            pass
+        payload = _cache().get(name_in_cache)     # None unless signed with the user's key
+        if payload is not None:
+            try:
+                unit, diags = pickle.loads(payload)
+                _MEMO[key] = (unit, diags)
+                return unit, list(diags)
+            except Exception:  # damaged (or from an incompatible stvm): parse again
+                pass
     unit, diags = parse_text(text, name, settings)
     _MEMO[key] = (unit, diags)
     if use_cache:
         try:
-            path.parent.mkdir(parents=True, exist_ok=True)
-            tmp = path.with_suffix(f".tmp{os.getpid()}")
-            with tmp.open("wb") as fh:
-                pickle.dump((unit, diags), fh, protocol=pickle.HIGHEST_PROTOCOL)
-            tmp.replace(path)
-        except (OSError, pickle.PicklingError, RecursionError):
+            _cache().put(name_in_cache, pickle.dumps((unit, diags), protocol=pickle.HIGHEST_PROTOCOL))
+        except (pickle.PicklingError, RecursionError):
             pass
     return unit, list(diags)
 

@@ -655,24 +655,44 @@ class Lowerer:
             var = ref.variable
             assert var is not None
             place = self.var_place(var, ref.kind == "global")
+            if id(target) in self.facts.auto_deref:
+                return self.store_through(place, value, ty)
             if var.key in self.cached and ref.kind != "global":
                 self.assigned.add(var.key)
             if var.section == IN_OUT and not aggregate:
                 return [f"{place}.set({value})"]
             return [self.assign_into(place, value, ty)]
+        if isinstance(target, n.Deref):
+            return self.store_through(self.expr(target.base), value, ty)
         if isinstance(target, n.Member):
             base = self.expr(target.base)
             base_type = self.facts.types[id(target.base)]
             attr = var_attr(self.member_name(base_type, target.name))
+            if id(target) in self.facts.auto_deref:
+                return self.store_through(f"{base}.{attr}", value, ty)
             return [self.assign_into(f"{base}.{attr}", value, ty)]
         if isinstance(target, n.Index):
             place = self.index_code(target)
             return [self.assign_into(place, value, ty)]
+        if isinstance(target, n.PartialAccess):
+            current = self.expr(target.base)
+            base_type = self.facts.types[id(target.base)]
+            shift, mask = target.bit * target.width, (1 << target.width) - 1
+            merged = f"(({current}) & {~(mask << shift) & ((1 << base_type.bits) - 1)}) | (({value}) << {shift})"  # type: ignore[attr-defined]
+            if base_type.signed:  # type: ignore[attr-defined]
+                merged = _wrap(merged, base_type)  # type: ignore[arg-type]
+            return self.store_code(target.base, merged, base_type)
         if isinstance(target, n.BitAccess):
             current = self.expr(target.base)
             base_type = self.facts.types[id(target.base)]
             return self.store_code(target.base, f"_setbit({current}, {target.bit}, {value})", base_type)
         raise AssertionError("checked: not an lvalue")
+
+    def store_through(self, ref: str, value: str, ty: t.Type | None) -> list[str]:
+        """Store through a reference (`r^ := v`, a REFERENCE TO variable); NULL faults."""
+        if ty is not None and t.is_aggregate(ty):
+            return [self.assign_into(f"({ref} or _null_ref())", value, ty)]
+        return [f"({ref} or _null_ref()).set({value})"]
 
     def assign_into(self, place: str, value: str, ty: t.Type | None) -> str:
         if isinstance(ty, t.StructType):
@@ -723,6 +743,8 @@ class Lowerer:
                         referenced.add(target.parts[0].lower())
         if pou.kind == "FUNCTION":
             referenced |= {v.key for v in pou.variables.values() if v.section == OUTPUT}
+        # a variable whose reference is taken (REF/ADR/REF=) may be read or written through it
+        referenced |= {var for owner, var in self.facts.addressed if owner == pou.key}
         uses = _name_uses(node.body)
         out = {}
         for var in pou.variables.values():
@@ -805,7 +827,9 @@ class Lowerer:
         if isinstance(ty, t.StringType) and isinstance(value, bytes):
             from stvm.runtime.helpers import _strfit
             return _strfit(value, ty.max_bytes)
-        if isinstance(ty, (t.BoolType, t.TimeType, t.EnumType)) and isinstance(value, (bool, int)):
+        if isinstance(ty, t.BoolType) and isinstance(value, int):
+            return bool(value)   # IEC: 0 and 1 are BOOL literals
+        if isinstance(ty, (t.TimeType, t.EnumType)) and isinstance(value, (bool, int)):
             return value
         return None
 
@@ -846,16 +870,61 @@ class Lowerer:
             return _lit(ref.value)
         if ref.kind == "result":
             return "_r"
+        if ref.kind == "null":
+            return "None"
         var = ref.variable
         assert var is not None
         place = self.var_place(var, ref.kind == "global")
+        if id(e) in self.facts.auto_deref:
+            return self.deref_code(place, var.type.target)  # type: ignore[attr-defined]
         if var.section == IN_OUT and not isinstance(var.type, (t.StructType, t.ArrayType, t.FBType)):
             return f"{place}.get()"
         return place
 
+    def deref_code(self, code: str, target: t.Type) -> str:
+        """Read through a reference: the aggregate itself, or the scalar's current value; NULL
+        (None) faults at the statement (`_null_ref`)."""
+        if t.is_aggregate(target):
+            return f"({code} or _null_ref())"
+        return f"({code} or _null_ref()).get()"
+
+    def ex_Deref(self, e: n.Deref) -> str:
+        return self.deref_code(self.expr(e.base), self.facts.types[id(e)])
+
+    def raw_place(self, target: n.Expr) -> str:
+        """The storage of a Name/Member itself (for a REFERENCE TO variable: the reference)."""
+        if isinstance(target, n.Name):
+            ref = self.facts.names[id(target)]
+            return self.var_place(ref.variable, ref.kind == "global")  # type: ignore[arg-type]
+        assert isinstance(target, n.Member)
+        base_type = self.facts.types[id(target.base)]
+        return f"{self.expr(target.base)}.{var_attr(self.member_name(base_type, target.name))}"
+
+    def reference_code(self, value: n.Expr) -> str:
+        """REF(x) / ADR(x) / `REF= x`: the reference object for the variable x (see RefType)."""
+        ty = self.facts.types[id(value)]
+        if isinstance(value, n.Deref):
+            return self.expr(value.base)
+        if isinstance(value, (n.Name, n.Member)) and id(value) in self.facts.auto_deref:
+            return self.raw_place(value)
+        if isinstance(ty, t.RefType) and ty.is_null:
+            return "None"
+        if t.is_aggregate(ty):
+            return self.expr(value)
+        return self.ref_code(value)
+
+    def st_RefAssign(self, s: n.RefAssign) -> None:
+        place = self.raw_place(s.target)
+        if isinstance(s.target, n.Name) and s.target.parts[0].lower() in self.cached:
+            self.assigned.add(s.target.parts[0].lower())
+        self.w.line(f"{place} = {self.reference_code(s.value)}")
+
     def ex_Member(self, e: n.Member) -> str:
         base_type = self.facts.types[id(e.base)]
         return f"{self.expr(e.base)}.{var_attr(self.member_name(base_type, e.name))}"
+
+    def ex_PartialAccess(self, e: n.PartialAccess) -> str:
+        return f"((({self.expr(e.base)}) >> {e.bit * e.width}) & {(1 << e.width) - 1})"
 
     def ex_BitAccess(self, e: n.BitAccess) -> str:
         return f"((({self.expr(e.base)}) >> {e.bit}) & 1 == 1)"
@@ -922,6 +991,14 @@ class Lowerer:
 
     def ex_Binary(self, e: n.Binary) -> str:
         op = e.op
+        lt = self.facts.types.get(id(e.left))
+        if op in ("EQ", "NE") and isinstance(lt, t.RefType):
+            rt = self.facts.types[id(e.right)]
+            target = lt.target if not lt.is_null else rt.target  # type: ignore[attr-defined]
+            left, right = self.expr(e.left), self.expr(e.right)
+            # aggregates: the same object; scalars: the same variable (AttrRef/ItemRef equality)
+            same = f"({left} is {right})" if target is None or t.is_aggregate(target) else f"_same_ref({left}, {right})"
+            return same if op == "EQ" else f"(not {same})"
         if op in ("EQ", "NE", "LT", "GT", "LE", "GE"):
             operand = self.facts.operand_types.get(id(e))
             left = self.expr_as(e.left, operand) if operand is not None else self.expr(e.left)
@@ -1013,6 +1090,8 @@ class Lowerer:
 
     # ---- calls
     def ex_Call(self, e: n.Call) -> str:
+        if id(e) in self.facts.ref_calls:
+            return self.reference_code(e.args[0].value)
         return self.function_call(e, self.facts.calls[id(e)])
 
     def arg_code(self, var: Variable, value: n.Expr) -> str:
@@ -1056,8 +1135,12 @@ class Lowerer:
             if var.section == IN_OUT and ref.kind != "global":
                 return f"{self.owner}.{var_attr(var.name)}"
             place = self.var_place(var, ref.kind == "global")
+            if id(value) in self.facts.auto_deref:
+                return place   # a REFERENCE TO variable passed on: its reference object
             obj, attr = place.rsplit(".", 1)
             return f"_AttrRef({obj}, {attr!r})"
+        if isinstance(value, n.Deref):
+            return self.expr(value.base)
         if isinstance(value, n.Member):
             base_type = self.facts.types[id(value.base)]
             return f"_AttrRef({self.expr(value.base)}, {var_attr(self.member_name(base_type, value.name))!r})"

@@ -161,6 +161,14 @@ def format_value(value: object, ty: t.Type, pous: dict | None = None) -> str:
                 continue
             parts.append(f"{var.name} := {format_value(getattr(value, 'v_' + var.key), var.type, pous)}")
         return "(" + ", ".join(parts) + ")"
+    if isinstance(ty, t.RefType):
+        # Choice: a reference prints as `-> value` of a scalar target, `-> TYPE` of an aggregate
+        # (a self-referencing struct must not recurse); `r^` in a path shows the target in full
+        if value is None:
+            return "NULL"
+        if ty.target is None or t.is_aggregate(ty.target):
+            return f"-> {ty.target.name if ty.target is not None else '?'}"
+        return f"-> {format_value(value.get(), ty.target, pous)}"  # type: ignore[attr-defined]
     return repr(value)
 
 

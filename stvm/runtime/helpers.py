@@ -102,6 +102,22 @@ def _oob(index: int, lo: int, hi: int) -> int:
     raise ArrayIndexError(f"array index {index} out of bounds {lo}..{hi}")
 
 
+class NullReference(STFault):
+    """A dereference of NULL (REF_TO / POINTER TO / REFERENCE TO never bound)."""
+
+
+def _null_ref():
+    raise NullReference("dereference of a NULL reference")
+
+
+def _same_ref(a, b) -> bool:
+    if a is b:
+        return True
+    if a is None or b is None:
+        return False
+    return a.same(b)
+
+
 def _endless_for(end: int, step: int, type_name: str) -> None:
     raise STFault(f"FOR loop cannot end: the {type_name} loop variable wraps before passing {end} "
                   f"(step {step}); a controller's watchdog would stop the task")
@@ -160,5 +176,5 @@ HELPERS = {
     "_tdiv": _tdiv, "_tdiv0": _tdiv0, "_expt": _expt, "_oob": _oob, "_endless_for": _endless_for, "_strfit": _strfit, "_copy_value": _copy_value,
     "_assign_array": _assign_array, "_setbit": _setbit, "_with": _with, "_Frame": _Frame,
     "_AttrRef": AttrRef, "_MapRef": MapRef, "_ItemRef": ItemRef, "_ArrayRef": ArrayRef, "_FunctionError": FunctionError,
-    "_STFault": STFault, "_ArrayIndexError": ArrayIndexError,
+    "_STFault": STFault, "_null_ref": _null_ref, "_same_ref": _same_ref, "_ArrayIndexError": ArrayIndexError,
 }

@@ -77,6 +77,10 @@ class AttrRef:
     def set(self, value) -> None:
         setattr(self.obj, self.attr, value)
 
+    def same(self, other) -> bool:
+        """The same variable (REF_TO comparison `r1 = r2`)."""
+        return type(other) is AttrRef and other.obj is self.obj and other.attr == self.attr
+
 
 class ItemRef:
     """Reference to `lst[index]` (an array element)."""
@@ -92,6 +96,9 @@ class ItemRef:
 
     def set(self, value) -> None:
         self.lst[self.index] = value
+
+    def same(self, other) -> bool:
+        return type(other) is ItemRef and other.lst is self.lst and other.index == self.index
 
 
 class MapRef:

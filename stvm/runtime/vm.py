@@ -87,7 +87,7 @@ class UnboundInOut(PathError):
     """The path is well-formed but goes through a VAR_IN_OUT the FB has not been called with yet."""
 
 
-_PATH_TOKEN = re.compile(r"\s*(?:([A-Za-z_][A-Za-z0-9_]*)|\[([^\]]*)\]|(\.))")
+_PATH_TOKEN = re.compile(r"\s*(?:([A-Za-z_][A-Za-z0-9_]*)|\[([^\]]*)\]|(\.)|(\^))")
 
 
 class VM:
@@ -328,6 +328,8 @@ class VM:
                 tokens.append(("name", m.group(1)))
             elif m.group(2) is not None:
                 tokens.append(("index", m.group(2)))
+            elif m.group(4):
+                tokens.append(("deref", "^"))
         names = [tok for tok in tokens]
         if not names or names[0][0] != "name":
             raise PathError(f"malformed variable path {path!r}")
@@ -358,6 +360,21 @@ class VM:
     def _walk(self, container: Any, key: Any, ty: t.Type, rest: list, path: str) -> tuple[Any, Any, t.Type]:
         for kind, text in rest:
             value = container[key] if isinstance(key, int) else getattr(container, key)
+            if kind == "deref":
+                # `r^`: through a REF_TO/POINTER TO/REFERENCE TO to the variable it refers to
+                if not isinstance(ty, t.RefType) or ty.is_null:
+                    raise PathError(f"{path!r}: '^' needs a reference, {ty.name} is not one")
+                if value is None:
+                    raise UnboundInOut(f"{path!r}: the reference is NULL")
+                if isinstance(value, AttrRef):
+                    container, key = value.obj, value.attr
+                elif isinstance(value, ItemRef):
+                    container, key = value.lst, value.index
+                # an aggregate's reference is the aggregate itself: (container, key) stays
+                ty = ty.target
+                if isinstance(ty, t.StructType):   # (a self-referencing struct's placeholder)
+                    ty = self.model.structs.get(ty.qualname.lower(), ty)
+                continue
             if kind == "name":
                 if isinstance(ty, t.StructType):
                     fty = ty.field_type(text)

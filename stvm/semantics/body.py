@@ -93,6 +93,14 @@ def conversion_hint(src: t.Type, dst: t.Type) -> str:
     return ""
 
 
+def trunc_result_from_context(settings) -> bool:
+    """Does TRUNC take its integer result type from the context (IEC ed. 3 table 22: ANY_REAL ->
+    ANY_INT, so `i : INT := TRUNC(r)`)? Sysmac's TRUNC gives DINT for REAL, LINT for LREAL (W502
+    2-284) — that rule remains when the context expects no integer or under a dialect where this
+    returns False. The single dialect switch for it (lang-dialects: False under sysmac)."""
+    return True
+
+
 def native_result_rule(pou: POUInfo):
     """The stdlib's result-type rule for a generic native (SHL, MUX, TRUNC, …), if it has one."""
     if not pou.native or pou.kind != "FUNCTION":
@@ -309,8 +317,10 @@ class _BodyChecker:
             if isinstance(var.type, t.FBType):
                 self.error(f"cannot assign to function block instance '{target.text}'", target.span, "E050")
                 return None
-            self.facts.types[id(target)] = var.type
-            return var.type
+            self.facts.types[id(target)] = self.implicit_deref(target, var.type)
+            return self.facts.types[id(target)]
+        if isinstance(target, n.Deref):
+            return self.expr(target)
         if isinstance(target, n.Member):
             base_type = self.expr(target.base)
             if base_type is None:
@@ -368,10 +378,21 @@ class _BodyChecker:
                     return
                 if isinstance(dst, t.RealType):
                     return
+                if isinstance(dst, t.BoolType) and value in (0, 1):
+                    return   # IEC 61131-3 ed. 3 6.3.3 table 5: 0 and 1 are BOOL literals
             if isinstance(value, float) and isinstance(dst, t.RealType):
                 return
         if isinstance(dst, t.StringType) and isinstance(src, t.StringType):
             self.string_constant_fits(expr, dst, span)
+        if isinstance(src, t.RefType) or isinstance(dst, t.RefType):
+            if isinstance(src, t.RefType) and self.refs_assignable(src, dst):
+                return
+            if isinstance(dst, t.RefType) and not isinstance(src, t.RefType):
+                self.error(f"type mismatch: cannot assign {src.name} to {dst.name}; take a reference with "
+                           f"{'ADR' if dst.flavour == 'POINTER' else 'REF'}(…)", span, "E052")
+                return
+            self.error(f"type mismatch: cannot assign {src.name} to {dst.name}", span, "E052")
+            return
         if implicit_ok(src, dst):
             return
         if isinstance(src, t.IntType) and isinstance(dst, t.IntType):
@@ -430,6 +451,10 @@ class _BodyChecker:
             if len(e.parts) == 1 and isinstance(expected, t.EnumType) and expected.value_of(e.parts[0]) is not None:
                 from stvm.semantics.checker import NameRef
                 ref = NameRef("enum", value=expected.value_of(e.parts[0]), variable=Variable(e.parts[0], "ENUM", expected))
+            elif len(e.parts) == 1 and not e.rooted and e.parts[0].upper() == "NULL":
+                from stvm.semantics.checker import NameRef
+                self.facts.names[id(e)] = NameRef("null")  # type: ignore[assignment]
+                return t.NULL_REF
             else:
                 self.undeclared(e)
                 return None
@@ -442,7 +467,7 @@ class _BodyChecker:
         var: Variable = ref.variable  # type: ignore[attr-defined]
         if var.constant and var.init is not None and not isinstance(var.init, (list, dict)):
             self.facts.consts[id(e)] = var.init
-        return var.type
+        return self.implicit_deref(e, var.type)
 
     def expr_Member(self, e: n.Member, expected) -> t.Type | None:
         base = self.expr(e.base)
@@ -482,6 +507,22 @@ class _BodyChecker:
             return None
         return t.BOOL
 
+    def expr_PartialAccess(self, e: n.PartialAccess, expected) -> t.Type | None:
+        base = self.expr(e.base)
+        if base is None:
+            return None
+        part = {8: t.BYTE, 16: t.WORD, 32: t.DWORD}[e.width]
+        letter = {8: "B", 16: "W", 32: "D"}[e.width]
+        if not isinstance(base, t.IntType):
+            self.error(f"%{letter} access needs a bit string or integer, not {base.name}", e.span, "E035")
+            return None
+        count = base.bits // e.width
+        if e.bit >= count:
+            what = f"{base.name} has no {part.name}s" if count == 0 else f"{base.name} has {part.name}s 0..{count - 1}"
+            self.error(f"%{letter}{e.bit} is outside {base.name}: {what}", e.span, "E035")
+            return None
+        return part
+
     def expr_Index(self, e: n.Index, expected) -> t.Type | None:
         base = self.expr(e.base)
         for ix in e.indices:
@@ -507,8 +548,120 @@ class _BodyChecker:
         return base.element
 
     def expr_Deref(self, e: n.Deref, expected) -> t.Type | None:
-        self.error("pointer dereference (^) is not supported", e.span, "E037")
+        base = self.expr(e.base)
+        if base is None:
+            return None
+        if not isinstance(base, t.RefType) or base.flavour == "REFERENCE":
+            self.error(f"'^' needs a reference (REF_TO or POINTER TO), but '{self.describe(e.base)}' is {base.name}",
+                       e.span, "E037")
+            return None
+        if base.is_null:
+            self.error("NULL cannot be dereferenced", e.span, "E037")
+            return None
+        return self.canonical(base.target)
+
+    def canonical(self, ty: t.Type) -> t.Type:
+        """A struct named inside its own declaration (`next : REF_TO Node`) was resolved to a
+        placeholder without fields; the finished type replaces it."""
+        if isinstance(ty, t.StructType):
+            return self.c.structs.get(ty.qualname.lower(), ty)
+        return ty
+
+    # ---- references (REF_TO / POINTER TO / REFERENCE TO)
+    def implicit_deref(self, e: n.Expr, ty: t.Type) -> t.Type:
+        """A REFERENCE TO variable stands for its target wherever it is used (CODESYS)."""
+        if isinstance(ty, t.RefType) and ty.flavour == "REFERENCE":
+            self.facts.auto_deref.add(id(e))
+            return self.canonical(ty.target)
+        return ty
+
+    def reference_of(self, e: n.Call) -> t.Type | None:
+        """REF(x) (IEC) / ADR(x) (CODESYS): a reference to the variable x, never to a value."""
+        word = e.callee.parts[0].upper()  # type: ignore[attr-defined]
+        if len(e.args) != 1 or e.args[0].kind != "positional":
+            self.check_args_loosely(e)
+            self.error(f"{word}() takes one variable", e.span, "E055")
+            return None
+        arg = e.args[0].value
+        ty = self.expr(arg)
+        if ty is None:
+            return None
+        if not isinstance(arg, (n.Name, n.Member, n.Index, n.Deref)):
+            what = "a single bit, which has no reference" if isinstance(arg, n.BitAccess) else "a temporary value"
+            shown = self.describe(arg)
+            shown = "this expression" if shown == "expression" else f"'{shown}'"
+            self.error(f"{word}() needs a variable; {shown} is {what}", arg.span, "E055")
+            return None
+        root: n.Expr = arg
+        while isinstance(root, (n.Member, n.Index)):
+            if isinstance(root, n.Member):
+                base_type = self.facts.types.get(id(root.base))
+                if isinstance(base_type, t.FBType):
+                    self.facts.addressed.add((base_type.qualname.lower(), root.name.lower()))
+            root = root.base
+        if isinstance(root, n.Name):
+            ref = self.facts.names.get(id(root))
+            kind = getattr(ref, "kind", None)
+            if kind in ("enum", "null", "result"):
+                self.error(f"{word}() needs a variable; '{root.text}' is a value", arg.span, "E055")
+                return None
+            var = ref.variable  # type: ignore[union-attr]
+            if var.constant:
+                self.error(f"{word}() of constant '{root.text}': a constant cannot be written through a reference",
+                           arg.span, "E055")
+                return None
+            if kind == "var":
+                self.facts.addressed.add((self.pou.key, var.key))
+        self.facts.ref_calls.add(id(e))
+        return t.ref_type(ty, "POINTER" if word == "ADR" else "REF_TO")
+
+    def stmt_RefAssign(self, s: n.RefAssign) -> None:
+        target = s.target
+        raw = None
+        if isinstance(target, (n.Name, n.Member)):
+            self.lvalue(target)
+            if id(target) in self.facts.auto_deref:
+                if isinstance(target, n.Name):
+                    raw = self.facts.names[id(target)].variable.type  # type: ignore[attr-defined]
+                else:
+                    raw = self.member_raw_type(target)
+        if raw is None:
+            self.expr(s.value)
+            self.error("REF= needs a REFERENCE TO variable on its left", target.span, "E056")
+            return
+        self.facts.types[id(target)] = raw
+        value_type = self.expr(s.value)
+        if value_type is None:
+            return
+        if isinstance(value_type, t.RefType) and value_type.is_null:
+            return
+        if not isinstance(s.value, (n.Name, n.Member, n.Index, n.Deref)):
+            self.error("REF= needs a variable; this expression is a temporary value", s.value.span, "E055")
+            return
+        if not t.same_type(value_type, raw.target):
+            self.error(f"REF= binds {raw.name} to a {value_type.name}", s.value.span, "E052")
+            return
+        root: n.Expr = s.value
+        while isinstance(root, (n.Member, n.Index)):
+            root = root.base
+        ref = self.facts.names.get(id(root)) if isinstance(root, n.Name) else None
+        if ref is not None and getattr(ref, "kind", None) == "var":
+            self.facts.addressed.add((self.pou.key, ref.variable.key))  # type: ignore[union-attr]
+
+    def member_raw_type(self, target: n.Member) -> t.Type | None:
+        base = self.facts.types.get(id(target.base))
+        if isinstance(base, t.StructType):
+            return base.field_type(target.name)
+        if isinstance(base, t.FBType):
+            fb = self.c.pous.get(base.qualname.lower())
+            var = fb.pin(target.name) if fb else None
+            return var.type if var else None
         return None
+
+    def refs_assignable(self, src: t.RefType, dst: t.Type) -> bool:
+        if not isinstance(dst, t.RefType):
+            return False
+        return src.is_null or t.same_type(src.target, dst.target)
 
     def expr_Unary(self, e: n.Unary, expected) -> t.Type | None:
         ty = self.expr(e.operand, expected)
@@ -557,6 +710,12 @@ class _BodyChecker:
         ru = id(e.right) in self.facts.untyped
         op = e.op
         sym = OP_TEXT.get(op, op)
+        if op in _LOGIC or op in ("EQ", "NE"):
+            # IEC: 0 and 1 are BOOL literals (`b AND 1`, `b = 0`)
+            if isinstance(lt, t.BoolType) and self.bool_literal(e.right):
+                rt = t.BOOL
+            elif isinstance(rt, t.BoolType) and self.bool_literal(e.left):
+                lt = t.BOOL
         if op in _COMPARE:
             if self.comparable(lt, rt, e.left, e.right, op):
                 self.facts.types[id(e)] = t.BOOL
@@ -600,6 +759,14 @@ class _BodyChecker:
         self.error(f"operator {sym} cannot be applied to {lt.name} and {rt.name}", e.span, "E039")
         return None
 
+    def bool_literal(self, e: n.Expr) -> bool:
+        if id(e) in self.facts.untyped and self.facts.consts.get(id(e)) in (0, 1) \
+                and not isinstance(self.facts.consts.get(id(e)), float):
+            self.facts.types[id(e)] = t.BOOL
+            self.facts.consts[id(e)] = bool(self.facts.consts[id(e)])
+            return True
+        return False
+
     def operand_type(self, lt: t.Type, rt: t.Type, lu: bool, ru: bool, e: n.Binary) -> t.Type | None:
         """The type a binary operation on these operands computes in."""
         if isinstance(lt, t.IntType) and isinstance(rt, t.IntType):
@@ -637,6 +804,8 @@ class _BodyChecker:
             return True
         if isinstance(lt, t.TimeType) and isinstance(rt, t.TimeType):
             return lt.name == rt.name
+        if isinstance(lt, t.RefType) and isinstance(rt, t.RefType) and op in ("EQ", "NE"):
+            return lt.is_null or rt.is_null or t.same_type(lt.target, rt.target)
         return False
 
     def time_arith(self, e: n.Binary, lt: t.Type, rt: t.Type) -> t.Type | None:
@@ -668,6 +837,10 @@ class _BodyChecker:
             return f"{self.describe(e.base)}.{e.name}"
         if isinstance(e, n.Index):
             return f"{self.describe(e.base)}[…]"
+        if isinstance(e, n.Deref):
+            return f"{self.describe(e.base)}^"
+        if isinstance(e, n.Call):
+            return f"{self.describe(e.callee)}(…)"
         return "expression"
 
     # ---- calls
@@ -676,6 +849,9 @@ class _BodyChecker:
         callee = e.callee
         pou: POUInfo | None = None
         instance: n.Expr | None = None
+        if isinstance(callee, n.Name) and len(callee.parts) == 1 and callee.parts[0].upper() in ("REF", "ADR") \
+                and self.resolve_name(callee) is None and self.lookup_callable(callee) is None:
+            return self.reference_of(e)
         if isinstance(callee, n.Name):
             ref = self.resolve_name(callee) if len(callee.parts) == 1 else None
             if ref is not None and getattr(ref, "variable", None) is not None and isinstance(ref.variable.type, t.FBType):  # type: ignore[attr-defined]
@@ -722,7 +898,11 @@ class _BodyChecker:
             return t.VOID
         assert pou is not None
         info = CallInfo(pou, False, None)
-        self.bind_args(e, pou, info, fb=False)
+        outer, self.call_expected = getattr(self, "call_expected", None), expected
+        try:
+            self.bind_args(e, pou, info, fb=False)
+        finally:
+            self.call_expected = outer
         self.facts.calls[id(e)] = info
         ret = pou.return_type
         if isinstance(ret, t.GenericType):
@@ -745,6 +925,8 @@ class _BodyChecker:
             self.error("mix of formal (name := value) and positional arguments", e.span, "E047")
         generic_types: list[t.Type] = []
         bound: set[str] = set()
+        if not positional and not formal and pou.variadic and not fb:
+            self.error(f"{pou.name} takes at least {max(len(params) - 1, 1)} arguments, got 0", e.span, "E048")
         if positional:
             if fb:
                 self.error(f"function block {pou.name} needs formal arguments (Name := value)", e.span, "E047")
@@ -809,13 +991,49 @@ class _BodyChecker:
         info.arg_types = tuple(arg_types)
         rule = native_result_rule(pou)
         if rule is not None:
+            exprs = [given.get(p.key) for p in params
+                     if not (pou.variadic and p is params[-1] and info.extra and p.key not in given)]
+            exprs += list(info.extra)
             try:
-                info.generic_type = rule(info.arg_types)
+                info.generic_type = rule(self.literal_context_types(pou, info.arg_types, exprs))
+                expected = getattr(self, "call_expected", None)
+                if pou.qualname.upper() == "TRUNC" and isinstance(expected, t.IntType) \
+                        and not expected.bitstring and trunc_result_from_context(self.settings):
+                    info.generic_type = expected   # IEC: TRUNC is ANY_REAL -> ANY_INT
             except Exception as exc:  # a rule rejecting its arguments is a type error in the user's call
                 self.error(f"{pou.name}: {exc}", e.span, "E046")
         elif generic_types:
             typed = [ty for ty, untyped in generic_types if not untyped]
             info.generic_type = self.common_generic(typed or [ty for ty, _ in generic_types], e)
+
+    def literal_context_types(self, pou: POUInfo, arg_types: tuple, exprs: list) -> tuple:
+        """The argument types a result rule sees: an untyped literal takes the type of the typed
+        arguments it is mixed with (SEL(c, 0, i) is INT, MUX(k, 0.5, r) is REAL), or, when all are
+        literals, the type the context expects (j : SINT := SEL(c, 1, 2)) if the literal fits."""
+        typed = [ty for ty, ex in zip(arg_types, exprs)
+                 if ex is not None and id(ex) not in self.facts.untyped and isinstance(ty, (t.IntType, t.RealType))]
+        expected = getattr(self, "call_expected", None)
+        out = []
+        for ty, ex in zip(arg_types, exprs):
+            if ex is None or id(ex) not in self.facts.untyped or not isinstance(ty, (t.IntType, t.RealType)):
+                out.append(ty)
+                continue
+            candidates = [c for c in typed if self.literal_fits(ex, c) and (isinstance(c, t.RealType) or isinstance(ty, t.IntType))]
+            if candidates:
+                out.append(candidates[0])
+            elif not typed and isinstance(expected, (t.IntType, t.RealType)) and self.literal_fits(ex, expected) \
+                    and (isinstance(expected, t.RealType) or isinstance(ty, t.IntType)):
+                out.append(expected)
+            else:
+                out.append(ty)
+        return tuple(out)
+
+    def untyped_bits_literal(self, e: n.Expr, ptype: t.GenericType) -> bool:
+        """An untyped non-negative integer literal (16#FF00) may stand for a bit string: it takes
+        the type of the call's typed arguments (AND(w, 16#FF00) is WORD)."""
+        value = self.facts.consts.get(id(e))
+        return (ptype.name == "ANY_BIT" and id(e) in self.facts.untyped and isinstance(value, int)
+                and not isinstance(value, bool) and value >= 0)
 
     def variadic_pin(self, pou: POUInfo, name: str) -> Variable | None:
         params = pou.params()
@@ -889,7 +1107,7 @@ class _BodyChecker:
         if ty is None:
             return
         if isinstance(ptype, t.GenericType):
-            if not ptype.accepts(ty):
+            if not ptype.accepts(ty) and not self.untyped_bits_literal(arg.value, ptype):
                 self.error(f"'{var.name}' of {pou.name} needs {ptype.name}, got {ty.name}", arg.value.span, "E052")
             else:
                 # untyped literals only decide the type when no typed argument does

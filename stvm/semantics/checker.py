@@ -60,6 +60,9 @@ class Facts:
     consts: dict[int, object] = field(default_factory=dict)  # compile-time values of constant exprs
     array_from_element: set[int] = field(default_factory=set)  # Index exprs passed as "array from here"
     operand_types: dict[int, t.Type] = field(default_factory=dict)  # comparisons: the type compared in
+    ref_calls: set[int] = field(default_factory=set)      # REF(x) / ADR(x) calls
+    auto_deref: set[int] = field(default_factory=set)     # names of REFERENCE TO variables (used as the target)
+    addressed: set[tuple[str, str]] = field(default_factory=set)  # (POU key, variable key) whose reference is taken
     keep: list = field(default_factory=list)              # keeps nodes alive so ids stay unique
 
 
@@ -252,11 +255,15 @@ class Checker:
     def alias_init(self, spec: n.TypeSpec, namespace: tuple[str, ...], seen: frozenset = frozenset()) -> object:
         """The initial value an alias type declares (`TYPE T : INT := 7;`), for variables of type
         T that have no initialiser of their own; None if there is none."""
+        if isinstance(spec, n.SubrangeTypeSpec):
+            return spec.low   # IEC 6.4.4.3: a subrange variable starts at its lower bound
         if not isinstance(spec, n.NamedTypeSpec):
             return None
         key = self.lookup_type_key(spec.parts, spec.rooted, namespace)
         if key is None or key in seen or not isinstance(self.index.type_decls[key].body, n.AliasDecl):
             return None  # a cycle is reported by resolve_declared_type
+        if key not in self.resolved_types:
+            self.resolve_declared_type(key)   # its own initial value is known once it is resolved
         inits = self.type_inits.get(key, {})
         if "" in inits:
             return inits[""]
@@ -289,6 +296,7 @@ class Checker:
                 info.return_type = self.resolve_type_spec(pou.return_type, pou.namespace, allow_generic=native) or t.DINT
         elif pou.return_type is not None:
             self.error(f"a {pou.kind} has no return type", pou.span, "E014")
+        early = self.declare_local_constants(pou, info)
         for block in pou.var_blocks:
             kind = block.kind
             if kind == "VAR_STAT":
@@ -297,6 +305,8 @@ class Checker:
                 self.error("VAR_GLOBAL is not allowed inside a POU; declare globals at top level", block.span, "E012")
                 continue
             for decl in block.decls:
+                if id(decl) in early:
+                    continue
                 vtype = self.resolve_type_spec(decl.type_spec, pou.namespace, allow_generic=native,
                                                allow_open_array=kind in (IN_OUT, INPUT))
                 for name, span in decl.names:
@@ -319,8 +329,37 @@ class Checker:
                             self.error(f"VAR_IN_OUT '{name}' cannot have an initial value", span, "E013")
                         else:
                             var.init = self.initial_value(decl.init, vtype, pou.namespace, info)
+        if early:   # back to declaration order (positional parameters, formatting, traces)
+            order = [name.lower() for block in pou.var_blocks for decl in block.decls for name, _ in decl.names]
+            rank = {key: i for i, key in reversed(list(enumerate(order)))}
+            info.variables = dict(sorted(info.variables.items(), key=lambda kv: rank.get(kv[0], len(order))))
         self.declaring = None
         return info
+
+    def declare_local_constants(self, pou: n.POU, info: POUInfo) -> set[int]:
+        """Declare the POU's elementary VAR CONSTANT entries before anything else, so an array
+        bound or STRING size may use a constant declared further down (IEC: declaration order
+        does not matter). Returns the ids of the declarations done here."""
+        done: set[int] = set()
+        for block in pou.var_blocks:
+            if not block.constant or block.kind not in (LOCAL, "VAR_STAT"):
+                continue
+            for decl in block.decls:
+                spec = decl.type_spec
+                if not (isinstance(spec, n.NamedTypeSpec) and len(spec.parts) == 1
+                        and spec.parts[0].upper() in t.ELEMENTARY) or decl.init is None:
+                    continue
+                vtype = t.ELEMENTARY[spec.parts[0].upper()]
+                fresh = [(name, span) for name, span in decl.names if name.lower() not in info.variables]
+                if len(fresh) != len(decl.names):
+                    continue   # a duplicate: the main pass reports it
+                for name, span in fresh:
+                    self.check_identifier(name, span)
+                    var = Variable(name, LOCAL, vtype, True, span)
+                    var.init = self.initial_value(decl.init, vtype, pou.namespace, info)
+                    info.variables[name.lower()] = var
+                done.add(id(decl))
+        return done
 
     # ---- types
     def lookup_type_key(self, parts: tuple[str, ...], rooted: bool, namespace: tuple[str, ...]) -> str | None:
@@ -483,8 +522,13 @@ class Checker:
             # Choice: a subrange is its base type (range checks at run time are not modelled).
             return base
         if isinstance(spec, n.RefTypeSpec):
-            self.error("REF_TO/POINTER TO are not supported by stvm", spec.span, "E019")
-            return None
+            target = self.resolve_type_spec(spec.target, namespace)
+            if target is None:
+                return None
+            if isinstance(target, t.RefType) and spec.flavour == "REFERENCE":
+                self.error("REFERENCE TO a reference is not allowed", spec.span, "E019")
+                return None
+            return t.ref_type(target, spec.flavour)
         self.error("unsupported type specification", getattr(spec, "span", n.NO_SPAN), "E019")
         return None
 
@@ -673,6 +717,8 @@ class Checker:
         if isinstance(ty, t.BoolType):
             if isinstance(value, bool):
                 return value
+            if isinstance(expr, n.IntLiteral) and value in (0, 1):
+                return bool(value)   # IEC 61131-3 ed. 3 table 5: 0 and 1 are BOOL literals
         elif isinstance(ty, t.IntType):
             if isinstance(value, int) and not isinstance(value, bool):
                 if not ty.lo <= value <= ty.hi:

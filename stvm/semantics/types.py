@@ -221,6 +221,52 @@ class GenericType(Type):
 
 
 @dataclass(frozen=True)
+class RefType(Type):
+    """REF_TO T (IEC), POINTER TO T and REFERENCE TO T (CODESYS): a reference to a variable.
+
+    At run time a reference to a scalar is an `AttrRef`/`ItemRef` (get/set), a reference to an
+    aggregate (STRUCT, ARRAY, FB instance) is the aggregate object itself (aggregates are never
+    rebound), and NULL is None. `flavour` REFERENCE is dereferenced implicitly where it is used.
+    """
+
+    target: Type = None  # type: ignore[assignment]  # None only for the NULL literal's type
+    flavour: str = "REF_TO"
+
+    @property
+    def kind(self) -> str:
+        return "ref"
+
+    @property
+    def is_null(self) -> bool:
+        return self.target is None
+
+
+def ref_type(target: Type, flavour: str = "REF_TO") -> RefType:
+    word = {"REF_TO": "REF_TO", "POINTER": "POINTER TO", "REFERENCE": "REFERENCE TO"}[flavour]
+    return RefType(f"{word} {target.name}", target, flavour)
+
+
+NULL_REF = RefType("NULL", None, "REF_TO")
+
+
+def same_type(a: Type, b: Type) -> bool:
+    """Equal types for a reference's target (structs, enums and FBs by qualified name)."""
+    if a == b:
+        return True
+    qa, qb = getattr(a, "qualname", None), getattr(b, "qualname", None)
+    if qa and qb and type(a) is type(b):
+        return qa.lower() == qb.lower()
+    if isinstance(a, RefType) and isinstance(b, RefType):
+        return a.flavour == b.flavour and same_type(a.target, b.target)
+    return False
+
+
+def is_aggregate(ty: Type) -> bool:
+    """Values that are objects the program never rebinds (a reference to them is the object)."""
+    return isinstance(ty, (StructType, ArrayType, FBType))
+
+
+@dataclass(frozen=True)
 class VoidType(Type):
     @property
     def kind(self) -> str:

@@ -20,6 +20,8 @@ from stvm.settings import DEFAULT_SETTINGS, IecPinAliases, RtrigFirstCall, Socka
 
 # Importing the implementation modules registers the natives.
 from stvm.stdlib import conversions, numeric, omron, sockets, strings, timefns, timers  # noqa: F401
+from stvm.stdlib import bcd
+from stvm.stdlib.counters import typed_counters_source
 from stvm.stdlib.registry import NATIVE_FBS, NATIVE_FUNCTIONS, native_fb, native_function
 from stvm.stdlib.sockets import RealTcpTransport, SocketTable, Transport, make_default_transport
 
@@ -77,6 +79,9 @@ def stdlib_sources(settings: SysmacSettings = DEFAULT_SETTINGS) -> list[tuple[st
     for name in ST_FILES:
         sources.append((DISPLAY_PREFIX + name, _apply_settings(name, _packaged_text(name), settings)))
     sources.append((f"{DISPLAY_PREFIX}conversions.st", conversions.conversion_declarations()))
+    iec_standard = _apply_settings("iec_standard.st", _packaged_text("iec_standard.st"), settings)
+    sources.append((f"{DISPLAY_PREFIX}typed_counters.st", typed_counters_source(iec_standard)))
+    sources.append((f"{DISPLAY_PREFIX}bcd.st", bcd.bcd_declarations()))
     return sources
 
 

@@ -315,6 +315,23 @@ def _make_converter(what: str, source_name: str, target_name: str):
     elif isinstance(source, StringType):
         def convert(ctx, text):
             return from_text(ctx, text, target, what)
+    elif isinstance(source, TimeType) and isinstance(target, (IntType, RealType)):
+        unit = time_unit_ns(source.name)
+
+        def convert(ctx, value):
+            if isinstance(target, RealType):
+                return coerce(value / unit, target)
+            whole = abs(value) // unit   # toward zero, as integer division in ST
+            return target.wrap(whole if value >= 0 else -whole)
+    elif isinstance(target, TimeType) and not isinstance(source, TimeType):
+        unit = time_unit_ns(target.name)
+
+        def convert(ctx, value):
+            if isinstance(source, RealType):
+                if not math.isfinite(value):
+                    raise FunctionError(f"{what}: {value} is not a time")
+                return real_to_integer(value * unit)
+            return int(value) * unit
     elif isinstance(source, TimeType):
         # DT_TO_DATE / DT_TO_TOD: the date part, or the time of day (IEC 2.5.1.5.1)
         def convert(ctx, value):
@@ -332,7 +349,19 @@ def conversion_pairs() -> list[tuple[str, str]]:
     for name in NUMERIC_TYPES + TIME_TYPES:
         pairs += [(name, "STRING"), ("STRING", name)]
     pairs += [("DT", "DATE"), ("DT", "TOD")]
+    for name in TIME_TYPES:
+        pairs += [(name, number) for number in NUMERIC_TYPES if number != "BOOL"]
+        pairs += [(number, name) for number in NUMERIC_TYPES if number != "BOOL"]
     return pairs
+
+
+def time_unit_ns(type_name: str) -> int:
+    """What one integer unit means in TIME/TOD/DATE/DT <-> integer and REAL conversions.
+
+    Choice (CODESYS/TwinCAT, the most common convention in code that uses these conversions;
+    IEC leaves it to the implementation): TIME and TIME_OF_DAY count milliseconds, DATE and
+    DATE_AND_TIME seconds since 1970-01-01. The single switch a dialect may change."""
+    return 1_000_000 if type_name in ("TIME", "TOD", "TIME_OF_DAY") else 1_000_000_000
 
 
 def _spellings(name: str) -> list[str]:

@@ -221,3 +221,48 @@ def ror(ctx, result_type, value, count):
     bits = _as_bits(value)
     rotated = ((bits >> count) | (bits << (width - count))) & ((1 << width) - 1)
     return _bits_result(result_type, rotated)
+
+
+# ---- comparison functions (IEC table 28): extensible ones compare each neighbouring pair
+def _chain(test):
+    def compare(ctx, result_type, *values):
+        return all(test(a, b) for a, b in zip(values, values[1:]))
+    return compare
+
+
+for _name, _test in (("GT", lambda a, b: a > b), ("GE", lambda a, b: a >= b), ("EQ", lambda a, b: a == b),
+                     ("LE", lambda a, b: a <= b), ("LT", lambda a, b: a < b)):
+    native_function(_name, generic=True, variadic=True)(_chain(_test))
+
+
+@native_function("NE", generic=True)
+def ne(ctx, result_type, first, second):
+    return first != second
+
+
+@native_function("__MOD", generic=True)
+def mod_function(ctx, result_type, dividend, divisor):
+    """MOD(a, b) as the MOD operator: the sign of the dividend; /0 per `int_div_zero`."""
+    if divisor == 0:
+        return _integer_division_by_zero(ctx, "MOD")
+    return coerce(int(math.fmod(int(dividend), int(divisor))), result_type)
+
+
+def _bitwise(operation):
+    def combine(ctx, result_type, *values):
+        acc = values[0]
+        for value in values[1:]:
+            acc = operation(acc, value)
+        return bool(acc) if isinstance(result_type, BoolType) else coerce(acc, result_type)
+    return combine
+
+
+native_function("__AND", generic=True, variadic=True)(_bitwise(lambda a, b: a & b))
+native_function("__OR", generic=True, variadic=True)(_bitwise(lambda a, b: a | b))
+native_function("__XOR", generic=True, variadic=True)(_bitwise(lambda a, b: a ^ b))
+
+
+@native_function("ATAN2", generic=True)
+def atan2(ctx, result_type, y, x):
+    """CODESYS ATAN2(Y, X): the angle of (X, Y) in radians, -pi..pi (atan2(0, 0) = 0)."""
+    return coerce(math.atan2(float(y), float(x)), result_type)

@@ -99,6 +99,14 @@ class BitAccess(Expr):
 
 
 @dataclass(frozen=True)
+class PartialAccess(BitAccess):
+    """`d.%B1`, `l.%W0`, `l.%D1`: part `bit` (counted from the least significant) of `width` bits.
+    A BitAccess, so every walk over variable paths treats it as one (`w.%X3` is a BitAccess)."""
+
+    width: int = 8
+
+
+@dataclass(frozen=True)
 class Index(Expr):
     base: Expr
     indices: tuple[Expr, ...]
@@ -151,6 +159,15 @@ class Statement(Node):
 
 @dataclass(frozen=True)
 class Assign(Statement):
+    target: Expr
+    value: Expr
+    span: Span = _span()
+
+
+@dataclass(frozen=True)
+class RefAssign(Statement):
+    """CODESYS `target REF= value`: bind the REFERENCE TO variable `target` to the variable `value`."""
+
     target: Expr
     value: Expr
     span: Span = _span()
@@ -272,6 +289,7 @@ class SubrangeTypeSpec(TypeSpec):
 @dataclass(frozen=True)
 class RefTypeSpec(TypeSpec):
     target: TypeSpec
+    flavour: str = "REF_TO"   # REF_TO (IEC), POINTER (POINTER TO), REFERENCE (REFERENCE TO)
     span: Span = _span()
 
 

@@ -207,7 +207,13 @@ class _ToNodes(Transformer):
         return n.SubrangeTypeSpec(items[0][1], items[1], items[2], self._s(meta))
 
     def ref_spec(self, meta, items):
-        return n.RefTypeSpec(items[-1], self._s(meta))
+        return n.RefTypeSpec(items[-1], "REF_TO", self._s(meta))
+
+    def pointer_spec(self, meta, items):
+        return n.RefTypeSpec(items[-1], "POINTER", self._s(meta))
+
+    def reference_spec(self, meta, items):
+        return n.RefTypeSpec(items[-1], "REFERENCE", self._s(meta))
 
     def initializer(self, meta, items):
         return n.ExprInit(items[0], self._s(meta))
@@ -264,6 +270,9 @@ class _ToNodes(Transformer):
 
     def assignment(self, meta, items):
         return n.Assign(items[0], items[1], self._s(meta))
+
+    def ref_assignment(self, meta, items):
+        return n.RefAssign(items[0], items[2], self._s(meta))
 
     def call_statement(self, meta, items):
         return n.CallStatement(items[0], self._s(meta))
@@ -386,6 +395,20 @@ class _ToNodes(Transformer):
     def call(self, meta, items):
         args = tuple(a for a in items[1:] if a is not None)
         return n.Call(items[0], args, self._s(meta))
+
+    def partial_access(self, meta, items):
+        text = str(items[1])
+        index = int(text[2:])
+        letter = text[1].upper()
+        if letter == "X":
+            return n.BitAccess(items[0], index, self._s(meta))
+        return n.PartialAccess(items[0], index, self._s(meta), width={"B": 8, "W": 16, "D": 32}[letter])
+
+    def keyword_call(self, meta, items):
+        # MOD(a, b), AND(a, b, …): the operators' function forms call the stdlib's `__MOD`, `__AND`
+        word = items[0]
+        callee = n.Name(("__" + str(word).upper(),), False, _tok_span(self.file, word))
+        return n.Call(callee, tuple(a for a in items[1:] if a is not None), self._s(meta))
 
     def deref(self, meta, items):
         return n.Deref(items[0], self._s(meta))

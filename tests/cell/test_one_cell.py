@@ -7,7 +7,7 @@ path the robot moved (every scan, stationary samples dropped): every point of on
 one emulator step (the largest distance the TCP moves in one scan) of the other path.
 
 PROGRAMS lists the projects; a library with a PnP demo is added with one entry (its project path):
-the Schneider IF_RobotMotion library of issue 14 part 4 is `"st_src/schneider"` once it exists.
+the Schneider IF_RobotMotion library of issue 14 part 4 is `"st_src/schneider"`.
 """
 
 from __future__ import annotations
@@ -28,7 +28,7 @@ PROGRAMS = [
     "st_src/cbt_v2",                # CBT_Commands V2
     "st_src/rockwell",              # raM_Robot_Opr_LoadPath
     "st_src/kuka",                  # mxAutomation style
-    # "st_src/schneider",           # IF_RobotMotion (issue 14 part 4)
+    "st_src/schneider",             # IF_RobotMotion (issue 14 part 4)
 ]
 REFERENCE = PROGRAMS[0]
 MAX_SCANS = 40000

@@ -13,7 +13,7 @@ import pytest
 from robotlibs_helpers import REPO, ST_SRC
 from stvm.trace import TraceSpec, read_trace
 
-LIBRARIES = ("cbt_v2", "rockwell", "kuka")
+LIBRARIES = ("cbt_v2", "rockwell", "kuka", "schneider")
 CASES = sorted((lib, p.stem.removeprefix("golden_")) for lib in LIBRARIES
                for p in (ST_SRC / lib / "scenarios").glob("golden_*.toml"))
 GOLDEN = REPO / "tests" / "golden"
@@ -75,3 +75,14 @@ def test_goldens_show_what_they_are_about():
     assert final(t, "PnP_Example_Instance.ErrorID") == "10128"
     t = read_trace(GOLDEN / "kuka_param_velocity.jsonl")
     assert final(t, "PnP_Example_Instance.ErrorID") == "510"
+    t = read_trace(GOLDEN / "schneider_pnp_cycle.jsonl")
+    assert final(t, "PnP_Example_Instance.Cycles") == "1"
+    assert values(t, "Robot.udiCurrentSegmentId")[:9] == ["0", "1", "2", "3", "0", "4", "5", "6", "0"]
+    t = read_trace(GOLDEN / "schneider_fault_drop.jsonl")
+    assert final(t, "PnP_Example_Instance.ErrorDiagExt") == "ET_DiagExt#InterfaceInvalid"
+    t = read_trace(GOLDEN / "schneider_fault_rejected.jsonl")
+    assert final(t, "PnP_Example_Instance.ErrorDiagExt") == "ET_DiagExt#UnexpectedFeedback"
+    assert final(t, "PnP_Example_Instance.ErrorSegment") == "2"
+    t = read_trace(GOLDEN / "schneider_param_velocity.jsonl")
+    assert final(t, "PnP_Example_Instance.ErrorDiagExt") == "ET_DiagExt#CommandRefused"
+    assert not any("PTP" in f.data for f in t.frames)

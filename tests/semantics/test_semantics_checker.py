@@ -56,7 +56,7 @@ REJECTED = [
     "ui := si;", "ud := i;", "ul := d;",                                        # signed -> wider unsigned
     "r := lr;", "i := r;", "d := lr;", "r := d * 1.5;",                         # real -> narrower/int
     "r := w;", "w := r;",                                                       # bit strings and reals
-    "i := s;", "s := i;", "i := 'abc';", "b := i;", "i := b;", "b := 1;",      # string/bool
+    "i := s;", "s := i;", "i := 'abc';", "b := i;", "i := b;", "b := 2;",      # string/bool (0 and 1 are BOOL literals)
     "c := 1;", "i := c;", "t := 5;", "d := t;", "dt := t;", "tod := dt;",       # enums and times
     "p := 5;", "p := a3;", "a3 := p;",                                          # structs and arrays
     "i := TRUE + 1;", "s := s + s;", "b := i = 'x';", "b := c = 1;", "r := r MOD 2.0;", "t := t * t;",
