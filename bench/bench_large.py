@@ -69,20 +69,20 @@ PHASES = textwrap.dedent("""
     import resource, sys, time
     from pathlib import Path
     t0 = time.perf_counter()
-    from stvm.project import _read_all, _stdlib_units, _lower_and_compile, _collector_paused
+    from stvm.project import read_files, stdlib_units, _lower_and_compile, _collector_paused
     from stvm.settings import DEFAULT_SETTINGS as S
     from stvm.syntax.parser import _parser, _ToNodes, parse_text
     from stvm.semantics import analyze
-    _parser(); _stdlib_units(S)
+    _parser(); stdlib_units(S)
     def rss(): return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     marks = [("imports + grammar + stdlib", time.perf_counter() - t0, rss())]
     def mark(name, start): marks.append((name, time.perf_counter() - start, rss()))
     with _collector_paused():
-        t = time.perf_counter(); texts, _ = _read_all([Path(sys.argv[1])]); mark("read", t)
+        t = time.perf_counter(); texts, _ = read_files([Path(sys.argv[1])]); mark("read", t)
         t = time.perf_counter(); tree = _parser().parse(texts[0][1], start="start"); mark("Lark parse tree", t)
         t = time.perf_counter(); unit, d = parse_text(texts[0][1], texts[0][0]); mark("parse + nodes", t)
         del tree
-        units, _, sources = _stdlib_units(S)
+        units, _, sources = stdlib_units(S)
         t = time.perf_counter(); analysis = analyze(list(units) + [unit], S); mark("check", t)
     t = time.perf_counter(); _lower_and_compile(analysis, S, texts, dict(texts)); mark("lower + compile", t)
     for name, seconds, peak in marks:

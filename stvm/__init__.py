@@ -6,7 +6,10 @@
     vm["Main.x"]                              # read (or assign) by path
 """
 
-__version__ = "0.1.0"
+from stvm.version import __version__  # noqa: F401 (API)
+
+# The API below is imported on first use (start-up time: `import stvm.syntax` must not load the
+# project driver, the VM and the stdlib).
 
 
 def load(paths, settings=None, use_cache=True):

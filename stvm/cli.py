@@ -64,74 +64,10 @@ def _parse_assignment(text: str) -> tuple[str, str]:
     return name.strip(), value.strip()
 
 
-def literal_value(text: str, ty):
-    """An IEC literal typed on the command line (`--set`), converted to `ty`."""
-    from stvm.semantics import types as t
-    from stvm.syntax import parse_expression
-    from stvm.syntax import nodes as n
-    expr, diags = parse_expression(text, "<--set>")
-    if expr is None or any(d.is_error for d in diags):
-        stripped = text.strip()
-        if stripped[:1] in ("'", '"'):
-            # a quote opens an ST string: one that does not parse is a mistake, not text
-            quote = stripped[0]
-            raise ValueError(f"{text!r} is not a complete string literal (close it with {quote}, "
-                             f"write $' for a quote inside)")
-        if isinstance(ty, t.StringType):
-            return text.encode("utf-8")
-        raise ValueError(f"{text!r} is not an ST literal")
-    negate = False
-    if isinstance(expr, n.Unary) and expr.op == "MINUS":
-        negate, expr = True, expr.operand
-    if isinstance(expr, (n.IntLiteral, n.RealLiteral, n.BoolLiteral, n.StringLiteral)):
-        value = expr.value
-    elif isinstance(expr, n.TimeLiteral):
-        value = expr.value_ns
-    elif isinstance(expr, n.HashLiteral):
-        if isinstance(ty, t.EnumType):
-            return expr.text
-        text_value = expr.text
-        if isinstance(ty, t.BoolType):
-            value = text_value.upper() in ("TRUE", "1")
-        elif "." in text_value or "e" in text_value.lower() and "#" not in text_value:
-            value = float(text_value)
-        else:
-            from stvm.syntax.literals import decode_int
-            value = decode_int(text_value.lstrip("+-")) * (-1 if text_value.startswith("-") else 1)
-    elif isinstance(expr, n.Name) and len(expr.parts) == 1 and isinstance(ty, t.EnumType):
-        return expr.parts[0]
-    else:
-        raise ValueError(f"{text!r} is not a literal")
-    if negate:
-        value = -value
-    _check_literal_kind(text, expr, value, ty)
-    if isinstance(ty, t.RealType) and isinstance(value, int) and not isinstance(value, bool):
-        try:
-            value = float(value)
-        except OverflowError:
-            raise ValueError(f"{text!r} is out of range for {ty.name}") from None
-    if isinstance(ty, t.RealType) and isinstance(value, (int, float)) and not isinstance(value, bool):
-        import math
-        limit = 3.4028234663852886e38 if ty.bits == 32 else 1.7976931348623157e308
-        if not math.isfinite(value) or abs(value) > limit:
-            raise ValueError(f"{text} is out of range for {ty.name} (at most ±{limit:.8g})")
-    return value
-
-
-def _check_literal_kind(text: str, expr, value, ty) -> None:
-    """User text must be a literal of the variable's kind: TIME takes T#5ms (5 alone would be
-    5 ns), BOOL takes TRUE/FALSE (or BOOL#1), not 1."""
-    from stvm.semantics import types as t
-    from stvm.syntax import nodes as n
-    if isinstance(ty, t.TimeType) and not isinstance(expr, (n.TimeLiteral, n.HashLiteral)):
-        raise ValueError(f"{text!r} is not a duration: write it as TIME, e.g. T#5ms or T#1s500ms")
-    if isinstance(ty, t.BoolType) and not isinstance(expr, (n.BoolLiteral, n.HashLiteral)):
-        raise ValueError(f"{text!r} is not a BOOL: write TRUE or FALSE")
-
-
 def cmd_run(args) -> int:
     from stvm.project import LoadError, load, nothing_to_run, parse_duration
     from stvm.runtime.vm import PathError, RuntimeFault, UnboundInOut
+    from stvm.semantics.literals import literal_value
     _require_files(args.files)
     settings = _settings(args)
     try:

@@ -12,17 +12,17 @@ import contextlib
 import gc
 import hashlib
 import marshal
-import os
 import pickle
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Sequence
 
-from stvm import __version__
+from stvm.version import __version__
 from stvm.diagnostics import Diagnostic, has_errors, render, sort_key
 from stvm.manifest import MANIFEST, ManifestError, project_files, read_manifest  # noqa: F401 (API)
 from stvm.runtime.vm import GENERATED_FILENAME, VM
 from stvm.settings import DEFAULT_SETTINGS, SysmacSettings
+from stvm.source import SourceError, Span, read_source
 
 if TYPE_CHECKING:
     from stvm.cache import SignedCache
@@ -123,7 +123,6 @@ def source_encoding(manifest: dict) -> str:
 
 
 def _file_span(path: Path):
-    from stvm.syntax.nodes import Span
     return Span(str(path), 0, 0, 0, 0)
 
 
@@ -193,68 +192,9 @@ def _cache_key(texts: list[tuple[str, str]], settings: SysmacSettings) -> str:
     return digest.hexdigest()
 
 
-MAX_SOURCE_BYTES = 8 * 2**20
-"""The largest source file stvm reads (8 MiB, about 300,000 lines of dense ST): a bigger
-input is refused with a clear error instead of minutes of parsing and gigabytes of memory."""
-
-
-class SourceError(Exception):
-    """A file that is not ST source text: too large, binary, or not in its encoding.
-    `line`/`column` locate the offending byte (0 when the whole file is the problem);
-    `text` is what can be shown of it (decoded with replacement characters)."""
-
-    def __init__(self, message: str, line: int = 0, column: int = 0, text: str = "") -> None:
-        super().__init__(message)
-        self.message = message
-        self.line = line
-        self.column = column
-        self.text = text
-
-
-def _is_utf8(encoding: str) -> bool:
-    return encoding.lower().replace("-", "").replace("_", "") == "utf8"
-
-
-def read_source(path: Path, encoding: str = "utf-8") -> str:
-    """The text of an ST file. Sources are UTF-8 (a BOM is skipped) unless the project manifest
-    declares `encoding`; raises SourceError for an oversized, binary or mis-encoded file and
-    OSError if it cannot be read."""
-    with open(path, "rb") as fh:
-        data = fh.read(MAX_SOURCE_BYTES + 1)   # bounded: /dev/zero must not exhaust memory
-    if len(data) > MAX_SOURCE_BYTES:
-        raise SourceError(f"file is larger than {MAX_SOURCE_BYTES // 2**20} MiB, the most stvm reads "
-                          f"from one source file (split it into several files)")
-    if data.startswith((b"\xff\xfe", b"\xfe\xff")):
-        raise SourceError("this file is UTF-16 text; ST sources are read as UTF-8 (save it as UTF-8)", 1, 1)
-    nul = data.find(b"\0")
-    if nul >= 0:
-        line, column = _position(data, nul, encoding)
-        raise SourceError(f"binary file (a NUL byte at line {line}, column {column}), not ST source text",
-                          line, column)
-    if data.startswith(b"\xef\xbb\xbf") and _is_utf8(encoding):
-        data = data[3:]
-    try:
-        return data.decode(encoding)
-    except UnicodeDecodeError as exc:
-        line, column = _position(data, exc.start, encoding)
-        bad = data[exc.start:exc.end].hex(" ").upper()
-        hint = ("re-save the file as UTF-8, or declare its encoding in stvm.toml, e.g. "
-                "[project] encoding = \"cp1252\"") if _is_utf8(encoding) else "check the encoding declared in stvm.toml"
-        raise SourceError(f"invalid {'UTF-8' if _is_utf8(encoding) else encoding} byte {bad} ({hint})", line, column,
-                          data.decode(encoding, errors="replace")) from None
-
-
-def _position(data: bytes, offset: int, encoding: str) -> tuple[int, int]:
-    """1-based line and column (in characters) of byte `offset`."""
-    line_start = data.rfind(b"\n", 0, offset) + 1
-    column = len(data[line_start:offset].decode(encoding, errors="replace")) + 1
-    return data.count(b"\n", 0, offset) + 1, column
-
-
-def _read_all(paths: Sequence[Path], encoding: str = "utf-8") -> tuple[list[tuple[str, str]], list[Diagnostic]]:
+def read_files(paths: Sequence[Path], encoding: str = "utf-8") -> tuple[list[tuple[str, str]], list[Diagnostic]]:
     """(name, text) of each file, and a diagnostic for each file that cannot be used (its text
     is then empty or decoded with replacement characters, so a binary file is never parsed)."""
-    from stvm.syntax.nodes import Span
     texts = []
     diags = []
     for path in paths:
@@ -277,7 +217,7 @@ def check(paths: Sequence[str | Path], settings: SysmacSettings | None = None, g
     if settings is None:
         settings = project_settings(paths)
     files, manifest, _ = expand_paths(paths)
-    texts, diags = _read_all(files, source_encoding(manifest))
+    texts, diags = read_files(files, source_encoding(manifest))
     analysis, diags, sources = _check_texts(texts, diags, settings)
     if generate and analysis is not None:
         try:
@@ -291,7 +231,7 @@ def check(paths: Sequence[str | Path], settings: SysmacSettings | None = None, g
 _STDLIB_UNITS: dict[str, tuple[list, list[Diagnostic]]] = {}
 
 
-def _stdlib_units(settings: SysmacSettings) -> tuple[list, list[Diagnostic], dict[str, str]]:
+def stdlib_units(settings: SysmacSettings) -> tuple[list, list[Diagnostic], dict[str, str]]:
     """The parsed stdlib, memoised in-process and pickled in the cache dir (it never changes
     between runs of one stvm version, and parsing it is most of a cold start)."""
     texts = _stdlib(settings)
@@ -342,7 +282,7 @@ def _check_texts_unpaused(texts, diags, settings):
     from stvm.semantics import analyze
     from stvm.syntax.parser import parse_text
     sources = dict(texts)
-    units, stdlib_diags, stdlib_sources = _stdlib_units(settings)
+    units, stdlib_diags, stdlib_sources = stdlib_units(settings)
     units = list(units)
     diags += stdlib_diags
     sources.update(stdlib_sources)
@@ -369,7 +309,6 @@ def _lower_and_compile(analysis, settings, texts, sources):
 def _lower_and_compile_unpaused(analysis, settings, texts, sources):
     """Generate and compile the Python module; Python's own limits become diagnostics."""
     from stvm.lower import lower_project
-    from stvm.syntax.nodes import Span
     fallback = Span(texts[-1][0] if texts else "<input>", 1, 1, 1, 2)
     lowered = None
     try:
@@ -387,7 +326,6 @@ def _lower_and_compile_unpaused(analysis, settings, texts, sources):
 
 
 def _too_deep(file: str) -> Diagnostic:
-    from stvm.syntax.nodes import Span
     return Diagnostic.error("expression or statement nesting too deep for stvm (split it into smaller parts)",
                             Span(file, 1, 1, 1, 2), "E003")
 
@@ -398,7 +336,7 @@ def load(paths: Sequence[str | Path], settings: SysmacSettings | None = None, us
     if settings is None:
         settings = project_settings(paths)
     files, manifest, root = expand_paths(paths)
-    texts, read_diags = _read_all(files, source_encoding(manifest))
+    texts, read_diags = read_files(files, source_encoding(manifest))
     if read_diags:
         raise LoadError(read_diags, dict(texts))
     key = _cache_key(texts + _stdlib(settings), settings)

@@ -41,6 +41,12 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from emulator import DEFAULT_SETTINGS as EMULATOR_DEFAULTS, parse_faults
+from stvm.project import parse_duration
+from stvm.runtime.vm import PathError, UnboundInOut
+from stvm.semantics import types as t
+from stvm.semantics.literals import literal_value
+
 
 class ScenarioError(ValueError):
     """A scenario file that cannot be used; the message names the file and the entry."""
@@ -90,9 +96,8 @@ class Scenario:
 
     def emulator_plan(self):
         """The emulator's (settings, initial fault plan) for this scenario."""
-        from emulator import DEFAULT_SETTINGS, parse_faults
         try:
-            settings = DEFAULT_SETTINGS.with_table(self.emulator_settings)
+            settings = EMULATOR_DEFAULTS.with_table(self.emulator_settings)
         except ValueError as exc:
             raise ScenarioError(f"{self.path}: {exc}") from exc
         try:
@@ -221,7 +226,6 @@ def _count(value: Any, where: str) -> int:
 def _duration(value: Any, where: str) -> int:
     if not isinstance(value, str):
         raise ScenarioError(f"{where} must be a duration string such as \"50ms\", got {_kind(value)}")
-    from stvm.project import parse_duration
     try:
         return parse_duration(str(value))
     except ValueError as exc:
@@ -259,7 +263,6 @@ def _parse_emulator(scenario: Scenario, emu: Any, name: str) -> None:
     settings = emu.get("settings", {})
     if not isinstance(settings, dict):
         raise ScenarioError(f"{name}: [emulator] settings must be a table")
-    from emulator.settings import DEFAULT_SETTINGS as EMULATOR_DEFAULTS
     try:
         EMULATOR_DEFAULTS.with_table(settings)   # checked now, so a bad value is never ignored
     except ValueError as exc:
@@ -269,8 +272,6 @@ def _parse_emulator(scenario: Scenario, emu: Any, name: str) -> None:
 
 def to_st_value(raw: Any, vm, path: str) -> Any:
     """A scenario value (TOML scalar or IEC literal string) converted for variable `path`."""
-    from stvm.cli import literal_value
-    from stvm.semantics import types as t
     ty = vm.type_of(path)
     if isinstance(raw, bool) or isinstance(raw, (int, float)):
         if isinstance(ty, t.RealType):
@@ -296,8 +297,6 @@ class ScenarioDriver:
     def _check(self, vm) -> None:
         """Every name and fault of the scenario, checked before the first scan (a typo found at
         scan 5000 would lose the run)."""
-        from stvm.runtime.vm import PathError, UnboundInOut
-        from stvm.semantics import types as t
         where = self.scenario.path
         for i, event in enumerate(self.scenario.events):
             entry = f"{where}: [[at]] #{i + 1}"
@@ -305,7 +304,6 @@ class ScenarioDriver:
                 if self.fault_sink is None:
                     raise ScenarioError(f"{entry}: fault {event.faults[0]!r} needs an emulator: use stvm trace "
                                         f"(lockstep) or a demo project with the bundled emulator")
-                from emulator import parse_faults
                 try:
                     parse_faults(event.faults)
                 except ValueError as exc:
@@ -326,7 +324,6 @@ class ScenarioDriver:
             self._check_path(path, f"{where}: [set]")
 
     def _check_path(self, path: str, where: str) -> None:
-        from stvm.runtime.vm import PathError, UnboundInOut
         try:
             self.vm.type_of(path)
         except UnboundInOut:
@@ -371,7 +368,6 @@ class ScenarioDriver:
                 self._fire(event)
 
     def _is_true(self, path: str) -> bool:
-        from stvm.runtime.vm import UnboundInOut
         try:
             return bool(self.vm.get(path))
         except UnboundInOut:   # through an in-out the FB has not been called with yet

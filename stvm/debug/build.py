@@ -22,7 +22,7 @@ from typing import Sequence
 
 from stvm.diagnostics import has_errors, sort_key
 from stvm.lower.codegen import Lowerer
-from stvm.project import LoadError, Project, _read_all, _stdlib_units, expand_paths, source_encoding
+from stvm.project import LoadError, Project, read_files, stdlib_units, expand_paths, source_encoding
 from stvm.runtime.vm import GENERATED_FILENAME
 from stvm.semantics.checker import Analysis, Checker
 from stvm.semantics.model import POUInfo
@@ -143,10 +143,10 @@ def load_debug(paths: Sequence[str | os.PathLike], settings: SysmacSettings = DE
     """Parse, check and lower `paths` for debugging (raises LoadError with every diagnostic)."""
     from stvm.syntax.parser import parse_text
     files, manifest, root = expand_paths(paths)
-    texts, read_diags = _read_all(files, source_encoding(manifest))
+    texts, read_diags = read_files(files, source_encoding(manifest))
     if read_diags:
         raise LoadError(read_diags, dict(texts))
-    units, diags, sources = _stdlib_units(settings)
+    units, diags, sources = stdlib_units(settings)
     units = list(units)
     sources = dict(sources)
     for name, text in texts:

@@ -19,6 +19,7 @@ from typing import Any, Sequence
 
 from stvm.debug.build import DebugBuild, load_debug
 from stvm.debug.engine import Engine
+from stvm.semantics.literals import literal_value
 
 
 @dataclass
@@ -143,7 +144,6 @@ def _apply_set(engine: Engine, item: str) -> None:
     name, sep, value = item.partition("=")
     if not sep or not name.strip():
         raise ValueError(f"--set needs NAME=VALUE, got {item!r}")
-    from stvm.cli import literal_value
     vm = engine.vm
     try:
         vm.set(name.strip(), literal_value(value.strip(), vm.type_of(name.strip())))

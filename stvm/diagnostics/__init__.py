@@ -19,7 +19,7 @@ from dataclasses import dataclass
 from enum import Enum
 from typing import Iterable, Mapping
 
-from stvm.syntax.nodes import Span
+from stvm.source import Span
 
 
 class Severity(str, Enum):

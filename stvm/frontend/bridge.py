@@ -39,6 +39,7 @@ from typing import Any, Callable, Iterable, Mapping
 from stvm.runtime.format import format_value
 from stvm.runtime.vm import VM, PathError, UnboundInOut, coerce_python_value
 from stvm.semantics import types as t
+from stvm.semantics.literals import literal_value   # Choice: the one literal reader `--set` uses
 
 MAX_PENDING_WRITES = 1024
 """Write batches queued for the next scan; more are rejected (a front end cannot stall the VM)."""
@@ -255,7 +256,6 @@ class VariableBridge:
         """IEC literal `text` (as `--set` takes it) as the Python value `submit` takes for `path`.
 
         Raises `WriteRejected` for an unknown path or text that is no literal of the type."""
-        from stvm.cli import literal_value   # Choice: the one literal reader `--set` uses
         try:
             ty = self.vm.accessor(path).type
         except PathError as exc:

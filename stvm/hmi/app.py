@@ -9,6 +9,7 @@ from __future__ import annotations
 import asyncio
 import json
 import secrets
+from pathlib import Path
 from typing import TYPE_CHECKING
 
 from starlette.applications import Starlette
@@ -19,8 +20,10 @@ from starlette.staticfiles import StaticFiles
 from starlette.websockets import WebSocket, WebSocketDisconnect
 
 from stvm.frontend import WriteRejected
-from stvm.hmi.server import (MAX_BODY_BYTES, MAX_WEBSOCKETS, PACKAGE, SEND_TIMEOUT_S, TOKEN_COOKIE, _Client,
-                             _Refused, is_loopback, json_dumps, token_from)
+from stvm.hmi.wire import (MAX_BODY_BYTES, MAX_WEBSOCKETS, SEND_TIMEOUT_S, TOKEN_COOKIE, Client, Refused,
+                          is_loopback, json_dumps, token_from)
+
+STATIC = Path(__file__).resolve().parent / "static"
 
 if TYPE_CHECKING:
     from stvm.hmi.server import HmiServer
@@ -124,7 +127,7 @@ def build_app(server: "HmiServer") -> Starlette:
             body = await _json_body(request)
             values, literals = server.check_writes(body)
             scan = await server.submit(values)
-        except _Refused as exc:
+        except Refused as exc:
             return _error(exc.status, exc.reason, exc.path)
         except WriteRejected as exc:
             return _error(503 if exc.path is None else 422, str(exc), exc.path)
@@ -143,7 +146,7 @@ def build_app(server: "HmiServer") -> Starlette:
                 if scan is None:
                     return _error(503, f"preset {name}: the VM did not scan in time; "
                                        f"{len(steps)} step(s) not all applied")
-        except _Refused as exc:
+        except Refused as exc:
             return _error(exc.status, exc.reason, exc.path)
         except WriteRejected as exc:
             return _error(409, f"preset {name}: {exc}", exc.path)
@@ -163,7 +166,7 @@ def build_app(server: "HmiServer") -> Starlette:
             await ws.close(code=1008 if found is None else 1013)
             return
         await ws.accept()
-        client = _Client(ws, found)
+        client = Client(ws, found)
         server.clients.add(client)
         server._update_watch()
         sender = asyncio.create_task(_send_loop(server, client))
@@ -198,13 +201,13 @@ def build_app(server: "HmiServer") -> Starlette:
         Route("/api/presets/{name}", post_preset, methods=["POST"]),
         Route("/api/pages", pages),
         WebSocketRoute("/ws", websocket),
-        Mount("/static", StaticFiles(directory=str(PACKAGE / "static")), name="static"),
+        Mount("/static", StaticFiles(directory=str(STATIC)), name="static"),
     ]
     app = Starlette(routes=routes, exception_handlers={404: not_found, 405: method_not_allowed})
     return Gate(app, server)
 
 
-async def _send_loop(server: "HmiServer", client: _Client) -> None:
+async def _send_loop(server: "HmiServer", client: Client) -> None:
     ws = client.websocket
     try:
         while True:
@@ -244,27 +247,27 @@ async def _json_body(request: Request, allow_empty: bool = False):
     length = request.headers.get("content-length")
     if length is not None:
         if not length.isdigit():
-            raise _Refused(400, "bad Content-Length")
+            raise Refused(400, "bad Content-Length")
         if int(length) > MAX_BODY_BYTES:
-            raise _Refused(413, f"body too large ({length} bytes > {MAX_BODY_BYTES})")
+            raise Refused(413, f"body too large ({length} bytes > {MAX_BODY_BYTES})")
     chunks = []
     size = 0
     async for chunk in request.stream():
         size += len(chunk)
         if size > MAX_BODY_BYTES:
-            raise _Refused(413, f"body too large (> {MAX_BODY_BYTES} bytes)")
+            raise Refused(413, f"body too large (> {MAX_BODY_BYTES} bytes)")
         chunks.append(chunk)
     raw = b"".join(chunks)
     if not raw.strip():
         if allow_empty:
             return {}
-        raise _Refused(400, "empty body: send a JSON object {\"<variable path>\": \"<IEC literal>\"}")
+        raise Refused(400, "empty body: send a JSON object {\"<variable path>\": \"<IEC literal>\"}")
     if ctype != "application/json":
-        raise _Refused(415, "send the body as Content-Type: application/json")
+        raise Refused(415, "send the body as Content-Type: application/json")
     try:
         return json.loads(raw.decode("utf-8"))
     except (UnicodeDecodeError, ValueError) as exc:
-        raise _Refused(400, f"malformed JSON: {exc}") from None
+        raise Refused(400, f"malformed JSON: {exc}") from None
 
 
 def _remember_token(request: Request, response: Response) -> None:

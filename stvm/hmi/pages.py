@@ -37,6 +37,7 @@ from typing import Any, Callable, Mapping, Sequence
 from stvm.diagnostics import Diagnostic
 from stvm.hmi.tomlpos import TomlLocator
 from stvm.semantics import types as t
+from stvm.semantics.literals import literal_value
 from stvm.syntax.nodes import Span
 
 WIDGET_KINDS = ("lamp", "numeric", "dropdown", "text", "status", "toggle", "momentary", "set",
@@ -618,7 +619,6 @@ class _Reader:
     # ---- small readers
     def _literal(self, f: _File, where: tuple, var: str, ty: t.Type, raw: Any, context: str) -> str | None:
         """A TOML value as the IEC literal text written to `var` (checked against its type)."""
-        from stvm.cli import literal_value
         from stvm.runtime.vm import coerce_python_value
         if isinstance(raw, bool):
             text = "TRUE" if raw else "FALSE"

@@ -8,17 +8,20 @@ The HTML is the black-box contract: every widget carries `data-var` (its ST path
 from __future__ import annotations
 
 import json
+from pathlib import Path
+
+import jinja2
 
 from stvm.hmi.pages import Hmi, Page
 from stvm.semantics import types as t
 
+TEMPLATES = Path(__file__).resolve().parent / "templates"
+
 
 class PageRenderer:
     def __init__(self, hmi: Hmi) -> None:
-        import jinja2
-        from stvm.hmi.server import PACKAGE
         self.hmi = hmi
-        self.env = jinja2.Environment(loader=jinja2.FileSystemLoader(str(PACKAGE / "templates")),
+        self.env = jinja2.Environment(loader=jinja2.FileSystemLoader(str(TEMPLATES)),
                                       autoescape=True, trim_blocks=True, lstrip_blocks=True,
                                       undefined=jinja2.StrictUndefined)
         self.env.globals["maxlength"] = _maxlength

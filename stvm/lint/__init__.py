@@ -16,7 +16,8 @@ from typing import Iterable, Sequence
 
 from stvm.diagnostics import Diagnostic
 from stvm.lint.config import LintConfig, load_config, suppressed
-from stvm.lint.registry import Finding, Rule, all_rules, select_rules
+from stvm.lint.findings import Finding, Rule
+from stvm.lint.registry import all_rules, select_rules
 from stvm.settings import DEFAULT_SETTINGS, SysmacSettings
 
 __all__ = ["lint", "lint_analysis", "LintReport", "Finding", "Rule", "all_rules", "select_rules"]

@@ -18,7 +18,8 @@ import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from stvm.lint.registry import Finding, matching, resolve_patterns
+from stvm.lint.findings import Finding
+from stvm.lint.registry import matching, resolve_patterns
 
 _NOQA = re.compile(r"(?:\(\*|//)\s*stvm:\s*noqa\b(?P<codes>[^*\n]*)", re.IGNORECASE)
 

@@ -95,7 +95,8 @@ def load_for_lint(paths: Sequence[str | Path], settings: SysmacSettings, use_cac
                   texts: dict[str, str] | None = None) -> Loaded:
     """Expand `paths` as `stvm check` does (a folder's *.st, a file's stvm.toml project), parse
     (cached) and check. `texts` overrides file contents (an editor's unsaved buffer)."""
-    from stvm.project import expand_paths, read_source
+    from stvm.project import expand_paths
+    from stvm.source import read_source
     from stvm.semantics import analyze
     from stvm.stdlib import stdlib_sources
     files, manifest, root = expand_paths(paths)

@@ -306,7 +306,7 @@ class _Typestate:
         if label[0] == "true":
             positives = self.positives.get(id(edge))
             if positives is None:
-                positives = self.positives[id(edge)] = _positive_members(label[1], self.ctx)
+                positives = self.positives[id(edge)] = positive_members(label[1], self.ctx)
             if not positives and id(edge) not in self.acquire_on and id(edge) not in self.release_on:
                 return state
             for tup in state:
@@ -337,7 +337,7 @@ class _Typestate:
         return a <= b
 
 
-def _positive_members(cond: n.Expr, ctx: PouContext, positive: bool = True) -> frozenset:
+def positive_members(cond: n.Expr, ctx: PouContext, positive: bool = True) -> frozenset:
     """PLCopen outputs (`inst.done`, …) a condition requires TRUE on its TRUE edge."""
     if isinstance(cond, n.Member) and positive and cond.name.lower() in _EXCLUSIVE \
             and isinstance(ctx.type_of(cond.base), t.FBType):
@@ -346,7 +346,7 @@ def _positive_members(cond: n.Expr, ctx: PouContext, positive: bool = True) -> f
     if isinstance(cond, n.Unary) and cond.op == "NOT":
         return frozenset()
     if isinstance(cond, n.Binary) and cond.op in ("AND", "AMP"):
-        return _positive_members(cond.left, ctx) | _positive_members(cond.right, ctx)
+        return positive_members(cond.left, ctx) | positive_members(cond.right, ctx)
     return frozenset()
 
 

@@ -9,7 +9,8 @@ import json
 from pathlib import Path
 
 from stvm.diagnostics import Diagnostic, render
-from stvm.lint.registry import Finding, Rule, all_rules
+from stvm.lint.findings import Finding, Rule
+from stvm.lint.registry import all_rules
 
 SARIF_SCHEMA = "https://docs.oasis-open.org/sarif/sarif/v2.1.0/errata01/os/schemas/sarif-schema-2.1.0.json"
 DOCS_PAGE = "docs/lint.md"

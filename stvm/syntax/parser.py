@@ -17,6 +17,7 @@ from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput
 
 from stvm.diagnostics import Diagnostic
 from stvm.settings import DEFAULT_SETTINGS, DoubleQuoteStrings, SysmacSettings
+from stvm.source import read_source
 from stvm.syntax import nodes as n
 
 _GRAMMAR_FILE = "st.lark"
@@ -639,11 +640,6 @@ def parse_expression(text: str, file: str = "<expr>", settings: SysmacSettings =
         return None, [_syntax_diagnostic(file, exc)]
     expr = _ToNodes(file, settings, diagnostics).transform(tree)
     return expr, diagnostics
-
-
-def read_source(path: Path) -> str:
-    from stvm.project import read_source as read
-    return read(path)
 
 
 def parse_files(paths: Sequence[Path], settings: SysmacSettings = DEFAULT_SETTINGS) -> tuple[list[n.CompilationUnit], list[Diagnostic], dict[str, str]]:

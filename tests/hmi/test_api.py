@@ -22,7 +22,7 @@ from small_project import write_project
 from stvm.frontend import VariableBridge
 from stvm.hmi import HmiServer, load_pages
 from stvm.hmi.cli import page_files
-from stvm.hmi.server import MAX_BODY_BYTES
+from stvm.hmi.wire import MAX_BODY_BYTES
 
 
 class Live:

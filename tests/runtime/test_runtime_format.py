@@ -173,7 +173,7 @@ def test_real_text_with_exponent_is_an_iec_real_literal(vm, value):
     ("Main.t", -1_500_000_000), ("Main.s", b"it's $5\r\n"), ("Main.c", 2), ("Main.byt", 16),
 ])
 def test_printed_literal_is_accepted_by_set(vm, path, value):
-    from stvm.cli import literal_value
+    from stvm.semantics.literals import literal_value
     vm[path] = value
     text = vm.format(path)
     vm2 = vm.project.start()

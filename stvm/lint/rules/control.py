@@ -6,7 +6,7 @@ from stvm.lint.access import node_accesses
 from stvm.lint.context import PouContext
 from stvm.lint.facts import node_subexprs, iter_exprs, place_key, text_of
 from stvm.lint.ranges import fmt
-from stvm.lint.registry import rule
+from stvm.lint.findings import rule
 from stvm.semantics import types as t
 from stvm.syntax import nodes as n
 

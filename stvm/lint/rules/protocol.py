@@ -5,7 +5,7 @@ from __future__ import annotations
 from stvm.lint.context import PouContext
 from stvm.lint.facts import node_calls, node_subexprs, iter_exprs, node_exprs, place_key, root_expr, text_of
 from stvm.lint.ranges import MAX_STRING_BYTES, fmt, is_point
-from stvm.lint.registry import rule
+from stvm.lint.findings import rule
 from stvm.semantics import types as t
 from stvm.settings import ByteToStringFormat
 from stvm.syntax import nodes as n

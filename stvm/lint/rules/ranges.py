@@ -9,7 +9,7 @@ from __future__ import annotations
 from stvm.lint.context import PouContext
 from stvm.lint.facts import node_calls, node_subexprs, NOT_CONST, place_key, text_of
 from stvm.lint.ranges import excluded_key, fmt, type_range
-from stvm.lint.registry import rule
+from stvm.lint.findings import rule
 from stvm.semantics import types as t
 from stvm.settings import ToarybyteStringModel
 from stvm.syntax import nodes as n

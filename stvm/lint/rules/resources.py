@@ -4,8 +4,8 @@ from __future__ import annotations
 
 from stvm.lint.context import PouContext
 from stvm.lint.facts import node_calls, place_key, text_of
-from stvm.lint.machines import Resource, _positive_members, leaks, nonlocal_flags, step_machines
-from stvm.lint.registry import rule
+from stvm.lint.machines import Resource, positive_members, leaks, nonlocal_flags, step_machines
+from stvm.lint.findings import rule
 
 
 def _fb_calls(ctx: PouContext, fb_name: str):
@@ -35,7 +35,7 @@ def _condition_edges(ctx: PouContext, member_key: str) -> set[int]:
     out = set()
     for node in ctx.cfg.nodes:
         for edge in node.succs:
-            if edge.label and edge.label[0] == "true" and member_key in _positive_members(edge.label[1], ctx):
+            if edge.label and edge.label[0] == "true" and member_key in positive_members(edge.label[1], ctx):
                 out.add(id(edge))
     return out
 

@@ -1,0 +1,82 @@
+"""Source text: where a thing is (`Span`) and how an ST file is read (`read_source`).
+
+The lowest stage of the pipeline (as RuSTy's `plc_source`): the parser, the diagnostics and the
+project driver all need spans and file reading, so they live below all of them and import
+nothing of stvm.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+
+@dataclass(frozen=True)
+class Span:
+    """A stretch of one source file: 1-based line and column of its first and last character."""
+    file: str
+    line: int
+    column: int
+    end_line: int
+    end_column: int
+
+    def __str__(self) -> str:
+        return f"{self.file}:{self.line}:{self.column}"
+
+
+MAX_SOURCE_BYTES = 8 * 2**20
+"""The largest source file stvm reads (8 MiB, about 300,000 lines of dense ST): a bigger
+input is refused with a clear error instead of minutes of parsing and gigabytes of memory."""
+
+
+class SourceError(Exception):
+    """A file that is not ST source text: too large, binary, or not in its encoding.
+    `line`/`column` locate the offending byte (0 when the whole file is the problem);
+    `text` is what can be shown of it (decoded with replacement characters)."""
+
+    def __init__(self, message: str, line: int = 0, column: int = 0, text: str = "") -> None:
+        super().__init__(message)
+        self.message = message
+        self.line = line
+        self.column = column
+        self.text = text
+
+
+def _is_utf8(encoding: str) -> bool:
+    return encoding.lower().replace("-", "").replace("_", "") == "utf8"
+
+
+def read_source(path: Path, encoding: str = "utf-8") -> str:
+    """The text of an ST file. Sources are UTF-8 (a BOM is skipped) unless the project manifest
+    declares `encoding`; raises SourceError for an oversized, binary or mis-encoded file and
+    OSError if it cannot be read."""
+    with open(path, "rb") as fh:
+        data = fh.read(MAX_SOURCE_BYTES + 1)   # bounded: /dev/zero must not exhaust memory
+    if len(data) > MAX_SOURCE_BYTES:
+        raise SourceError(f"file is larger than {MAX_SOURCE_BYTES // 2**20} MiB, the most stvm reads "
+                          f"from one source file (split it into several files)")
+    if data.startswith((b"\xff\xfe", b"\xfe\xff")):
+        raise SourceError("this file is UTF-16 text; ST sources are read as UTF-8 (save it as UTF-8)", 1, 1)
+    nul = data.find(b"\0")
+    if nul >= 0:
+        line, column = _position(data, nul, encoding)
+        raise SourceError(f"binary file (a NUL byte at line {line}, column {column}), not ST source text",
+                          line, column)
+    if data.startswith(b"\xef\xbb\xbf") and _is_utf8(encoding):
+        data = data[3:]
+    try:
+        return data.decode(encoding)
+    except UnicodeDecodeError as exc:
+        line, column = _position(data, exc.start, encoding)
+        bad = data[exc.start:exc.end].hex(" ").upper()
+        hint = ("re-save the file as UTF-8, or declare its encoding in stvm.toml, e.g. "
+                "[project] encoding = \"cp1252\"") if _is_utf8(encoding) else "check the encoding declared in stvm.toml"
+        raise SourceError(f"invalid {'UTF-8' if _is_utf8(encoding) else encoding} byte {bad} ({hint})", line, column,
+                          data.decode(encoding, errors="replace")) from None
+
+
+def _position(data: bytes, offset: int, encoding: str) -> tuple[int, int]:
+    """1-based line and column (in characters) of byte `offset`."""
+    line_start = data.rfind(b"\n", 0, offset) + 1
+    column = len(data[line_start:offset].decode(encoding, errors="replace")) + 1
+    return data.count(b"\n", 0, offset) + 1, column
