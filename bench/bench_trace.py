@@ -25,7 +25,7 @@ sys.path.insert(0, str(ROOT))
 
 from stvm.project import load  # noqa: E402
 from stvm.trace import Recorder, TraceSpec, run_trace, select_signals, write_trace  # noqa: E402
-from stvm.trace.run import _Prepared  # noqa: E402
+from stvm.trace.run import Prepared  # noqa: E402
 
 SCENARIO = ROOT / "st_src" / "scenarios" / "golden_pnp_cycle.toml"
 FILES = [ROOT / "st_src" / "PnP_Example.st"]
@@ -56,7 +56,7 @@ def determinism(runs: int, project) -> tuple[int, float]:
 
 def timed_run(project, watch: list[str] | None, cycles: int) -> tuple[float, float, int, float]:
     """(loop seconds, seconds inside the sampling hook, signals, program ns per scan)."""
-    prepared = _Prepared(TraceSpec(FILES, scenario=SCENARIO, cycles=cycles), project)
+    prepared = Prepared(TraceSpec(FILES, scenario=SCENARIO, cycles=cycles), project)
     vm = prepared.vm
     hook_time = [0.0]
     count = 0
@@ -86,7 +86,7 @@ def timed_run(project, watch: list[str] | None, cycles: int) -> tuple[float, flo
 def sample_costs(project) -> tuple[float, float, int]:
     """Microseconds per `Recorder.sample` when nothing changed and when a value changed
     (tight loops on the state after 100 scans: less noisy than whole runs)."""
-    prepared = _Prepared(TraceSpec(FILES, scenario=SCENARIO, cycles=100), project)
+    prepared = Prepared(TraceSpec(FILES, scenario=SCENARIO, cycles=100), project)
     prepared.wire()
     vm = prepared.vm
     vm.run(cycles=100)

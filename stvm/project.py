@@ -61,8 +61,10 @@ class Project:
     def start(self, scan: str | int = "10ms", realtime: bool = False, start_dt_ns: int = 0,
               transport=None) -> VM:
         """A fresh VM for this project (all variables at their initial values)."""
+        from stvm.stdlib import NATIVE_FBS, NATIVE_FUNCTIONS   # lazy: start-up (`import stvm.project`)
         scan_ns = parse_duration(scan) if isinstance(scan, str) else int(scan)
-        return VM(self, scan_ns=scan_ns, realtime=realtime, start_dt_ns=start_dt_ns, transport=transport)
+        return VM(self, scan_ns=scan_ns, realtime=realtime, start_dt_ns=start_dt_ns, transport=transport,
+                  natives=NATIVE_FUNCTIONS, native_fbs=NATIVE_FBS)
 
 
 def parse_duration(text: str) -> int:
@@ -280,6 +282,7 @@ def _check_texts(texts, diags, settings):
 
 def _check_texts_unpaused(texts, diags, settings):
     from stvm.semantics import analyze
+    from stvm.stdlib import NATIVE_FUNCTIONS
     from stvm.syntax.parser import parse_text
     sources = dict(texts)
     units, stdlib_diags, stdlib_sources = stdlib_units(settings)
@@ -293,7 +296,7 @@ def _check_texts_unpaused(texts, diags, settings):
     analysis = None
     if not has_errors(diags):
         try:
-            analysis = analyze(units, settings)
+            analysis = analyze(units, settings, NATIVE_FUNCTIONS)
             diags += analysis.diagnostics
         except RecursionError:
             diags.append(_too_deep(units[-1].path if units else "<input>"))

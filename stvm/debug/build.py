@@ -27,6 +27,7 @@ from stvm.runtime.vm import GENERATED_FILENAME
 from stvm.semantics.checker import Analysis, Checker
 from stvm.semantics.model import POUInfo
 from stvm.settings import DEFAULT_SETTINGS, SysmacSettings
+from stvm.stdlib import NATIVE_FUNCTIONS
 from stvm.syntax import nodes as n
 
 
@@ -156,7 +157,7 @@ def load_debug(paths: Sequence[str | os.PathLike], settings: SysmacSettings = DE
         diags += unit_diags
     checker = None
     if not has_errors(diags):
-        checker = Checker(units, settings)
+        checker = Checker(units, settings, NATIVE_FUNCTIONS)
         analysis = checker.run()
         diags += analysis.diagnostics
     diags.sort(key=sort_key)

@@ -224,14 +224,14 @@ class Console:
         self.write(f"Deleted watch {rest}: {removed}")
 
     def do_set(self, rest: str) -> None:
-        target, value = _assignment(rest, "set")
+        target, value = parse_assignment(rest, "set")
         self.write(f"{target} := {self.engine.assign(target, value, self.frame_index)}")
 
     def do_force(self, rest: str) -> None:
         if not rest:
             self.do_info("force")
             return
-        target, value = _assignment(rest, "force")
+        target, value = parse_assignment(rest, "force")
         forced = self.engine.force(target, value, self.frame_index)
         self.write(f"Forced {forced.key_display} := {self.engine.format(forced.value, forced.store.type)}")
 
@@ -358,7 +358,7 @@ def _count(text: str, default: int) -> int:
     return int(text)
 
 
-def _assignment(text: str, command: str) -> tuple[str, str]:
+def parse_assignment(text: str, command: str) -> tuple[str, str]:
     """Split `VAR := VALUE` at the first `:=` outside quotes and parentheses."""
     depth = 0
     quote = ""

@@ -532,11 +532,11 @@ class DapServer:
 
     def _repl_command(self, engine: Engine, text: str, frame: int) -> str | None:
         """Console commands typed in the Debug Console (None: an expression to evaluate)."""
-        from stvm.debug.console import _assignment
+        from stvm.debug.console import parse_assignment
         word, _, rest = text.partition(" ")
         word = word.lower()
         if word == "force" and rest:
-            target, value = _assignment(rest, "force")
+            target, value = parse_assignment(rest, "force")
             forced = engine.force(target, value, frame)
             return f"forced {forced.key_display} := {engine.format(forced.value, forced.store.type)}"
         if word == "unforce" and rest:
@@ -545,7 +545,7 @@ class DapServer:
         if word in ("forces", "force") and not rest:
             return "\n".join(f"forced {f.describe()}" for f in engine.forces.values()) or "nothing is forced"
         if word == "set" and rest:
-            target, value = _assignment(rest, "set")
+            target, value = parse_assignment(rest, "set")
             return f"{target} := {engine.assign(target, value, frame)}"
         if word == "scan":
             count = int(rest) if rest.strip().isdigit() else 1

@@ -40,7 +40,7 @@ from typing import Any, Callable
 from stvm.debug.build import DebugBuild
 from stvm.debug.scope import Compiled, CompiledStore, DebugError, Scope, ScopeCompiler
 from stvm.runtime.format import format_time, format_value
-from stvm.runtime.helpers import _copy_value
+from stvm.runtime.helpers import copy_value
 from stvm.runtime.vm import GENERATED_FILENAME, RuntimeFault
 from stvm.semantics import types as t
 from stvm.semantics.model import EXTERNAL, IN_OUT, POUInfo
@@ -368,7 +368,7 @@ class Engine:
         value = self.compiler.value(self.vm, scope, store)
         key = (scope.path.lower() + "." if store.root_is_local and scope.path else "") + store.canonical
         forced = Force(target.strip(), key, value_text.strip(), value, store, scope)
-        self.compiler.store(self.vm, scope, store, _copy_value(value))
+        self.compiler.store(self.vm, scope, store, copy_value(value))
         self.forces[key] = forced
         return forced
 
@@ -674,7 +674,7 @@ class Engine:
             return
         for key, forced in list(self.forces.items()):
             try:
-                self.compiler.store(self.vm, forced.scope, forced.store, _copy_value(forced.value))
+                self.compiler.store(self.vm, forced.scope, forced.store, copy_value(forced.value))
             except DebugError as exc:
                 del self.forces[key]
                 self._warn(f"force {forced.describe()} released: {exc}")

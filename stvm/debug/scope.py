@@ -25,8 +25,8 @@ from typing import Any
 from stvm.lower.codegen import Lowerer
 from stvm.lower.names import var_attr
 from stvm.semantics import types as t
-from stvm.semantics.body import _BodyChecker
-from stvm.semantics.checker import Facts, NameRef
+from stvm.semantics.body import BodyChecker
+from stvm.semantics.facts import Facts, NameRef
 from stvm.semantics.model import EXTERNAL, GLOBAL, IN_OUT, POUInfo, Variable
 from stvm.syntax import nodes as n
 
@@ -108,7 +108,7 @@ _GLOBAL_POU = POUInfo("<debugger>", "<debugger>", "PROGRAM", None)
 _GLOBAL_NODE = n.POU("PROGRAM", "<debugger>", (), None, (), (), ())
 
 
-class _ScopeChecker(_BodyChecker):
+class _ScopeChecker(BodyChecker):
     """The body checker with the debugger's wider scope rules (module docstring)."""
 
     def __init__(self, checker, pou: POUInfo, node: n.POU, programs: dict[str, tuple[str, str]]) -> None:

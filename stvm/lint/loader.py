@@ -19,7 +19,9 @@ from typing import Sequence
 from stvm.cache import SignedCache, default_folder
 from stvm.diagnostics import Diagnostic, has_errors, sort_key
 from stvm.settings import SysmacSettings
+from stvm import syntax
 from stvm.syntax.nodes import Span
+from stvm.version import __version__
 
 
 @dataclass
@@ -49,10 +51,8 @@ _CODE_DIGEST: list[str] = []
 def _code_digest() -> str:
     """Hash of the parser's code: a cached tree is only valid for the parser that made it."""
     if not _CODE_DIGEST:
-        import stvm
-        import stvm.syntax
-        digest = hashlib.sha256(stvm.__version__.encode())
-        folder = Path(stvm.syntax.__file__).resolve().parent
+        digest = hashlib.sha256(__version__.encode())
+        folder = Path(syntax.__file__).resolve().parent
         for path in sorted(folder.iterdir()):
             if path.suffix in (".py", ".lark"):
                 digest.update(path.name.encode() + b"\0" + path.read_bytes())
@@ -98,7 +98,7 @@ def load_for_lint(paths: Sequence[str | Path], settings: SysmacSettings, use_cac
     from stvm.project import expand_paths
     from stvm.source import read_source
     from stvm.semantics import analyze
-    from stvm.stdlib import stdlib_sources
+    from stvm.stdlib import NATIVE_FUNCTIONS, stdlib_sources
     files, manifest, root = expand_paths(paths)
     diags: list[Diagnostic] = []
     sources: dict[str, str] = {}
@@ -124,7 +124,7 @@ def load_for_lint(paths: Sequence[str | Path], settings: SysmacSettings, use_cac
     analysis = None
     if not has_errors(diags):
         try:
-            analysis = analyze(units, settings)
+            analysis = analyze(units, settings, NATIVE_FUNCTIONS)
             diags += analysis.diagnostics
         except RecursionError:
             diags.append(Diagnostic.error("the program is nested too deeply to analyse",

@@ -16,7 +16,7 @@ from urllib.parse import unquote, urlparse
 from lsprotocol import types as lsp
 from pygls.lsp.server import LanguageServer
 
-from stvm import __version__
+from stvm.version import __version__
 
 SOURCE_CHECK, SOURCE_LINT = "stvm", "stvm-lint"
 

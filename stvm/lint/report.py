@@ -75,7 +75,7 @@ def _uri(file: str, base: Path | None) -> tuple[str, str | None]:
 
 def render_sarif(findings: list[Finding], diagnostics: list[Diagnostic], base: Path | None = None,
                  version: str = "") -> str:
-    from stvm import __version__
+    from stvm.version import __version__
     rules = all_rules()
     index = {r.code: i for i, r in enumerate(rules)}
     driver = {

@@ -15,11 +15,14 @@ import bisect
 import math
 from dataclasses import dataclass, field
 
+from stvm.numeric import f32, strfit
 from stvm.semantics import types as t
-from stvm.semantics.checker import Analysis, CallInfo
+from stvm.semantics.checker import Analysis
+from stvm.semantics.facts import CallInfo
 from stvm.semantics.model import EXTERNAL, GLOBAL, IN_OUT, INPUT, OUTPUT, TEMP, POUInfo, Variable
 from stvm.lower.names import unit_name, var_attr
 from stvm.syntax import nodes as n
+from stvm.syntax.walk import calls_in, name_uses, root_name, walk
 from stvm.settings import ArrayOob, EnumDefault, ForEndEval, IntDivZero
 
 
@@ -405,11 +408,11 @@ class Lowerer:
             self.w.line(f"except _ArrayIndexError as _e: _oob_skipped(_e, {len(self.sites) - 1})")
 
     def has_index(self, node: object) -> bool:
-        return any(isinstance(x, n.Index) for x in _walk((node,)))
+        return any(isinstance(x, n.Index) for x in walk((node,)))
 
     def has_native_call(self, node: object) -> bool:
         """Does this statement call a FUNCTION (which may raise an instruction error)?"""
-        for x in _walk((node,)):
+        for x in walk((node,)):
             if isinstance(x, n.Call):
                 info = self.facts.calls.get(id(x))
                 if info is not None and not info.is_fb:
@@ -554,15 +557,15 @@ class Lowerer:
         if ref is None or ref.kind != "var" or ref.variable is None or ref.variable.key not in self.cached:
             return False
         key = ref.variable.key
-        for node in _walk(s.body):
+        for node in walk(s.body):
             if isinstance(node, (n.Exit, n.Return)):
                 return False
-            if isinstance(node, n.Assign) and _root_name(node.target) == key:
+            if isinstance(node, n.Assign) and root_name(node.target) == key:
                 return False
             if isinstance(node, n.For) and node.variable.parts[0].lower() == key:
                 return False
             if isinstance(node, n.Argument) and node.kind != "input" and node.kind != "positional" \
-                    and _root_name(node.value) == key:
+                    and root_name(node.value) == key:
                 return False
         return True
 
@@ -634,7 +637,7 @@ class Lowerer:
     def hoistable_accesses(self, body, key: str) -> set[tuple[int, int, int]]:
         """(offset, lo, hi) of every 1-D array access indexed by the loop variable (+/- const)."""
         found: set[tuple[int, int, int]] = set()
-        for node in _walk(body):
+        for node in walk(body):
             if isinstance(node, n.Index) and len(node.indices) == 1:
                 base_type = self.facts.types.get(id(node.base))
                 if isinstance(base_type, t.ArrayType) and base_type.dims and len(base_type.dims) == 1:
@@ -767,7 +770,7 @@ class Lowerer:
         if not self.cache_locals:
             return {}
         referenced: set[str] = set()
-        for call in _calls_in(node.body):
+        for call in calls_in(node.body):
             info = self.facts.calls.get(id(call))
             if info is None:
                 continue
@@ -783,7 +786,7 @@ class Lowerer:
             referenced |= {v.key for v in pou.variables.values() if v.section == OUTPUT}
         # a variable whose reference is taken (REF/ADR/REF=) may be read or written through it
         referenced |= {var for owner, var in self.facts.addressed if owner == pou.key}
-        uses = _name_uses(node.body)
+        uses = name_uses(node.body)
         out = {}
         for var in pou.variables.values():
             if var.section in (EXTERNAL, GLOBAL) or var.key in referenced:
@@ -858,13 +861,11 @@ class Lowerer:
 
     def convert_const(self, value: object, ty: t.Type) -> object:
         if isinstance(ty, t.RealType) and isinstance(value, (int, float)) and not isinstance(value, bool):
-            from stvm.runtime.helpers import _f32
-            return _f32(float(value)) if ty.bits == 32 else float(value)
+            return f32(float(value)) if ty.bits == 32 else float(value)
         if isinstance(ty, t.IntType) and isinstance(value, int) and not isinstance(value, bool):
             return ty.wrap(value)
         if isinstance(ty, t.StringType) and isinstance(value, bytes):
-            from stvm.runtime.helpers import _strfit
-            return _strfit(value, ty.max_bytes)
+            return strfit(value, ty.max_bytes)
         if isinstance(ty, t.BoolType) and isinstance(value, int):
             return bool(value)   # IEC: 0 and 1 are BOOL literals
         if isinstance(ty, (t.TimeType, t.EnumType)) and isinstance(value, (bool, int)):
@@ -1247,60 +1248,6 @@ class Lowerer:
 
 
 _CACHE_MIN_USES = 3          # uses of a variable in a body (a use inside a loop counts as many)
-_LOOP_WEIGHT = 10
-
-
-def _name_uses(body) -> dict[str, int]:
-    """How often each single-part name is used in a statement list, loops weighted."""
-    counts: dict[str, int] = {}
-
-    def visit(node, weight: int) -> None:
-        if isinstance(node, tuple):
-            for item in node:
-                visit(item, weight)
-            return
-        if isinstance(node, n.Name) and len(node.parts) == 1:
-            key = node.parts[0].lower()
-            counts[key] = counts.get(key, 0) + weight
-        inner = weight * _LOOP_WEIGHT if isinstance(node, (n.For, n.While, n.Repeat)) else weight
-        for name in getattr(node, "__dataclass_fields__", ()):
-            if name != "span":
-                value = getattr(node, name)
-                if isinstance(value, tuple) or hasattr(value, "__dataclass_fields__"):
-                    visit(value, inner)
-
-    visit(tuple(body), 1)
-    return counts
-
-
-def _walk(body):
-    """Every node under a statement list (statements, expressions, arguments)."""
-    stack: list = list(body)
-    while stack:
-        node = stack.pop()
-        if isinstance(node, tuple):
-            stack.extend(node)
-            continue
-        yield node
-        for name in getattr(node, "__dataclass_fields__", ()):
-            if name != "span":
-                value = getattr(node, name)
-                if isinstance(value, tuple) or hasattr(value, "__dataclass_fields__"):
-                    stack.append(value)
-
-
-def _root_name(expr) -> str | None:
-    """The variable at the root of an access path (`a` in `a.b[1]`), lower case."""
-    while isinstance(expr, (n.Member, n.Index, n.BitAccess)):
-        expr = expr.base
-    return expr.parts[0].lower() if isinstance(expr, n.Name) and len(expr.parts) == 1 else None
-
-
-def _calls_in(body) -> list[n.Call]:
-    """Every Call node in a statement list (for the by-reference analysis)."""
-    return [node for node in _walk(body) if isinstance(node, n.Call)]
-
-
 def lower_project(analysis: Analysis, settings) -> LoweredProject:
     """Generate the Python module for a checked project."""
     return Lowerer(analysis, settings).lower()

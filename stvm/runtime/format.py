@@ -5,6 +5,7 @@ from __future__ import annotations
 import calendar
 import math
 
+from stvm.numeric import f32
 from stvm.semantics import types as t
 
 _NS = 1_000_000_000
@@ -103,10 +104,9 @@ def format_real(value: float, bits: int) -> str:
 def _shortest_real32(value: float) -> str:
     """The shortest decimal that reads back as the same binary32 value; positional for
     1e-4 <= |x| < 1e6, else scientific (`1.6777216e+07`), as numpy prints float32."""
-    from stvm.runtime.helpers import _f32
     for digits in range(0, 10):
         text = f"{value:.{digits}e}"
-        if _f32(float(text)) == value:
+        if f32(float(text)) == value:
             break
     mantissa, exponent = text.split("e")
     mantissa = mantissa.rstrip("0").rstrip(".") if "." in mantissa else mantissa

@@ -6,21 +6,9 @@ Kept small and branch-light: they run inside scans.
 from __future__ import annotations
 
 import math
-import struct
 
+from stvm.numeric import f32, strfit
 from stvm.runtime.values import ArrayIndexError, ArrayRef, AttrRef, FunctionError, ItemRef, MapRef, STFault
-
-_pack_f = struct.Struct("<f")
-
-
-def _f32(x: float) -> float:
-    """Round to IEEE binary32 (every REAL store), keeping inf/nan; overflow becomes ±inf."""
-    try:
-        return _pack_f.unpack(_pack_f.pack(x))[0]
-    except OverflowError:
-        if x != x:
-            return x
-        return math.inf if x > 0 else -math.inf
 
 
 def _idiv(a: int, b: int) -> int:
@@ -123,28 +111,12 @@ def _endless_for(end: int, step: int, type_name: str) -> None:
                   f"(step {step}); a controller's watchdog would stop the task")
 
 
-def _strfit(value: bytes, max_bytes: int) -> bytes:
-    """Store into STRING[n]: truncate to n-1 bytes (Omron), never inside a UTF-8 sequence."""
-    if len(value) <= max_bytes:
-        return value
-    cut = value[:max_bytes]
-    # drop a partial UTF-8 character at the end
-    i = len(cut)
-    while i > 0 and (cut[i - 1] & 0xC0) == 0x80:
-        i -= 1
-    if i > 0 and cut[i - 1] >= 0xC0:
-        needed = 2 if cut[i - 1] < 0xE0 else 3 if cut[i - 1] < 0xF0 else 4
-        if len(cut) - (i - 1) < needed:
-            cut = cut[: i - 1]
-    return cut
-
-
-def _copy_value(value):
+def copy_value(value):
     """Deep copy of an aggregate value (arrays are lists, structs have `_copy`)."""
     if type(value) is list:
         if value and type(value[0]) in (int, float, bool, bytes):
             return value[:]
-        return [_copy_value(v) for v in value]
+        return [copy_value(v) for v in value]
     copy = getattr(value, "_copy", None)
     return copy() if copy is not None else value
 
@@ -152,7 +124,7 @@ def _copy_value(value):
 def _assign_array(dst: list, src) -> None:
     if isinstance(src, ArrayRef):
         src = src.data[src.start:]
-    dst[:] = _copy_value(src)
+    dst[:] = copy_value(src)
 
 
 def _setbit(word: int, bit: int, value: bool) -> int:
@@ -172,8 +144,8 @@ class _Frame:
 
 
 HELPERS = {
-    "_f32": _f32, "_idiv": _idiv, "_idiv0": _idiv0, "_imod": _imod, "_imod0": _imod0, "_fdiv": _fdiv,
-    "_tdiv": _tdiv, "_tdiv0": _tdiv0, "_expt": _expt, "_oob": _oob, "_endless_for": _endless_for, "_strfit": _strfit, "_copy_value": _copy_value,
+    "_f32": f32, "_idiv": _idiv, "_idiv0": _idiv0, "_imod": _imod, "_imod0": _imod0, "_fdiv": _fdiv,
+    "_tdiv": _tdiv, "_tdiv0": _tdiv0, "_expt": _expt, "_oob": _oob, "_endless_for": _endless_for, "_strfit": strfit, "_copy_value": copy_value,
     "_assign_array": _assign_array, "_setbit": _setbit, "_with": _with, "_Frame": _Frame,
     "_AttrRef": AttrRef, "_MapRef": MapRef, "_ItemRef": ItemRef, "_ArrayRef": ArrayRef, "_FunctionError": FunctionError,
     "_STFault": STFault, "_null_ref": _null_ref, "_same_ref": _same_ref, "_ArrayIndexError": ArrayIndexError,

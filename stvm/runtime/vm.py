@@ -16,8 +16,9 @@ import re
 import time
 from dataclasses import dataclass, field
 from types import TracebackType
-from typing import Any, Callable
+from typing import Any, Callable, Mapping
 
+from stvm.numeric import f32, strfit
 from stvm.runtime.context import RunContext
 from stvm.runtime.format import format_time, format_value
 from stvm.runtime.helpers import HELPERS
@@ -92,7 +93,10 @@ _PATH_TOKEN = re.compile(r"\s*(?:([A-Za-z_][A-Za-z0-9_]*)|\[([^\]]*)\]|(\.)|(\^)
 
 class VM:
     def __init__(self, project, scan_ns: int = 10_000_000, realtime: bool = False,
-                 start_dt_ns: int = 0, transport: Any = None) -> None:
+                 start_dt_ns: int = 0, transport: Any = None, natives: Mapping[str, Any] | None = None,
+                 native_fbs: Mapping[str, type] | None = None) -> None:
+        """`natives`, `native_fbs`: the stdlib's implementations (stvm.stdlib.NATIVE_FUNCTIONS,
+        NATIVE_FBS) by upper-case name; `Project.start` passes them."""
         _ensure_recursion_limit()
         self.project = project
         self.model = project.model
@@ -103,7 +107,8 @@ class VM:
                               transport=transport)
         self.realtime = realtime
         ns: dict[str, Any] = dict(HELPERS)
-        from stvm.stdlib.registry import NATIVE_FBS, NATIVE_FUNCTIONS
+        NATIVE_FUNCTIONS = natives if natives is not None else {}
+        NATIVE_FBS = native_fbs if native_fbs is not None else {}
         ns["_NATIVE_FB"] = NATIVE_FBS
         lowered = project.lowered
         for py_name, key in lowered.natives.items():
@@ -506,7 +511,6 @@ class Accessor:
 
 def coerce_python_value(value: Any, ty: t.Type) -> Any:
     """Check and convert a Python value given through the API or `--set` to `ty`'s representation."""
-    from stvm.runtime.helpers import _f32, _strfit
     if isinstance(ty, t.BoolType):
         if isinstance(value, bool):
             return value
@@ -523,13 +527,13 @@ def coerce_python_value(value: Any, ty: t.Type) -> Any:
                 as_float = float(value)
             except OverflowError:
                 raise ValueError(f"{value} is out of range for {ty.name}") from None
-            return _f32(as_float) if ty.bits == 32 else as_float
+            return f32(as_float) if ty.bits == 32 else as_float
     elif isinstance(ty, t.StringType):
         if isinstance(value, str):
             value = value.encode("utf-8")
         if isinstance(value, (bytes, bytearray)):
             value = bytes(value).split(b"\x00", 1)[0]
-            return _strfit(value, ty.max_bytes)
+            return strfit(value, ty.max_bytes)
     elif isinstance(ty, t.TimeType):
         if isinstance(value, int) and not isinstance(value, bool):
             return value

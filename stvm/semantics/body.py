@@ -14,6 +14,7 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 from stvm.semantics import types as t
+from stvm.semantics.facts import NOT_CONST, CallInfo, NameRef
 from stvm.semantics.model import EXTERNAL, IN_OUT, INPUT, OUTPUT, POUInfo, Variable
 from stvm.syntax import nodes as n
 from stvm.settings import IntLiteralType
@@ -101,16 +102,16 @@ def trunc_result_from_context(settings) -> bool:
     return True
 
 
-def native_result_rule(pou: POUInfo):
-    """The stdlib's result-type rule for a generic native (SHL, MUX, TRUNC, …), if it has one."""
+def native_result_rule(pou: POUInfo, natives):
+    """The stdlib's result-type rule for a generic native (SHL, MUX, TRUNC, …), if it has one;
+    `natives`: the native functions the checker was given (stvm.stdlib.NATIVE_FUNCTIONS)."""
     if not pou.native or pou.kind != "FUNCTION":
         return None
-    from stvm.stdlib.registry import NATIVE_FUNCTIONS
-    native = NATIVE_FUNCTIONS.get(pou.qualname.split("\\")[-1].upper())
+    native = natives.get(pou.qualname.split("\\")[-1].upper())
     return native.result_rule if native is not None else None
 
 
-class _BodyChecker:
+class BodyChecker:
     def __init__(self, checker: "Checker", pou: POUInfo, node: n.POU) -> None:
         self.c = checker
         self.pou = pou
@@ -272,7 +273,6 @@ class _BodyChecker:
     # ---- names
     def resolve_name(self, name: n.Name) -> object:
         """Resolve a Name: a NameRef for variables/enumerators/result, or None (diagnosed)."""
-        from stvm.semantics.checker import NameRef
         if len(name.parts) == 1 and not name.rooted:
             key = name.parts[0].lower()
             var = self.pou.variables.get(key)
@@ -451,10 +451,8 @@ class _BodyChecker:
         ref = self.resolve_name(e)
         if ref is None:
             if len(e.parts) == 1 and isinstance(expected, t.EnumType) and expected.value_of(e.parts[0]) is not None:
-                from stvm.semantics.checker import NameRef
                 ref = NameRef("enum", value=expected.value_of(e.parts[0]), variable=Variable(e.parts[0], "ENUM", expected))
             elif len(e.parts) == 1 and not e.rooted and e.parts[0].upper() == "NULL":
-                from stvm.semantics.checker import NameRef
                 self.facts.names[id(e)] = NameRef("null")  # type: ignore[assignment]
                 return t.NULL_REF
             else:
@@ -744,8 +742,7 @@ class _BodyChecker:
             return None
         if lu and ru:
             folded = self.c.const_value(e, self.pou_namespace, self.pou)
-            from stvm.semantics.checker import _NOT_CONST
-            if folded is not _NOT_CONST and isinstance(folded, (int, float)):
+            if folded is not NOT_CONST and isinstance(folded, (int, float)):
                 self.facts.untyped.add(id(e))
                 self.facts.consts[id(e)] = folded
                 if isinstance(folded, int):
@@ -847,7 +844,6 @@ class _BodyChecker:
 
     # ---- calls
     def expr_Call(self, e: n.Call, expected, statement: bool) -> t.Type | None:
-        from stvm.semantics.checker import CallInfo
         callee = e.callee
         pou: POUInfo | None = None
         instance: n.Expr | None = None
@@ -993,7 +989,7 @@ class _BodyChecker:
                      for p in params if not (pou.variadic and p is params[-1] and info.extra and p.key not in given)]
         arg_types += [self.facts.types.get(id(x), params[-1].type) for x in info.extra]
         info.arg_types = tuple(arg_types)
-        rule = native_result_rule(pou)
+        rule = native_result_rule(pou, self.c.natives)
         if rule is not None:
             exprs = [given.get(p.key) for p in params
                      if not (pou.variadic and p is params[-1] and info.extra and p.key not in given)]

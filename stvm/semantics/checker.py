@@ -10,13 +10,18 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import Any, Mapping
 
 from stvm.diagnostics import Diagnostic
+from stvm.numeric import f32
 from stvm.semantics import types as t
+from stvm.semantics.body import BodyChecker
+from stvm.semantics.facts import NOT_CONST, CallInfo, Facts, NameRef  # noqa: F401 (API: checker.Facts)
 from stvm.semantics.model import (EXTERNAL, GLOBAL, IN_OUT, INPUT, LOCAL, POUInfo,
                                   ProjectModel, TaskInfo, Variable)
 from stvm.settings import BareEnumerators, DEFAULT_SETTINGS, StringOverflow, SysmacSettings
 from stvm.syntax import nodes as n
+from stvm.syntax.walk import calls_in
 
 # Reserved words that the contextual lexer may still let through as names.
 _RESERVED = {
@@ -25,47 +30,6 @@ _RESERVED = {
     "not", "mod", "true", "false", "var", "end_var", "function", "function_block", "program", "type",
     "struct", "array", "constant", "retain",
 }
-
-
-@dataclass
-class NameRef:
-    """What a `Name` expression denotes."""
-
-    kind: str                     # 'var', 'global', 'enum', 'const', 'pou', 'result'
-    variable: Variable | None = None
-    pou: POUInfo | None = None
-    value: object = None          # enum value / constant
-
-
-@dataclass
-class CallInfo:
-    """A resolved call: the callee and how each argument binds."""
-
-    pou: POUInfo
-    is_fb: bool
-    instance: n.Expr | None       # the FB instance expression
-    inputs: list[tuple[Variable, n.Expr]] = field(default_factory=list)
-    outputs: list[tuple[Variable, n.Expr, bool]] = field(default_factory=list)   # (pin, target, negate)
-    extra: list[n.Expr] = field(default_factory=list)     # variadic extras, in order
-    generic_type: t.Type | None = None
-    arg_types: tuple[t.Type, ...] = ()                    # per parameter (+ extras), for typed natives
-    en: n.Expr | None = None                              # `EN := c`: the call runs only when c is TRUE
-    eno: tuple[n.Expr, bool] | None = None                # `ENO => v` / `NOT ENO => v`: (target, negate)
-
-
-@dataclass
-class Facts:
-    types: dict[int, t.Type] = field(default_factory=dict)
-    names: dict[int, NameRef] = field(default_factory=dict)
-    calls: dict[int, CallInfo] = field(default_factory=dict)
-    untyped: set[int] = field(default_factory=set)        # untyped numeric literals (after folding)
-    consts: dict[int, object] = field(default_factory=dict)  # compile-time values of constant exprs
-    array_from_element: set[int] = field(default_factory=set)  # Index exprs passed as "array from here"
-    operand_types: dict[int, t.Type] = field(default_factory=dict)  # comparisons: the type compared in
-    ref_calls: set[int] = field(default_factory=set)      # REF(x) / ADR(x) calls
-    auto_deref: set[int] = field(default_factory=set)     # names of REFERENCE TO variables (used as the target)
-    addressed: set[tuple[str, str]] = field(default_factory=set)  # (POU key, variable key) whose reference is taken
-    keep: list = field(default_factory=list)              # keeps nodes alive so ids stay unique
 
 
 @dataclass
@@ -131,9 +95,13 @@ def _longest_paths(graph: dict[str, list[tuple[str, str]]]) -> tuple[dict[str, i
 
 
 class Checker:
-    def __init__(self, units: list[n.CompilationUnit], settings: SysmacSettings) -> None:
+    def __init__(self, units: list[n.CompilationUnit], settings: SysmacSettings,
+                 natives: Mapping[str, Any] | None = None) -> None:
         self.units = units
         self.settings = settings
+        # the stdlib's native functions by upper-case name (stvm.stdlib.NATIVE_FUNCTIONS): their
+        # result-type rules. Given by the caller, which knows the stdlib; the checker sits below it.
+        self.natives = natives if natives is not None else {}
         self.diags: list[Diagnostic] = []
         self.facts = Facts()
         self.index = _Index()
@@ -538,7 +506,7 @@ class Checker:
     def const_int(self, expr: n.Expr, namespace: tuple[str, ...]) -> int | None:
         value = self.const_value(expr, namespace, self.declaring)
         if isinstance(value, bool) or not isinstance(value, int):
-            if value is not _NOT_CONST:
+            if value is not NOT_CONST:
                 self.error("expected a constant integer", expr.span, "E020")
             else:
                 self.error("expected a constant integer expression", expr.span, "E020")
@@ -546,7 +514,7 @@ class Checker:
         return value
 
     def const_value(self, expr: n.Expr, namespace: tuple[str, ...], pou: POUInfo | None) -> object:
-        """Evaluate a constant expression at compile time; `_NOT_CONST` if it is not one."""
+        """Evaluate a constant expression at compile time; `NOT_CONST` if it is not one."""
         if isinstance(expr, (n.IntLiteral, n.BoolLiteral, n.StringLiteral)):
             return expr.value
         if isinstance(expr, n.RealLiteral):
@@ -555,10 +523,10 @@ class Checker:
             return expr.value_ns
         if isinstance(expr, n.HashLiteral):
             lit = self.hash_literal(expr, namespace, report=False)
-            return _NOT_CONST if lit is None else lit[1]
+            return NOT_CONST if lit is None else lit[1]
         if isinstance(expr, n.Unary):
             v = self.const_value(expr.operand, namespace, pou)
-            if v is _NOT_CONST:
+            if v is NOT_CONST:
                 return v
             if expr.op == "MINUS" and isinstance(v, (int, float)) and not isinstance(v, bool):
                 return -v
@@ -566,12 +534,12 @@ class Checker:
                 return v
             if expr.op == "NOT" and isinstance(v, bool):
                 return not v
-            return _NOT_CONST
+            return NOT_CONST
         if isinstance(expr, n.Binary):
             a = self.const_value(expr.left, namespace, pou)
             b = self.const_value(expr.right, namespace, pou)
-            if a is _NOT_CONST or b is _NOT_CONST or isinstance(a, (bytes, bool)) or isinstance(b, (bytes, bool)):
-                return _NOT_CONST
+            if a is NOT_CONST or b is NOT_CONST or isinstance(a, (bytes, bool)) or isinstance(b, (bytes, bool)):
+                return NOT_CONST
             try:
                 if expr.op == "PLUS":
                     return a + b
@@ -587,8 +555,8 @@ class Checker:
                 if expr.op == "MOD" and isinstance(a, int) and isinstance(b, int):
                     return int(math.fmod(a, b))
             except ZeroDivisionError:
-                return _NOT_CONST
-            return _NOT_CONST
+                return NOT_CONST
+            return NOT_CONST
         if isinstance(expr, n.Name) and len(expr.parts) == 1:
             key = expr.parts[0].lower()
             var = pou.variables.get(key) if pou else None
@@ -597,11 +565,11 @@ class Checker:
             if var is not None:
                 if var.constant and var.init is not None:
                     return var.init
-                return _NOT_CONST
+                return NOT_CONST
             enum = self.bare_enumerator(expr.parts[0], expr.span, report=False)
             if enum is not None:
                 return enum[1]
-        return _NOT_CONST
+        return NOT_CONST
 
     def bare_enumerator(self, name: str, span: n.Span, report: bool = True) -> tuple[t.EnumType, int] | None:
         cands = self.enumerators.get(name.lower(), [])
@@ -677,7 +645,7 @@ class Checker:
                 self.error("an array initialiser is written in brackets: [1, 2, 3(0)]", init.span, "E023")
                 return None
             value = self.const_value(init.expr, namespace, pou)
-            if value is _NOT_CONST:
+            if value is NOT_CONST:
                 if isinstance(init.expr, n.Name) and len(init.expr.parts) == 1 and isinstance(ty, t.EnumType):
                     v = ty.value_of(init.expr.parts[0])
                     if v is not None:
@@ -760,7 +728,7 @@ class Checker:
                 if pou.body:
                     self.error(f"native POU '{pou.name}' must not have a body", pou.span, "E025")
                 continue
-            _BodyChecker(self, info, pou).check()
+            BodyChecker(self, info, pou).check()
         # the depth check walks iteratively and runs first: the two checks after it recurse,
         # and a chain thousands deep must be a diagnostic naming it, not a RecursionError
         if self.check_nesting_depth():
@@ -843,7 +811,6 @@ class Checker:
         """FB instances nested in FB instances (or structs), and POUs calling POUs, at most
         NESTING_LIMIT deep: the same limit for `stvm run` and `stvm debug` (the VM builds and
         calls them on the Python stack). Returns False if a chain is too deep."""
-        from stvm.lower.codegen import _calls_in
         contains: dict[str, list[tuple[str, str]]] = {}
         for key, pou in self.pous.items():
             if pou.kind != "FUNCTION":
@@ -856,7 +823,7 @@ class Checker:
         calls: dict[str, list[tuple[str, str]]] = {key: [] for key in self.index.pou_nodes}
         for key, node in self.index.pou_nodes.items():
             seen: set[str] = set()
-            for call in _calls_in(node.body):
+            for call in calls_in(node.body):
                 info = self.facts.calls.get(id(call))
                 if info is not None and info.pou.key not in seen:
                     seen.add(info.pou.key)
@@ -910,10 +877,9 @@ class Checker:
 
     def check_recursion(self) -> None:
         """IEC 61131-3 (and Sysmac) forbid recursive calls of functions and FBs."""
-        from stvm.lower.codegen import _calls_in
         graph: dict[str, set[str]] = {key: set() for key in self.index.pou_nodes}
         for key, node in self.index.pou_nodes.items():
-            for call in _calls_in(node.body):
+            for call in calls_in(node.body):
                 info = self.facts.calls.get(id(call))
                 if info is not None and info.pou.kind == "FUNCTION":
                     graph[key].add(info.pou.key)
@@ -979,17 +945,13 @@ class Checker:
         return [], programs
 
 
-_NOT_CONST = object()
-
-
 def _is_stdlib(file: str) -> bool:
     return file.startswith("<stdlib")
 
 
 def _round_real(value: float, ty: t.Type) -> float:
     if isinstance(ty, t.RealType) and ty.bits == 32:
-        from stvm.runtime.helpers import _f32
-        return _f32(value)
+        return f32(value)
     return float(value)
 
 
@@ -997,9 +959,11 @@ def _time_compatible(literal_type: str, target: str) -> bool:
     return literal_type == target
 
 
-from stvm.semantics.body import _BodyChecker  # noqa: E402  (body checker needs Checker defined)
 
+def analyze(units: list[n.CompilationUnit], settings: SysmacSettings = DEFAULT_SETTINGS,
+            natives: Mapping[str, Any] | None = None) -> Analysis:
+    """Check all units together; returns the model, per-node facts and every diagnostic.
 
-def analyze(units: list[n.CompilationUnit], settings: SysmacSettings = DEFAULT_SETTINGS) -> Analysis:
-    """Check all units together; returns the model, per-node facts and every diagnostic."""
-    return Checker(units, settings).run()
+    `natives`: the stdlib's native functions (stvm.stdlib.NATIVE_FUNCTIONS), for the result types
+    of generic ones (SHL, MUX, TRUNC, …); without it their result is the common input type."""
+    return Checker(units, settings, natives).run()

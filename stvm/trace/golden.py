@@ -219,11 +219,11 @@ def locate_writer(spec, actual: Trace, divergence: Divergence, project=None) -> 
     if divergence.kind != "value":
         return None
     from stvm.runtime.vm import RuntimeFault
-    from stvm.trace.run import _Prepared
+    from stvm.trace.run import Prepared
     from stvm.trace.signals import WatchError, select_signals
     index = actual.index_of(divergence.variable)
     target_scan = actual.last_change(index, min(divergence.scan, actual.scans - 1))
-    prepared = _Prepared(spec, project)
+    prepared = Prepared(spec, project)
     vm = prepared.vm
     try:
         signal = select_signals(vm, [divergence.variable])[0]

@@ -51,7 +51,7 @@ class TraceRun:
     tcp_path: object = None                    # a TcpPathRecorder when `record_tcp`
 
 
-class _Prepared:
+class Prepared:
     """A VM wired to its robot and scenario, ready for scan 0 (shared by the recorder and the
     writer search, which replays a run to a given scan)."""
 
@@ -102,7 +102,7 @@ def run_trace(spec: TraceSpec, project=None, progress: Callable[[int], None] | N
     from stvm.runtime.vm import RuntimeFault
     from stvm.trace.recorder import Recorder
     from stvm.trace.signals import select_signals
-    prepared = _Prepared(spec, project)
+    prepared = Prepared(spec, project)
     vm = prepared.vm
     patterns = list(spec.watch) or list(prepared.scenario.watch)
     if not patterns:

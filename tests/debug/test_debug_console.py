@@ -11,7 +11,7 @@ import pytest
 from core_helpers import cli, write_st
 from debug_helpers import MOVE_ABSOLUTE, PNP_SCENARIO, THESIS_MAIN, line_of, small_build, small_line, small_path, thesis_build
 
-from stvm.debug.console import Console, _assignment
+from stvm.debug.console import Console, parse_assignment
 from stvm.debug.engine import Engine
 from stvm.debug.scope import DebugError
 
@@ -145,10 +145,10 @@ def test_errors_are_messages_not_tracebacks():
 
 
 def test_assignment_splits_at_the_top_level_assign():
-    assert _assignment("a[1] := F(x := 2)", "set") == ("a[1]", "F(x := 2)")
-    assert _assignment("s := 'a := b'", "set") == ("s", "'a := b'")
+    assert parse_assignment("a[1] := F(x := 2)", "set") == ("a[1]", "F(x := 2)")
+    assert parse_assignment("s := 'a := b'", "set") == ("s", "'a := b'")
     with pytest.raises(DebugError):
-        _assignment("a = 1", "set")
+        parse_assignment("a = 1", "set")
 
 
 def test_thesis_console_breakpoint_in_cbt_moveabsolute():
