@@ -4,7 +4,8 @@ When the project's manifest (`stvm.toml`) has a `[demo]` table, `stvm run` becom
 it starts the emulator on a loopback port (unless `--robot HOST:PORT` names a robot), applies the
 manifest's scenario (robot address, PnP segments, Execute inputs), runs on the real-time clock
 (the robot moves in wall-clock time) and shows a live status until Ctrl-C, `--cycles N` scans,
-`--duration`, or `--pnp-cycles N` complete Pick-and-Place cycles.
+`--duration`, `--until EXPR`, or the number of complete cycles the manifest asks for (`[demo]
+cycles = N`, or the short flag it declares: `cycles_flag = "--pnp-cycles"` makes `--pnp-cycles N`).
 """
 
 from __future__ import annotations
@@ -20,6 +21,7 @@ from typing import Any
 
 from stvm.runtime.vm import timing_us
 from stvm.scenario import ScenarioDriver, load_scenario
+import emulator
 
 TM_LISTEN_PORT = 5890
 
@@ -58,10 +60,12 @@ class DemoState:
 class Demo:
     """Everything the demo adds around a VM run."""
 
-    def __init__(self, project, vm, args) -> None:
+    def __init__(self, project, vm, args, cycles: int | None = None) -> None:
+        """`cycles`: stop after this many complete cycles (None: no limit)."""
         self.project = project
         self.vm = vm
         self.args = args
+        self.cycle_limit = cycles
         self.config = project.manifest.get("demo", {})
         self.server = None
         self.robot_address: tuple[str, int] | None = None
@@ -89,7 +93,6 @@ class Demo:
         if self.args.robot:
             self.robot_address = parse_robot(self.args.robot)
         else:
-            import emulator
             port = free_loopback_port()
             self.server = emulator.start_server(host="127.0.0.1", port=port, log_path=self.args.emulator_log)
             self.robot_address = ("127.0.0.1", self.server.port)
@@ -132,8 +135,7 @@ class Demo:
         return rows
 
     def done(self) -> bool:
-        limit = getattr(self.args, "pnp_cycles", None)
-        return limit is not None and self.state.cycles >= limit
+        return self.cycle_limit is not None and self.state.cycles >= self.cycle_limit
 
     # ---- display
     def status_rows(self) -> list[tuple[str, str]]:

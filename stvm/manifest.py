@@ -24,11 +24,15 @@ where a list belongs is not read letter by letter).
 from __future__ import annotations
 
 import codecs
+import re
 import tomllib
 from pathlib import Path
 from typing import Any
 
 MANIFEST = "stvm.toml"
+
+# a flag a manifest may declare for its demo (`[demo] cycles_flag`): long form, lower case
+_FLAG = re.compile(r"--[a-z][a-z0-9]*(-[a-z0-9]+)*")
 
 
 class ManifestError(ValueError):
@@ -64,6 +68,10 @@ _SCHEMA: dict[str, dict[str, tuple[Any, str]] | None] = {
         "errors": (_string_list, "a list of STRING variable paths"),
         "title": (lambda v: isinstance(v, str), "a string (the demo's name in the status view)"),
         "description": (lambda v: isinstance(v, str), "a string"),
+        "cycles": (lambda v: _integer(v) and v >= 0,
+                   "a number of complete cycles after which the demo stops (0: no limit)"),
+        "cycles_flag": (lambda v: isinstance(v, str) and _FLAG.fullmatch(v) is not None,
+                        "a command-line flag, e.g. \"--pnp-cycles\", that sets `cycles` for a run"),
     },
 }
 

@@ -38,9 +38,10 @@ LAYERS: list[tuple[str, ...]] = [
     ("stvm.cache", "stvm.manifest"),
     ("stvm.project",),                   # the driver: load, check, lower, start
     ("stvm.lockstep", "stvm.scenario"),
-    ("stvm.demo", "stvm.trace", "stvm.run"),
+    ("stvm.demo", "stvm.trace"),
     ("stvm.debug", "stvm.frontend", "stvm.hmi", "stvm.opcua", "stvm.lint"),
-    ("stvm", "stvm.cli", "stvm.__main__", "stvm.pytest_plugin"),   # `stvm`: the API (load, VM)
+    # the commands: `stvm run` drives the demo, scenarios and every front end; `stvm` is the API
+    ("stvm", "stvm.cli", "stvm.run", "stvm.__main__", "stvm.pytest_plugin"),
 ]
 # `stvm` (the package) names only itself: its submodules are placed by their own entries.
 ROOT_PACKAGE = "stvm"

@@ -13,6 +13,7 @@ from typing import Callable, TextIO
 from stvm.debug.engine import (CONTINUE, FAULTED, FINISH, NEXT, SCAN, STEP, TERMINATED, Engine,
                                StopEvent)
 from stvm.debug.scope import DebugError
+from stvm.syntax import parse_expression
 
 HELP = """\
 Commands (ST expressions in ST syntax, evaluated in the selected frame's scope):
@@ -205,7 +206,6 @@ class Console:
         if not rest:
             self.do_info("watch")
             return
-        from stvm.syntax import parse_expression
         expr, diags = parse_expression(rest, "<watch>")
         if expr is None or any(d.is_error for d in diags):
             problem = next((d.message for d in diags if d.is_error), "not an expression")

@@ -29,6 +29,8 @@ from stvm.debug.scope import DebugError, is_scalar_ref
 from stvm.diagnostics import printable
 from stvm.semantics import types as t
 from stvm.semantics.model import EXTERNAL, IN_OUT, INPUT, OUTPUT
+from stvm.project import LoadError
+from stvm.diagnostics import render
 
 _REASONS = {ENTRY: "entry", BREAKPOINT: "breakpoint", STEPPED: "step", PAUSED: "pause", SCANNED: "step",
             FAULT: "exception"}
@@ -274,7 +276,6 @@ class DapServer:
 
     def on_launch(self, args: dict) -> dict:
         from stvm.debug.session import SessionOptions, open_session
-        from stvm.project import LoadError
         from stvm.scenario import ScenarioError
         program = args.get("program")
         if not program:
@@ -315,7 +316,6 @@ class DapServer:
         self.engine.listeners.append(self._on_engine_event)
         self.engine.output.append(lambda text: self.output(f"warning: {text}", "stderr"))
         for warning in self.session.build.project.warnings:
-            from stvm.diagnostics import render
             self.output(render(warning, self.session.build.project.sources), "stderr")
         if self.session.robot != "none":
             port = f" on port {self.session.server.port}" if self.session.server is not None else ""

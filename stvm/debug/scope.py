@@ -29,6 +29,7 @@ from stvm.semantics.body import BodyChecker
 from stvm.semantics.facts import Facts, NameRef
 from stvm.semantics.model import EXTERNAL, GLOBAL, IN_OUT, POUInfo, Variable
 from stvm.syntax import nodes as n
+from stvm.syntax import parse_expression
 
 EXPR_FILENAME = "<stvm-debug>"   # never GENERATED_FILENAME: the tracer must not step into these
 
@@ -195,7 +196,6 @@ class ScopeCompiler:
 
     # ---- parsing
     def parse(self, text: str) -> n.Expr:
-        from stvm.syntax import parse_expression
         expr, diags = parse_expression(text.strip(), EXPR_FILENAME, self.settings)
         errors = [d for d in diags if d.is_error]
         if expr is None or errors:

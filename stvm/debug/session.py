@@ -20,6 +20,7 @@ from typing import Any, Sequence
 from stvm.debug.build import DebugBuild, load_debug
 from stvm.debug.engine import Engine
 from stvm.semantics.literals import literal_value
+from stvm.project import parse_duration, project_settings
 
 
 @dataclass
@@ -58,7 +59,6 @@ class Session:
 def open_session(options: SessionOptions, build: DebugBuild | None = None) -> Session:
     """Load (unless `build` is given) and prepare a session; raises LoadError, ValueError (bad
     options) or ScenarioError. The engine is not started yet."""
-    from stvm.project import parse_duration, project_settings
     from stvm.scenario import Scenario, load_scenario
     settings = project_settings(options.files, list(options.sysmac))
     scenario = load_scenario(options.scenario) if options.scenario else Scenario()

@@ -12,6 +12,9 @@ from pathlib import Path
 from typing import Any
 
 from stvm.hmi.pages import HmiLoadError
+from stvm.frontend import VariableBridge
+from stvm.hmi.pages import load_pages
+from stvm.hmi.server import HmiServer
 
 HELP = ("serve the project's HMI pages (stvm.toml [hmi]) on [HOST:]PORT while the VM runs "
         "(default host 127.0.0.1; any other host needs the token printed at start-up)")
@@ -59,9 +62,6 @@ def start_hmi(project, vm, address: str, pose=None, run_parameters: dict[str, An
               stream=None):
     """Load the pages, attach a bridge to `vm` and start the server; prints the URL on `stream`.
     Raises HmiUsageError or HmiLoadError (nothing is started then)."""
-    from stvm.frontend import VariableBridge
-    from stvm.hmi.pages import load_pages
-    from stvm.hmi.server import HmiServer
     host, port = parse_address(address)
     files, start = page_files(project)
     bridge = VariableBridge(vm)

@@ -39,6 +39,9 @@ from stvm.hmi.tomlpos import TomlLocator
 from stvm.semantics import types as t
 from stvm.semantics.literals import literal_value
 from stvm.syntax.nodes import Span
+from stvm.syntax.literals import decode_int
+from stvm.diagnostics import render
+from stvm.runtime.vm import coerce_python_value
 
 WIDGET_KINDS = ("lamp", "numeric", "dropdown", "text", "status", "toggle", "momentary", "set",
                 "preset", "nav", "popup", "robot_view", "note")
@@ -76,7 +79,6 @@ class HmiLoadError(Exception):
         self.sources = sources
 
     def render(self) -> str:
-        from stvm.diagnostics import render
         return "".join(render(d, self.sources) for d in self.diagnostics)
 
 
@@ -619,7 +621,6 @@ class _Reader:
     # ---- small readers
     def _literal(self, f: _File, where: tuple, var: str, ty: t.Type, raw: Any, context: str) -> str | None:
         """A TOML value as the IEC literal text written to `var` (checked against its type)."""
-        from stvm.runtime.vm import coerce_python_value
         if isinstance(raw, bool):
             text = "TRUE" if raw else "FALSE"
         elif isinstance(raw, (int, float)):
@@ -687,7 +688,6 @@ def _reason(exc: Exception) -> str:
 
 def literal_number(literal: str) -> float | None:
     """The number an IEC literal for an integer or REAL stands for (None: not a plain number)."""
-    from stvm.syntax.literals import decode_int
     text = literal.strip().replace("_", "")
     sign = -1 if text.startswith("-") else 1
     body = text.lstrip("+-")

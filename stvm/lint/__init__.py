@@ -19,6 +19,7 @@ from stvm.lint.config import LintConfig, load_config, suppressed
 from stvm.lint.findings import Finding, Rule
 from stvm.lint.registry import all_rules, select_rules
 from stvm.settings import DEFAULT_SETTINGS, SysmacSettings
+from stvm.lint.context import ProjectContext
 
 __all__ = ["lint", "lint_analysis", "LintReport", "Finding", "Rule", "all_rules", "select_rules"]
 
@@ -41,7 +42,6 @@ def lint_analysis(analysis, settings: SysmacSettings, rules: Iterable[Rule], inc
                   files: set[str] | None = None) -> list[Finding]:
     """Every finding of `rules` on the checked project (user POUs; the stdlib with
     `include_stdlib`; only POUs of `files` when given), sorted by place."""
-    from stvm.lint.context import ProjectContext
     project = ProjectContext(analysis, settings)
     rules = list(rules)
     findings: list[Finding] = []

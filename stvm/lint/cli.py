@@ -12,6 +12,10 @@ from __future__ import annotations
 
 import sys
 from pathlib import Path
+from stvm.settings import DEFAULT_SETTINGS
+from stvm.lint.config import ConfigError
+from stvm.lint.registry import SelectionError, select_rules
+from stvm.lint import lint
 
 EXIT_CLEAN, EXIT_FINDINGS, EXIT_USAGE = 0, 1, 2
 
@@ -44,13 +48,10 @@ def _usage(message: str) -> int:
 
 
 def _settings(args):
-    from stvm.settings import DEFAULT_SETTINGS
     return DEFAULT_SETTINGS.with_overrides(getattr(args, "sysmac", None) or [])
 
 
 def cmd_lint(args) -> int:
-    from stvm.lint.config import ConfigError
-    from stvm.lint.registry import SelectionError, select_rules
     from stvm.lint.report import explain
     if args.explain:
         try:
@@ -68,7 +69,6 @@ def cmd_lint(args) -> int:
         settings = _settings(args)
     except ValueError as exc:
         return _usage(str(exc))
-    from stvm.lint import lint
     from stvm.lint.report import render_json, render_sarif, render_text
     try:
         report = lint(args.files, settings, select=args.select, ignore=args.ignore, use_cache=not args.no_cache)

@@ -11,6 +11,7 @@ from stvm.lint.ranges import Interval, RangeAnalysis, State, analyze_ranges
 from stvm.lint.findings import Finding
 from stvm.semantics import types as t
 from stvm.syntax import nodes as n
+from stvm.lint.dataflow import solve
 
 
 class ProjectContext:
@@ -132,5 +133,4 @@ class _SetAnalysis:
 
 def solve_sets(ctx: PouContext, initial: frozenset, transfer, must: bool):
     """Solve a set analysis for one call of the POU (no state carried between scans)."""
-    from stvm.lint.dataflow import solve
     return solve(ctx.cfg, _SetAnalysis(ctx, initial, transfer, must), scan_loop=False)

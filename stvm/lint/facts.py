@@ -13,6 +13,7 @@ from typing import Iterator
 from stvm.semantics import types as t
 from stvm.semantics.model import EXTERNAL, GLOBAL, IN_OUT, INPUT, LOCAL, OUTPUT, TEMP, POUInfo, Variable
 from stvm.syntax import nodes as n
+from stvm.semantics.body import OP_TEXT
 
 NOT_CONST = object()
 
@@ -225,6 +226,5 @@ def text_of(expr: n.Expr) -> str:
     if isinstance(expr, n.Unary):
         return f"{'NOT ' if expr.op == 'NOT' else '-'}{text_of(expr.operand)}"
     if isinstance(expr, n.Binary):
-        from stvm.semantics.body import OP_TEXT
         return f"{text_of(expr.left)} {OP_TEXT.get(expr.op, expr.op)} {text_of(expr.right)}"
     return "expression"

@@ -22,6 +22,8 @@ from stvm.settings import SysmacSettings
 from stvm import syntax
 from stvm.syntax.nodes import Span
 from stvm.version import __version__
+from stvm.source import read_source
+from stvm.semantics import analyze
 
 
 @dataclass
@@ -96,8 +98,6 @@ def load_for_lint(paths: Sequence[str | Path], settings: SysmacSettings, use_cac
     """Expand `paths` as `stvm check` does (a folder's *.st, a file's stvm.toml project), parse
     (cached) and check. `texts` overrides file contents (an editor's unsaved buffer)."""
     from stvm.project import expand_paths
-    from stvm.source import read_source
-    from stvm.semantics import analyze
     from stvm.stdlib import NATIVE_FUNCTIONS, stdlib_sources
     files, manifest, root = expand_paths(paths)
     diags: list[Diagnostic] = []

@@ -17,6 +17,7 @@ from lsprotocol import types as lsp
 from pygls.lsp.server import LanguageServer
 
 from stvm.version import __version__
+from stvm.lint import lint
 
 SOURCE_CHECK, SOURCE_LINT = "stvm", "stvm-lint"
 
@@ -50,7 +51,6 @@ def rule_href(code: str, path: Path) -> str:
 
 def diagnostics_for(path: Path, text: str | None, settings) -> dict[str, list[lsp.Diagnostic]]:
     """Checker and lint diagnostics for `path` (and its project), grouped by file URI."""
-    from stvm.lint import lint
     texts = {str(path): text} if text is not None else None
     report = lint([path], settings, texts=texts)
     out: dict[str, list[lsp.Diagnostic]] = {}

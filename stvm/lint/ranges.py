@@ -36,6 +36,7 @@ from stvm.lint.facts import (EXTERNAL, GLOBAL, IN_OUT, LOCAL, NOT_CONST, OUTPUT,
 from stvm.semantics import types as t
 from stvm.settings import ByteToStringFormat, EnumDefault
 from stvm.syntax import nodes as n
+from stvm.lint.access import node_accesses
 
 Interval = tuple[int, int]
 State = dict[str, Interval]
@@ -459,7 +460,6 @@ class RangeAnalysis:
         """Root variables that the loop of this head writes (its body, its own FOR step)."""
         cached = self._loop_writes.get(head.index)
         if cached is None:
-            from stvm.lint.access import node_accesses
             inner = {id(s) for s in _statements_in(head.stmt)}
             cached = {a.var.key for node in self.cfg.nodes if id(node.stmt) in inner
                       for a in node_accesses(node, self.facts) if a.kind != "read"}
@@ -821,7 +821,6 @@ def _statements_in(stmt) -> list:
 
 def _assigned_roots(cfg: CFG, facts: FactsView) -> set[str]:
     """Variables some statement of the body writes (assignment, output binding, in-out, FOR)."""
-    from stvm.lint.access import node_accesses
     return {access.var.key for node in cfg.nodes for access in node_accesses(node, facts)
             if access.kind != "read"}
 

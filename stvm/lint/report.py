@@ -11,6 +11,7 @@ from pathlib import Path
 from stvm.diagnostics import Diagnostic, render
 from stvm.lint.findings import Finding, Rule
 from stvm.lint.registry import all_rules
+from stvm.version import __version__
 
 SARIF_SCHEMA = "https://docs.oasis-open.org/sarif/sarif/v2.1.0/errata01/os/schemas/sarif-schema-2.1.0.json"
 DOCS_PAGE = "docs/lint.md"
@@ -75,7 +76,6 @@ def _uri(file: str, base: Path | None) -> tuple[str, str | None]:
 
 def render_sarif(findings: list[Finding], diagnostics: list[Diagnostic], base: Path | None = None,
                  version: str = "") -> str:
-    from stvm.version import __version__
     rules = all_rules()
     index = {r.code: i for i, r in enumerate(rules)}
     driver = {

@@ -27,6 +27,7 @@ from stvm.runtime.values import ArrayIndexError, AttrRef, FunctionError, ItemRef
 from stvm.semantics import types as t
 from stvm.syntax.nodes import Span
 from stvm.settings import FunErrorPolicy, StringOverflow
+from stvm.diagnostics import excerpt
 
 GENERATED_FILENAME = "<stvm-generated>"
 
@@ -60,7 +61,6 @@ class RuntimeFault(Exception):
         self.now_ns = now_ns
 
     def render(self, sources: dict[str, str] | None = None) -> str:
-        from stvm.diagnostics import excerpt
         where = f"{self.span.file}:{self.span.line}:{self.span.column}" if self.span else "<unknown>"
         text = f"{where}: fault: {self.message} (task {self.task}, scan {self.scan}, t={format_time(self.now_ns)})\n"
         if self.span and sources:

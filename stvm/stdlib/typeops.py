@@ -13,6 +13,7 @@ from stvm.semantics.types import (
     BoolType, EnumType, IntType, RealType, StringType, TimeType, Type, LINT,
 )
 from stvm.settings import StringLengthUnit, StringResultOverflow
+from stvm.runtime.values import FunctionError
 
 STRING_MAX_BYTES = 1985
 """Bytes of text a plain STRING holds (1986 bytes with the NUL, sysmac.md 2)."""
@@ -98,7 +99,6 @@ def string_result(ctx, text: bytes, what: str) -> bytes:
     `string_result_overflow`): more than 1985 bytes is an instruction error, or is cut."""
     if len(text) <= STRING_MAX_BYTES:
         return text
-    from stvm.runtime.values import FunctionError
     if ctx.settings.string_result_overflow is StringResultOverflow.TRUNCATE:
         cut = STRING_MAX_BYTES
         if ctx.settings.string_length_unit is StringLengthUnit.UTF8:

@@ -11,6 +11,10 @@ from __future__ import annotations
 
 import sys
 from pathlib import Path
+from stvm.trace.golden import compare, locate_writer, render_report
+from stvm.trace.run import TraceSpec, run_trace
+from stvm.trace.signals import WatchError
+from stvm.trace.writers import SUFFIXES, TraceFormatError, read_trace, write_trace
 
 EXIT_OK, EXIT_COMPILE, EXIT_USAGE, EXIT_FAULT, EXIT_MISMATCH = 0, 1, 2, 3, 4
 
@@ -51,10 +55,6 @@ def _usage(message: str) -> int:
 def cmd_trace(args) -> int:
     from stvm.project import LoadError, load, project_settings
     from stvm.scenario import ScenarioError
-    from stvm.trace.golden import compare, locate_writer, render_report
-    from stvm.trace.run import TraceSpec, run_trace
-    from stvm.trace.signals import WatchError
-    from stvm.trace.writers import SUFFIXES, TraceFormatError, read_trace, write_trace
 
     for f in args.files:
         if not Path(f).exists():

@@ -21,6 +21,8 @@ from dataclasses import dataclass, field
 
 from stvm.runtime.format import format_time
 from stvm.trace.model import Trace
+from stvm.trace.run import Prepared
+from stvm.trace.signals import WatchError, select_signals
 
 
 @dataclass
@@ -219,8 +221,6 @@ def locate_writer(spec, actual: Trace, divergence: Divergence, project=None) -> 
     if divergence.kind != "value":
         return None
     from stvm.runtime.vm import RuntimeFault
-    from stvm.trace.run import Prepared
-    from stvm.trace.signals import WatchError, select_signals
     index = actual.index_of(divergence.variable)
     target_scan = actual.last_change(index, min(divergence.scan, actual.scans - 1))
     prepared = Prepared(spec, project)

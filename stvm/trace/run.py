@@ -16,6 +16,8 @@ from pathlib import Path
 from typing import Callable, Sequence
 
 from stvm.trace.model import Trace
+from stvm.trace.recorder import Recorder
+from stvm.trace.signals import WatchError, select_signals
 
 DEFAULT_CYCLES = 1000
 
@@ -100,13 +102,10 @@ def run_trace(spec: TraceSpec, project=None, progress: Callable[[int], None] | N
     """Run `spec` in lockstep and record it. A runtime fault ends the run early; it is recorded
     as an event and returned in `TraceRun.fault` (not raised)."""
     from stvm.runtime.vm import RuntimeFault
-    from stvm.trace.recorder import Recorder
-    from stvm.trace.signals import select_signals
     prepared = Prepared(spec, project)
     vm = prepared.vm
     patterns = list(spec.watch) or list(prepared.scenario.watch)
     if not patterns:
-        from stvm.trace.signals import WatchError
         raise WatchError("nothing to record: give --watch PATTERN (or [record] watch in the scenario)")
     signals = select_signals(vm, patterns)
     recorder = Recorder(vm, signals)
