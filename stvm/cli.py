@@ -67,7 +67,6 @@ def _parse_assignment(text: str) -> tuple[str, str]:
 def cmd_run(args) -> int:
     from stvm.project import LoadError, load, nothing_to_run, parse_duration
     from stvm.runtime.vm import PathError, RuntimeFault, UnboundInOut
-    from stvm.semantics.literals import literal_value
     _require_files(args.files)
     settings = _settings(args)
     try:
@@ -107,6 +106,7 @@ def cmd_run(args) -> int:
         except PathError as exc:
             raise _UsageError(str(exc)) from exc
     for item in args.set or []:
+        from stvm.semantics.literals import literal_value   # lazy: start-up (parses the literal)
         name, text = _parse_assignment(item)
         try:
             ty = vm.type_of(name)

@@ -20,13 +20,13 @@ from typing import TYPE_CHECKING, Sequence
 from stvm.version import __version__
 from stvm.diagnostics import Diagnostic, has_errors, render, sort_key
 from stvm.manifest import MANIFEST, ManifestError, project_files, read_manifest  # noqa: F401 (API)
-from stvm.runtime.vm import GENERATED_FILENAME, VM
 from stvm.settings import DEFAULT_SETTINGS, SysmacSettings
 from stvm.source import SourceError, Span, read_source
 
 if TYPE_CHECKING:
     from stvm.cache import SignedCache
     from stvm.lower import LoweredProject
+    from stvm.runtime.vm import VM
     from stvm.semantics.model import ProjectModel
 
 # The front end (Lark, the checker, the code generator) is imported only on a cache miss: a
@@ -59,8 +59,9 @@ class Project:
     root: Path | None = None
 
     def start(self, scan: str | int = "10ms", realtime: bool = False, start_dt_ns: int = 0,
-              transport=None) -> VM:
+              transport=None) -> "VM":
         """A fresh VM for this project (all variables at their initial values)."""
+        from stvm.runtime.vm import VM   # lazy: start-up (`stvm check` never runs a VM)
         scan_ns = parse_duration(scan) if isinstance(scan, str) else int(scan)
         return VM(self, scan_ns=scan_ns, realtime=realtime, start_dt_ns=start_dt_ns, transport=transport)
 
@@ -309,6 +310,7 @@ def _lower_and_compile(analysis, settings, texts, sources):
 def _lower_and_compile_unpaused(analysis, settings, texts, sources):
     """Generate and compile the Python module; Python's own limits become diagnostics."""
     from stvm.lower import lower_project
+    from stvm.runtime.vm import GENERATED_FILENAME
     fallback = Span(texts[-1][0] if texts else "<input>", 1, 1, 1, 2)
     lowered = None
     try:
