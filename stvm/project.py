@@ -284,14 +284,20 @@ _STDLIB_UNITS: dict[str, tuple[list, list[Diagnostic]]] = {}
 
 
 def stdlib_units(settings: SysmacSettings) -> tuple[list, list[Diagnostic], dict[str, str]]:
-    """The parsed stdlib, memoised in-process and pickled in the cache dir (it never changes
-    between runs of one stvm version, and parsing it is most of a cold start)."""
+    """The parsed stdlib: memoised in-process, shipped prebuilt for the default settings
+    (stvm/stdlib/prebuilt.py), else pickled in the cache dir (it never changes between runs of
+    one stvm version, and parsing it is most of a cold start)."""
     texts = _stdlib(settings)
     key = _cache_key([], settings, "stdlib-units")
     sources = dict(texts)
     if key in _STDLIB_UNITS:
         units, diags = _STDLIB_UNITS[key]
         return units, list(diags), sources
+    from stvm.stdlib import prebuilt
+    shipped = prebuilt.load(texts, settings)    # parsed once when stvm was built (default settings)
+    if shipped is not None:
+        _STDLIB_UNITS[key] = shipped
+        return shipped[0], list(shipped[1]), sources
     from stvm.syntax.parser import parse_text
     cache = _cache()
     entry = f"stdlib-{key}.ast"
