@@ -14,14 +14,27 @@ See ``docs/emulator.md`` and the docstrings of :mod:`emulator.transport` and
 :mod:`emulator.settings`.
 """
 
-from .faults import NO_FAULTS, FaultPlan, parse_fault, parse_faults
-from .framing import Cperr, Frame, FrameError, ListenNodeFramer, encode
-from .robot import NodeState, Robot
-from .settings import DEFAULT_SETTINGS, EmulatorSettings
-from .transport import ClientEndpoint, InProcessLink, TcpServer, start_server
-
 __all__ = [
     "ClientEndpoint", "Cperr", "DEFAULT_SETTINGS", "EmulatorSettings", "FaultPlan", "Frame", "FrameError",
     "InProcessLink", "ListenNodeFramer", "NO_FAULTS", "NodeState", "Robot", "TcpServer", "encode",
     "parse_fault", "parse_faults", "start_server",
 ]
+
+
+# lazy: start-up (the robot's motion planner needs numpy; `stvm run` of a project without a
+# robot, and the scenario reader, must not pay for it)
+_HOMES = {
+    "NO_FAULTS": "faults", "FaultPlan": "faults", "parse_fault": "faults", "parse_faults": "faults",
+    "Cperr": "framing", "Frame": "framing", "FrameError": "framing", "ListenNodeFramer": "framing",
+    "encode": "framing", "NodeState": "robot", "Robot": "robot", "DEFAULT_SETTINGS": "settings",
+    "EmulatorSettings": "settings", "ClientEndpoint": "transport", "InProcessLink": "transport",
+    "TcpServer": "transport", "start_server": "transport",
+}
+
+
+def __getattr__(name):
+    home = _HOMES.get(name)
+    if home is None:
+        raise AttributeError(name)
+    import importlib
+    return getattr(importlib.import_module(f"emulator.{home}"), name)

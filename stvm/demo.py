@@ -19,9 +19,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from stvm.runtime.vm import timing_us
-from stvm.scenario import ScenarioDriver, load_scenario
-import emulator
+# lazy: start-up (`stvm` imports this module to look for `stvm.demo.cli`; the scenario reader,
+# the VM and the emulator load when a demo runs)
 
 TM_LISTEN_PORT = 5890
 
@@ -89,10 +88,12 @@ class Demo:
         if getattr(self.args, "hmi", None) and isinstance(hmi_table, dict) and "scenario" in hmi_table:
             config_scenario = hmi_table["scenario"]   # the operator drives the cell from the pages
         scenario_path = self.args.scenario or (root / config_scenario if config_scenario else None)
+        from stvm.scenario import ScenarioDriver, load_scenario   # lazy: start-up
         scenario = load_scenario(scenario_path) if scenario_path else None
         if self.args.robot:
             self.robot_address = parse_robot(self.args.robot)
         else:
+            import emulator   # lazy: start-up
             port = free_loopback_port()
             self.server = emulator.start_server(host="127.0.0.1", port=port, log_path=self.args.emulator_log)
             self.robot_address = ("127.0.0.1", self.server.port)
@@ -159,6 +160,7 @@ class Demo:
             last_tx = next((f for f in reversed(frames) if _frame_dir(f) == "tx"), None)
             rows.append(("last frame PLC→robot", _frame_text(last_rx)))
             rows.append(("last frame robot→PLC", _frame_text(last_tx)))
+        from stvm.runtime.vm import timing_us   # lazy: start-up
         scan = timing_us(self.vm.scan_durations_ns)
         if scan is not None:
             rows.append(("scan time", f"mean {scan[0]:.0f} µs, p99 {scan[2]:.0f} µs, max {scan[3]:.0f} µs"))

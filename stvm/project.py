@@ -20,13 +20,13 @@ from typing import TYPE_CHECKING, Sequence
 from stvm.version import __version__
 from stvm.diagnostics import Diagnostic, has_errors, render, sort_key
 from stvm.manifest import MANIFEST, ManifestError, project_files, read_manifest  # noqa: F401 (API)
-from stvm.runtime.vm import GENERATED_FILENAME, VM
 from stvm.settings import DEFAULT_SETTINGS, SysmacSettings
 from stvm.source import SourceError, Span, read_source
 
 if TYPE_CHECKING:
     from stvm.cache import SignedCache
     from stvm.lower import LoweredProject
+    from stvm.runtime.vm import VM
     from stvm.semantics.model import ProjectModel
 
 # The front end (Lark, the checker, the code generator) is imported only on a cache miss: a
@@ -59,8 +59,9 @@ class Project:
     root: Path | None = None
 
     def start(self, scan: str | int = "10ms", realtime: bool = False, start_dt_ns: int = 0,
-              transport=None) -> VM:
+              transport=None) -> "VM":
         """A fresh VM for this project (all variables at their initial values)."""
+        from stvm.runtime.vm import VM   # lazy: start-up (`stvm check` never runs a VM)
         from stvm.stdlib import NATIVE_FBS, NATIVE_FUNCTIONS   # lazy: start-up (`import stvm.project`)
         scan_ns = parse_duration(scan) if isinstance(scan, str) else int(scan)
         return VM(self, scan_ns=scan_ns, realtime=realtime, start_dt_ns=start_dt_ns, transport=transport,
@@ -184,8 +185,12 @@ def _stvm_code_digest() -> str:
     return _CODE_DIGEST[0]
 
 
-def _cache_key(texts: list[tuple[str, str]], settings: SysmacSettings) -> str:
+def _cache_key(texts: list[tuple[str, str]], settings: SysmacSettings, kind: str = "") -> str:
+    """Content hash of a cache entry: stvm's version and own code (the stdlib's ST text is part
+    of that code, generated from it and the settings), the settings, and the name and text of
+    every unit given. `kind` keeps entries of different stages apart."""
     digest = hashlib.sha256()
+    digest.update(kind.encode() + b"\0")
     digest.update(__version__.encode())
     digest.update(_stvm_code_digest().encode())
     digest.update(repr(settings).encode())
@@ -212,43 +217,96 @@ def read_files(paths: Sequence[Path], encoding: str = "utf-8") -> tuple[list[tup
     return texts, diags
 
 
-def check(paths: Sequence[str | Path], settings: SysmacSettings | None = None, generate: bool = False):
+def check(paths: Sequence[str | Path], settings: SysmacSettings | None = None, generate: bool = False,
+          use_cache: bool = True):
     """Parse and check: (analysis or None, diagnostics sorted, sources). With `generate`, also
     lower and compile, so limits that only code generation meets are reported too. Without
-    `settings`, the project's own (`project_settings`)."""
+    `settings`, the project's own (`project_settings`).
+
+    The verdict (the diagnostics) of a project is cached by content hash (stvm's version and
+    code, the settings, every file's name and text): an unchanged project skips parsing,
+    checking and lowering. The analysis is then computed only if the caller reads it."""
     if settings is None:
         settings = project_settings(paths)
     files, manifest, _ = expand_paths(paths)
     texts, diags = read_files(files, source_encoding(manifest))
-    analysis, diags, sources = _check_texts(texts, diags, settings)
+    cache_name = f"check-{_cache_key(texts, settings, 'check+generate' if generate else 'check')}.diag"
+    if use_cache and not diags:
+        payload = _cache().get(cache_name)
+        if payload is not None:
+            try:
+                # verified: only this user's stvm (holding the key) can have written it
+                ok, cached_diags, extra_sources = pickle.loads(payload)
+            except Exception:  # a stale entry (an older stvm's classes) is rebuilt, never fatal
+                pass
+            else:
+                sources = dict(texts)
+                sources.update(extra_sources)
+                analysis = _DeferredAnalysis(texts, settings) if ok else None
+                return analysis, list(cached_diags), sources
+    analysis, diags, sources = _check_texts(texts, diags, settings, use_cache)
     if generate and analysis is not None:
         try:
             _lower_and_compile(analysis, settings, texts, sources)
         except LoadError as exc:
             diags = diags + exc.diagnostics
             analysis = None
+    if use_cache:
+        user = {name for name, _ in texts}
+        # the stdlib's text is kept with the verdict: a diagnostic may point into it
+        extra = {name: text for name, text in sources.items() if name not in user}
+        try:
+            payload = pickle.dumps((analysis is not None, diags, extra), protocol=pickle.HIGHEST_PROTOCOL)
+        except (pickle.PicklingError, RecursionError, TypeError):
+            payload = None
+        if payload is not None:
+            _cache().put(cache_name, payload)
+            _cache().prune("check-*.diag", CACHE_MAX_ENTRIES)
     return analysis, diags, sources
+
+
+class _DeferredAnalysis:
+    """The `Analysis` of a project whose verdict came from the cache: computed (parse from the
+    unit cache, check) on first use, so `stvm check` of an unchanged project never builds it."""
+
+    def __init__(self, texts, settings) -> None:
+        self._texts = texts
+        self._settings = settings
+        self._analysis = None
+
+    def __getattr__(self, name):
+        if name.startswith("_"):
+            raise AttributeError(name)
+        if self._analysis is None:
+            self._analysis, _, _ = _check_texts(list(self._texts), [], self._settings)
+        return getattr(self._analysis, name)
 
 
 _STDLIB_UNITS: dict[str, tuple[list, list[Diagnostic]]] = {}
 
 
 def stdlib_units(settings: SysmacSettings) -> tuple[list, list[Diagnostic], dict[str, str]]:
-    """The parsed stdlib, memoised in-process and pickled in the cache dir (it never changes
-    between runs of one stvm version, and parsing it is most of a cold start)."""
+    """The parsed stdlib: memoised in-process, shipped prebuilt for the default settings
+    (stvm/stdlib/prebuilt.py), else pickled in the cache dir (it never changes between runs of
+    one stvm version, and parsing it is most of a cold start)."""
     texts = _stdlib(settings)
-    key = _cache_key(texts, settings)
+    key = _cache_key([], settings, "stdlib-units")
     sources = dict(texts)
     if key in _STDLIB_UNITS:
         units, diags = _STDLIB_UNITS[key]
         return units, list(diags), sources
+    from stvm.stdlib import prebuilt
+    shipped = prebuilt.load(texts, settings)    # parsed once when stvm was built (default settings)
+    if shipped is not None:
+        _STDLIB_UNITS[key] = shipped
+        return shipped[0], list(shipped[1]), sources
     from stvm.syntax.parser import parse_text
     cache = _cache()
-    name = f"stdlib-{key}.ast"
+    entry = f"stdlib-{key}.ast"
     try:
-        payload = cache.get(name)
+        payload = cache.get(entry)
         if payload is None:
-            raise LookupError(name)
+            raise LookupError(entry)
         units, diags = pickle.loads(payload)   # verified: written by this user's stvm
     except Exception:  # missing, unreadable or not ours: parse again
         units, diags = [], []
@@ -256,7 +314,7 @@ def stdlib_units(settings: SysmacSettings) -> tuple[list, list[Diagnostic], dict
             unit, d = parse_text(text, name, settings)
             units.append(unit)
             diags += d
-        cache.put(name, pickle.dumps((units, diags), protocol=pickle.HIGHEST_PROTOCOL))
+        cache.put(entry, pickle.dumps((units, diags), protocol=pickle.HIGHEST_PROTOCOL))
     _STDLIB_UNITS[key] = (units, diags)
     return units, list(diags), sources
 
@@ -275,22 +333,51 @@ def _collector_paused():
             gc.enable()
 
 
-def _check_texts(texts, diags, settings):
+def parse_unit(name: str, text: str, settings: SysmacSettings, use_cache: bool = True):
+    """(unit, parse diagnostics) of one file, from the cache when its text, the settings and
+    stvm are unchanged: an edit re-parses only the file edited."""
+    from stvm.syntax.parser import parse_text
+    if not use_cache:
+        return parse_text(text, name, settings)
+    entry = f"unit-{_cache_key([(name, text)], settings, 'unit')}.ast"
+    payload = _cache().get(entry)
+    if payload is not None:
+        try:
+            unit, diags = pickle.loads(payload)   # verified: written by this user's stvm
+            return unit, list(diags)
+        except Exception:  # a stale entry is parsed again, never fatal
+            pass
+    unit, diags = parse_text(text, name, settings)
+    try:
+        payload = pickle.dumps((unit, diags), protocol=pickle.HIGHEST_PROTOCOL)
+    except (pickle.PicklingError, RecursionError, TypeError):
+        payload = None
+    if payload is not None:
+        _cache().put(entry, payload)
+        if "unit" not in _PRUNED:     # once a process: a cold project writes one entry a file
+            _PRUNED.add("unit")
+            _cache().prune("unit-*.ast", UNIT_CACHE_MAX_ENTRIES)
+    return unit, diags
+
+
+_PRUNED: set[str] = set()
+
+
+def _check_texts(texts, diags, settings, use_cache: bool = True):
     with _collector_paused():
-        return _check_texts_unpaused(texts, diags, settings)
+        return _check_texts_unpaused(texts, diags, settings, use_cache)
 
 
-def _check_texts_unpaused(texts, diags, settings):
+def _check_texts_unpaused(texts, diags, settings, use_cache: bool = True):
     from stvm.semantics import analyze
     from stvm.stdlib import NATIVE_FUNCTIONS
-    from stvm.syntax.parser import parse_text
     sources = dict(texts)
     units, stdlib_diags, stdlib_sources = stdlib_units(settings)
     units = list(units)
     diags += stdlib_diags
     sources.update(stdlib_sources)
     for name, text in texts:
-        unit, d = parse_text(text, name, settings)
+        unit, d = parse_unit(name, text, settings, use_cache)
         units.append(unit)
         diags += d
     analysis = None
@@ -312,6 +399,7 @@ def _lower_and_compile(analysis, settings, texts, sources):
 def _lower_and_compile_unpaused(analysis, settings, texts, sources):
     """Generate and compile the Python module; Python's own limits become diagnostics."""
     from stvm.lower import lower_project
+    from stvm.runtime.vm import GENERATED_FILENAME
     fallback = Span(texts[-1][0] if texts else "<input>", 1, 1, 1, 2)
     lowered = None
     try:
@@ -342,7 +430,7 @@ def load(paths: Sequence[str | Path], settings: SysmacSettings | None = None, us
     texts, read_diags = read_files(files, source_encoding(manifest))
     if read_diags:
         raise LoadError(read_diags, dict(texts))
-    key = _cache_key(texts + _stdlib(settings), settings)
+    key = _cache_key(texts, settings, "load")
     cache_name = f"{key}.bin"
     payload = _cache().get(cache_name) if use_cache else None
     if payload is not None:
@@ -352,7 +440,7 @@ def load(paths: Sequence[str | Path], settings: SysmacSettings | None = None, us
             return Project(model, lowered, marshal.loads(code_bytes), sources, settings, warnings, True, manifest, root)
         except Exception:  # a stale entry (an older stvm's classes) is rebuilt, never fatal
             pass
-    analysis, diags, sources = _check_texts(texts, [], settings)
+    analysis, diags, sources = _check_texts(texts, [], settings, use_cache)
     if analysis is None:
         raise LoadError(diags, sources)
     lowered, code = _lower_and_compile(analysis, settings, texts, sources)
@@ -371,6 +459,7 @@ def load(paths: Sequence[str | Path], settings: SysmacSettings | None = None, us
 
 
 CACHE_MAX_ENTRIES = 200
+UNIT_CACHE_MAX_ENTRIES = 2000   # parsed files (a few KiB to a few MiB each)
 
 
 def nothing_to_run(project: Project, files: Sequence[str | Path] = ()) -> str | None:

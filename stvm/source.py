@@ -24,6 +24,9 @@ class Span:
         return f"{self.file}:{self.line}:{self.column}"
 
 
+NO_SPAN = Span("<builtin>", 0, 0, 0, 0)   # a declaration stvm itself made (builtins, defaults)
+
+
 MAX_SOURCE_BYTES = 8 * 2**20
 """The largest source file stvm reads (8 MiB, about 300,000 lines of dense ST): a bigger
 input is refused with a clear error instead of minutes of parsing and gigabytes of memory."""

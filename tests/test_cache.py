@@ -135,3 +135,81 @@ def test_the_lint_parse_cache_never_unpickles_a_forged_entry(private_cache, tmp_
     loader._MEMO.clear()
     unit, _ = loader.parse_cached(PROGRAM, "main.st", settings)
     assert not marker.exists() and unit is not None               # parsed again, nothing ran
+
+
+# ---- the parse and check caches (issue 16): an unchanged project skips parse and check
+
+OTHER = "FUNCTION Twice : INT\nVAR_INPUT v : INT; END_VAR\nTwice := v * 2;\nEND_FUNCTION\n"
+
+
+def _counting_parser(monkeypatch):
+    """Count the user files the parser really parses (the stdlib is memoised in-process)."""
+    from stvm.syntax import parser
+    parsed: list[str] = []
+    real = parser.parse_text
+
+    def counting(text, name, *args, **kwargs):
+        if not name.startswith("<stdlib>"):
+            parsed.append(name)
+        return real(text, name, *args, **kwargs)
+    monkeypatch.setattr(parser, "parse_text", counting)
+    return parsed
+
+
+def test_an_unchanged_project_is_checked_from_the_cache(private_cache, tmp_path, monkeypatch):
+    folder, key, source = private_cache
+    other = tmp_path / "lib.st"
+    other.write_text(OTHER)
+    parsed = _counting_parser(monkeypatch)
+    analysis, diags, _ = project_module.check([source, other], generate=True)
+    assert analysis is not None and not diags and sorted(parsed) == sorted([str(source), str(other)])
+    parsed.clear()
+    import stvm.semantics.checker as checker
+    monkeypatch.setattr(checker, "analyze", lambda *a, **k: pytest.fail("checked again"))
+    analysis, diags, sources = project_module.check([source, other], generate=True)
+    assert not parsed and not diags and str(source) in sources
+    assert list(folder.glob("check-*.diag")) and len(list(folder.glob("unit-*.ast"))) == 2
+    monkeypatch.undo()
+    # the analysis of a cached verdict is still there for a caller that reads it
+    assert "main" in {k.split("\\")[-1] for k in analysis.model.pous}
+
+
+def test_an_edit_reparses_only_the_file_edited_and_the_verdict_follows(private_cache, tmp_path, monkeypatch):
+    folder, key, source = private_cache
+    other = tmp_path / "lib.st"
+    other.write_text(OTHER)
+    assert not project_module.check([source, other])[1]
+    parsed = _counting_parser(monkeypatch)
+    source.write_text(PROGRAM.replace("x + 1", "x + y"))
+    analysis, diags, sources = project_module.check([source, other])
+    assert parsed == [str(source)]                      # lib.st came from the unit cache
+    assert analysis is None and [d.message for d in diags] == ["'y' is not declared"]
+    parsed.clear()
+    again = project_module.check([source, other])       # the error verdict is cached too
+    assert not parsed and again[0] is None and [d.message for d in again[1]] == ["'y' is not declared"]
+    assert "x + y" in again[2][str(source)]
+
+
+def test_other_settings_are_another_cache_entry(private_cache, monkeypatch):
+    from stvm.settings import DEFAULT_SETTINGS
+    folder, key, source = private_cache
+    project_module.check([source])
+    parsed = _counting_parser(monkeypatch)
+    other = DEFAULT_SETTINGS.with_overrides(["int_div_zero=zero"])
+    assert other != DEFAULT_SETTINGS
+    project_module.check([source], other)
+    assert parsed == [str(source)]
+    assert len(list(folder.glob("check-*.diag"))) == 2
+
+
+def test_forged_check_and_unit_entries_are_never_unpickled(private_cache, tmp_path):
+    folder, key, source = private_cache
+    project_module.check([source], generate=True)
+    marker = tmp_path / "pwned"
+    entries = list(folder.glob("check-*.diag")) + list(folder.glob("unit-*.ast"))
+    assert len(entries) == 2
+    for entry in entries:
+        entry.write_bytes(b"\0" * 32 + pickle.dumps(_Payload(marker)))
+    project_module._CACHES.clear()
+    analysis, diags, _ = project_module.check([source], generate=True)
+    assert not marker.exists() and analysis is not None and not diags

@@ -10,8 +10,18 @@ project's `stvm.toml` (`[hmi] pages = [...]`). The page format is in docs/hmi.md
 (URLs, `data-var`/`data-action` attributes, `/api/vars`) in `stvm/hmi/server.py`.
 """
 
-from stvm.hmi.pages import Hmi, HmiLoadError, load_pages
-from stvm.hmi.robot import PoseSource, from_lockstep, from_tcp_server
-from stvm.hmi.server import HmiServer
 
 __all__ = ["Hmi", "HmiLoadError", "HmiServer", "PoseSource", "from_lockstep", "from_tcp_server", "load_pages"]
+
+
+# lazy: start-up (the server pulls in starlette and uvicorn; `stvm.hmi.cli` must not)
+_HOMES = {"Hmi": "pages", "HmiLoadError": "pages", "load_pages": "pages", "PoseSource": "robot",
+          "from_lockstep": "robot", "from_tcp_server": "robot", "HmiServer": "server"}
+
+
+def __getattr__(name):
+    home = _HOMES.get(name)
+    if home is None:
+        raise AttributeError(name)
+    import importlib
+    return getattr(importlib.import_module(f"stvm.hmi.{home}"), name)

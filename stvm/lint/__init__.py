@@ -14,14 +14,29 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Iterable, Sequence
 
+from typing import TYPE_CHECKING
+
 from stvm.diagnostics import Diagnostic
-from stvm.lint.config import LintConfig, load_config, suppressed
 from stvm.lint.findings import Finding, Rule
-from stvm.lint.registry import all_rules, select_rules
 from stvm.settings import DEFAULT_SETTINGS, SysmacSettings
 from stvm.lint.context import ProjectContext
 
+if TYPE_CHECKING:
+    from stvm.lint.config import LintConfig
+
 __all__ = ["lint", "lint_analysis", "LintReport", "Finding", "Rule", "all_rules", "select_rules"]
+
+
+def __getattr__(name):
+    # lazy: start-up (`stvm.lint.cli` registers its sub-commands on every `stvm` call; the rule
+    # registry and the config reader load only when lint runs)
+    if name in ("all_rules", "select_rules"):
+        from stvm.lint import registry
+        return getattr(registry, name)
+    if name in ("LintConfig", "load_config", "suppressed"):
+        from stvm.lint import config
+        return getattr(config, name)
+    raise AttributeError(name)
 
 
 @dataclass
@@ -76,12 +91,14 @@ def _reported_files(paths: Sequence[str | Path], loaded: list[str]) -> set[str]:
 
 def lint(paths: Sequence[str | Path], settings: SysmacSettings = DEFAULT_SETTINGS,
          select: Iterable[str] | None = None, ignore: Iterable[str] = (), use_cache: bool = True,
-         texts: dict[str, str] | None = None, config: LintConfig | None = None,
+         texts: dict[str, str] | None = None, config: "LintConfig | None" = None,
          include_stdlib: bool = False) -> LintReport:
     """Parse, check and lint `paths` (files or folders, as `stvm check`). `select`/`ignore` take
     codes, prefixes (SA2) or names; the project's stvm.toml `[lint]` adds to them, and
     `(* stvm: noqa SAnnn *)` on a line suppresses that line's findings."""
+    from stvm.lint.config import load_config, suppressed   # lazy: start-up
     from stvm.lint.loader import load_for_lint
+    from stvm.lint.registry import select_rules
     loaded = load_for_lint(paths, settings, use_cache, texts)
     if config is None:
         config = load_config(loaded.manifest, loaded.root)

@@ -21,7 +21,7 @@ import textwrap
 from dataclasses import dataclass
 from typing import Callable, Iterable
 
-from stvm.syntax.nodes import Span
+from stvm.source import Span
 
 FAMILIES = {
     "SA1": "Data flow",

@@ -25,7 +25,7 @@ from stvm.runtime.helpers import HELPERS
 from stvm.runtime.stats import TimingStats
 from stvm.runtime.values import ArrayIndexError, AttrRef, FunctionError, ItemRef, MapRef, STFault
 from stvm.semantics import types as t
-from stvm.syntax.nodes import Span
+from stvm.source import Span
 from stvm.settings import FunErrorPolicy, StringOverflow
 from stvm.diagnostics import excerpt
 

@@ -1,5 +1,11 @@
 """Stage 2: index, resolve and type-check (`analyze`)."""
 
-from stvm.semantics.checker import Analysis, analyze
-
 __all__ = ["analyze", "Analysis"]
+
+
+def __getattr__(name):
+    # lazy: start-up (the VM and the cached load need `stvm.semantics.types`, not the checker)
+    if name in __all__:
+        from stvm.semantics import checker
+        return getattr(checker, name)
+    raise AttributeError(name)

@@ -10,7 +10,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from stvm.semantics.types import Type
-from stvm.syntax import nodes as n
+from stvm.source import NO_SPAN, Span   # start-up: not the syntax tree (a cached load unpickles this)
 
 INPUT, OUTPUT, IN_OUT, LOCAL, TEMP, GLOBAL, EXTERNAL = (
     "VAR_INPUT", "VAR_OUTPUT", "VAR_IN_OUT", "VAR", "VAR_TEMP", "VAR_GLOBAL", "VAR_EXTERNAL")
@@ -22,7 +22,7 @@ class Variable:
     section: str              # VAR_INPUT, VAR_OUTPUT, VAR_IN_OUT, VAR, VAR_TEMP, VAR_GLOBAL, VAR_EXTERNAL
     type: Type
     constant: bool = False
-    span: n.Span = n.NO_SPAN
+    span: Span = NO_SPAN
     init: object = None       # the constant initial value (runtime representation) or None for the type default
 
     @property
@@ -43,7 +43,7 @@ class POUInfo:
     typed: bool = False       # native wants the static argument types (`{native typed}`)
     aliases: dict[str, str] = field(default_factory=dict)         # pin alias key → pin key
     file: str = ""
-    span: n.Span = n.NO_SPAN
+    span: Span = NO_SPAN
 
     @property
     def key(self) -> str:

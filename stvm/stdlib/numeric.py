@@ -10,7 +10,6 @@ from __future__ import annotations
 import copy
 import math
 
-import numpy as np
 
 from stvm.runtime.values import FunctionError, STFault
 from stvm.semantics.types import BoolType, IntType, RealType, Type, DINT, LINT
@@ -40,19 +39,29 @@ def abs_(ctx, result_type, value):
     return coerce(abs(value), result_type)
 
 
-def _real_function(numpy_function):
+def _numpy():
+    import numpy   # lazy: start-up (a program that calls no REAL function never loads numpy)
+    return numpy
+
+
+def _real_function(numpy_name):
+    function = []     # the numpy ufunc, looked up on the first call
+
     def apply(ctx, result_type, value):
+        np = _numpy()
+        if not function:
+            function.append(getattr(np, numpy_name))
         with np.errstate(all="ignore"):
-            return coerce(float(numpy_function(np.float64(value))), result_type)
+            return coerce(float(function[0](np.float64(value))), result_type)
     return apply
 
 
 # Choice: computed in double precision and rounded to the result type; for REAL this is the
 # correctly rounded single-precision result in all but rare double-rounding cases.
 REAL_FUNCTIONS = {
-    "SQRT": np.sqrt, "LN": np.log, "LOG": np.log10, "EXP": np.exp,
-    "SIN": np.sin, "COS": np.cos, "TAN": np.tan,
-    "ASIN": np.arcsin, "ACOS": np.arccos, "ATAN": np.arctan,
+    "SQRT": "sqrt", "LN": "log", "LOG": "log10", "EXP": "exp",
+    "SIN": "sin", "COS": "cos", "TAN": "tan",
+    "ASIN": "arcsin", "ACOS": "arccos", "ATAN": "arctan",
 }
 for _name, _function in REAL_FUNCTIONS.items():
     native_function(_name, generic=True)(_real_function(_function))
@@ -60,6 +69,7 @@ for _name, _function in REAL_FUNCTIONS.items():
 
 @native_function("EXPT", generic=True, result_rule=_first_argument_type)
 def expt(ctx, result_type, base, exponent):
+    np = _numpy()
     with np.errstate(all="ignore"):
         return coerce(float(np.power(np.float64(base), np.float64(exponent))), result_type)
 

@@ -8,10 +8,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from stvm.source import Span  # every node carries one (`n.Span`)
-
-
-NO_SPAN = Span("<builtin>", 0, 0, 0, 0)
+from stvm.source import NO_SPAN, Span  # every node carries one (`n.Span`)
 
 
 def _span() -> Span:

@@ -11,15 +11,29 @@
 See docs/trace.md for the formats and the pytest plugin (`stvm.pytest_plugin`).
 """
 
-from stvm.trace.golden import Divergence, Writer, compare, locate_writer, render_report
-from stvm.trace.model import EventEntry, FrameEntry, SignalInfo, Trace
-from stvm.trace.recorder import Recorder
-from stvm.trace.run import TraceRun, TraceSpec, run_trace
-from stvm.trace.signals import Signal, WatchError, select_signals
-from stvm.trace.writers import TraceFormatError, read_trace, write_trace
-
 __all__ = [
     "Divergence", "EventEntry", "FrameEntry", "Recorder", "Signal", "SignalInfo", "Trace", "TraceFormatError",
     "TraceRun", "TraceSpec", "WatchError", "Writer", "compare", "locate_writer", "read_trace", "render_report",
     "run_trace", "select_signals", "write_trace",
 ]
+
+
+# lazy: start-up (`stvm.trace.cli` registers `stvm trace` on every `stvm` call; the recorder and
+# the writers load when a trace is made)
+_HOMES = {
+    "Divergence": "golden", "Writer": "golden", "compare": "golden", "locate_writer": "golden",
+    "render_report": "golden",
+    "EventEntry": "model", "FrameEntry": "model", "SignalInfo": "model", "Trace": "model",
+    "Recorder": "recorder",
+    "TraceRun": "run", "TraceSpec": "run", "run_trace": "run",
+    "Signal": "signals", "WatchError": "signals", "select_signals": "signals",
+    "TraceFormatError": "writers", "read_trace": "writers", "write_trace": "writers",
+}
+
+
+def __getattr__(name):
+    home = _HOMES.get(name)
+    if home is None:
+        raise AttributeError(name)
+    import importlib
+    return getattr(importlib.import_module(f"stvm.trace.{home}"), name)

@@ -1,0 +1,91 @@
+"""The stdlib's parsed units, built once and shipped with stvm (start-up time of a cold run).
+
+Parsing the stdlib's ~66 KB of ST is most of a first `stvm check` with an empty cache. The units
+the parser makes of it with the default settings are stored beside this module
+(`prebuilt_units.pickle.z`), under a key: stvm's version, the stdlib text itself, the settings,
+and the code of every module the parse result depends on (the grammar and parser, the tree
+nodes, spans, diagnostics, settings). A key that does not match (another stvm, other settings,
+an edited grammar) means the file is not used: the stdlib is parsed (and cached per user) as
+before, so a stale file costs time, never correctness.
+
+Trust: the file is part of the installed package, like its `.py` files (whoever can replace it
+can replace those); it is only read from this folder, never from a cache folder.
+
+Rebuild it after changing the grammar, the parser, the nodes or the stdlib:
+
+    python -m stvm.stdlib.prebuilt          (tests/stdlib/test_prebuilt.py says when it is stale)
+"""
+
+from __future__ import annotations
+
+import hashlib
+import pickle
+import zlib
+from pathlib import Path
+
+FILE = Path(__file__).with_name("prebuilt_units.pickle.z")
+
+# what the parse result depends on, beside the stdlib text and the settings (relative to stvm/)
+_PARSE_CODE = ("syntax", "source.py", "diagnostics", "settings.py", "version.py")
+
+
+def _code_files(package: Path) -> list[Path]:
+    files = []
+    for name in _PARSE_CODE:
+        path = package / name
+        if path.is_dir():
+            files += sorted(p for p in path.rglob("*") if p.suffix in (".py", ".lark")
+                            and "__pycache__" not in p.parts)
+        else:
+            files.append(path)
+    return files
+
+
+def key(texts: list[tuple[str, str]], settings) -> str:
+    from stvm.version import __version__
+    package = Path(__file__).resolve().parent.parent
+    digest = hashlib.sha256(b"stdlib-prebuilt\0" + __version__.encode() + b"\0" + repr(settings).encode())
+    for path in _code_files(package):
+        digest.update(path.relative_to(package).as_posix().encode() + b"\0" + path.read_bytes())
+    for name, text in texts:
+        digest.update(name.encode() + b"\0" + text.encode("utf-8", "replace") + b"\0")
+    return digest.hexdigest()
+
+
+def load(texts: list[tuple[str, str]], settings):
+    """(units, diagnostics) of the shipped stdlib parse when it matches `texts` and `settings`
+    exactly, else None."""
+    try:
+        data = FILE.read_bytes()
+    except OSError:
+        return None
+    stored_key, _, body = data.partition(b"\n")
+    if stored_key.decode("ascii", "replace") != key(texts, settings):
+        return None
+    try:
+        units, diags = pickle.loads(zlib.decompress(body))
+    except Exception:   # damaged, or classes that changed: parse instead
+        return None
+    return units, diags
+
+
+def build() -> Path:
+    """Parse the stdlib with the default settings and write the file (what `python -m` does)."""
+    from stvm.settings import DEFAULT_SETTINGS
+    from stvm.stdlib import stdlib_sources
+    from stvm.syntax.parser import parse_text
+    texts = stdlib_sources(DEFAULT_SETTINGS)
+    units, diags = [], []
+    for name, text in texts:
+        unit, d = parse_text(text, name, DEFAULT_SETTINGS)
+        units.append(unit)
+        diags += d
+    body = zlib.compress(pickle.dumps((units, diags), protocol=pickle.HIGHEST_PROTOCOL), 9)
+    tmp = FILE.with_suffix(".tmp")
+    tmp.write_bytes(key(texts, DEFAULT_SETTINGS).encode("ascii") + b"\n" + body)
+    tmp.replace(FILE)
+    return FILE
+
+
+if __name__ == "__main__":
+    print(f"wrote {build()}")
