@@ -1,0 +1,193 @@
+"""Object orientation on the VM (IEC 61131-3 ed. 3 6.6.5-6.6.6, CODESYS/TwinCAT syntax): METHODs
+with inputs, outputs, in-outs, fresh locals and a result; calls as statements and in expressions,
+formal and positional; own methods without prefix and through THIS^; EXTENDS, overriding,
+SUPER^; interfaces; properties. Black-box programs through the API and the CLI."""
+
+from __future__ import annotations
+
+import pytest
+
+import stvm
+from core_helpers import cli, run_st, start_st, write_st
+
+COUNTER = """
+FUNCTION_BLOCK FB_Counter
+VAR_INPUT step : INT := 1; END_VAR
+VAR_OUTPUT count : INT; END_VAR
+VAR limit : INT := 10; END_VAR
+count := count + step;
+
+METHOD Reset
+count := 0;
+END_METHOD
+
+METHOD IsReady : BOOL
+IsReady := count >= limit;
+END_METHOD
+
+METHOD Calc : INT
+VAR_INPUT a : INT; b : INT; END_VAR
+VAR_OUTPUT doubled : INT; END_VAR
+VAR tmp : INT; END_VAR
+tmp := tmp + a * b;          (* VAR of a method starts fresh on every call *)
+doubled := 2 * tmp;
+Calc := tmp + count;
+END_METHOD
+
+METHOD AddTwice
+VAR_INPUT n : INT; END_VAR
+count := count + Calc(n, 1);
+THIS^.count := THIS^.count + THIS^.Calc(a := n, b := 1);
+END_METHOD
+END_FUNCTION_BLOCK
+
+PROGRAM Main
+VAR
+  c : FB_Counter;
+  x : INT;
+  d : INT;
+  ready : BOOL;
+  n : INT;
+END_VAR
+c(step := 2);
+x := c.Calc(a := 1, b := 2, doubled => d);
+IF c.IsReady() THEN
+  ready := TRUE;
+  c.Reset();
+END_IF;
+n := n + 1;
+IF n = 7 THEN c.AddTwice(3); END_IF;
+END_PROGRAM
+"""
+
+
+def test_methods_read_and_write_the_instance():
+    values = run_st(COUNTER, cycles=4, prints=["Main.x", "Main.d", "Main.ready", "Main.c.count"])
+    # count 8 after 4 calls; Calc(1, 2): tmp = 2 (fresh), doubled 4, result 2 + 8
+    assert values == {"Main.x": 10, "Main.d": 4, "Main.ready": False, "Main.c.count": 8}
+
+
+def test_method_in_a_condition_and_as_a_statement():
+    values = run_st(COUNTER, cycles=5, prints=["Main.ready", "Main.c.count"])
+    assert values == {"Main.ready": True, "Main.c.count": 0}      # IsReady at 10, then Reset
+
+
+def test_own_methods_without_prefix_and_through_this():
+    values = run_st(COUNTER, cycles=7, prints=["Main.c.count", "Main.x"])
+    # scan 7: count 4, x = 2 + 4; AddTwice(3): 4 + Calc(3,1) = 4 + 7 = 11, then 11 + (3 + 11) = 25
+    assert values == {"Main.c.count": 25, "Main.x": 6}
+
+
+IN_OUT = """
+FUNCTION_BLOCK FB_Acc
+VAR total : DINT; END_VAR
+METHOD Add : DINT
+VAR_INPUT v : DINT; END_VAR
+VAR_IN_OUT acc : DINT; END_VAR
+VAR_OUTPUT was : DINT; END_VAR
+was := acc;
+acc := acc + v;
+total := total + v;
+Add := total;
+END_METHOD
+END_FUNCTION_BLOCK
+
+PROGRAM Main
+VAR a : FB_Acc; s : DINT := 100; w : DINT; r : DINT; arr : ARRAY[1..2] OF DINT; q : BOOL; END_VAR
+r := a.Add(v := 5, acc := s, was => w);
+a.Add(7, arr[2]);
+q := a.Add(v := 1, acc := arr[1]) > 12 AND s = 105;
+END_PROGRAM
+"""
+
+
+def test_method_in_out_outputs_and_positional_arguments():
+    values = run_st(IN_OUT, cycles=1, prints=["Main.s", "Main.w", "Main.r", "Main.arr", "Main.q", "Main.a.total"])
+    assert values == {"Main.s": 105, "Main.w": 100, "Main.r": 5, "Main.arr": [1, 7], "Main.q": True,
+                      "Main.a.total": 13}
+
+
+def test_method_locals_are_fresh_each_call():
+    src = """
+FUNCTION_BLOCK F
+METHOD Next : INT
+VAR k : INT; END_VAR
+k := k + 1;
+Next := k;
+END_METHOD
+END_FUNCTION_BLOCK
+PROGRAM Main VAR f : F; a, b : INT; END_VAR
+a := f.Next();
+b := f.Next() + f.Next();
+END_PROGRAM
+"""
+    assert run_st(src, cycles=3, prints=["Main.a", "Main.b"]) == {"Main.a": 1, "Main.b": 2}
+
+
+def test_method_with_return_exits_early():
+    src = """
+FUNCTION_BLOCK F
+VAR hits : INT; END_VAR
+METHOD Check : INT
+VAR_INPUT v : INT; END_VAR
+Check := -1;
+IF v < 0 THEN RETURN; END_IF;
+hits := hits + 1;
+Check := hits;
+END_METHOD
+END_FUNCTION_BLOCK
+PROGRAM Main VAR f : F; a, b : INT; END_VAR
+a := f.Check(-5);
+b := f.Check(3);
+END_PROGRAM
+"""
+    assert run_st(src, cycles=2, prints=["Main.a", "Main.b"]) == {"Main.a": -1, "Main.b": 2}
+
+
+def test_methods_may_come_before_the_body_and_in_a_program():
+    src = """
+FUNCTION_BLOCK F
+VAR_OUTPUT n : INT; END_VAR
+METHOD Bump
+n := n + 10;
+END_METHOD
+n := n + 1;
+Bump();
+END_FUNCTION_BLOCK
+PROGRAM Main
+VAR f : F; seen : INT; END_VAR
+f();
+Record();
+METHOD Record
+seen := f.n;
+END_METHOD
+END_PROGRAM
+"""
+    assert run_st(src, cycles=2, prints=["Main.seen"]) == {"Main.seen": 22}
+
+
+def test_the_body_sees_what_its_methods_wrote_in_the_same_call():
+    # the FB body holds no copy of its variables while it calls its own methods
+    src = """
+FUNCTION_BLOCK F
+VAR_OUTPUT n : INT; log : INT; END_VAR
+n := n + 1; n := n + 1; n := n + 1;
+Twice();
+log := n;
+n := n + 1;
+METHOD Twice
+n := n * 2;
+END_METHOD
+END_FUNCTION_BLOCK
+PROGRAM Main VAR f : F; END_VAR
+f();
+END_PROGRAM
+"""
+    assert run_st(src, cycles=1, prints=["Main.f.log", "Main.f.n"]) == {"Main.f.log": 6, "Main.f.n": 7}
+
+
+def test_cli_run_prints_values_changed_by_methods(tmp_path):
+    path = write_st(COUNTER, "counter.st", tmp_path)
+    rc, out, err = cli(["run", path, "--cycles", "7", "--print", "Main.c.count", "--print", "Main.ready"])
+    assert rc == 0, err
+    assert "Main.c.count = 25" in out and "Main.ready = TRUE" in out
