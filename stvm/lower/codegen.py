@@ -343,6 +343,7 @@ class Lowerer:
         if pou.interfaces or base is not None:
             # what __QUERYINTERFACE asks: every interface the instance implements (keys)
             w.line(f"_itfs = {tuple(sorted(self.implemented(pou)))!r}")
+            w.line(f"_st = {pou.name!r}")
         w.line("def __init__(self):")
         w.indent += 1
         if base is not None:
@@ -918,6 +919,8 @@ class Lowerer:
         src = self.facts.types.get(id(e))
         if ty is None or src is None:
             return self.expr(e)
+        if isinstance(ty, t.InterfaceType) and id(e) in self.facts.untyped:
+            return "None"   # `itf := 0`
         if id(e) in self.facts.consts and not isinstance(self.facts.consts[id(e)], (list, dict)):
             value = self.facts.consts[id(e)]
             converted = self.convert_const(value, ty)
@@ -1130,6 +1133,11 @@ class Lowerer:
     def ex_Binary(self, e: n.Binary) -> str:
         op = e.op
         lt = self.facts.types.get(id(e.left))
+        if op in ("EQ", "NE") and (isinstance(lt, t.InterfaceType)
+                                   or isinstance(self.facts.types.get(id(e.right)), t.InterfaceType)):
+            # interfaces compare by the instance they hold; 0 and NULL are "none"
+            left, right = ("None" if id(x) in self.facts.untyped else self.expr(x) for x in (e.left, e.right))
+            return f"({left} {'is' if op == 'EQ' else 'is not'} {right})"
         if op in ("EQ", "NE") and isinstance(lt, t.RefType):
             rt = self.facts.types[id(e.right)]
             target = lt.target if not lt.is_null else rt.target  # type: ignore[attr-defined]
@@ -1230,6 +1238,11 @@ class Lowerer:
     def ex_Call(self, e: n.Call) -> str:
         if id(e) in self.facts.ref_calls:
             return self.reference_code(e.args[0].value)
+        if self.facts.intrinsics and id(e) in self.facts.intrinsics:
+            what, key = self.facts.intrinsics[id(e)]
+            if what == "valid":
+                return f"({self.expr(e.args[0].value)} is not None)"
+            return f"_query_itf({self.expr(e.args[0].value)}, {key!r}, {self.ref_code(e.args[1].value)})"
         return self.function_call(e, self.facts.calls[id(e)])
 
     def arg_code(self, var: Variable, value: n.Expr) -> str:

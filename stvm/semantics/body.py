@@ -394,6 +394,9 @@ class _BodyChecker:
 
     # ---- assignability
     def require_assignable(self, expr: n.Expr, src: t.Type, dst: t.Type, span: n.Span) -> None:
+        if isinstance(dst, t.InterfaceType) or isinstance(src, t.InterfaceType):
+            self.interface_assignable(expr, src, dst, span)
+            return
         if isinstance(dst, t.FBType) or isinstance(src, t.FBType):
             self.error("function block instances cannot be assigned", span, "E052")
             return
@@ -430,6 +433,65 @@ class _BodyChecker:
             self.error(f"cannot assign {src.name} to {dst.name} implicitly (value may not fit){conversion_hint(src, dst)}", span, "E052")
             return
         self.error(f"type mismatch: cannot assign {src.name} to {dst.name}{conversion_hint(src, dst)}", span, "E052")
+
+    def interface_assignable(self, expr: n.Expr, src: t.Type, dst: t.Type, span: n.Span) -> None:
+        """`itf := fbInstance` (its FB implements the interface), `itf := itf2` (the same or an
+        extending interface), `itf := 0` / `NULL`."""
+        if not isinstance(dst, t.InterfaceType):
+            self.error(f"type mismatch: cannot assign interface {src.name} to {dst.name}", span, "E052")
+            return
+        key = dst.qualname.lower()
+        if isinstance(src, t.FBType):
+            if key not in self.c.implemented_interfaces(src.qualname.lower()):
+                self.error(f"function block {src.name} does not implement interface {dst.name}", span, "E052")
+            return
+        if isinstance(src, t.InterfaceType):
+            if key not in self.c.interface_closure(src.qualname.lower()):
+                self.error(f"type mismatch: interface {src.name} does not extend {dst.name}", span, "E052")
+            return
+        if (isinstance(src, t.RefType) and src.is_null) or self.is_zero_literal(expr):
+            return
+        self.error(f"type mismatch: cannot assign {src.name} to interface {dst.name}", span, "E052")
+
+    def is_zero_literal(self, expr: n.Expr) -> bool:
+        return id(expr) in self.facts.untyped and self.facts.consts.get(id(expr)) == 0
+
+    def intrinsic(self, e: n.Call, word: str) -> t.Type | None:
+        """__QUERYINTERFACE(itf, itf2) (CODESYS): itf2 := the instance itf holds when its FB
+        implements itf2's interface, else 0; TRUE when it does. __ISVALIDREF(x): x is not NULL."""
+        args = [a for a in e.args if a.kind == "positional"]
+        want = 2 if word == "__QUERYINTERFACE" else 1
+        if len(args) != want or len(e.args) != want:
+            self.check_args_loosely(e)
+            self.error(f"{word} takes {want} positional argument(s)", e.span, "E048")
+            return None
+        ty = self.expr(args[0].value)
+        if ty is None:
+            return None
+        if word == "__ISVALIDREF":
+            if not isinstance(ty, (t.InterfaceType, t.RefType)):
+                self.error(f"__ISVALIDREF needs an interface or a reference, not {ty.name}", args[0].value.span, "E052")
+                return None
+            self.facts.intrinsics[id(e)] = ("valid", None)
+            return t.BOOL
+        if not isinstance(ty, (t.InterfaceType, t.FBType)):
+            self.error(f"__QUERYINTERFACE needs an interface or an FB instance, not {ty.name}", args[0].value.span, "E052")
+            return None
+        target = args[1].value
+        tty = self.lvalue(target) if self.is_lvalue_shape(target) else None
+        if not isinstance(tty, t.InterfaceType):
+            if tty is not None or not self.is_lvalue_shape(target):
+                self.error("the second argument of __QUERYINTERFACE must be an interface variable", target.span, "E052")
+            return None
+        root = target
+        while isinstance(root, (n.Member, n.Index)):
+            root = root.base
+        ref = self.facts.names.get(id(root)) if isinstance(root, n.Name) else None
+        if ref is not None and ref.kind in ("var", "field"):  # type: ignore[attr-defined]
+            owner = self.pou.key if ref.kind == "var" else self.fb.key  # type: ignore[attr-defined,union-attr]
+            self.facts.addressed.add((owner, ref.variable.key))  # type: ignore[attr-defined]
+        self.facts.intrinsics[id(e)] = ("query", tty.qualname.lower())
+        return t.BOOL
 
     def string_constant_fits(self, expr: n.Expr, dst: t.StringType, span: n.Span) -> None:
         """A constant text that provably overflows STRING[n] (sysmac.md 2, `string_overflow`):
@@ -997,6 +1059,10 @@ class _BodyChecker:
             return True
         if isinstance(lt, t.TimeType) and isinstance(rt, t.TimeType):
             return lt.name == rt.name
+        if (isinstance(lt, t.InterfaceType) or isinstance(rt, t.InterfaceType)) and op in ("EQ", "NE"):
+            others = [(ty, ex) for ty, ex in ((lt, le), (rt, re_)) if not isinstance(ty, t.InterfaceType)]
+            return all(isinstance(ty, t.FBType) or (isinstance(ty, t.RefType) and ty.is_null) or self.is_zero_literal(ex)
+                       for ty, ex in others)
         if isinstance(lt, t.RefType) and isinstance(rt, t.RefType) and op in ("EQ", "NE"):
             return lt.is_null or rt.is_null or t.same_type(lt.target, rt.target)
         return False
@@ -1042,6 +1108,9 @@ class _BodyChecker:
         callee = e.callee
         pou: POUInfo | None = None
         instance: n.Expr | None = None
+        if isinstance(callee, n.Name) and len(callee.parts) == 1 and callee.parts[0].upper() in ("__QUERYINTERFACE", "__ISVALIDREF") \
+                and self.lookup_callable(callee) is None:
+            return self.intrinsic(e, callee.parts[0].upper())
         if isinstance(callee, (n.Member, n.Deref)) or (self.fb is not None and isinstance(callee, n.Name)):
             done, ty = self.oo_call(e, expected, statement)
             if done:
@@ -1294,6 +1363,8 @@ class _BodyChecker:
                     info.inputs.append((var, arg.value))
                     return
                 ty = aty
+            elif isinstance(ptype, t.FBType) and self.is_lvalue_shape(arg.value):
+                ty = self.expr(arg.value)   # an FB instance passed by reference
             else:
                 ty = self.lvalue(arg.value) if self.is_lvalue_shape(arg.value) else None
                 if ty is None and not self.is_lvalue_shape(arg.value):
@@ -1309,6 +1380,9 @@ class _BodyChecker:
             elif isinstance(ptype, t.ArrayType) and isinstance(ty, t.ArrayType) and ptype.dims is None:
                 if not self.element_ok(ty.element, ptype.element):
                     self.error(f"'{var.name}' of {pou.name} needs {ptype.name}, got {ty.name}", arg.value.span, "E052")
+            elif isinstance(ty, t.FBType) and isinstance(ptype, t.FBType) \
+                    and self.c.is_derived(ty.qualname.lower(), ptype.qualname.lower()):
+                pass   # an instance of a derived FB is an instance of its base
             elif not (ty == ptype or (isinstance(ty, t.StringType) and isinstance(ptype, t.StringType))
                       or (isinstance(ty, (t.StructType, t.EnumType)) and implicit_ok(ty, ptype))
                       or (isinstance(ty, t.ArrayType) and implicit_ok(ty, ptype))

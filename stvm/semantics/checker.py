@@ -71,6 +71,7 @@ class Facts:
     addressed: set[tuple[str, str]] = field(default_factory=set)  # (POU key, variable key) whose reference is taken
     keep: list = field(default_factory=list)              # keeps nodes alive so ids stay unique
     props: dict[int, tuple] = field(default_factory=dict)  # property uses: id → (PropertyInfo, how) how: self/inst/itf
+    intrinsics: dict[int, tuple] = field(default_factory=dict)  # __QUERYINTERFACE ('query', key) / __ISVALIDREF ('valid', None)
 
 
 @dataclass
@@ -652,6 +653,11 @@ class Checker:
                     impl = self.find_method(key, method.name)
                     if impl is not None and impl.abstract and method.name.lower() not in reported:
                         reported.add(method.name.lower())
+                        if impl.owner == key:
+                            self.error(f"ABSTRACT method '{impl.name}' needs an ABSTRACT function block; "
+                                       f"declare FUNCTION_BLOCK ABSTRACT {info.name}",
+                                       self.method_nodes[impl.key].name_span, "E068")
+                            continue
                         self.error(f"function block '{info.name}' must implement the ABSTRACT method "
                                    f"'{method.name}' of {self.pous[impl.owner].name} (or be ABSTRACT)", span, "E068")
             for itf in sorted(self.implemented_interfaces(key)):

@@ -191,3 +191,201 @@ def test_cli_run_prints_values_changed_by_methods(tmp_path):
     rc, out, err = cli(["run", path, "--cycles", "7", "--print", "Main.c.count", "--print", "Main.ready"])
     assert rc == 0, err
     assert "Main.c.count = 25" in out and "Main.ready = TRUE" in out
+
+
+# ---------------------------------------------------------------- EXTENDS, overriding, SUPER^
+SHAPES = """
+FUNCTION_BLOCK ABSTRACT FB_Shape
+VAR_OUTPUT calls : INT; END_VAR
+VAR unit : INT := 1; END_VAR
+calls := calls + 1;
+METHOD ABSTRACT Area : REAL
+END_METHOD
+METHOD Describe : REAL
+Describe := Area() * 10.0;        (* dynamic dispatch: the instance's own Area *)
+END_METHOD
+METHOD PROTECTED Scale : REAL
+VAR_INPUT f : REAL; END_VAR
+Scale := f * 2.0;
+END_METHOD
+END_FUNCTION_BLOCK
+
+FUNCTION_BLOCK FB_Square EXTENDS FB_Shape
+VAR_INPUT side : REAL; END_VAR
+VAR_OUTPUT bodyran : INT; END_VAR
+SUPER^();                          (* the base body *)
+bodyran := bodyran + 1;
+METHOD Area : REAL
+Area := side * side;
+END_METHOD
+END_FUNCTION_BLOCK
+
+FUNCTION_BLOCK FB_Big EXTENDS FB_Square
+METHOD Area : REAL
+Area := SUPER^.Area() + Scale(1.5) + unit;
+END_METHOD
+END_FUNCTION_BLOCK
+
+FUNCTION Twice : REAL
+VAR_IN_OUT s : FB_Shape; END_VAR
+Twice := 2.0 * s.Describe();
+END_FUNCTION
+
+PROGRAM Main
+VAR sq : FB_Square; big : FB_Big; a, b, c, d : REAL; END_VAR
+sq(side := 2.0);
+big(side := 3.0);
+a := sq.Describe();
+b := big.Describe();
+c := big.Area();
+d := Twice(big);
+END_PROGRAM
+"""
+
+
+def test_inherited_methods_dispatch_to_the_override():
+    values = run_st(SHAPES, cycles=2, prints=["Main.a", "Main.b", "Main.c", "Main.d"])
+    # square 2: area 4 -> 40; big 3: 9 + Scale(1.5) 3 + unit 1 = 13 -> 130; via a base in-out: 260
+    assert values == {"Main.a": 40.0, "Main.b": 130.0, "Main.c": 13.0, "Main.d": 260.0}
+
+
+def test_inherited_variables_and_the_base_body_through_super():
+    values = run_st(SHAPES, cycles=2, prints=["Main.sq.calls", "Main.sq.bodyran", "Main.big.calls", "Main.big.bodyran"])
+    # FB_Big has no statements of its own: its body is empty (the base body runs only through SUPER^())
+    assert values == {"Main.sq.calls": 2, "Main.sq.bodyran": 2, "Main.big.calls": 0, "Main.big.bodyran": 0}
+
+
+def test_print_shows_inherited_variables():
+    text = run_st(SHAPES, cycles=1, fmt=True, prints=["Main.sq"])
+    assert text == {"Main.sq": "(calls := 1, unit := 1, side := 2.0, bodyran := 1)"}
+
+
+# ---------------------------------------------------------------- interfaces
+MOTORS = """
+INTERFACE I_Base
+METHOD Id : INT
+END_METHOD
+END_INTERFACE
+
+INTERFACE I_Motor EXTENDS I_Base
+METHOD Start : BOOL
+VAR_INPUT speed : INT; END_VAR
+VAR_OUTPUT accepted : INT; END_VAR
+END_METHOD
+PROPERTY Speed : INT
+GET END_GET
+END_PROPERTY
+END_INTERFACE
+
+INTERFACE I_Other
+METHOD Ping
+END_METHOD
+END_INTERFACE
+
+FUNCTION_BLOCK FB_Motor IMPLEMENTS I_Motor
+VAR_INPUT ident : INT; END_VAR
+VAR sp : INT; END_VAR
+METHOD Id : INT
+Id := ident;
+END_METHOD
+METHOD Start : BOOL
+VAR_INPUT speed : INT; END_VAR
+VAR_OUTPUT accepted : INT; END_VAR
+sp := speed;
+accepted := speed * 2;
+Start := speed > 0;
+END_METHOD
+PROPERTY Speed : INT
+GET
+Speed := sp;
+END_GET
+SET
+sp := Speed;
+END_SET
+END_PROPERTY
+END_FUNCTION_BLOCK
+
+FUNCTION_BLOCK FB_Fast EXTENDS FB_Motor IMPLEMENTS I_Other
+METHOD Start : BOOL
+VAR_INPUT speed : INT; END_VAR
+VAR_OUTPUT accepted : INT; END_VAR
+Start := SUPER^.Start(speed := speed * 10, accepted => accepted);
+END_METHOD
+METHOD Ping
+sp := -1;
+END_METHOD
+END_FUNCTION_BLOCK
+
+PROGRAM Main
+VAR
+  m1 : FB_Motor;
+  m2 : FB_Fast;
+  itf : I_Motor;
+  base : I_Base;
+  other : I_Other;
+  ok : BOOL;
+  acc : INT;
+  ids : INT;
+  wasnull, nowset, q1, q2, same, valid : BOOL;
+  s1, s2 : INT;
+  n : INT;
+END_VAR
+n := n + 1;
+m1(ident := 1); m2(ident := 2);
+IF n = 1 THEN wasnull := itf = 0; END_IF;
+itf := m1;
+nowset := itf <> NULL;
+ok := itf.Start(speed := 3, accepted => acc);
+s1 := itf.Speed;
+itf := m2;
+ok := itf.Start(4);
+s2 := m2.Speed;
+base := itf;
+ids := base.Id() * 10 + m1.Id();
+q1 := __QUERYINTERFACE(base, other);
+q2 := __QUERYINTERFACE(m1, other);
+valid := __ISVALIDREF(other);
+same := itf = m2 AND base = itf;
+m1.Speed := 42;
+IF n = 3 THEN
+  other := 0;
+  other.Ping();
+END_IF
+END_PROGRAM
+"""
+
+
+def test_calls_through_interfaces_dispatch_to_the_instance():
+    values = run_st(MOTORS, cycles=1, prints=["Main.ok", "Main.acc", "Main.s1", "Main.s2", "Main.ids", "Main.m1.sp"])
+    # m1.Start(3): accepted 6; FB_Fast.Start(4) -> SUPER^.Start(40): sp 40; m1.Speed := 42 at the end
+    assert values == {"Main.ok": True, "Main.acc": 6, "Main.s1": 3, "Main.s2": 40, "Main.ids": 21, "Main.m1.sp": 42}
+
+
+def test_interface_comparisons_and_query_interface():
+    values = run_st(MOTORS, cycles=1, prints=["Main.wasnull", "Main.nowset", "Main.q1", "Main.q2", "Main.valid",
+                                              "Main.same"])
+    # m1 implements no I_Other: q2 FALSE and `other` back to NULL
+    assert values == {"Main.wasnull": True, "Main.nowset": True, "Main.q1": True, "Main.q2": False,
+                      "Main.valid": False, "Main.same": True}
+
+
+def test_print_of_an_interface_variable():
+    assert run_st(MOTORS, cycles=1, fmt=True, prints=["Main.itf", "Main.other"]) == \
+        {"Main.itf": "-> FB_Fast", "Main.other": "NULL"}
+
+
+def test_call_through_an_unassigned_interface_faults_at_its_line(tmp_path):
+    path = write_st(MOTORS, "motors.st", tmp_path)
+    rc, out, err = cli(["run", path, "--cycles", "5"])
+    line = MOTORS.splitlines().index("  other.Ping();") + 1
+    assert rc == 3
+    assert f"motors.st:{line}:3: fault: call through an interface that holds no instance (NULL)" in err
+    assert "scan 2" in err and "Traceback" not in err
+
+
+def test_api_fault_names_the_line():
+    vm = start_st(MOTORS)
+    vm.run(cycles=2)
+    with pytest.raises(stvm.RuntimeFault, match="interface") as info:
+        vm.run(cycles=1)
+    assert info.value.span.line == MOTORS.splitlines().index("  other.Ping();") + 1
