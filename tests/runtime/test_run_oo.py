@@ -389,3 +389,59 @@ def test_api_fault_names_the_line():
     with pytest.raises(stvm.RuntimeFault, match="interface") as info:
         vm.run(cycles=1)
     assert info.value.span.line == MOTORS.splitlines().index("  other.Ping();") + 1
+
+
+# ---------------------------------------------------------------- properties
+TANK = """
+FUNCTION_BLOCK FB_Tank
+VAR_OUTPUT log : INT; END_VAR
+VAR lvl : INT; maxv : INT := 100; writes : INT; END_VAR
+Level := Level + 1;             (* inside the FB a bare property name calls GET and SET *)
+log := Level;
+
+PROPERTY Level : INT            (* TwinCAT stores GET and SET apart: two blocks of one name *)
+GET
+Level := lvl;
+END_GET
+END_PROPERTY
+
+PROPERTY PUBLIC Level : INT
+SET
+writes := writes + 1;
+IF Level > maxv THEN lvl := maxv; ELSE lvl := Level; END_IF;
+END_SET
+END_PROPERTY
+
+PROPERTY WriteCount : INT
+GET
+VAR doubled : INT; END_VAR
+doubled := writes * 2;
+WriteCount := doubled / 2;
+END_GET
+END_PROPERTY
+
+METHOD Fill
+THIS^.Level := 500;
+END_METHOD
+END_FUNCTION_BLOCK
+
+PROGRAM Main
+VAR t : FB_Tank; a, w : INT; r : REAL; END_VAR
+t();
+t.Level := t.Level + 10;
+a := t.Level;
+IF a > 30 THEN t.Fill(); END_IF;
+w := t.WriteCount;
+r := t.Level * 1.5;
+END_PROGRAM
+"""
+
+
+def test_properties_are_used_like_variables():
+    values = run_st(TANK, cycles=3, prints=["Main.a", "Main.w", "Main.r", "Main.t.log", "Main.t.lvl"])
+    # per scan: body +1 and t.Level +10 (two SETs); scan 3: 33 > 30, Fill sets 500, clamped to 100
+    assert values == {"Main.a": 33, "Main.w": 7, "Main.r": 150.0, "Main.t.log": 23, "Main.t.lvl": 100}
+
+
+def test_property_setter_runs_once_per_assignment():
+    assert run_st(TANK, cycles=1, prints=["Main.t.writes"]) == {"Main.t.writes": 2}
