@@ -13,7 +13,7 @@ import pytest
 ROOT = Path(__file__).resolve().parent.parent
 
 
-@pytest.mark.parametrize("library", ["cbt_v2", "rockwell", "kuka", "schneider"])
+@pytest.mark.parametrize("library", ["cbt_v2", "rockwell", "kuka", "schneider", "schneider/oo"])
 def test_library_demo_runs_one_pnp_cycle(tmp_path, library):
     log = tmp_path / "frames.jsonl"
     result = subprocess.run(

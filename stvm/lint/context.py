@@ -48,6 +48,19 @@ class PouContext:
         return build_cfg(self.node)
 
     @cached_property
+    def oo_shared(self) -> bool:
+        """An FB/PROGRAM whose variables its METHODs or PROPERTYs (or a base's) also read and write,
+        or that inherits variables: its body alone does not show every access (the rules that
+        need all of them skip it)."""
+        pous = self.project.analysis.model.pous
+        cur = self.info
+        while cur is not None:
+            if getattr(cur, "methods", None) or getattr(cur, "properties", None) or getattr(cur, "base", None):
+                return True
+            cur = pous.get(cur.base) if getattr(cur, "base", None) else None
+        return False
+
+    @cached_property
     def _ranges(self):
         return analyze_ranges(self.cfg, self.info, self.facts, self.settings, self.project.alias_ranges)
 

@@ -19,7 +19,7 @@ from stvm.semantics import types as t
 from stvm.semantics.checker import Analysis
 from stvm.semantics.facts import CallInfo
 from stvm.semantics.model import EXTERNAL, GLOBAL, IN_OUT, INPUT, OUTPUT, TEMP, POUInfo, Variable
-from stvm.lower.names import unit_name, var_attr
+from stvm.lower.names import method_attr, unit_name, var_attr
 from stvm.syntax import nodes as n
 from stvm.syntax.walk import calls_in, name_uses, root_name, walk
 from stvm.settings import ArrayOob, EnumDefault, ForEndEval, IntDivZero
@@ -207,15 +207,34 @@ class Lowerer:
         for key, st in sorted(self.model.structs.items()):
             self.struct_class(key, st)  # type: ignore[arg-type]
         self.globals_class()
-        for key, pou in sorted(self.model.pous.items()):
+        for key, pou in self.class_order():
             node = self.a.pou_nodes.get(key)
             if pou.kind == "FUNCTION":
                 if not pou.native:
                     self.function(pou, node)
-            else:
+            elif pou.kind != "INTERFACE":
                 self.fb_class(pou, node)
         return LoweredProject("\n".join(w.lines) + "\n", w.line_map, self.classes, self.natives,
                               self.native_fbs, self.types, self.sites)
+
+    def class_order(self) -> list[tuple[str, POUInfo]]:
+        """POUs in key order, except that a base FB comes before the FBs extending it."""
+        pous = self.model.pous
+        order: list[tuple[str, POUInfo]] = []
+        done: set[str] = set()
+
+        def visit(key: str) -> None:
+            if key in done:
+                return
+            done.add(key)
+            base = pous[key].base
+            if base is not None and base in pous:
+                visit(base)
+            order.append((key, pous[key]))
+
+        for key in sorted(pous):
+            visit(key)
+        return order
 
     def struct_class(self, key: str, st: t.StructType) -> None:
         w = self.w
@@ -274,15 +293,23 @@ class Lowerer:
         w = self.w
         w.blank_span()
         cls = self.classes[pou.key]
-        own = [v for v in pou.variables.values() if v.section != EXTERNAL]
+        base = self.model.pous[pou.base] if pou.base is not None else None
+        inherited = set(base.variables) if base is not None else set()
+        own = [v for v in pou.variables.values() if v.section != EXTERNAL and v.key not in inherited]
         attrs = [var_attr(v.name) for v in own]
         if pou.native:
             attrs.append("_impl")
-        w.line(f"class {cls}:")
+        w.line(f"class {cls}({self.classes[base.key]}):" if base is not None else f"class {cls}:")
         w.indent += 1
         w.line(f"__slots__ = {tuple(attrs)!r}")
+        if pou.interfaces or base is not None:
+            # what __QUERYINTERFACE asks: every interface the instance implements (keys)
+            w.line(f"_itfs = {tuple(sorted(self.implemented(pou)))!r}")
+            w.line(f"_st = {pou.name!r}")
         w.line("def __init__(self):")
         w.indent += 1
+        if base is not None:
+            w.line(f"{self.classes[base.key]}.__init__(self)")
         for var in own:
             if var.section == IN_OUT:
                 w.line(f"self.{var_attr(var.name)} = None")
@@ -302,33 +329,58 @@ class Lowerer:
         else:
             assert node is not None
             cached = self.cached_vars(pou, node)
-            temps_reset = [f"self.{var_attr(v.name)} = {self.var_default(v)}" for v in own
+            temps_reset = [f"self.{var_attr(v.name)} = {self.var_default(v)}" for v in pou.variables.values()
                            if v.section == TEMP and v.key not in cached]
             self.cached_body(pou, node, cached, temps_reset, [])
-        w.indent -= 2
+        w.indent -= 1
+        for method in pou.methods.values():
+            if not method.abstract:
+                self.function(method, self.a.method_nodes[method.key], method_attr(method.name))
+        for prop in pou.properties.values():
+            for kind, accessor in (("GET", prop.getter), ("SET", prop.setter)):
+                if accessor is not None and not accessor.abstract:
+                    self.function(accessor, self.a.method_nodes[accessor.key], method_attr(prop.name, kind))
+        self.pou = pou
+        w.indent -= 1
         w.blank_span()
 
-    def function(self, pou: POUInfo, node: n.POU | None) -> None:
+    def implemented(self, pou: POUInfo) -> set[str]:
+        out: set[str] = set()
+        cur: POUInfo | None = pou
+        while cur is not None:
+            stack = list(cur.interfaces)
+            while stack:
+                key = stack.pop()
+                if key not in out and key in self.model.pous:
+                    out.add(key)
+                    stack.extend(self.model.pous[key].interfaces)
+            cur = self.model.pous.get(cur.base) if cur.base else None
+        return out
+
+    def function(self, pou: POUInfo, node, method: str = "") -> None:
+        """A FUNCTION, or (`method`: its Python name) a METHOD / property accessor of the FB class
+        being written: the same frame, with `self` the instance."""
         w = self.w
         w.blank_span()
-        name = self.classes[pou.key]
+        name = method or self.classes[pou.key]
         params = pou.params()
         outputs = [v for v in pou.variables.values() if v.section == OUTPUT]
-        args = ", ".join([var_attr(p.name) for p in params] + [f"o_{var_attr(o.name)}=None" for o in outputs])
+        args = ", ".join((["self"] if method else []) + [var_attr(p.name) for p in params]
+                         + [f"o_{var_attr(o.name)}=None" for o in outputs])
         w.line(f"def {name}({args}):")
         w.indent += 1
         self.pou = pou
         self.owner = "_f"
-        assert node is not None and pou.return_type is not None
+        assert node is not None and (pou.return_type is not None or method)
         # every variable lives on the frame `_f` (so in-outs can reference it); the often used
         # ones are copied into Python locals by cached_body
-        prologue = ["_f = _Frame()"]
+        prologue = ["_f = _Frame()"] if pou.variables or not method else []
         for p in params:
             prologue.append(f"_f.{var_attr(p.name)} = {var_attr(p.name)}")
         for var in pou.variables.values():
             if var.section not in (INPUT, IN_OUT, EXTERNAL):
                 prologue.append(f"_f.{var_attr(var.name)} = {self.var_default(var)}")
-        prologue.append(f"_r = {self.default_expr(pou.return_type)}")
+        prologue.append(f"_r = {self.default_expr(pou.return_type)}" if pou.return_type is not None else "_r = None")
         # VAR_OUTPUT of a function: written through the caller's references when it returns
         epilogue = [f"if o_{var_attr(o.name)} is not None: o_{var_attr(o.name)}.set(_f.{var_attr(o.name)})"
                     for o in outputs]
@@ -374,7 +426,7 @@ class Lowerer:
         for x in walk((node,)):
             if isinstance(x, n.Call):
                 info = self.facts.calls.get(id(x))
-                if info is not None and not info.is_fb:
+                if info is not None and not info.is_fb and not info.oo:
                     return True
         return False
 
@@ -425,7 +477,9 @@ class Lowerer:
 
     def plain_call(self, s: n.CallStatement) -> None:
         info = self.facts.calls[id(s.call)]
-        if info.is_fb:
+        if info.oo == "super_body":
+            self.w.line(f"{self.classes[info.static_owner]}.__call__(self)")
+        elif info.is_fb:
             self.fb_call(s.call, info)  # type: ignore[arg-type]
         else:
             self.w.line(self.function_call(s.call, info))  # type: ignore[arg-type]
@@ -635,7 +689,7 @@ class Lowerer:
         self.w.line("continue")
 
     def st_Return(self, s: n.Return) -> None:
-        self.w.line("return _r" if self.pou and self.pou.kind == "FUNCTION" else "return")
+        self.w.line("return _r" if self.pou and self.pou.kind in ("FUNCTION", "METHOD") else "return")
 
     def st_Empty(self, s: n.Empty) -> None:
         self.w.line("pass")
@@ -648,16 +702,18 @@ class Lowerer:
     def store_code(self, target: n.Expr, value: str, ty: t.Type | None) -> list[str]:
         """Python statements that store `value` (already converted to `ty`) into `target`."""
         aggregate = isinstance(ty, (t.StructType, t.ArrayType))
+        if self.facts.props and id(target) in self.facts.props:
+            return [f"{self.property_target(target, 'SET')}({value})"]
         if isinstance(target, n.Name):
             ref = self.facts.names[id(target)]
             if ref.kind == "result":
                 return [f"_r = {value}" if not aggregate else f"_r = _copy_value({value})"]
             var = ref.variable
             assert var is not None
-            place = self.var_place(var, ref.kind == "global")
+            place = self.name_place(ref)
             if id(target) in self.facts.auto_deref:
                 return self.store_through(place, value, ty)
-            if var.key in self.cached and ref.kind != "global":
+            if var.key in self.cached and ref.kind not in ("global", "field"):
                 self.assigned.add(var.key)
             if var.section == IN_OUT and not aggregate:
                 return [f"{place}.set({value})"]
@@ -741,8 +797,14 @@ class Lowerer:
                 for var, target, _ in info.outputs:
                     if isinstance(target, n.Name):
                         referenced.add(target.parts[0].lower())
-        if pou.kind == "FUNCTION":
+        if pou.kind in ("FUNCTION", "METHOD"):
             referenced |= {v.key for v in pou.variables.values() if v.section == OUTPUT}
+        if pou.kind != "METHOD" and self.has_members(pou):
+            # its methods and properties read and write the instance's variables while the body
+            # runs (own calls, calls back through interfaces): only temporaries and aggregates
+            # may stay in Python locals
+            referenced |= {v.key for v in pou.variables.values() if v.section != TEMP
+                           and not isinstance(v.type, (t.StructType, t.ArrayType, t.FBType))}
         # a variable whose reference is taken (REF/ADR/REF=) may be read or written through it
         referenced |= {var for owner, var in self.facts.addressed if owner == pou.key}
         uses = name_uses(node.body)
@@ -757,6 +819,14 @@ class Lowerer:
                 continue
             out[var.key] = var
         return out
+
+    def has_members(self, pou: POUInfo) -> bool:
+        cur: POUInfo | None = pou
+        while cur is not None:
+            if cur.methods or cur.properties:
+                return True
+            cur = self.model.pous.get(cur.base) if cur.base else None
+        return False
 
     def cached_body(self, pou: POUInfo, node: n.POU, cached: dict[str, Variable], prologue_extra: list[str],
                     epilogue_extra: list[str]) -> None:
@@ -811,6 +881,8 @@ class Lowerer:
         src = self.facts.types.get(id(e))
         if ty is None or src is None:
             return self.expr(e)
+        if isinstance(ty, t.InterfaceType) and id(e) in self.facts.untyped:
+            return "None"   # `itf := 0`
         if id(e) in self.facts.consts and not isinstance(self.facts.consts[id(e)], (list, dict)):
             value = self.facts.consts[id(e)]
             converted = self.convert_const(value, ty)
@@ -863,6 +935,8 @@ class Lowerer:
         return getattr(self, "ex_" + type(e).__name__)(e)
 
     def ex_Name(self, e: n.Name) -> str:
+        if self.facts.props and id(e) in self.facts.props:
+            return self.property_get(e)
         ref = self.facts.names[id(e)]
         if ref.kind == "enum":
             return _lit(ref.value)
@@ -870,14 +944,40 @@ class Lowerer:
             return "_r"
         if ref.kind == "null":
             return "None"
+        if ref.kind in ("this", "super"):
+            return "self"
         var = ref.variable
         assert var is not None
-        place = self.var_place(var, ref.kind == "global")
+        place = self.name_place(ref)
         if id(e) in self.facts.auto_deref:
             return self.deref_code(place, var.type.target)  # type: ignore[attr-defined]
         if var.section == IN_OUT and not isinstance(var.type, (t.StructType, t.ArrayType, t.FBType)):
             return f"{place}.get()"
         return place
+
+    def name_place(self, ref) -> str:
+        """Where a variable Name lives: a method's view of its instance (`self.v_x`) or var_place."""
+        if ref.kind == "field":
+            return f"self.{var_attr(ref.variable.name)}"
+        return self.var_place(ref.variable, ref.kind == "global")
+
+    def property_target(self, e: n.Expr, accessor: str) -> str:
+        """`obj.g_p` / `obj.s_p` for a property use (checked: facts.props)."""
+        prop, how = self.facts.props[id(e)]
+        attr = method_attr(prop.name, accessor)
+        if how == "self":
+            return f"self.{attr}"
+        assert isinstance(e, n.Member)
+        if how == "super":
+            owner = self.model.pous[prop.owner]
+            return f"{self.classes[owner.key]}.{attr}.__get__(self)"
+        base = self.expr(e.base)
+        if how == "itf":
+            base = f"({base} or _null_itf())"
+        return f"{base}.{attr}"
+
+    def property_get(self, e: n.Expr) -> str:
+        return f"{self.property_target(e, 'GET')}()"
 
     def deref_code(self, code: str, target: t.Type) -> str:
         """Read through a reference: the aggregate itself, or the scalar's current value; NULL
@@ -887,13 +987,14 @@ class Lowerer:
         return f"({code} or _null_ref()).get()"
 
     def ex_Deref(self, e: n.Deref) -> str:
+        if isinstance(e.base, n.Name) and getattr(self.facts.names.get(id(e.base)), "kind", None) in ("this", "super"):
+            return "self"   # THIS^ / SUPER^: the instance itself, never NULL
         return self.deref_code(self.expr(e.base), self.facts.types[id(e)])
 
     def raw_place(self, target: n.Expr) -> str:
         """The storage of a Name/Member itself (for a REFERENCE TO variable: the reference)."""
         if isinstance(target, n.Name):
-            ref = self.facts.names[id(target)]
-            return self.var_place(ref.variable, ref.kind == "global")  # type: ignore[arg-type]
+            return self.name_place(self.facts.names[id(target)])
         assert isinstance(target, n.Member)
         base_type = self.facts.types[id(target.base)]
         return f"{self.expr(target.base)}.{var_attr(self.member_name(base_type, target.name))}"
@@ -918,6 +1019,8 @@ class Lowerer:
         self.w.line(f"{place} = {self.reference_code(s.value)}")
 
     def ex_Member(self, e: n.Member) -> str:
+        if self.facts.props and id(e) in self.facts.props:
+            return self.property_get(e)
         base_type = self.facts.types[id(e.base)]
         return f"{self.expr(e.base)}.{var_attr(self.member_name(base_type, e.name))}"
 
@@ -990,6 +1093,11 @@ class Lowerer:
     def ex_Binary(self, e: n.Binary) -> str:
         op = e.op
         lt = self.facts.types.get(id(e.left))
+        if op in ("EQ", "NE") and (isinstance(lt, t.InterfaceType)
+                                   or isinstance(self.facts.types.get(id(e.right)), t.InterfaceType)):
+            # interfaces compare by the instance they hold; 0 and NULL are "none"
+            left, right = ("None" if id(x) in self.facts.untyped else self.expr(x) for x in (e.left, e.right))
+            return f"({left} {'is' if op == 'EQ' else 'is not'} {right})"
         if op in ("EQ", "NE") and isinstance(lt, t.RefType):
             rt = self.facts.types[id(e.right)]
             target = lt.target if not lt.is_null else rt.target  # type: ignore[attr-defined]
@@ -1090,6 +1198,11 @@ class Lowerer:
     def ex_Call(self, e: n.Call) -> str:
         if id(e) in self.facts.ref_calls:
             return self.reference_code(e.args[0].value)
+        if self.facts.intrinsics and id(e) in self.facts.intrinsics:
+            what, key = self.facts.intrinsics[id(e)]
+            if what == "valid":
+                return f"({self.expr(e.args[0].value)} is not None)"
+            return f"_query_itf({self.expr(e.args[0].value)}, {key!r}, {self.ref_code(e.args[1].value)})"
         return self.function_call(e, self.facts.calls[id(e)])
 
     def arg_code(self, var: Variable, value: n.Expr) -> str:
@@ -1131,8 +1244,8 @@ class Lowerer:
             var = ref.variable
             assert var is not None
             if var.section == IN_OUT and ref.kind != "global":
-                return f"{self.owner}.{var_attr(var.name)}"
-            place = self.var_place(var, ref.kind == "global")
+                return f"{'self' if ref.kind == 'field' else self.owner}.{var_attr(var.name)}"
+            place = self.name_place(ref)
             if id(value) in self.facts.auto_deref:
                 return place   # a REFERENCE TO variable passed on: its reference object
             obj, attr = place.rsplit(".", 1)
@@ -1149,7 +1262,7 @@ class Lowerer:
 
     def function_call(self, e: n.Call, info: CallInfo) -> str:
         pou = info.pou
-        name = self.classes[pou.key]
+        name = self.classes[pou.key] if not info.oo else ""
         given = {var.key: value for var, value in info.inputs}
         args = []
         for p in pou.params():
@@ -1170,6 +1283,16 @@ class Lowerer:
             if convert != "v":
                 ref = f"_MapRef({ref}, lambda v: {convert})"
             args.append(f"o_{var_attr(var.name)}={ref}")
+        if info.oo:
+            attr = method_attr(pou.name)
+            if info.oo == "self":
+                return f"self.{attr}({', '.join(args)})"
+            if info.oo == "super":
+                return f"{self.classes[info.static_owner]}.{attr}({', '.join(['self'] + args)})"
+            inst = self.expr(info.instance)  # type: ignore[arg-type]
+            if info.oo == "itf":
+                inst = f"({inst} or _null_itf())"
+            return f"{inst}.{attr}({', '.join(args)})"
         if pou.native:
             lead = ["_ctx"]
             if pou.generic:

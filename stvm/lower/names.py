@@ -31,3 +31,8 @@ def unit_name(kind: str, index: int, qualname: str) -> str:
     """Class/function name of a POU or struct: kind P (FB/PROGRAM), F (function), N (native fn), S (struct)."""
     leaf = qualname.split("\\")[-1]
     return f"{kind}{index}_{_checked(leaf)}"
+
+
+def method_attr(st_name: str, accessor: str = "") -> str:
+    """Python method of an FB class for METHOD `st_name` (m_), or a PROPERTY's GET (g_) / SET (s_)."""
+    return {"": "m_", "GET": "g_", "SET": "s_"}[accessor] + _checked(st_name)

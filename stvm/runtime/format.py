@@ -161,6 +161,9 @@ def format_value(value: object, ty: t.Type, pous: dict | None = None) -> str:
                 continue
             parts.append(f"{var.name} := {format_value(getattr(value, 'v_' + var.key), var.type, pous)}")
         return "(" + ", ".join(parts) + ")"
+    if isinstance(ty, t.InterfaceType):
+        # an interface variable: NULL, or `-> FB_Type` of the instance it holds
+        return "NULL" if value is None else f"-> {getattr(value, '_st', 'instance')}"
     if isinstance(ty, t.RefType):
         # Choice: a reference prints as `-> value` of a scalar target, `-> TYPE` of an aggregate
         # (a self-referencing struct must not recurse); `r^` in a path shows the target in full

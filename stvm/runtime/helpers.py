@@ -98,6 +98,17 @@ def _null_ref():
     raise NullReference("dereference of a NULL reference")
 
 
+def _null_itf():
+    raise NullReference("call through an interface that holds no instance (NULL)")
+
+
+def _query_itf(obj, key: str, out) -> bool:
+    """__QUERYINTERFACE(obj, out): `out` := obj when its FB implements interface `key`."""
+    found = obj is not None and key in getattr(obj, "_itfs", ())
+    out.set(obj if found else None)
+    return found
+
+
 def _same_ref(a, b) -> bool:
     if a is b:
         return True
@@ -148,5 +159,5 @@ HELPERS = {
     "_tdiv": _tdiv, "_tdiv0": _tdiv0, "_expt": _expt, "_oob": _oob, "_endless_for": _endless_for, "_strfit": strfit, "_copy_value": copy_value,
     "_assign_array": _assign_array, "_setbit": _setbit, "_with": _with, "_Frame": _Frame,
     "_AttrRef": AttrRef, "_MapRef": MapRef, "_ItemRef": ItemRef, "_ArrayRef": ArrayRef, "_FunctionError": FunctionError,
-    "_STFault": STFault, "_null_ref": _null_ref, "_same_ref": _same_ref, "_ArrayIndexError": ArrayIndexError,
+    "_STFault": STFault, "_null_ref": _null_ref, "_null_itf": _null_itf, "_query_itf": _query_itf, "_same_ref": _same_ref, "_ArrayIndexError": ArrayIndexError,
 }

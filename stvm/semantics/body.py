@@ -11,6 +11,7 @@ Typing rules follow shared/spec/sysmac.md section 2:
 
 from __future__ import annotations
 
+from dataclasses import replace
 from typing import TYPE_CHECKING
 
 from stvm.semantics import types as t
@@ -102,6 +103,11 @@ def trunc_result_from_context(settings) -> bool:
     return True
 
 
+def _with_access(method: POUInfo, access: str) -> POUInfo:
+    """A property accessor checked with its property's access specifier."""
+    return replace(method, access=access)
+
+
 def native_result_rule(pou: POUInfo, natives):
     """The stdlib's result-type rule for a generic native (SHL, MUX, TRUNC, …), if it has one;
     `natives`: the native functions the checker was given (stvm.stdlib.NATIVE_FUNCTIONS)."""
@@ -112,10 +118,14 @@ def native_result_rule(pou: POUInfo, natives):
 
 
 class BodyChecker:
-    def __init__(self, checker: "Checker", pou: POUInfo, node: n.POU) -> None:
+    def __init__(self, checker: "Checker", pou: POUInfo, node, fb: POUInfo | None = None,
+                 fb_node: n.POU | None = None) -> None:
         self.c = checker
         self.pou = pou
         self.node = node
+        # the FB (or PROGRAM) whose instance the body runs on: its own body, or a method's owner
+        self.fb = fb if fb is not None else (pou if pou.kind in ("FUNCTION_BLOCK", "PROGRAM") else None)
+        self.fb_node = fb_node if fb_node is not None else node
         self.facts = checker.facts
         self.settings = checker.settings
         self.loop_depth = 0
@@ -268,7 +278,7 @@ class BodyChecker:
 
     @property
     def pou_namespace(self) -> tuple[str, ...]:
-        return self.node.namespace
+        return self.fb_node.namespace
 
     # ---- names
     def resolve_name(self, name: n.Name) -> object:
@@ -281,8 +291,20 @@ class BodyChecker:
                     g = self.c.globals.get(key)
                     return NameRef("global", g) if g is not None else None
                 return NameRef("var", var)
-            if self.pou.kind == "FUNCTION" and key == self.pou.name.lower():
+            if key == self.pou.name.lower() and (self.pou.kind == "FUNCTION" or (
+                    self.pou.kind == "METHOD" and self.pou.return_type is not None)):
                 return NameRef("result", pou=self.pou)
+            if self.fb is not None and self.fb is not self.pou:
+                var = self.fb.variables.get(key)   # a method sees its instance's variables
+                if var is not None:
+                    if var.section == EXTERNAL:
+                        g = self.c.globals.get(key)
+                        return NameRef("global", g) if g is not None else None
+                    return NameRef("field", var)
+            if self.fb is not None:
+                prop = self.c.find_property(self.fb.key, key)
+                if prop is not None:
+                    return NameRef("prop", pou=prop.getter, value=prop)
             g = self.c.globals.get(key)
             if g is not None:
                 return NameRef("global", g)
@@ -310,6 +332,8 @@ class BodyChecker:
             if kind == "enum":
                 self.error(f"cannot assign to enumerator '{target.text}'", target.span, "E050")
                 return None
+            if kind == "prop":
+                return self.property_store(target, ref.value, "self")  # type: ignore[attr-defined]
             if kind == "result":
                 self.facts.types[id(target)] = self.pou.return_type  # type: ignore[assignment]
                 return self.pou.return_type
@@ -327,7 +351,12 @@ class BodyChecker:
             base_type = self.expr(target.base)
             if base_type is None:
                 return None
-            if isinstance(base_type, t.FBType):
+            if isinstance(base_type, (t.FBType, t.InterfaceType)):
+                prop = self.c.find_property(base_type.qualname.lower(), target.name)
+                if prop is not None:
+                    self.facts.names.pop(id(target), None)
+                    return self.property_store(target, prop, self.member_how(target.base, base_type))
+            if isinstance(base_type, t.FBType) and not self.inside_own(target.base, base_type):
                 fb = self.c.pous.get(base_type.qualname.lower())
                 pin = fb.pin(target.name) if fb else None
                 if pin is not None and pin.section in (INPUT, OUTPUT, IN_OUT):
@@ -365,6 +394,9 @@ class BodyChecker:
 
     # ---- assignability
     def require_assignable(self, expr: n.Expr, src: t.Type, dst: t.Type, span: n.Span) -> None:
+        if isinstance(dst, t.InterfaceType) or isinstance(src, t.InterfaceType):
+            self.interface_assignable(expr, src, dst, span)
+            return
         if isinstance(dst, t.FBType) or isinstance(src, t.FBType):
             self.error("function block instances cannot be assigned", span, "E052")
             return
@@ -401,6 +433,65 @@ class BodyChecker:
             self.error(f"cannot assign {src.name} to {dst.name} implicitly (value may not fit){conversion_hint(src, dst)}", span, "E052")
             return
         self.error(f"type mismatch: cannot assign {src.name} to {dst.name}{conversion_hint(src, dst)}", span, "E052")
+
+    def interface_assignable(self, expr: n.Expr, src: t.Type, dst: t.Type, span: n.Span) -> None:
+        """`itf := fbInstance` (its FB implements the interface), `itf := itf2` (the same or an
+        extending interface), `itf := 0` / `NULL`."""
+        if not isinstance(dst, t.InterfaceType):
+            self.error(f"type mismatch: cannot assign interface {src.name} to {dst.name}", span, "E052")
+            return
+        key = dst.qualname.lower()
+        if isinstance(src, t.FBType):
+            if key not in self.c.implemented_interfaces(src.qualname.lower()):
+                self.error(f"function block {src.name} does not implement interface {dst.name}", span, "E052")
+            return
+        if isinstance(src, t.InterfaceType):
+            if key not in self.c.interface_closure(src.qualname.lower()):
+                self.error(f"type mismatch: interface {src.name} does not extend {dst.name}", span, "E052")
+            return
+        if (isinstance(src, t.RefType) and src.is_null) or self.is_zero_literal(expr):
+            return
+        self.error(f"type mismatch: cannot assign {src.name} to interface {dst.name}", span, "E052")
+
+    def is_zero_literal(self, expr: n.Expr) -> bool:
+        return id(expr) in self.facts.untyped and self.facts.consts.get(id(expr)) == 0
+
+    def intrinsic(self, e: n.Call, word: str) -> t.Type | None:
+        """__QUERYINTERFACE(itf, itf2) (CODESYS): itf2 := the instance itf holds when its FB
+        implements itf2's interface, else 0; TRUE when it does. __ISVALIDREF(x): x is not NULL."""
+        args = [a for a in e.args if a.kind == "positional"]
+        want = 2 if word == "__QUERYINTERFACE" else 1
+        if len(args) != want or len(e.args) != want:
+            self.check_args_loosely(e)
+            self.error(f"{word} takes {want} positional argument(s)", e.span, "E048")
+            return None
+        ty = self.expr(args[0].value)
+        if ty is None:
+            return None
+        if word == "__ISVALIDREF":
+            if not isinstance(ty, (t.InterfaceType, t.RefType)):
+                self.error(f"__ISVALIDREF needs an interface or a reference, not {ty.name}", args[0].value.span, "E052")
+                return None
+            self.facts.intrinsics[id(e)] = ("valid", None)
+            return t.BOOL
+        if not isinstance(ty, (t.InterfaceType, t.FBType)):
+            self.error(f"__QUERYINTERFACE needs an interface or an FB instance, not {ty.name}", args[0].value.span, "E052")
+            return None
+        target = args[1].value
+        tty = self.lvalue(target) if self.is_lvalue_shape(target) else None
+        if not isinstance(tty, t.InterfaceType):
+            if tty is not None or not self.is_lvalue_shape(target):
+                self.error("the second argument of __QUERYINTERFACE must be an interface variable", target.span, "E052")
+            return None
+        root = target
+        while isinstance(root, (n.Member, n.Index)):
+            root = root.base
+        ref = self.facts.names.get(id(root)) if isinstance(root, n.Name) else None
+        if ref is not None and ref.kind in ("var", "field"):  # type: ignore[attr-defined]
+            owner = self.pou.key if ref.kind == "var" else self.fb.key  # type: ignore[attr-defined,union-attr]
+            self.facts.addressed.add((owner, ref.variable.key))  # type: ignore[attr-defined]
+        self.facts.intrinsics[id(e)] = ("query", tty.qualname.lower())
+        return t.BOOL
 
     def string_constant_fits(self, expr: n.Expr, dst: t.StringType, span: n.Span) -> None:
         """A constant text that provably overflows STRING[n] (sysmac.md 2, `string_overflow`):
@@ -455,6 +546,8 @@ class BodyChecker:
             elif len(e.parts) == 1 and not e.rooted and e.parts[0].upper() == "NULL":
                 self.facts.names[id(e)] = NameRef("null")  # type: ignore[assignment]
                 return t.NULL_REF
+            elif len(e.parts) == 1 and not e.rooted and e.parts[0].upper() in ("THIS", "SUPER"):
+                return self.this_or_super(e)
             else:
                 self.undeclared(e)
                 return None
@@ -464,6 +557,8 @@ class BodyChecker:
             return ref.variable.type  # type: ignore[attr-defined]
         if ref.kind == "result":  # type: ignore[attr-defined]
             return self.pou.return_type
+        if ref.kind == "prop":  # type: ignore[attr-defined]
+            return self.property_load(e, ref.value, "self")  # type: ignore[attr-defined]
         var: Variable = ref.variable  # type: ignore[attr-defined]
         if var.constant and var.init is not None and not isinstance(var.init, (list, dict)):
             self.facts.consts[id(e)] = var.init
@@ -478,12 +573,26 @@ class BodyChecker:
             if fty is None:
                 self.error(f"{base.name} has no member '{e.name}'", e.span, "E034")
             return fty
+        if isinstance(base, (t.FBType, t.InterfaceType)):
+            prop = self.c.find_property(base.qualname.lower(), e.name)
+            if prop is not None:
+                return self.property_load(e, prop, self.member_how(e.base, base))
+        if isinstance(base, t.InterfaceType):
+            what = "method" if self.c.find_method(base.qualname.lower(), e.name) else "member"
+            self.error(f"interface {base.name} has no property '{e.name}'" if what == "member" else
+                       f"'{e.name}' is a method of interface {base.name}; call it: {e.name}(…)", e.span, "E034")
+            return None
         if isinstance(base, t.FBType):
             fb = self.c.pous.get(base.qualname.lower())
             var = fb.pin(e.name) if fb else None
             if var is None:
+                if fb is not None and self.c.find_method(fb.key, e.name) is not None:
+                    self.error(f"'{e.name}' is a method of {base.name}; call it: {e.name}(…)", e.span, "E034")
+                    return None
                 self.error(f"function block {base.name} has no member '{e.name}'", e.span, "E034")
                 return None
+            if self.inside_own(e.base, base):
+                return var.type
             return var.type if self.member_visible(base, var, e) else None
         self.error(f"'{self.describe(e.base)}' is {base.name}, which has no members", e.span, "E034")
         return None
@@ -494,6 +603,150 @@ class BodyChecker:
             self.error(f"'{e.name}' is internal to {base.name}; only inputs and outputs are visible outside", e.span, "E034")
             return False
         return True
+
+    # ---- object orientation
+    def this_or_super(self, e: n.Name) -> t.Type | None:
+        """THIS (a POINTER TO the instance) and SUPER (to its base part), inside an FB or method."""
+        from stvm.semantics.checker import NameRef
+        word = e.parts[0].upper()
+        if self.fb is None or self.fb.kind not in ("FUNCTION_BLOCK", "PROGRAM"):
+            self.error(f"{word} is only meaningful inside a function block or its methods", e.span, "E070")
+            return None
+        key = self.fb.key
+        if word == "SUPER":
+            if self.fb.base is None:
+                self.error(f"SUPER: {self.fb.name} does not EXTEND a function block", e.span, "E070")
+                return None
+            key = self.fb.base
+        info = self.c.pous[key]
+        self.facts.names[id(e)] = NameRef(word.lower(), pou=info)  # type: ignore[assignment]
+        return t.ref_type(t.FBType(info.name, info.qualname, info.kind == "PROGRAM"), "POINTER")
+
+    def inside_own(self, base: n.Expr, base_type: t.FBType) -> bool:
+        """Is `base` THIS^ / SUPER^, or an instance of the FB being checked (whose internals its
+        own body and methods may see)?"""
+        if isinstance(base, n.Deref) and isinstance(base.base, n.Name) and base.base.parts[0].upper() in ("THIS", "SUPER") \
+                and getattr(self.facts.names.get(id(base.base)), "kind", None) in ("this", "super"):
+            return True
+        return False
+
+    def member_how(self, base: n.Expr, base_type: t.Type) -> str:
+        if isinstance(base_type, t.InterfaceType):
+            return "itf"
+        if isinstance(base, n.Deref) and isinstance(base.base, n.Name) \
+                and getattr(self.facts.names.get(id(base.base)), "kind", None) == "super":
+            return "super"
+        return "inst"
+
+    def check_access(self, member: POUInfo, what: str, span: n.Span) -> bool:
+        """PRIVATE: only the declaring FB; PROTECTED: it and derived FBs; INTERNAL: its namespace."""
+        access = member.access
+        if access == "PUBLIC":
+            return True
+        owner = self.c.pous.get(member.owner)
+        here = self.fb.key if self.fb is not None else None
+        ok = True
+        if access == "PRIVATE":
+            ok = here == member.owner
+        elif access == "PROTECTED":
+            ok = here is not None and self.c.is_derived(here, member.owner)
+        elif access == "INTERNAL":
+            ok = owner is None or self.c.index.pou_nodes[member.owner].namespace == self.pou_namespace
+        if not ok:
+            where = {"PRIVATE": f"only {owner.name if owner else '?'} itself",
+                     "PROTECTED": f"only {owner.name if owner else '?'} and the function blocks extending it",
+                     "INTERNAL": "only its own namespace"}[access]
+            self.error(f"{what} '{member.name}' of {owner.name if owner else '?'} is {access}: {where} may use it",
+                       span, "E071")
+        return ok
+
+    def property_load(self, e: n.Expr, prop, how: str) -> t.Type | None:
+        if prop.getter is None:
+            self.error(f"property '{prop.name}' has no GET; it can only be written", e.span, "E072")
+            return None
+        self.check_access(prop.getter if prop.access == "PUBLIC" else _with_access(prop.getter, prop.access),
+                          "property", e.span)
+        self.facts.props[id(e)] = (prop, how)
+        return prop.type
+
+    def property_store(self, target: n.Expr, prop, how: str) -> t.Type | None:
+        if prop.setter is None:
+            self.error(f"property '{prop.name}' has no SET; it can only be read", target.span, "E072")
+            return None
+        self.check_access(prop.setter if prop.access == "PUBLIC" else _with_access(prop.setter, prop.access),
+                          "property", target.span)
+        self.facts.props[id(target)] = (prop, how)
+        self.facts.types[id(target)] = prop.type
+        return prop.type
+
+    def method_call(self, e: n.Call, method: POUInfo, oo: str, instance: n.Expr | None, static_owner: str,
+                    expected) -> t.Type | None:
+        from stvm.semantics.checker import CallInfo
+        self.check_access(method, "method", e.callee.span)
+        if oo == "super" and method.abstract:
+            self.error(f"SUPER^.{method.name}: the method is ABSTRACT in {self.c.pous[method.owner].name}",
+                       e.callee.span, "E070")
+        info = CallInfo(method, False, instance, oo=oo, static_owner=static_owner)
+        outer, self.call_expected = getattr(self, "call_expected", None), expected
+        try:
+            self.bind_args(e, method, info, fb=False)
+        finally:
+            self.call_expected = outer
+        self.facts.calls[id(e)] = info
+        return method.return_type or t.VOID
+
+    def oo_call(self, e: n.Call, expected, statement: bool) -> tuple[bool, t.Type | None]:
+        """A METHOD call or SUPER^(): (True, result type) when `e` is one; (False, None) if not."""
+        from stvm.semantics.checker import CallInfo
+        callee = e.callee
+        if isinstance(callee, n.Name):
+            if len(callee.parts) == 1 and not callee.rooted and self.fb is not None:
+                method = self.c.find_method(self.fb.key, callee.parts[0])
+                if method is not None and self.resolve_name(callee) is None:
+                    return True, self.method_call(e, method, "self", None, "", expected)
+            return False, None
+        if isinstance(callee, n.Deref) and isinstance(callee.base, n.Name) and callee.base.parts[0].upper() == "SUPER" \
+                and self.resolve_name(callee.base) is None:
+            ty = self.expr(callee)
+            if ty is None:
+                self.check_args_loosely(e)
+                return True, None
+            if e.args:
+                self.error("SUPER^() calls the base body; it takes no arguments", e.span, "E047")
+            if not statement:
+                self.error("SUPER^() is a statement", e.span, "E045")
+            base = self.c.pous[self.fb.base]  # type: ignore[union-attr,index]
+            self.facts.calls[id(e)] = CallInfo(base, True, None, oo="super_body", static_owner=base.key)
+            return True, t.VOID
+        if not isinstance(callee, n.Member):
+            return False, None
+        base_type = self.expr(callee.base)
+        if base_type is None:
+            self.check_args_loosely(e)
+            return True, None
+        if isinstance(base_type, t.InterfaceType):
+            method = self.c.find_method(base_type.qualname.lower(), callee.name)
+            if method is None:
+                self.error(f"interface {base_type.name} has no method '{callee.name}'", callee.span, "E045")
+                self.check_args_loosely(e)
+                return True, None
+            return True, self.method_call(e, method, "itf", callee.base, "", expected)
+        if isinstance(base_type, t.FBType):
+            method = self.c.find_method(base_type.qualname.lower(), callee.name)
+            if method is None:
+                fb = self.c.pous.get(base_type.qualname.lower())
+                if fb is not None and fb.pin(callee.name) is None and (fb.methods or fb.base or fb.properties):
+                    self.error(f"function block {base_type.name} has no method '{callee.name}'", callee.span, "E045")
+                    self.check_args_loosely(e)
+                    return True, None
+                return False, None
+            how = self.member_how(callee.base, base_type)
+            if how == "super":
+                return True, self.method_call(e, method, "super", None, self.fb.base or "", expected)  # type: ignore[union-attr]
+            if isinstance(callee.base, n.Deref) and self.inside_own(callee.base, base_type):
+                return True, self.method_call(e, method, "self", None, "", expected)
+            return True, self.method_call(e, method, "inst", callee.base, "", expected)
+        return False, None
 
     def expr_BitAccess(self, e: n.BitAccess, expected) -> t.Type | None:
         base = self.expr(e.base)
@@ -803,6 +1056,10 @@ class BodyChecker:
             return True
         if isinstance(lt, t.TimeType) and isinstance(rt, t.TimeType):
             return lt.name == rt.name
+        if (isinstance(lt, t.InterfaceType) or isinstance(rt, t.InterfaceType)) and op in ("EQ", "NE"):
+            others = [(ty, ex) for ty, ex in ((lt, le), (rt, re_)) if not isinstance(ty, t.InterfaceType)]
+            return all(isinstance(ty, t.FBType) or (isinstance(ty, t.RefType) and ty.is_null) or self.is_zero_literal(ex)
+                       for ty, ex in others)
         if isinstance(lt, t.RefType) and isinstance(rt, t.RefType) and op in ("EQ", "NE"):
             return lt.is_null or rt.is_null or t.same_type(lt.target, rt.target)
         return False
@@ -847,6 +1104,13 @@ class BodyChecker:
         callee = e.callee
         pou: POUInfo | None = None
         instance: n.Expr | None = None
+        if isinstance(callee, n.Name) and len(callee.parts) == 1 and callee.parts[0].upper() in ("__QUERYINTERFACE", "__ISVALIDREF") \
+                and self.lookup_callable(callee) is None:
+            return self.intrinsic(e, callee.parts[0].upper())
+        if isinstance(callee, (n.Member, n.Deref)) or (self.fb is not None and isinstance(callee, n.Name)):
+            done, ty = self.oo_call(e, expected, statement)
+            if done:
+                return ty
         if isinstance(callee, n.Name) and len(callee.parts) == 1 and callee.parts[0].upper() in ("REF", "ADR") \
                 and self.resolve_name(callee) is None and self.lookup_callable(callee) is None:
             return self.reference_of(e)
@@ -1095,6 +1359,8 @@ class BodyChecker:
                     info.inputs.append((var, arg.value))
                     return
                 ty = aty
+            elif isinstance(ptype, t.FBType) and self.is_lvalue_shape(arg.value):
+                ty = self.expr(arg.value)   # an FB instance passed by reference
             else:
                 ty = self.lvalue(arg.value) if self.is_lvalue_shape(arg.value) else None
                 if ty is None and not self.is_lvalue_shape(arg.value):
@@ -1110,6 +1376,9 @@ class BodyChecker:
             elif isinstance(ptype, t.ArrayType) and isinstance(ty, t.ArrayType) and ptype.dims is None:
                 if not self.element_ok(ty.element, ptype.element):
                     self.error(f"'{var.name}' of {pou.name} needs {ptype.name}, got {ty.name}", arg.value.span, "E052")
+            elif isinstance(ty, t.FBType) and isinstance(ptype, t.FBType) \
+                    and self.c.is_derived(ty.qualname.lower(), ptype.qualname.lower()):
+                pass   # an instance of a derived FB is an instance of its base
             elif not (ty == ptype or (isinstance(ty, t.StringType) and isinstance(ptype, t.StringType))
                       or (isinstance(ty, (t.StructType, t.EnumType)) and implicit_ok(ty, ptype))
                       or (isinstance(ty, t.ArrayType) and implicit_ok(ty, ptype))

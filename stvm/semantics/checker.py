@@ -17,8 +17,8 @@ from stvm.numeric import f32
 from stvm.semantics import types as t
 from stvm.semantics.body import BodyChecker
 from stvm.semantics.facts import NOT_CONST, CallInfo, Facts, NameRef  # noqa: F401 (API: checker.Facts)
-from stvm.semantics.model import (EXTERNAL, GLOBAL, IN_OUT, INPUT, LOCAL, POUInfo,
-                                  ProjectModel, TaskInfo, Variable)
+from stvm.semantics.model import (EXTERNAL, GLOBAL, IN_OUT, INPUT, LOCAL, OUTPUT, POUInfo,
+                                  ProjectModel, PropertyInfo, TaskInfo, Variable)
 from stvm.settings import BareEnumerators, DEFAULT_SETTINGS, StringOverflow, SysmacSettings
 from stvm.syntax import nodes as n
 from stvm.syntax.walk import calls_in
@@ -40,6 +40,7 @@ class Analysis:
     pou_nodes: dict[str, n.POU]
     diagnostics: list[Diagnostic]
     type_inits: dict[str, dict[str, object]]   # struct qualname key → field key → initial value
+    method_nodes: dict[str, n.Method] = field(default_factory=dict)   # METHOD/GET/SET key → node
 
 
 class _Index:
@@ -115,6 +116,7 @@ class Checker:
         self.structs: dict[str, t.Type] = {}
         self.enums: dict[str, t.Type] = {}
         self.declaring: POUInfo | None = None   # the POU whose declarations are being resolved
+        self.method_nodes: dict[str, n.Method] = {}     # METHOD / GET / SET key → its node
 
     # ---- diagnostics
     def error(self, message: str, span: n.Span, code: str = "") -> None:
@@ -174,6 +176,7 @@ class Checker:
             self.declare_globals(block, namespace, elementary_only=False if block.constant else None)
         for key, pou in self.index.pou_nodes.items():
             self.pous[key] = self.declare_pou(pou)
+        self.link_oo()
 
     def check_identifier(self, name: str, span: n.Span) -> None:
         if name.lower() in _RESERVED:
@@ -257,7 +260,19 @@ class Checker:
                 if alias and pin:
                     info.aliases[alias] = pin
         self.check_identifier(pou.name, pou.span)
+        mods = set(pou.modifiers)
+        info.abstract, info.final = "ABSTRACT" in mods, "FINAL" in mods
+        if mods and pou.kind != "FUNCTION_BLOCK":
+            self.error(f"{', '.join(sorted(mods))} is only allowed on a FUNCTION_BLOCK, METHOD or PROPERTY",
+                       pou.name_span if pou.name_span.line else pou.span, "E060")
+        if info.abstract and info.final:
+            self.error(f"function block '{pou.name}' cannot be both ABSTRACT and FINAL", pou.span, "E060")
         self.declaring = info   # its constants may size its arrays and strings (const_value)
+        if pou.kind == "INTERFACE":
+            info.return_type = None
+            self.declare_members(pou, info)
+            self.declaring = None
+            return info
         if pou.kind == "FUNCTION":
             if pou.return_type is None:
                 self.error(f"function '{pou.name}' needs a return type", pou.span, "E014")
@@ -266,7 +281,20 @@ class Checker:
                 info.return_type = self.resolve_type_spec(pou.return_type, pou.namespace, allow_generic=native) or t.DINT
         elif pou.return_type is not None:
             self.error(f"a {pou.kind} has no return type", pou.span, "E014")
+        self.declare_variables(pou, info, pou.namespace, native)
+        self.declaring = None
+        if pou.kind == "FUNCTION" and (pou.methods or pou.properties):
+            what = pou.methods[0] if pou.methods else pou.properties[0]
+            self.error("a FUNCTION has no methods or properties; declare them in a FUNCTION_BLOCK",
+                       what.span, "E061")
+        else:
+            self.declare_members(pou, info)
+        return info
+
+    def declare_variables(self, pou, info: POUInfo, namespace: tuple[str, ...], native: bool = False) -> None:
+        """Declare the variable blocks of a POU or METHOD (`pou`: its node) into `info`."""
         early = self.declare_local_constants(pou, info)
+        function_like = info.kind == "FUNCTION" or (info.kind == "METHOD" and info.return_type is not None)
         for block in pou.var_blocks:
             kind = block.kind
             if kind == "VAR_STAT":
@@ -277,7 +305,7 @@ class Checker:
             for decl in block.decls:
                 if id(decl) in early:
                     continue
-                vtype = self.resolve_type_spec(decl.type_spec, pou.namespace, allow_generic=native,
+                vtype = self.resolve_type_spec(decl.type_spec, namespace, allow_generic=native,
                                                allow_open_array=kind in (IN_OUT, INPUT))
                 for name, span in decl.names:
                     self.check_identifier(name, span)
@@ -285,12 +313,12 @@ class Checker:
                     if key in info.variables:
                         self.error(f"duplicate declaration of '{name}' in {pou.name}", span, "E010")
                         continue
-                    if pou.kind == "FUNCTION" and key == pou.name.lower():
-                        self.error(f"'{name}' is the function's own name", span, "E010")
+                    if function_like and key == pou.name.lower():
+                        self.error(f"'{name}' is the {info.kind.lower()}'s own name", span, "E010")
                         continue
                     var = Variable(name, kind, vtype or t.DINT, block.constant, span)
                     if decl.init is None and kind not in (IN_OUT, EXTERNAL):
-                        var.init = self.alias_init(decl.type_spec, pou.namespace)
+                        var.init = self.alias_init(decl.type_spec, namespace)
                     if block.constant and decl.init is None and kind != EXTERNAL:
                         self.error(f"constant '{name}' needs an initial value", span, "E013")
                     info.variables[key] = var
@@ -298,13 +326,370 @@ class Checker:
                         if kind == IN_OUT:
                             self.error(f"VAR_IN_OUT '{name}' cannot have an initial value", span, "E013")
                         else:
-                            var.init = self.initial_value(decl.init, vtype, pou.namespace, info)
+                            var.init = self.initial_value(decl.init, vtype, namespace, info)
         if early:   # back to declaration order (positional parameters, formatting, traces)
             order = [name.lower() for block in pou.var_blocks for decl in block.decls for name, _ in decl.names]
             rank = {key: i for i, key in reversed(list(enumerate(order)))}
             info.variables = dict(sorted(info.variables.items(), key=lambda kv: rank.get(kv[0], len(order))))
-        self.declaring = None
+
+    def declare_members(self, pou: n.POU, info: POUInfo) -> None:
+        """The METHODs and PROPERTYs of an FB, PROGRAM or INTERFACE (signatures; bodies are
+        checked with the POU's)."""
+        for m in pou.methods:
+            method = self.declare_method(m, info, pou)
+            if m.name.lower() in info.methods or m.name.lower() in info.properties:
+                self.error(f"duplicate method '{m.name}' in {pou.name}", m.name_span, "E010")
+                continue
+            if m.name.lower() in info.variables:
+                self.error(f"'{m.name}' is both a variable and a method of {pou.name}", m.name_span, "E010")
+                continue
+            info.methods[m.name.lower()] = method
+        merged: dict[str, list[n.Property]] = {}
+        for prop in pou.properties:   # a GET and a SET may come as two PROPERTY blocks of one name
+            merged.setdefault(prop.name.lower(), []).append(prop)
+        for key, props in merged.items():
+            prop = props[0]
+            getters = [p.getter for p in props if p.getter is not None]
+            setters = [p.setter for p in props if p.setter is not None]
+            if len(getters) > 1 or len(setters) > 1 or (len(props) > 1 and any(
+                    self.resolve_type_spec(p.type_spec, pou.namespace) != self.resolve_type_spec(prop.type_spec, pou.namespace)
+                    for p in props[1:])):
+                self.error(f"duplicate property '{prop.name}' in {pou.name}", props[-1].name_span, "E010")
+                continue
+            if key in info.methods or key in info.variables:
+                self.error(f"'{prop.name}' is declared twice in {pou.name}", prop.name_span, "E010")
+                continue
+            self.check_identifier(prop.name, prop.name_span)
+            ptype = self.resolve_type_spec(prop.type_spec, pou.namespace) or t.DINT
+            access, abstract, final = self.member_modifiers(prop.modifiers, prop.name_span, "property")
+            if not getters and not setters:
+                self.error(f"property '{prop.name}' needs a GET or a SET", prop.name_span, "E062")
+            accessors = {}
+            for kind, acc in (("GET", getters[0] if getters else None), ("SET", setters[0] if setters else None)):
+                if acc is None:
+                    accessors[kind] = None
+                    continue
+                m = n.Method(prop.name, prop.modifiers, prop.type_spec if kind == "GET" else None,
+                             prop.var_blocks + acc.var_blocks, acc.body, (), acc.span, prop.name_span)
+                method = self.declare_method(m, info, pou, accessor=kind, prop_type=ptype)
+                accessors[kind] = method
+            info.properties[key] = PropertyInfo(prop.name, ptype, accessors["GET"], accessors["SET"],
+                                                info.key, access, prop.name_span)
+
+    def member_modifiers(self, modifiers: tuple[str, ...], span: n.Span, what: str) -> tuple[str, bool, bool]:
+        access = [m for m in modifiers if m in ("PUBLIC", "PRIVATE", "PROTECTED", "INTERNAL")]
+        if len(access) > 1:
+            self.error(f"a {what} has one access specifier, not {' and '.join(access)}", span, "E060")
+        abstract, final = "ABSTRACT" in modifiers, "FINAL" in modifiers
+        if abstract and final:
+            self.error(f"a {what} cannot be both ABSTRACT and FINAL", span, "E060")
+        return (access[0] if access else "PUBLIC"), abstract, final
+
+    def declare_method(self, m: n.Method, owner: POUInfo, pou: n.POU, accessor: str = "",
+                       prop_type: t.Type | None = None) -> POUInfo:
+        qual = owner.qualname + "." + (f"__{accessor.lower()}_" if accessor else "") + m.name
+        info = POUInfo(m.name, qual, "METHOD", None, file=m.span.file, span=m.span)
+        info.owner = owner.key
+        self.method_nodes[info.key] = m
+        info.access, info.abstract, info.final = self.member_modifiers(m.modifiers, m.name_span, "method")
+        if not accessor:
+            self.check_identifier(m.name, m.name_span)
+        outer, self.declaring = self.declaring, info
+        if accessor == "GET":
+            info.return_type = prop_type
+        elif m.return_type is not None:
+            info.return_type = self.resolve_type_spec(m.return_type, pou.namespace) or t.DINT
+        if accessor == "SET":   # the property's name is the value being set
+            info.variables[m.name.lower()] = Variable(m.name, INPUT, prop_type or t.DINT, False, m.name_span)
+        self.declare_variables(m, info, pou.namespace)
+        self.declaring = outer
+        for key, var in info.variables.items():
+            if var.section in (GLOBAL, "VAR_STAT"):
+                self.error(f"{var.section} is not allowed in a method", var.span, "E012")
+        if pou.kind == "INTERFACE":
+            if m.body:
+                self.error(f"method '{m.name}' of interface {pou.name} cannot have statements", m.body[0].span, "E063")
+            if any(v.section not in (INPUT, OUTPUT, IN_OUT) for v in info.variables.values()):
+                bad = next(v for v in info.variables.values() if v.section not in (INPUT, OUTPUT, IN_OUT))
+                self.error(f"an interface method declares only inputs, outputs and in-outs, not {bad.section}",
+                           bad.span, "E063")
+            info.abstract = True
+        elif info.abstract and m.body:
+            self.error(f"ABSTRACT method '{m.name}' cannot have statements", m.body[0].span, "E063")
         return info
+
+    # ---- object orientation: EXTENDS, IMPLEMENTS, method tables
+    def members_of(self, info: POUInfo) -> list[POUInfo]:
+        """The METHODs and property accessors an FB, PROGRAM or INTERFACE declares itself."""
+        out = list(info.methods.values())
+        for prop in info.properties.values():
+            out += [m for m in (prop.getter, prop.setter) if m is not None]
+        return out
+
+    def link_oo(self) -> None:
+        """Resolve EXTENDS and IMPLEMENTS, report cycles, inherit the base's variables."""
+        for key, pou in self.index.pou_nodes.items():
+            info = self.pous[key]
+            if pou.extends:
+                if pou.kind == "INTERFACE":
+                    info.interfaces = tuple(k for k in (self.interface_key(name, pou) for name in pou.extends) if k)
+                elif pou.kind != "FUNCTION_BLOCK":
+                    self.error(f"a {pou.kind} cannot EXTEND; only a FUNCTION_BLOCK or INTERFACE can",
+                               pou.extends[0].span, "E064")
+                elif len(pou.extends) > 1:
+                    self.error("a function block EXTENDS one base function block", pou.extends[1].span, "E064")
+                else:
+                    base = pou.extends[0]
+                    bkey = self.lookup_pou_key(base.parts, pou.namespace)
+                    binfo = self.pous.get(bkey) if bkey else None
+                    if binfo is None or binfo.kind != "FUNCTION_BLOCK" or binfo.native:
+                        what = "unknown function block" if binfo is None else f"'{base.text}' is not a function block; cannot extend"
+                        self.error(f"{what} '{base.text}'" if binfo is None else what, base.span, "E064")
+                    elif binfo.final:
+                        self.error(f"function block '{binfo.name}' is FINAL and cannot be extended", base.span, "E064")
+                    else:
+                        info.base = bkey
+            if pou.implements:
+                if pou.kind not in ("FUNCTION_BLOCK",):
+                    self.error(f"a {pou.kind} cannot IMPLEMENT an interface", pou.implements[0].span, "E064")
+                else:
+                    info.interfaces = tuple(k for k in (self.interface_key(name, pou) for name in pou.implements) if k)
+        # cycles: a chain of bases that comes back
+        for key, info in self.pous.items():
+            if info.kind == "FUNCTION_BLOCK" and info.base:
+                chain, cur = [key], info.base
+                while cur is not None and cur not in chain:
+                    chain.append(cur)
+                    cur = self.pous[cur].base
+                if cur == key:
+                    names = " -> ".join(self.pous[k].name for k in chain + [key])
+                    self.error(f"cycle in EXTENDS: {names}", self.index.pou_nodes[key].extends[0].span, "E065")
+                    info.base = None
+            if info.kind == "INTERFACE" and info.interfaces:
+                seen: set[str] = set()
+                stack = list(info.interfaces)
+                while stack:
+                    cur = stack.pop()
+                    if cur == key:
+                        self.error(f"cycle in INTERFACE EXTENDS through {info.name}",
+                                   self.index.pou_nodes[key].extends[0].span, "E065")
+                        info.interfaces = ()
+                        break
+                    if cur not in seen:
+                        seen.add(cur)
+                        stack.extend(self.pous[cur].interfaces)
+        merged: set[str] = set()
+
+        def inherit(key: str) -> None:
+            if key in merged:
+                return
+            merged.add(key)
+            info = self.pous[key]
+            if info.base is None:
+                return
+            inherit(info.base)
+            base = self.pous[info.base]
+            variables = dict(base.variables)
+            for vkey, var in info.variables.items():
+                if vkey in variables:
+                    self.error(f"'{var.name}' is already declared in the base function block {base.name}",
+                               var.span, "E010")
+                    continue
+                variables[vkey] = var
+            info.inherited = len(base.variables)
+            info.variables = variables
+
+        for key, info in list(self.pous.items()):
+            if info.kind == "FUNCTION_BLOCK":
+                inherit(key)
+        for key, info in self.pous.items():
+            for method in info.methods.values():
+                if method.name.lower() in info.variables and info.inherited:
+                    self.error(f"'{method.name}' is a variable of the base function block; a method cannot "
+                               f"have its name", method.span, "E010")
+        self.check_oo_rules()
+
+    def interface_key(self, name: n.Name, pou: n.POU) -> str | None:
+        key = self.lookup_pou_key(name.parts, pou.namespace)
+        if key is None or self.pous[key].kind != "INTERFACE":
+            self.error(f"unknown interface '{name.text}'" if key is None else f"'{name.text}' is not an interface",
+                       name.span, "E064")
+            return None
+        return key
+
+    def base_chain(self, key: str) -> list[POUInfo]:
+        """The FB and its bases, the FB first."""
+        out = []
+        cur: str | None = key
+        while cur is not None and cur in self.pous and len(out) < 1000:
+            out.append(self.pous[cur])
+            cur = self.pous[cur].base
+        return out
+
+    def find_method(self, key: str, name: str) -> POUInfo | None:
+        """The method `name` of FB/PROGRAM `key` (own or inherited) or of interface `key` (own or
+        from the interfaces it extends)."""
+        low = name.lower()
+        info = self.pous.get(key)
+        if info is None:
+            return None
+        if info.kind == "INTERFACE":
+            for itf in self.interface_closure(key):
+                m = self.pous[itf].methods.get(low)
+                if m is not None:
+                    return m
+            return None
+        for fb in self.base_chain(key):
+            if low in fb.methods:
+                return fb.methods[low]
+        return None
+
+    def find_property(self, key: str, name: str) -> PropertyInfo | None:
+        low = name.lower()
+        info = self.pous.get(key)
+        if info is None:
+            return None
+        chain = [self.pous[k] for k in self.interface_closure(key)] if info.kind == "INTERFACE" else self.base_chain(key)
+        for fb in chain:
+            if low in fb.properties:
+                return fb.properties[low]
+        return None
+
+    def interface_closure(self, key: str) -> list[str]:
+        """An interface and every interface it extends, itself first."""
+        out, stack = [], [key]
+        while stack:
+            cur = stack.pop(0)
+            if cur not in out and cur in self.pous:
+                out.append(cur)
+                stack.extend(self.pous[cur].interfaces)
+        return out
+
+    def implemented_interfaces(self, key: str) -> set[str]:
+        """Every interface an FB implements (itself or through its bases), with what they extend."""
+        out: set[str] = set()
+        for fb in self.base_chain(key):
+            for itf in fb.interfaces:
+                out.update(self.interface_closure(itf))
+        return out
+
+    def is_derived(self, key: str, base: str) -> bool:
+        return any(fb.key == base for fb in self.base_chain(key))
+
+    def check_oo_rules(self) -> None:
+        """Overrides match, FINAL is not overridden, a concrete FB implements every ABSTRACT and
+        interface method and property (IEC ed. 3 6.6.5.5-6.6.6)."""
+        for key, info in self.pous.items():
+            if info.kind != "FUNCTION_BLOCK":
+                continue
+            node = self.index.pou_nodes[key]
+            bases = self.base_chain(key)[1:]
+            for method in info.methods.values():
+                for base in bases:
+                    over = base.methods.get(method.name.lower())
+                    if over is None:
+                        continue
+                    if over.final:
+                        self.error(f"method '{method.name}' is FINAL in {base.name} and cannot be overridden",
+                                   self.method_nodes[method.key].name_span, "E066")
+                    elif over.access == "PRIVATE":
+                        pass
+                    else:
+                        self.same_signature(method, over, f"{base.name}.{over.name}", "overrides")
+                    break
+            for prop in info.properties.values():
+                for base in bases:
+                    over = base.properties.get(prop.key)
+                    if over is not None:
+                        if over.type != prop.type:
+                            self.error(f"property '{prop.name}' is {prop.type.name} but overrides "
+                                       f"{base.name}.{over.name} of type {over.type.name}", prop.span, "E067")
+                        break
+            if info.abstract:
+                continue
+            # every method must have an implementation
+            span = node.name_span if node.name_span.line else node.span
+            reported: set[str] = set()
+            for fb in reversed(self.base_chain(key)):
+                for method in fb.methods.values():
+                    impl = self.find_method(key, method.name)
+                    if impl is not None and impl.abstract and method.name.lower() not in reported:
+                        reported.add(method.name.lower())
+                        if impl.owner == key:
+                            self.error(f"ABSTRACT method '{impl.name}' needs an ABSTRACT function block; "
+                                       f"declare FUNCTION_BLOCK ABSTRACT {info.name}",
+                                       self.method_nodes[impl.key].name_span, "E068")
+                            continue
+                        self.error(f"function block '{info.name}' must implement the ABSTRACT method "
+                                   f"'{method.name}' of {self.pous[impl.owner].name} (or be ABSTRACT)", span, "E068")
+            for itf in sorted(self.implemented_interfaces(key)):
+                iinfo = self.pous[itf]
+                for method in iinfo.methods.values():
+                    impl = self.find_method(key, method.name)
+                    if impl is None:
+                        self.error(f"function block '{info.name}' does not implement method '{method.name}' "
+                                   f"of interface {iinfo.name}", span, "E068")
+                    else:
+                        if impl.access != "PUBLIC":
+                            self.error(f"method '{impl.name}' implements interface {iinfo.name} and must be PUBLIC",
+                                       self.method_nodes[impl.key].name_span, "E067")
+                        self.same_signature(impl, method, f"{iinfo.name}.{method.name}", "implements")
+                for prop in iinfo.properties.values():
+                    impl_p = self.find_property(key, prop.name)
+                    if impl_p is None:
+                        self.error(f"function block '{info.name}' does not implement property '{prop.name}' "
+                                   f"of interface {iinfo.name}", span, "E068")
+                    elif impl_p.type != prop.type:
+                        self.error(f"property '{impl_p.name}' is {impl_p.type.name}; interface {iinfo.name} "
+                                   f"declares it {prop.type.name}", impl_p.span, "E067")
+                    else:
+                        for kind, want, have in (("GET", prop.getter, impl_p.getter), ("SET", prop.setter, impl_p.setter)):
+                            if want is not None and have is None:
+                                self.error(f"property '{impl_p.name}' needs a {kind} (interface {iinfo.name} "
+                                           f"declares one)", impl_p.span, "E068")
+        # an ABSTRACT function block has no instances (only references and interfaces to derived ones)
+        seen_vars: set[int] = set()
+        for key, info in self.pous.items():
+            for holder in [info] + self.members_of(info):
+                for var in holder.variables.values():
+                    if id(var) in seen_vars:
+                        continue
+                    seen_vars.add(id(var))
+                    ty = var.type
+                    while isinstance(ty, t.ArrayType):
+                        ty = ty.element
+                    if isinstance(ty, t.FBType) and var.section not in (IN_OUT, EXTERNAL):
+                        target = self.pous.get(ty.qualname.lower())
+                        if target is not None and target.abstract:
+                            self.error(f"cannot instantiate ABSTRACT function block '{target.name}' "
+                                       f"('{var.name}'); declare an instance of a derived one", var.span, "E069")
+        # an interface method redeclared in an extending interface must keep its signature
+        for key, info in self.pous.items():
+            if info.kind == "INTERFACE":
+                for method in info.methods.values():
+                    for other in self.interface_closure(key)[1:]:
+                        over = self.pous[other].methods.get(method.name.lower())
+                        if over is not None:
+                            self.same_signature(method, over, f"{self.pous[other].name}.{over.name}", "redeclares")
+
+    def same_signature(self, method: POUInfo, other: POUInfo, what: str, verb: str) -> None:
+        """Report where `method` differs from `other` (return type, parameters in order)."""
+        span = self.method_nodes[method.key].name_span if method.key in self.method_nodes else method.span
+
+        def params(m: POUInfo) -> list[tuple[str, str, t.Type]]:
+            return [(v.key, v.section, v.type) for v in m.variables.values() if v.section in (INPUT, OUTPUT, IN_OUT)]
+        mine, theirs = params(method), params(other)
+        if (method.return_type or t.VOID) != (other.return_type or t.VOID):
+            have = method.return_type.name if method.return_type else "no result"
+            want = other.return_type.name if other.return_type else "no result"
+            self.error(f"method '{method.name}' returns {have} but {verb} {what}, which returns {want}", span, "E067")
+            return
+        if mine != theirs:
+            def show(ps):
+                return ", ".join(f"{sec.replace('VAR_', '')} {[v.name for v in (method.variables | other.variables).values() if v.key == k][0]} : {ty.name}"
+                                 for k, sec, ty in ps) or "no parameters"
+            self.error(f"signature of method '{method.name}' ({show(mine)}) does not match {what} "
+                       f"({show(theirs)}), which it {verb}", span, "E067")
 
     def declare_local_constants(self, pou: n.POU, info: POUInfo) -> set[int]:
         """Declare the POU's elementary VAR CONSTANT entries before anything else, so an array
@@ -451,6 +836,8 @@ class Checker:
                 if pou.kind == "FUNCTION":
                     self.error(f"'{spec.text}' is a function, not a type", spec.span, "E018")
                     return None
+                if pou.kind == "INTERFACE":
+                    return t.InterfaceType(pou.name, "\\".join(pou.namespace + (pou.name,)))
                 return t.FBType(pou.name, "\\".join(pou.namespace + (pou.name,)), pou.kind == "PROGRAM")
             self.error(f"unknown type '{spec.text}'", spec.span, "E018")
             return None
@@ -729,6 +1116,8 @@ class Checker:
                     self.error(f"native POU '{pou.name}' must not have a body", pou.span, "E025")
                 continue
             BodyChecker(self, info, pou).check()
+            for method in self.members_of(info):
+                BodyChecker(self, method, self.method_nodes[method.key], fb=info, fb_node=pou).check()
         # the depth check walks iteratively and runs first: the two checks after it recurse,
         # and a chain thousands deep must be a diagnostic naming it, not a RecursionError
         if self.check_nesting_depth():
@@ -736,7 +1125,8 @@ class Checker:
             self.check_recursion()
         tasks, defaults = self.check_configuration()
         model = ProjectModel(self.pous, self.globals, tasks, defaults, self.structs, self.enums)
-        return Analysis(model, self.facts, self.units, dict(self.index.pou_nodes), self.diags, self.type_inits)
+        return Analysis(model, self.facts, self.units, dict(self.index.pou_nodes), self.diags, self.type_inits,
+                        self.method_nodes)
 
     def check_containment(self) -> None:
         """A FUNCTION_BLOCK or STRUCT may not contain itself, directly or through other members:

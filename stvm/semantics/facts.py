@@ -39,6 +39,10 @@ class CallInfo:
     arg_types: tuple[t.Type, ...] = ()                    # per parameter (+ extras), for typed natives
     en: n.Expr | None = None                              # `EN := c`: the call runs only when c is TRUE
     eno: tuple[n.Expr, bool] | None = None                # `ENO => v` / `NOT ENO => v`: (target, negate)
+    # a METHOD call: 'self' (own method, `M()` / `THIS^.M()`), 'inst' (`fb.M()`), 'super'
+    # (`SUPER^.M()`, static), 'itf' (through an interface variable); 'super_body' is `SUPER^()`
+    oo: str = ""
+    static_owner: str = ""                                # 'super'/'super_body': the base FB's key
 
 
 @dataclass
@@ -54,3 +58,5 @@ class Facts:
     auto_deref: set[int] = field(default_factory=set)     # names of REFERENCE TO variables (used as the target)
     addressed: set[tuple[str, str]] = field(default_factory=set)  # (POU key, variable key) whose reference is taken
     keep: list = field(default_factory=list)              # keeps nodes alive so ids stay unique
+    props: dict[int, tuple] = field(default_factory=dict)  # property uses: id → (PropertyInfo, how) how: self/inst/itf
+    intrinsics: dict[int, tuple] = field(default_factory=dict)  # __QUERYINTERFACE ('query', key) / __ISVALIDREF ('valid', None)

@@ -44,6 +44,17 @@ class POUInfo:
     aliases: dict[str, str] = field(default_factory=dict)         # pin alias key → pin key
     file: str = ""
     span: Span = NO_SPAN
+    # object orientation (IEC ed. 3 6.6.5-6.6.6): a METHOD is a POUInfo of kind METHOD whose
+    # `owner` is its FB's (or interface's) key; an INTERFACE is a POUInfo of kind INTERFACE
+    methods: dict[str, "POUInfo"] = field(default_factory=dict)         # own methods, key → METHOD
+    properties: dict[str, "PropertyInfo"] = field(default_factory=dict)  # own properties
+    base: str | None = None           # FB EXTENDS: the base FB's key
+    interfaces: tuple[str, ...] = ()  # IMPLEMENTS (FB) / EXTENDS (INTERFACE): keys as declared
+    owner: str = ""                   # METHOD: the key of the FB or interface declaring it
+    access: str = "PUBLIC"            # METHOD/PROPERTY: PUBLIC, PRIVATE, PROTECTED, INTERNAL
+    abstract: bool = False
+    final: bool = False
+    inherited: int = 0                # FB: how many of `variables` (the first ones) come from the base
 
     @property
     def key(self) -> str:
@@ -59,6 +70,24 @@ class POUInfo:
         key = name.lower()
         key = self.aliases.get(key, key)
         return self.variables.get(key)
+
+
+@dataclass
+class PropertyInfo:
+    """PROPERTY P : T of an FB or interface: GET is a METHOD returning T (named P), SET a METHOD
+    with the input P."""
+
+    name: str
+    type: Type
+    getter: POUInfo | None
+    setter: POUInfo | None
+    owner: str = ""
+    access: str = "PUBLIC"
+    span: Span = NO_SPAN
+
+    @property
+    def key(self) -> str:
+        return self.name.lower()
 
 
 @dataclass

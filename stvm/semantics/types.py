@@ -191,6 +191,18 @@ class FBType(Type):
 
 
 @dataclass(frozen=True)
+class InterfaceType(Type):
+    """An INTERFACE type (IEC ed. 3 6.6.6): a variable of it holds a reference to an FB instance
+    implementing it (at run time the instance object itself), or NULL (None)."""
+
+    qualname: str = ""
+
+    @property
+    def kind(self) -> str:
+        return "interface"
+
+
+@dataclass(frozen=True)
 class GenericType(Type):
     """IEC generic types (ANY, ANY_NUM, …) usable only in stdlib signatures."""
 

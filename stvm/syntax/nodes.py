@@ -364,8 +364,48 @@ class TypeDecl(Node):
 
 
 @dataclass(frozen=True)
+class Method(Node):
+    """METHOD in a FUNCTION_BLOCK, PROGRAM or INTERFACE (IEC ed. 3 6.6.5); `modifiers`: PUBLIC,
+    PRIVATE, PROTECTED, INTERNAL, ABSTRACT, FINAL, OVERRIDE as written (upper case)."""
+
+    name: str
+    modifiers: tuple[str, ...]
+    return_type: TypeSpec | None
+    var_blocks: tuple[VarBlock, ...]
+    body: tuple[Statement, ...]
+    pragmas: tuple[str, ...] = ()
+    span: Span = _span()
+    name_span: Span = _span()
+
+
+@dataclass(frozen=True)
+class Accessor(Node):
+    """The GET or SET of a PROPERTY: its own variables and statements."""
+
+    kind: str   # GET, SET
+    var_blocks: tuple[VarBlock, ...]
+    body: tuple[Statement, ...]
+    span: Span = _span()
+
+
+@dataclass(frozen=True)
+class Property(Node):
+    """PROPERTY P : T with GET and/or SET (CODESYS/TwinCAT)."""
+
+    name: str
+    modifiers: tuple[str, ...]
+    type_spec: TypeSpec
+    var_blocks: tuple[VarBlock, ...]
+    getter: Accessor | None
+    setter: Accessor | None
+    pragmas: tuple[str, ...] = ()
+    span: Span = _span()
+    name_span: Span = _span()
+
+
+@dataclass(frozen=True)
 class POU(Node):
-    kind: str  # FUNCTION, FUNCTION_BLOCK, PROGRAM
+    kind: str  # FUNCTION, FUNCTION_BLOCK, PROGRAM, INTERFACE
     name: str
     namespace: tuple[str, ...]
     return_type: TypeSpec | None
@@ -374,6 +414,12 @@ class POU(Node):
     pragmas: tuple[str, ...]
     span: Span = _span()
     end_span: Span = _span()
+    modifiers: tuple[str, ...] = ()           # ABSTRACT, FINAL, PUBLIC, INTERNAL
+    extends: tuple[Name, ...] = ()            # FB EXTENDS one base; INTERFACE EXTENDS several
+    implements: tuple[Name, ...] = ()
+    methods: tuple[Method, ...] = ()
+    properties: tuple[Property, ...] = ()
+    name_span: Span = _span()
 
 
 @dataclass(frozen=True)

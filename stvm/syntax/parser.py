@@ -7,6 +7,7 @@ stages only see values.
 
 from __future__ import annotations
 
+from dataclasses import replace
 from functools import lru_cache
 from importlib import resources
 from pathlib import Path
@@ -57,6 +58,10 @@ _PRECEDENCE = {"OR": 1, "XOR": 2, "AND": 3, "AMP": 3, "EQ": 4, "NE": 4, "LT": 5,
                "PLUS": 6, "MINUS": 6, "STAR": 7, "SLASH": 7, "MOD": 7, "POW": 8}
 
 
+class _Modifier(str):
+    """PUBLIC, PRIVATE, ABSTRACT, FINAL, … in a POU, METHOD or PROPERTY header."""
+
+
 class _ToNodes(Transformer):
     """Turns the Lark tree into nodes; literal errors become diagnostics, not exceptions."""
 
@@ -102,11 +107,69 @@ class _ToNodes(Transformer):
         return tuple(str(t)[1:-1].strip() for t in items)
 
     def pou(self, meta, items):
-        pragmas, kind, name, ret, *rest = items
+        pragmas, kind, *rest = items
+        modifiers = []
+        while isinstance(rest[0], _Modifier):
+            modifiers.append(str(rest.pop(0)))
+        name, ret, extends, implements, *rest = rest
         end = rest[-1]
-        body = rest[-2]
+        body, methods, properties = rest[-2]
         blocks = tuple(rest[:-2])
-        return n.POU(kind, str(name), (), ret, blocks, body, pragmas, self._s(meta), end)
+        return n.POU(kind, str(name), (), ret, blocks, body, pragmas, self._s(meta), end,
+                     modifiers=tuple(modifiers), extends=extends or (), implements=implements or (),
+                     methods=methods, properties=properties, name_span=self._ts(name))
+
+    def pou_body(self, meta, items):
+        statements = tuple(s for s in items if isinstance(s, n.Statement) and not isinstance(s, n.Empty))
+        methods = tuple(m for m in items if isinstance(m, n.Method))
+        properties = tuple(m for m in items if isinstance(m, n.Property))
+        return statements, methods, properties
+
+    def extends_clause(self, meta, items):
+        return tuple(items)
+
+    def implements_clause(self, meta, items):
+        return tuple(items)
+
+    def modifier(self, meta, items):
+        return _Modifier(str(items[0]).upper())
+
+    def _member_head(self, items):
+        pragmas, *rest = items
+        modifiers = []
+        while isinstance(rest[0], _Modifier):
+            modifiers.append(str(rest.pop(0)))
+        return pragmas, tuple(modifiers), rest
+
+    def method_decl(self, meta, items):
+        pragmas, modifiers, rest = self._member_head(items)
+        name, ret, *rest = rest
+        body = rest[-1]
+        return n.Method(str(name), modifiers, ret, tuple(rest[:-1]), body, pragmas, self._s(meta), self._ts(name))
+
+    def property_decl(self, meta, items):
+        pragmas, modifiers, rest = self._member_head(items)
+        name, type_spec, *rest = rest
+        blocks = tuple(x for x in rest if isinstance(x, n.VarBlock))
+        getter = next((x for x in rest if isinstance(x, n.Accessor) and x.kind == "GET"), None)
+        setter = next((x for x in rest if isinstance(x, n.Accessor) and x.kind == "SET"), None)
+        return n.Property(str(name), modifiers, type_spec, blocks, getter, setter, pragmas, self._s(meta),
+                          self._ts(name))
+
+    def property_accessor(self, meta, items):
+        word, end = str(items[0]).upper(), str(items[-1]).upper()
+        if word not in ("GET", "SET"):
+            self._error(f"syntax error: unexpected '{items[0]}'; expected GET, SET or END_PROPERTY", self._ts(items[0]))
+        elif end != "END_" + word:
+            self._error(f"{word} ends with END_{word}, not {end}", self._ts(items[-1]))
+        return n.Accessor(word if word in ("GET", "SET") else "GET", tuple(items[1:-2]), items[-2], self._s(meta))
+
+    def interface(self, meta, items):
+        pragmas, name, extends, *members = items
+        methods = tuple(m for m in members if isinstance(m, n.Method))
+        properties = tuple(m for m in members if isinstance(m, n.Property))
+        return n.POU("INTERFACE", str(name), (), None, (), (), pragmas, self._s(meta), self._s(meta),
+                     extends=extends or (), methods=methods, properties=properties, name_span=self._ts(name))
 
     def pou_kind(self, meta, items):
         return str(items[0].type)
@@ -496,8 +559,7 @@ class _ToNodes(Transformer):
 def _collect(file: str, items: list, namespace: tuple[str, ...], out: dict[str, list]) -> None:
     for item in items:
         if isinstance(item, n.POU):
-            out["pous"].append(n.POU(item.kind, item.name, namespace, item.return_type, item.var_blocks,
-                                     item.body, item.pragmas, item.span, item.end_span))
+            out["pous"].append(replace(item, namespace=namespace) if namespace else item)
         elif isinstance(item, n.GlobalVars):
             out["globals"].append(n.GlobalVars(item.block, namespace, item.span))
         elif isinstance(item, n.Configuration):

@@ -3,42 +3,17 @@ FB_TmRobot.st, the demo st_src/schneider/oo): FB_TmRobot IMPLEMENTS IF_RobotMoti
 called through an interface variable, must behave exactly as the functions tests/schneider checks
 (test_robot_motion.py): the same diagnostics, the same TM frames for the PnP cycle.
 
-These need METHOD / INTERFACE / IMPLEMENTS / interface variables / `=>` on method calls (issue 11,
-branch lang-oo). While stvm cannot parse an INTERFACE, they are expected to fail (xfail, strict:
-once the language has them they must pass, and a failure then is a real one)."""
+They use METHOD / INTERFACE / IMPLEMENTS / interface variables / `=>` on method calls (issue 11)."""
 
 from __future__ import annotations
 
 from functools import lru_cache
-
-import pytest
 
 import stvm
 from robotlibs_helpers import REPO, Cell, load_library, manifest_files, motion_commands, script_of
 
 OO_FOLDER = REPO / "st_src" / "schneider" / "oo"
 
-
-def _oo_supported() -> bool:
-    """Does stvm parse and check an INTERFACE with a METHOD and an FB implementing it?"""
-    import tempfile
-    from pathlib import Path
-    source = ("INTERFACE I\nMETHOD M\nVAR_OUTPUT q : INT; END_VAR\nEND_METHOD\nEND_INTERFACE\n"
-              "FUNCTION_BLOCK F IMPLEMENTS I\nMETHOD M\nVAR_OUTPUT q : INT; END_VAR\nq := 1;\nEND_METHOD\n"
-              "END_FUNCTION_BLOCK\n")
-    with tempfile.TemporaryDirectory() as folder:
-        path = Path(folder) / "probe.st"
-        path.write_text(source, encoding="utf-8")
-        try:
-            stvm.load([str(path)])
-        except Exception:               # the load error of a stvm without object orientation
-            return False
-    return True
-
-
-OO_SUPPORTED = _oo_supported()
-pytestmark = pytest.mark.xfail(not OO_SUPPORTED, strict=True,
-                               reason="stvm has no METHOD/INTERFACE/IMPLEMENTS yet (issue 11, branch lang-oo)")
 
 HARNESS = r"""
 (* Test harness (tests/schneider/test_oo_interface.py). Not part of the library. *)

@@ -126,6 +126,8 @@ def read_before_write(ctx: PouContext):
       """,
       thesis="`TCP_Rcv_RcvSize` in every command FB but CBT_Connect (st_src/README.md 8.3), `Length` in the move FBs.")
 def unused_write(ctx: PouContext):
+    if ctx.oo_shared:
+        return   # its methods may read what the body writes
     if ctx.info.kind == "PROGRAM":
         sections = (TEMP,)
     else:
@@ -204,8 +206,8 @@ def output_unassigned(ctx: PouContext):
                 yield ctx.finding("SA103", f"{what} is not assigned on some path through the function "
                                            f"(it returns the type's default there)", span)
         return
-    if ctx.info.kind != "FUNCTION_BLOCK":
-        return
+    if ctx.info.kind != "FUNCTION_BLOCK" or ctx.oo_shared:
+        return   # (an FB whose methods or base body may assign its outputs: not decidable here)
     outputs = {key: var for key, var in ctx.info.variables.items() if var.section == OUTPUT}
     written = set()
     for node in ctx.cfg.nodes:

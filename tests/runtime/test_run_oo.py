@@ -1,0 +1,447 @@
+"""Object orientation on the VM (IEC 61131-3 ed. 3 6.6.5-6.6.6, CODESYS/TwinCAT syntax): METHODs
+with inputs, outputs, in-outs, fresh locals and a result; calls as statements and in expressions,
+formal and positional; own methods without prefix and through THIS^; EXTENDS, overriding,
+SUPER^; interfaces; properties. Black-box programs through the API and the CLI."""
+
+from __future__ import annotations
+
+import pytest
+
+import stvm
+from core_helpers import cli, run_st, start_st, write_st
+
+COUNTER = """
+FUNCTION_BLOCK FB_Counter
+VAR_INPUT step : INT := 1; END_VAR
+VAR_OUTPUT count : INT; END_VAR
+VAR limit : INT := 10; END_VAR
+count := count + step;
+
+METHOD Reset
+count := 0;
+END_METHOD
+
+METHOD IsReady : BOOL
+IsReady := count >= limit;
+END_METHOD
+
+METHOD Calc : INT
+VAR_INPUT a : INT; b : INT; END_VAR
+VAR_OUTPUT doubled : INT; END_VAR
+VAR tmp : INT; END_VAR
+tmp := tmp + a * b;          (* VAR of a method starts fresh on every call *)
+doubled := 2 * tmp;
+Calc := tmp + count;
+END_METHOD
+
+METHOD AddTwice
+VAR_INPUT n : INT; END_VAR
+count := count + Calc(n, 1);
+THIS^.count := THIS^.count + THIS^.Calc(a := n, b := 1);
+END_METHOD
+END_FUNCTION_BLOCK
+
+PROGRAM Main
+VAR
+  c : FB_Counter;
+  x : INT;
+  d : INT;
+  ready : BOOL;
+  n : INT;
+END_VAR
+c(step := 2);
+x := c.Calc(a := 1, b := 2, doubled => d);
+IF c.IsReady() THEN
+  ready := TRUE;
+  c.Reset();
+END_IF;
+n := n + 1;
+IF n = 7 THEN c.AddTwice(3); END_IF;
+END_PROGRAM
+"""
+
+
+def test_methods_read_and_write_the_instance():
+    values = run_st(COUNTER, cycles=4, prints=["Main.x", "Main.d", "Main.ready", "Main.c.count"])
+    # count 8 after 4 calls; Calc(1, 2): tmp = 2 (fresh), doubled 4, result 2 + 8
+    assert values == {"Main.x": 10, "Main.d": 4, "Main.ready": False, "Main.c.count": 8}
+
+
+def test_method_in_a_condition_and_as_a_statement():
+    values = run_st(COUNTER, cycles=5, prints=["Main.ready", "Main.c.count"])
+    assert values == {"Main.ready": True, "Main.c.count": 0}      # IsReady at 10, then Reset
+
+
+def test_own_methods_without_prefix_and_through_this():
+    values = run_st(COUNTER, cycles=7, prints=["Main.c.count", "Main.x"])
+    # scan 7: count 4, x = 2 + 4; AddTwice(3): 4 + Calc(3,1) = 4 + 7 = 11, then 11 + (3 + 11) = 25
+    assert values == {"Main.c.count": 25, "Main.x": 6}
+
+
+IN_OUT = """
+FUNCTION_BLOCK FB_Acc
+VAR total : DINT; END_VAR
+METHOD Add : DINT
+VAR_INPUT v : DINT; END_VAR
+VAR_IN_OUT acc : DINT; END_VAR
+VAR_OUTPUT was : DINT; END_VAR
+was := acc;
+acc := acc + v;
+total := total + v;
+Add := total;
+END_METHOD
+END_FUNCTION_BLOCK
+
+PROGRAM Main
+VAR a : FB_Acc; s : DINT := 100; w : DINT; r : DINT; arr : ARRAY[1..2] OF DINT; q : BOOL; END_VAR
+r := a.Add(v := 5, acc := s, was => w);
+a.Add(7, arr[2]);
+q := a.Add(v := 1, acc := arr[1]) > 12 AND s = 105;
+END_PROGRAM
+"""
+
+
+def test_method_in_out_outputs_and_positional_arguments():
+    values = run_st(IN_OUT, cycles=1, prints=["Main.s", "Main.w", "Main.r", "Main.arr", "Main.q", "Main.a.total"])
+    assert values == {"Main.s": 105, "Main.w": 100, "Main.r": 5, "Main.arr": [1, 7], "Main.q": True,
+                      "Main.a.total": 13}
+
+
+def test_method_locals_are_fresh_each_call():
+    src = """
+FUNCTION_BLOCK F
+METHOD Next : INT
+VAR k : INT; END_VAR
+k := k + 1;
+Next := k;
+END_METHOD
+END_FUNCTION_BLOCK
+PROGRAM Main VAR f : F; a, b : INT; END_VAR
+a := f.Next();
+b := f.Next() + f.Next();
+END_PROGRAM
+"""
+    assert run_st(src, cycles=3, prints=["Main.a", "Main.b"]) == {"Main.a": 1, "Main.b": 2}
+
+
+def test_method_with_return_exits_early():
+    src = """
+FUNCTION_BLOCK F
+VAR hits : INT; END_VAR
+METHOD Check : INT
+VAR_INPUT v : INT; END_VAR
+Check := -1;
+IF v < 0 THEN RETURN; END_IF;
+hits := hits + 1;
+Check := hits;
+END_METHOD
+END_FUNCTION_BLOCK
+PROGRAM Main VAR f : F; a, b : INT; END_VAR
+a := f.Check(-5);
+b := f.Check(3);
+END_PROGRAM
+"""
+    assert run_st(src, cycles=2, prints=["Main.a", "Main.b"]) == {"Main.a": -1, "Main.b": 2}
+
+
+def test_methods_may_come_before_the_body_and_in_a_program():
+    src = """
+FUNCTION_BLOCK F
+VAR_OUTPUT n : INT; END_VAR
+METHOD Bump
+n := n + 10;
+END_METHOD
+n := n + 1;
+Bump();
+END_FUNCTION_BLOCK
+PROGRAM Main
+VAR f : F; seen : INT; END_VAR
+f();
+Record();
+METHOD Record
+seen := f.n;
+END_METHOD
+END_PROGRAM
+"""
+    assert run_st(src, cycles=2, prints=["Main.seen"]) == {"Main.seen": 22}
+
+
+def test_the_body_sees_what_its_methods_wrote_in_the_same_call():
+    # the FB body holds no copy of its variables while it calls its own methods
+    src = """
+FUNCTION_BLOCK F
+VAR_OUTPUT n : INT; log : INT; END_VAR
+n := n + 1; n := n + 1; n := n + 1;
+Twice();
+log := n;
+n := n + 1;
+METHOD Twice
+n := n * 2;
+END_METHOD
+END_FUNCTION_BLOCK
+PROGRAM Main VAR f : F; END_VAR
+f();
+END_PROGRAM
+"""
+    assert run_st(src, cycles=1, prints=["Main.f.log", "Main.f.n"]) == {"Main.f.log": 6, "Main.f.n": 7}
+
+
+def test_cli_run_prints_values_changed_by_methods(tmp_path):
+    path = write_st(COUNTER, "counter.st", tmp_path)
+    rc, out, err = cli(["run", path, "--cycles", "7", "--print", "Main.c.count", "--print", "Main.ready"])
+    assert rc == 0, err
+    assert "Main.c.count = 25" in out and "Main.ready = TRUE" in out
+
+
+# ---------------------------------------------------------------- EXTENDS, overriding, SUPER^
+SHAPES = """
+FUNCTION_BLOCK ABSTRACT FB_Shape
+VAR_OUTPUT calls : INT; END_VAR
+VAR unit : INT := 1; END_VAR
+calls := calls + 1;
+METHOD ABSTRACT Area : REAL
+END_METHOD
+METHOD Describe : REAL
+Describe := Area() * 10.0;        (* dynamic dispatch: the instance's own Area *)
+END_METHOD
+METHOD PROTECTED Scale : REAL
+VAR_INPUT f : REAL; END_VAR
+Scale := f * 2.0;
+END_METHOD
+END_FUNCTION_BLOCK
+
+FUNCTION_BLOCK FB_Square EXTENDS FB_Shape
+VAR_INPUT side : REAL; END_VAR
+VAR_OUTPUT bodyran : INT; END_VAR
+SUPER^();                          (* the base body *)
+bodyran := bodyran + 1;
+METHOD Area : REAL
+Area := side * side;
+END_METHOD
+END_FUNCTION_BLOCK
+
+FUNCTION_BLOCK FB_Big EXTENDS FB_Square
+METHOD Area : REAL
+Area := SUPER^.Area() + Scale(1.5) + unit;
+END_METHOD
+END_FUNCTION_BLOCK
+
+FUNCTION Twice : REAL
+VAR_IN_OUT s : FB_Shape; END_VAR
+Twice := 2.0 * s.Describe();
+END_FUNCTION
+
+PROGRAM Main
+VAR sq : FB_Square; big : FB_Big; a, b, c, d : REAL; END_VAR
+sq(side := 2.0);
+big(side := 3.0);
+a := sq.Describe();
+b := big.Describe();
+c := big.Area();
+d := Twice(big);
+END_PROGRAM
+"""
+
+
+def test_inherited_methods_dispatch_to_the_override():
+    values = run_st(SHAPES, cycles=2, prints=["Main.a", "Main.b", "Main.c", "Main.d"])
+    # square 2: area 4 -> 40; big 3: 9 + Scale(1.5) 3 + unit 1 = 13 -> 130; via a base in-out: 260
+    assert values == {"Main.a": 40.0, "Main.b": 130.0, "Main.c": 13.0, "Main.d": 260.0}
+
+
+def test_inherited_variables_and_the_base_body_through_super():
+    values = run_st(SHAPES, cycles=2, prints=["Main.sq.calls", "Main.sq.bodyran", "Main.big.calls", "Main.big.bodyran"])
+    # FB_Big has no statements of its own: its body is empty (the base body runs only through SUPER^())
+    assert values == {"Main.sq.calls": 2, "Main.sq.bodyran": 2, "Main.big.calls": 0, "Main.big.bodyran": 0}
+
+
+def test_print_shows_inherited_variables():
+    text = run_st(SHAPES, cycles=1, fmt=True, prints=["Main.sq"])
+    assert text == {"Main.sq": "(calls := 1, unit := 1, side := 2.0, bodyran := 1)"}
+
+
+# ---------------------------------------------------------------- interfaces
+MOTORS = """
+INTERFACE I_Base
+METHOD Id : INT
+END_METHOD
+END_INTERFACE
+
+INTERFACE I_Motor EXTENDS I_Base
+METHOD Start : BOOL
+VAR_INPUT speed : INT; END_VAR
+VAR_OUTPUT accepted : INT; END_VAR
+END_METHOD
+PROPERTY Speed : INT
+GET END_GET
+END_PROPERTY
+END_INTERFACE
+
+INTERFACE I_Other
+METHOD Ping
+END_METHOD
+END_INTERFACE
+
+FUNCTION_BLOCK FB_Motor IMPLEMENTS I_Motor
+VAR_INPUT ident : INT; END_VAR
+VAR sp : INT; END_VAR
+METHOD Id : INT
+Id := ident;
+END_METHOD
+METHOD Start : BOOL
+VAR_INPUT speed : INT; END_VAR
+VAR_OUTPUT accepted : INT; END_VAR
+sp := speed;
+accepted := speed * 2;
+Start := speed > 0;
+END_METHOD
+PROPERTY Speed : INT
+GET
+Speed := sp;
+END_GET
+SET
+sp := Speed;
+END_SET
+END_PROPERTY
+END_FUNCTION_BLOCK
+
+FUNCTION_BLOCK FB_Fast EXTENDS FB_Motor IMPLEMENTS I_Other
+METHOD Start : BOOL
+VAR_INPUT speed : INT; END_VAR
+VAR_OUTPUT accepted : INT; END_VAR
+Start := SUPER^.Start(speed := speed * 10, accepted => accepted);
+END_METHOD
+METHOD Ping
+sp := -1;
+END_METHOD
+END_FUNCTION_BLOCK
+
+PROGRAM Main
+VAR
+  m1 : FB_Motor;
+  m2 : FB_Fast;
+  itf : I_Motor;
+  base : I_Base;
+  other : I_Other;
+  ok : BOOL;
+  acc : INT;
+  ids : INT;
+  wasnull, nowset, q1, q2, same, valid : BOOL;
+  s1, s2 : INT;
+  n : INT;
+END_VAR
+n := n + 1;
+m1(ident := 1); m2(ident := 2);
+IF n = 1 THEN wasnull := itf = 0; END_IF;
+itf := m1;
+nowset := itf <> NULL;
+ok := itf.Start(speed := 3, accepted => acc);
+s1 := itf.Speed;
+itf := m2;
+ok := itf.Start(4);
+s2 := m2.Speed;
+base := itf;
+ids := base.Id() * 10 + m1.Id();
+q1 := __QUERYINTERFACE(base, other);
+q2 := __QUERYINTERFACE(m1, other);
+valid := __ISVALIDREF(other);
+same := itf = m2 AND base = itf;
+m1.Speed := 42;
+IF n = 3 THEN
+  other := 0;
+  other.Ping();
+END_IF
+END_PROGRAM
+"""
+
+
+def test_calls_through_interfaces_dispatch_to_the_instance():
+    values = run_st(MOTORS, cycles=1, prints=["Main.ok", "Main.acc", "Main.s1", "Main.s2", "Main.ids", "Main.m1.sp"])
+    # m1.Start(3): accepted 6; FB_Fast.Start(4) -> SUPER^.Start(40): sp 40; m1.Speed := 42 at the end
+    assert values == {"Main.ok": True, "Main.acc": 6, "Main.s1": 3, "Main.s2": 40, "Main.ids": 21, "Main.m1.sp": 42}
+
+
+def test_interface_comparisons_and_query_interface():
+    values = run_st(MOTORS, cycles=1, prints=["Main.wasnull", "Main.nowset", "Main.q1", "Main.q2", "Main.valid",
+                                              "Main.same"])
+    # m1 implements no I_Other: q2 FALSE and `other` back to NULL
+    assert values == {"Main.wasnull": True, "Main.nowset": True, "Main.q1": True, "Main.q2": False,
+                      "Main.valid": False, "Main.same": True}
+
+
+def test_print_of_an_interface_variable():
+    assert run_st(MOTORS, cycles=1, fmt=True, prints=["Main.itf", "Main.other"]) == \
+        {"Main.itf": "-> FB_Fast", "Main.other": "NULL"}
+
+
+def test_call_through_an_unassigned_interface_faults_at_its_line(tmp_path):
+    path = write_st(MOTORS, "motors.st", tmp_path)
+    rc, out, err = cli(["run", path, "--cycles", "5"])
+    line = MOTORS.splitlines().index("  other.Ping();") + 1
+    assert rc == 3
+    assert f"motors.st:{line}:3: fault: call through an interface that holds no instance (NULL)" in err
+    assert "scan 2" in err and "Traceback" not in err
+
+
+def test_api_fault_names_the_line():
+    vm = start_st(MOTORS)
+    vm.run(cycles=2)
+    with pytest.raises(stvm.RuntimeFault, match="interface") as info:
+        vm.run(cycles=1)
+    assert info.value.span.line == MOTORS.splitlines().index("  other.Ping();") + 1
+
+
+# ---------------------------------------------------------------- properties
+TANK = """
+FUNCTION_BLOCK FB_Tank
+VAR_OUTPUT log : INT; END_VAR
+VAR lvl : INT; maxv : INT := 100; writes : INT; END_VAR
+Level := Level + 1;             (* inside the FB a bare property name calls GET and SET *)
+log := Level;
+
+PROPERTY Level : INT            (* TwinCAT stores GET and SET apart: two blocks of one name *)
+GET
+Level := lvl;
+END_GET
+END_PROPERTY
+
+PROPERTY PUBLIC Level : INT
+SET
+writes := writes + 1;
+IF Level > maxv THEN lvl := maxv; ELSE lvl := Level; END_IF;
+END_SET
+END_PROPERTY
+
+PROPERTY WriteCount : INT
+GET
+VAR doubled : INT; END_VAR
+doubled := writes * 2;
+WriteCount := doubled / 2;
+END_GET
+END_PROPERTY
+
+METHOD Fill
+THIS^.Level := 500;
+END_METHOD
+END_FUNCTION_BLOCK
+
+PROGRAM Main
+VAR t : FB_Tank; a, w : INT; r : REAL; END_VAR
+t();
+t.Level := t.Level + 10;
+a := t.Level;
+IF a > 30 THEN t.Fill(); END_IF;
+w := t.WriteCount;
+r := t.Level * 1.5;
+END_PROGRAM
+"""
+
+
+def test_properties_are_used_like_variables():
+    values = run_st(TANK, cycles=3, prints=["Main.a", "Main.w", "Main.r", "Main.t.log", "Main.t.lvl"])
+    # per scan: body +1 and t.Level +10 (two SETs); scan 3: 33 > 30, Fill sets 500, clamped to 100
+    assert values == {"Main.a": 33, "Main.w": 7, "Main.r": 150.0, "Main.t.log": 23, "Main.t.lvl": 100}
+
+
+def test_property_setter_runs_once_per_assignment():
+    assert run_st(TANK, cycles=1, prints=["Main.t.writes"]) == {"Main.t.writes": 2}

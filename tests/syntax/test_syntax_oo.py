@@ -1,0 +1,103 @@
+"""Object-oriented declarations in the syntax tree: METHOD (before or after an FB's statements,
+with modifiers and a result type), FUNCTION_BLOCK EXTENDS / IMPLEMENTS / ABSTRACT / FINAL,
+INTERFACE (EXTENDS, methods, properties), PROPERTY with GET / SET, THIS^ / SUPER^."""
+
+from __future__ import annotations
+
+import pytest
+
+from stvm.syntax import nodes as n
+from stvm.syntax.parser import parse_text
+
+
+def _unit(text: str) -> n.CompilationUnit:
+    unit, diags = parse_text(text, "t.st")
+    assert not [d for d in diags if d.severity.name == "ERROR"], diags
+    return unit
+
+
+def test_methods_before_and_after_the_body():
+    fb = _unit("""
+FUNCTION_BLOCK F
+VAR x : INT; END_VAR
+METHOD First : INT
+VAR_INPUT a : INT; END_VAR
+First := a;
+END_METHOD
+x := 1;
+x := 2;
+METHOD PRIVATE Second
+END_METHOD;
+END_FUNCTION_BLOCK""").pous[0]
+    assert [type(s) for s in fb.body] == [n.Assign, n.Assign]
+    first, second = fb.methods
+    assert (first.name, first.modifiers, first.return_type.parts) == ("First", (), ("INT",))
+    assert first.var_blocks[0].kind == "VAR_INPUT" and len(first.body) == 1
+    assert (second.name, second.modifiers, second.return_type, second.body) == ("Second", ("PRIVATE",), None, ())
+
+
+def test_fb_header_extends_implements_and_modifiers():
+    fb = _unit("FUNCTION_BLOCK ABSTRACT Derived EXTENDS Base IMPLEMENTS I1, Lib\\I2 END_FUNCTION_BLOCK").pous[0]
+    assert fb.modifiers == ("ABSTRACT",)
+    assert fb.extends == (n.Name(("Base",)),)
+    assert fb.implements == (n.Name(("I1",)), n.Name(("Lib", "I2")))
+
+
+def test_interface_with_methods_properties_and_extends():
+    itf = _unit("""
+INTERFACE I_Motion EXTENDS I_Base, I_Other
+METHOD MoveTo : BOOL
+VAR_INPUT x : LREAL; END_VAR
+END_METHOD
+PROPERTY Speed : LREAL
+GET
+END_GET
+SET
+END_SET
+END_PROPERTY
+END_INTERFACE""").pous[0]
+    assert itf.kind == "INTERFACE" and itf.name == "I_Motion"
+    assert [e.parts for e in itf.extends] == [("I_Base",), ("I_Other",)]
+    assert [m.name for m in itf.methods] == ["MoveTo"]
+    (prop,) = itf.properties
+    assert prop.name == "Speed" and prop.getter is not None and prop.setter is not None
+
+
+def test_property_with_get_and_set_bodies():
+    fb = _unit("""
+FUNCTION_BLOCK F
+VAR v : INT; END_VAR
+PROPERTY PUBLIC Value : INT
+GET
+VAR tmp : INT; END_VAR
+tmp := v;
+Value := tmp;
+END_GET
+SET
+v := Value;
+END_SET
+END_PROPERTY
+END_FUNCTION_BLOCK""").pous[0]
+    (prop,) = fb.properties
+    assert prop.modifiers == ("PUBLIC",) and prop.type_spec.parts == ("INT",)
+    assert prop.getter.kind == "GET" and prop.getter.var_blocks[0].decls[0].names[0][0] == "tmp"
+    assert len(prop.getter.body) == 2 and len(prop.setter.body) == 1
+
+
+def test_this_and_super_are_dereferenced_names():
+    fb = _unit("FUNCTION_BLOCK F EXTENDS B THIS^.x := SUPER^.Get(); SUPER^(); END_FUNCTION_BLOCK").pous[0]
+    assign, call = fb.body
+    assert assign.target == n.Member(n.Deref(n.Name(("THIS",))), "x")
+    assert assign.value == n.Call(n.Member(n.Deref(n.Name(("SUPER",))), "Get"), ())
+    assert call.call == n.Call(n.Deref(n.Name(("SUPER",))), ())
+
+
+@pytest.mark.parametrize("word", ["final", "internal", "public", "get", "set"])
+def test_modifier_words_stay_usable_as_variable_names(word):
+    pou = _unit(f"PROGRAM P VAR {word} : INT; END_VAR {word} := {word} + 1; END_PROGRAM").pous[0]
+    assert pou.body[0].target == n.Name((word,))
+
+
+def test_method_outside_a_pou_is_a_syntax_error():
+    _, diags = parse_text("METHOD M END_METHOD", "t.st")
+    assert diags and diags[0].severity.name == "ERROR" and diags[0].span.line == 1
