@@ -25,6 +25,8 @@ _ARITH = {"PLUS": "+", "MINUS": "-", "STAR": "*", "SLASH": "/", "MOD": "MOD", "P
 _COMPARE = {"EQ": "=", "NE": "<>", "LT": "<", "GT": ">", "LE": "<=", "GE": ">="}
 _LOGIC = {"AND": "AND", "AMP": "AND", "OR": "OR", "XOR": "XOR"}
 OP_TEXT = {**_ARITH, **_COMPARE, **_LOGIC, "NOT": "NOT"}
+# operators answered from their operand's type (a user POU of the same name wins)
+INTRINSICS = ("LOWER_BOUND", "UPPER_BOUND", "SIZEOF", "XSIZEOF")
 
 
 def int_literal_type(value: int, settings) -> t.Type:
@@ -377,6 +379,8 @@ class _BodyChecker:
                 if isinstance(dst, t.IntType):
                     if not dst.lo <= value <= dst.hi:
                         self.error(f"{value} is out of range for {dst.name} ({dst.lo}..{dst.hi})", span, "E022")
+                    elif isinstance(dst, t.SubrangeType) and not dst.low <= value <= dst.high:
+                        self.error(f"{value} is outside the subrange {dst.text}", span, "E022")
                     return
                 if isinstance(dst, t.RealType):
                     return
@@ -617,6 +621,73 @@ class _BodyChecker:
         self.facts.ref_calls.add(id(e))
         return t.ref_type(ty, "POINTER" if word == "ADR" else "REF_TO")
 
+    # ---- intrinsics answered from the types (LOWER_BOUND, UPPER_BOUND, SIZEOF, XSIZEOF)
+    def intrinsic_call(self, e: n.Call, word: str) -> t.Type | None:
+        """Operators computed from the static type of their operand. A fixed array's bounds and
+        every SIZEOF are constants; the bounds of an ARRAY[*] parameter are read at run time from
+        what the caller passed (`open_array_bounds`)."""
+        if word in ("LOWER_BOUND", "UPPER_BOUND"):
+            return self.array_bound(e, word)
+        if len(e.args) != 1 or e.args[0].kind != "positional":
+            self.check_args_loosely(e)
+            self.error(f"{word}() takes one variable or type name", e.span, "E070")
+            return None
+        arg = e.args[0].value
+        ty = self.sizeof_operand(arg)
+        if ty is None:
+            return None
+        size = t.byte_size(ty)
+        if size is None:
+            self.error(f"{word}() of {ty.name}: its size in bytes is not defined here "
+                       "(stvm does not model the memory of function blocks or references)", arg.span, "E070")
+            return None
+        if word == "XSIZEOF":
+            self.facts.intrinsics[id(e)] = ("CONST", size)
+            return t.UDINT   # Choice: a 32-bit platform (CODESYS: UDINT there, ULINT on 64-bit ones)
+        # CODESYS/TwinCAT: "the type adapts to the size" (USINT < 256 <= UINT ...): a constant that
+        # takes the type its context needs, like an untyped literal
+        return self.constant_intrinsic(e, size)
+
+    def constant_intrinsic(self, e: n.Call, value: int) -> t.Type:
+        self.facts.intrinsics[id(e)] = ("CONST", value)
+        self.facts.consts[id(e)] = value
+        self.facts.untyped.add(id(e))
+        return int_literal_type(value, self.settings)
+
+    def sizeof_operand(self, arg: n.Expr) -> t.Type | None:
+        """The type SIZEOF measures: a variable's, or a type named directly (`SIZEOF(INT)`)."""
+        if isinstance(arg, n.Name) and self.resolve_name(arg) is None:
+            spec = n.NamedTypeSpec(arg.parts, False, arg.span)
+            if len(arg.parts) == 1 and (arg.parts[0].upper() in t.ELEMENTARY or arg.parts[0].upper() == "WSTRING") \
+                    or self.c.lookup_type_key(arg.parts, False, self.pou_namespace) is not None:
+                return self.c.resolve_type_spec(spec, self.pou_namespace)
+        return self.expr(arg)
+
+    def array_bound(self, e: n.Call, word: str) -> t.Type | None:
+        """LOWER_BOUND(arr, dim) / UPPER_BOUND(arr, dim) (IEC 61131-3 ed. 3, 6.5.3.2): DINT."""
+        if len(e.args) != 2 or any(a.kind != "positional" for a in e.args):
+            self.check_args_loosely(e)
+            self.error(f"{word}() takes an array and a constant dimension: {word}(arr, 1)", e.span, "E070")
+            return None
+        arr, dim_expr = e.args[0].value, e.args[1].value
+        ty = self.expr(arr)
+        self.expr(dim_expr)
+        if ty is None:
+            return None
+        if not isinstance(ty, t.ArrayType):
+            self.error(f"{word}() needs an array; '{self.describe(arr)}' is {ty.name}", arr.span, "E070")
+            return None
+        dim = self.c.const_value(dim_expr, self.pou_namespace, self.pou)
+        ndims = 1 if ty.dims is None else len(ty.dims)
+        if isinstance(dim, bool) or not isinstance(dim, int) or not 1 <= dim <= ndims:
+            self.error(f"the dimension of {word}() must be a constant 1..{ndims}", dim_expr.span, "E070")
+            return None
+        if ty.dims is not None:
+            lo, hi = ty.dims[dim - 1]
+            return self.constant_intrinsic(e, lo if word == "LOWER_BOUND" else hi)
+        self.facts.intrinsics[id(e)] = (word, arr)
+        return t.DINT
+
     def stmt_RefAssign(self, s: n.RefAssign) -> None:
         target = s.target
         raw = None
@@ -854,6 +925,9 @@ class _BodyChecker:
         if isinstance(callee, n.Name) and len(callee.parts) == 1 and callee.parts[0].upper() in ("REF", "ADR") \
                 and self.resolve_name(callee) is None and self.lookup_callable(callee) is None:
             return self.reference_of(e)
+        if isinstance(callee, n.Name) and len(callee.parts) == 1 and callee.parts[0].upper() in INTRINSICS \
+                and self.resolve_name(callee) is None and self.lookup_callable(callee) is None:
+            return self.intrinsic_call(e, callee.parts[0].upper())
         if isinstance(callee, n.Name):
             ref = self.resolve_name(callee) if len(callee.parts) == 1 else None
             if ref is not None and getattr(ref, "variable", None) is not None and isinstance(ref.variable.type, t.FBType):  # type: ignore[attr-defined]

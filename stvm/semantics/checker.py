@@ -63,6 +63,8 @@ class Facts:
     array_from_element: set[int] = field(default_factory=set)  # Index exprs passed as "array from here"
     operand_types: dict[int, t.Type] = field(default_factory=dict)  # comparisons: the type compared in
     ref_calls: set[int] = field(default_factory=set)      # REF(x) / ADR(x) calls
+    # LOWER_BOUND/UPPER_BOUND/SIZEOF calls: ("CONST", value) or (word, ARRAY[*] operand)
+    intrinsics: dict[int, tuple[str, object]] = field(default_factory=dict)
     auto_deref: set[int] = field(default_factory=set)     # names of REFERENCE TO variables (used as the target)
     addressed: set[tuple[str, str]] = field(default_factory=set)  # (POU key, variable key) whose reference is taken
     keep: list = field(default_factory=list)              # keeps nodes alive so ids stay unique
@@ -521,8 +523,12 @@ class Checker:
             if not isinstance(base, t.IntType):
                 self.error(f"subrange base must be an integer type, not {spec.base}", spec.span, "E019")
                 return None
-            # Choice: a subrange is its base type (range checks at run time are not modelled).
-            return base
+            low, high = spec.low, spec.high
+            if not base.lo <= low <= high <= base.hi:
+                self.error(f"subrange {low}..{high} is empty or outside {base.name} ({base.lo}..{base.hi})",
+                           spec.span, "E019")
+                return base
+            return t.subrange_of(base, low, high)
         if isinstance(spec, n.RefTypeSpec):
             target = self.resolve_type_spec(spec.target, namespace)
             if target is None:
@@ -547,6 +553,10 @@ class Checker:
 
     def const_value(self, expr: n.Expr, namespace: tuple[str, ...], pou: POUInfo | None) -> object:
         """Evaluate a constant expression at compile time; `_NOT_CONST` if it is not one."""
+        if isinstance(expr, n.Call):
+            # LOWER_BOUND/UPPER_BOUND of a declared array, SIZEOF: constants once checked
+            word, value = self.facts.intrinsics.get(id(expr), ("", None))
+            return value if word == "CONST" else _NOT_CONST
         if isinstance(expr, (n.IntLiteral, n.BoolLiteral, n.StringLiteral)):
             return expr.value
         if isinstance(expr, n.RealLiteral):
@@ -728,7 +738,10 @@ class Checker:
                     if not typed:
                         self.error(f"{value} is out of range for {ty.name} ({ty.lo}..{ty.hi})", span, "E022")
                         return None
-                    return ty.wrap(value)
+                    value = ty.wrap(value)
+                if isinstance(ty, t.SubrangeType) and not ty.low <= value <= ty.high:
+                    self.error(f"{value} is outside the subrange {ty.text}", span, "E022")
+                    return None
                 return value
         elif isinstance(ty, t.RealType):
             if isinstance(value, (int, float)) and not isinstance(value, bool):

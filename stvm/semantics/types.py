@@ -77,6 +77,24 @@ class IntType(Type):
 
 
 @dataclass(frozen=True)
+class SubrangeType(IntType):
+    """`INT(0..100)` (IEC 61131-3 ed. 3, 6.4.4.3): an integer of the base type (same `name`,
+    width and wrap) whose values must lie in low..high. A constant outside is a check-time error;
+    a value computed at run time outside follows `subrange_check`."""
+
+    low: int = 0
+    high: int = 0
+
+    @property
+    def text(self) -> str:
+        return f"{self.name}({self.low}..{self.high})"
+
+
+def subrange_of(base: IntType, low: int, high: int) -> SubrangeType:
+    return SubrangeType(base.name, base.bits, base.signed, base.bitstring, low, high)
+
+
+@dataclass(frozen=True)
 class RealType(Type):
     bits: int = 32
 
@@ -321,3 +339,48 @@ def is_integer(t: Type) -> bool:
 
 def is_numeric(t: Type) -> bool:
     return isinstance(t, (IntType, RealType))
+
+
+# ---- sizes in bytes (SIZEOF / XSIZEOF) ---------------------------------------------------------
+# Choice (no controller memory is modelled): the sizes a CODESYS/TwinCAT x86 target reports, with
+# Sysmac's own widths where they differ — TIME, DATE, TOD and DT are 64-bit (Sysmac, and LTIME
+# everywhere); STRING[n] is its n bytes of storage (Sysmac counts the NUL in n); an enumeration
+# is its base type (INT unless it names one). STRUCTs use natural alignment (every member at a multiple of its
+# own alignment, the struct padded to its largest one: CODESYS's default pack mode 8). Function
+# block instances and references have no defined size here: None.
+
+def byte_size(ty: Type) -> int | None:
+    if isinstance(ty, BoolType):
+        return 1
+    if isinstance(ty, (IntType, RealType)):
+        return ty.bits // 8
+    if isinstance(ty, TimeType):
+        return 8
+    if isinstance(ty, StringType):
+        return ty.size
+    if isinstance(ty, EnumType):
+        return byte_size(ty.base) if ty.base is not None else 2
+    if isinstance(ty, ArrayType):
+        element = byte_size(ty.element)
+        return None if element is None or ty.dims is None else element * ty.length
+    if isinstance(ty, StructType):
+        offset, largest = 0, 1
+        for _, field_type in ty.fields:
+            size, align = byte_size(field_type), _alignment(field_type)
+            if size is None or align is None:
+                return None
+            offset = -(-offset // align) * align + size
+            largest = max(largest, align)
+        return -(-offset // largest) * largest
+    return None
+
+
+def _alignment(ty: Type) -> int | None:
+    if isinstance(ty, ArrayType):
+        return _alignment(ty.element)
+    if isinstance(ty, StructType):
+        aligns = [_alignment(f) for _, f in ty.fields]
+        return None if None in aligns else max(aligns, default=1)  # type: ignore[type-var]
+    if isinstance(ty, StringType):
+        return 1
+    return byte_size(ty)
