@@ -238,9 +238,9 @@ def probe_int_div_zero(settings):
 
 
 def probe_open_array_bounds(settings):
-    return _run_program("FUNCTION First : INT VAR_IN_OUT a : ARRAY[*] OF INT; END_VAR\n"
+    return _run_program("FUNCTION First : DINT VAR_IN_OUT a : ARRAY[*] OF INT; END_VAR\n"
                         "First := a[1] * 100 + LOWER_BOUND(a, 1); END_FUNCTION\n"
-                        "PROGRAM Main VAR arr : ARRAY[1..3] OF INT := [7, 8, 9]; f : INT; END_VAR\n"
+                        "PROGRAM Main VAR arr : ARRAY[1..3] OF INT := [7, 8, 9]; f : DINT; END_VAR\n"
                         "f := First(arr); END_PROGRAM\n", settings, ["Main.f"])
 
 
