@@ -1035,7 +1035,7 @@ class Lowerer:
             return operand
         if isinstance(ty, t.IntType):
             return _wrap(f"-{operand}", ty)
-        if ty.name == "TIME":
+        if getattr(ty, "family", "") == "TIME":
             return _wrap(f"-{operand}", t.LINT)  # type: ignore[arg-type]
         return f"(-{operand})"
 

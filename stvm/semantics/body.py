@@ -83,7 +83,8 @@ def implicit_ok(src: t.Type, dst: t.Type) -> bool:
                 and (src.element == dst.element or (isinstance(src.element, t.StringType) and isinstance(dst.element, t.StringType))
                      or (getattr(src.element, "qualname", None) or "x").lower() == (getattr(dst.element, "qualname", None) or "y").lower()))
     if isinstance(src, t.TimeType) and isinstance(dst, t.TimeType):
-        return src.name == dst.name
+        # IEC ed. 3 (implicit conversions): TIME -> LTIME, DATE -> LDATE, TOD -> LTOD, DT -> LDT
+        return src.family == dst.family and (dst.long or not src.long)
     return False
 
 
@@ -747,7 +748,7 @@ class _BodyChecker:
                 return ty
             self.error(f"NOT needs BOOL or a bit string, not {ty.name}", e.span, "E038")
             return None
-        if isinstance(ty, (t.IntType, t.RealType)) or ty.name == "TIME":
+        if isinstance(ty, (t.IntType, t.RealType)) or getattr(ty, "family", "") == "TIME":
             if id(e.operand) in self.facts.untyped:
                 value = self.facts.consts[id(e.operand)]
                 folded = -value if e.op == "MINUS" else value
@@ -876,31 +877,33 @@ class _BodyChecker:
         if isinstance(lt, t.BoolType) and isinstance(rt, t.BoolType):
             return True
         if isinstance(lt, t.TimeType) and isinstance(rt, t.TimeType):
-            return lt.name == rt.name
+            return lt.family == rt.family
         if isinstance(lt, t.RefType) and isinstance(rt, t.RefType) and op in ("EQ", "NE"):
             return lt.is_null or rt.is_null or t.same_type(lt.target, rt.target)
         return False
 
     def time_arith(self, e: n.Binary, lt: t.Type, rt: t.Type) -> t.Type | None:
+        """IEC table 30 on the TIME family; a long operand (LTIME, LDT, …) makes the result long."""
         op = e.op
-        ln, rn = lt.name, rt.name
+        ln, rn = getattr(lt, "family", lt.name), getattr(rt, "family", rt.name)
+        long = getattr(lt, "long", False) or getattr(rt, "long", False)
         if op == "PLUS":
             if ln == rn == "TIME":
-                return t.TIME
+                return t.time_type("TIME", long)
             if ln in ("DATE_AND_TIME", "TIME_OF_DAY") and rn == "TIME":
-                return lt
+                return t.time_type(ln, long)
             if rn in ("DATE_AND_TIME", "TIME_OF_DAY") and ln == "TIME":
-                return rt
+                return t.time_type(rn, long)
         if op == "MINUS":
             if ln == rn:
-                return t.TIME
+                return t.time_type("TIME", long)
             if ln in ("DATE_AND_TIME", "TIME_OF_DAY") and rn == "TIME":
-                return lt
+                return t.time_type(ln, long)
         if op in ("STAR", "SLASH") and ln == "TIME" and isinstance(rt, (t.IntType, t.RealType)):
-            return t.TIME
+            return lt
         if op == "STAR" and rn == "TIME" and isinstance(lt, (t.IntType, t.RealType)):
-            return t.TIME
-        self.error(f"operator {OP_TEXT.get(op, op)} cannot be applied to {ln} and {rn}", e.span, "E039")
+            return rt
+        self.error(f"operator {OP_TEXT.get(op, op)} cannot be applied to {lt.name} and {rt.name}", e.span, "E039")
         return None
 
     def describe(self, e: n.Expr) -> str:

@@ -1007,7 +1007,9 @@ def _round_real(value: float, ty: t.Type) -> float:
 
 
 def _time_compatible(literal_type: str, target: str) -> bool:
-    return literal_type == target
+    """May a T#/D#/TOD#/DT# literal (or its long form) initialise a variable of `target`?"""
+    literal, wanted = t.ELEMENTARY[literal_type], t.ELEMENTARY[target]
+    return literal.family == wanted.family and (wanted.long or not literal.long)  # type: ignore[attr-defined]
 
 
 from stvm.semantics.body import _BodyChecker  # noqa: E402  (body checker needs Checker defined)

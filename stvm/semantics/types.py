@@ -107,13 +107,27 @@ class RealType(Type):
         return 3 if self.bits == 32 else 5
 
 
+_LONG_TIMES = {"LTIME": "TIME", "LDATE": "DATE", "LTIME_OF_DAY": "TIME_OF_DAY", "LDATE_AND_TIME": "DATE_AND_TIME"}
+
+
 @dataclass(frozen=True)
 class TimeType(Type):
-    """TIME (a duration) and DATE/TOD/DT (points in time), all integer nanoseconds."""
+    """TIME (a duration) and DATE/TOD/DT (points in time), all integer nanoseconds; their long
+    forms LTIME, LDATE, LTIME_OF_DAY, LDATE_AND_TIME (IEC ed. 3) are distinct types of the same
+    `family`. Sysmac's TIME is already 64-bit nanoseconds, so both forms hold the same values."""
 
     @property
     def kind(self) -> str:
         return "time"
+
+    @property
+    def family(self) -> str:
+        """TIME, DATE, TIME_OF_DAY or DATE_AND_TIME, for the long forms too."""
+        return _LONG_TIMES.get(self.name, self.name)
+
+    @property
+    def long(self) -> bool:
+        return self.name in _LONG_TIMES
 
 
 @dataclass(frozen=True)
@@ -224,7 +238,7 @@ class GenericType(Type):
         if n == "ANY_NUM":
             return k in ("int", "real") and not getattr(other, "bitstring", False)
         if n == "ANY_MAGNITUDE":
-            return (k in ("int", "real") and not getattr(other, "bitstring", False)) or other.name == "TIME"
+            return (k in ("int", "real") and not getattr(other, "bitstring", False)) or getattr(other, "family", "") == "TIME"
         if n == "ANY_INT":
             return k == "int" and not other.bitstring  # type: ignore[attr-defined]
         if n == "ANY_REAL":
@@ -234,7 +248,7 @@ class GenericType(Type):
         if n == "ANY_STRING":
             return k == "string"
         if n == "ANY_DATE":
-            return k == "time" and other.name != "TIME"
+            return k == "time" and other.family != "TIME"  # type: ignore[attr-defined]
         return False
 
 
@@ -309,13 +323,18 @@ TIME = TimeType("TIME")
 DATE = TimeType("DATE")
 TOD = TimeType("TIME_OF_DAY")
 DT = TimeType("DATE_AND_TIME")
+LTIME = TimeType("LTIME")
+LDATE = TimeType("LDATE")
+LTOD = TimeType("LTIME_OF_DAY")
+LDT = TimeType("LDATE_AND_TIME")
 STRING = StringType("STRING", 1986)
 VOID = VoidType("VOID")
 
 ELEMENTARY: dict[str, Type] = {
     "BOOL": BOOL, "REAL": REAL, "LREAL": LREAL,
-    "TIME": TIME, "LTIME": TIME, "DATE": DATE, "TIME_OF_DAY": TOD, "TOD": TOD,
-    "DATE_AND_TIME": DT, "DT": DT, "STRING": STRING,
+    "TIME": TIME, "DATE": DATE, "TIME_OF_DAY": TOD, "TOD": TOD, "DATE_AND_TIME": DT, "DT": DT,
+    "LTIME": LTIME, "LDATE": LDATE, "LTIME_OF_DAY": LTOD, "LTOD": LTOD, "LDATE_AND_TIME": LDT, "LDT": LDT,
+    "STRING": STRING,
     **_ints(),
 }
 GENERICS: dict[str, Type] = {
@@ -327,6 +346,13 @@ GENERICS: dict[str, Type] = {
 SINT, INT, DINT, LINT = (ELEMENTARY[n] for n in ("SINT", "INT", "DINT", "LINT"))
 USINT, UINT, UDINT, ULINT = (ELEMENTARY[n] for n in ("USINT", "UINT", "UDINT", "ULINT"))
 BYTE, WORD, DWORD, LWORD = (ELEMENTARY[n] for n in ("BYTE", "WORD", "DWORD", "LWORD"))
+
+
+def time_type(family: str, long: bool) -> TimeType:
+    """The TIME-family type of `family` (TIME, DATE, TIME_OF_DAY, DATE_AND_TIME), long or not."""
+    if not long:
+        return ELEMENTARY[family]  # type: ignore[return-value]
+    return next(ty for ty in (LTIME, LDATE, LTOD, LDT) if ty.family == family)
 
 
 def string_type(size: int) -> StringType:
