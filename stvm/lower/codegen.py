@@ -1145,9 +1145,9 @@ class Lowerer:
             return f"_ArrayRef({code}, 0, {vtype.dims[0][0]})"
         return f"_ArrayRef({code}, 0)"
 
-    def intrinsic_code(self, e: n.Call) -> str:
+    def type_query_code(self, e: n.Call) -> str:
         """LOWER_BOUND / UPPER_BOUND of an ARRAY[*] parameter, or a constant (see body.py)."""
-        word, operand = self.facts.intrinsics[id(e)]
+        word, operand = self.facts.type_queries[id(e)]
         if word == "CONST":
             ty = self.facts.types.get(id(e))
             converted = self.convert_const(operand, ty) if ty is not None else None
@@ -1161,8 +1161,8 @@ class Lowerer:
     def ex_Call(self, e: n.Call) -> str:
         if id(e) in self.facts.ref_calls:
             return self.reference_code(e.args[0].value)
-        if id(e) in self.facts.intrinsics:
-            return self.intrinsic_code(e)
+        if id(e) in self.facts.type_queries:
+            return self.type_query_code(e)
         return self.function_call(e, self.facts.calls[id(e)])
 
     def arg_code(self, var: Variable, value: n.Expr) -> str:

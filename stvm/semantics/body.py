@@ -26,7 +26,7 @@ _COMPARE = {"EQ": "=", "NE": "<>", "LT": "<", "GT": ">", "LE": "<=", "GE": ">="}
 _LOGIC = {"AND": "AND", "AMP": "AND", "OR": "OR", "XOR": "XOR"}
 OP_TEXT = {**_ARITH, **_COMPARE, **_LOGIC, "NOT": "NOT"}
 # operators answered from their operand's type (a user POU of the same name wins)
-INTRINSICS = ("LOWER_BOUND", "UPPER_BOUND", "SIZEOF", "XSIZEOF")
+TYPE_QUERIES = ("LOWER_BOUND", "UPPER_BOUND", "SIZEOF", "XSIZEOF")
 
 
 def int_literal_type(value: int, settings) -> t.Type:
@@ -622,8 +622,8 @@ class _BodyChecker:
         self.facts.ref_calls.add(id(e))
         return t.ref_type(ty, "POINTER" if word == "ADR" else "REF_TO")
 
-    # ---- intrinsics answered from the types (LOWER_BOUND, UPPER_BOUND, SIZEOF, XSIZEOF)
-    def intrinsic_call(self, e: n.Call, word: str) -> t.Type | None:
+    # ---- operators answered from the types (LOWER_BOUND, UPPER_BOUND, SIZEOF, XSIZEOF)
+    def type_query(self, e: n.Call, word: str) -> t.Type | None:
         """Operators computed from the static type of their operand. A fixed array's bounds and
         every SIZEOF are constants; the bounds of an ARRAY[*] parameter are read at run time from
         what the caller passed (`open_array_bounds`)."""
@@ -643,14 +643,14 @@ class _BodyChecker:
                        "(stvm does not model the memory of function blocks or references)", arg.span, "E070")
             return None
         if word == "XSIZEOF":
-            self.facts.intrinsics[id(e)] = ("CONST", size)
+            self.facts.type_queries[id(e)] = ("CONST", size)
             return t.UDINT   # Choice: a 32-bit platform (CODESYS: UDINT there, ULINT on 64-bit ones)
         # CODESYS/TwinCAT: "the type adapts to the size" (USINT < 256 <= UINT ...): a constant that
         # takes the type its context needs, like an untyped literal
-        return self.constant_intrinsic(e, size)
+        return self.constant_type_query(e, size)
 
-    def constant_intrinsic(self, e: n.Call, value: int) -> t.Type:
-        self.facts.intrinsics[id(e)] = ("CONST", value)
+    def constant_type_query(self, e: n.Call, value: int) -> t.Type:
+        self.facts.type_queries[id(e)] = ("CONST", value)
         self.facts.consts[id(e)] = value
         self.facts.untyped.add(id(e))
         return int_literal_type(value, self.settings)
@@ -685,8 +685,8 @@ class _BodyChecker:
             return None
         if ty.dims is not None:
             lo, hi = ty.dims[dim - 1]
-            return self.constant_intrinsic(e, lo if word == "LOWER_BOUND" else hi)
-        self.facts.intrinsics[id(e)] = (word, arr)
+            return self.constant_type_query(e, lo if word == "LOWER_BOUND" else hi)
+        self.facts.type_queries[id(e)] = (word, arr)
         return t.DINT
 
     def stmt_RefAssign(self, s: n.RefAssign) -> None:
@@ -928,9 +928,9 @@ class _BodyChecker:
         if isinstance(callee, n.Name) and len(callee.parts) == 1 and callee.parts[0].upper() in ("REF", "ADR") \
                 and self.resolve_name(callee) is None and self.lookup_callable(callee) is None:
             return self.reference_of(e)
-        if isinstance(callee, n.Name) and len(callee.parts) == 1 and callee.parts[0].upper() in INTRINSICS \
+        if isinstance(callee, n.Name) and len(callee.parts) == 1 and callee.parts[0].upper() in TYPE_QUERIES \
                 and self.resolve_name(callee) is None and self.lookup_callable(callee) is None:
-            return self.intrinsic_call(e, callee.parts[0].upper())
+            return self.type_query(e, callee.parts[0].upper())
         if isinstance(callee, n.Name):
             ref = self.resolve_name(callee) if len(callee.parts) == 1 else None
             if ref is not None and getattr(ref, "variable", None) is not None and isinstance(ref.variable.type, t.FBType):  # type: ignore[attr-defined]

@@ -64,7 +64,7 @@ class Facts:
     operand_types: dict[int, t.Type] = field(default_factory=dict)  # comparisons: the type compared in
     ref_calls: set[int] = field(default_factory=set)      # REF(x) / ADR(x) calls
     # LOWER_BOUND/UPPER_BOUND/SIZEOF calls: ("CONST", value) or (word, ARRAY[*] operand)
-    intrinsics: dict[int, tuple[str, object]] = field(default_factory=dict)
+    type_queries: dict[int, tuple[str, object]] = field(default_factory=dict)
     auto_deref: set[int] = field(default_factory=set)     # names of REFERENCE TO variables (used as the target)
     addressed: set[tuple[str, str]] = field(default_factory=set)  # (POU key, variable key) whose reference is taken
     keep: list = field(default_factory=list)              # keeps nodes alive so ids stay unique
@@ -555,7 +555,7 @@ class Checker:
         """Evaluate a constant expression at compile time; `_NOT_CONST` if it is not one."""
         if isinstance(expr, n.Call):
             # LOWER_BOUND/UPPER_BOUND of a declared array, SIZEOF: constants once checked
-            word, value = self.facts.intrinsics.get(id(expr), ("", None))
+            word, value = self.facts.type_queries.get(id(expr), ("", None))
             return value if word == "CONST" else _NOT_CONST
         if isinstance(expr, (n.IntLiteral, n.BoolLiteral, n.StringLiteral)):
             return expr.value
