@@ -55,10 +55,26 @@ class ArrayOob(Enum):
     SKIP_STATEMENT = "skip_statement"
 
 
+class OpenArrayBounds(Enum):
+    """How an ARRAY[*] parameter numbers the elements passed."""
+    ZERO = "zero"               # from 0, whatever the argument's bounds (Sysmac: "the array from this element on")
+    # IEC 61131-3 ed. 3 6.5.3.2 and CODESYS/TwinCAT: the argument's own bounds, read with
+    # LOWER_BOUND/UPPER_BOUND (an element passed as "array from here" starts at 0 all the same)
+    ACTUAL = "actual"
+
+
 class IntDivZero(Enum):
     """Integer `/` and MOD, DIV(), TIME / INT, TIME / REAL and DIV_TIME by zero (one meaning everywhere)."""
     FAULT = "fault"             # the task stops with the ST location
     ZERO = "zero"               # the result is 0
+
+
+class SubrangeCheck(Enum):
+    """A value outside its subrange type (`INT(0..100)`) computed at run time (a constant is always a check-time error)."""
+    FAULT = "fault"             # IEC 61131-3 ed. 3 6.4.4.3 ("an error"): the task stops with the ST location
+    # CODESYS/TwinCAT without the implicit CheckRangeSigned/CheckRangeUnsigned functions: the
+    # value is stored (wrapped to the base type only)
+    STORE = "store"
 
 
 class IntLiteralType(Enum):
@@ -357,12 +373,14 @@ class SysmacSettings:
     int_literal_type: IntLiteralType = setting(IntLiteralType.DINT, "2")
     string_length_unit: StringLengthUnit = setting(StringLengthUnit.UTF8, "2")
     string_overflow: StringOverflow = setting(StringOverflow.TRUNCATE_WARN, "2")
+    subrange_check: SubrangeCheck = setting(SubrangeCheck.FAULT, "2")
     # section 3: dialect
     bare_enumerators: BareEnumerators = setting(BareEnumerators.RESOLVE_UNIQUE, "3 #3")
     dollar_n: DollarN = setting(DollarN.LF, "3 #7")
     invalid_dollar_escape: InvalidDollarEscape = setting(InvalidDollarEscape.ERROR, "3 #7")
     double_quote_strings: DoubleQuoteStrings = setting(DoubleQuoteStrings.ACCEPT_WARN, "3 #8")
     for_end_eval: ForEndEval = setting(ForEndEval.ONCE, "9")
+    open_array_bounds: OpenArrayBounds = setting(OpenArrayBounds.ZERO, "3 #4")
     # section 4/5: sockets
     skt_send_copy: SktSendCopy = setting(SktSendCopy.AT_START, "4 #2")
     skt_errorid_reset: SktErrorIdReset = setting(SktErrorIdReset.START_AND_CLEAR, "4 #2")

@@ -237,6 +237,18 @@ def probe_int_div_zero(settings):
                         settings, ["Main.q", "Main.d", "Main.t"])
 
 
+def probe_open_array_bounds(settings):
+    return _run_program("FUNCTION First : DINT VAR_IN_OUT a : ARRAY[*] OF INT; END_VAR\n"
+                        "First := a[1] * 100 + LOWER_BOUND(a, 1); END_FUNCTION\n"
+                        "PROGRAM Main VAR arr : ARRAY[1..3] OF INT := [7, 8, 9]; f : DINT; END_VAR\n"
+                        "f := First(arr); END_PROGRAM\n", settings, ["Main.f"])
+
+
+def probe_subrange_check(settings):
+    return _run_program("PROGRAM Main VAR p : INT(0..100) := 90; i : INT := 20; END_VAR\n"
+                        "p := p + i; END_PROGRAM\n", settings, ["Main.p"])
+
+
 Probe = Callable[[SysmacSettings], Any]
 StdlibTest = str     # "tests/<path>.py::<test function>"
 
@@ -258,6 +270,8 @@ OBSERVED: dict[tuple[str, str], Probe | StdlibTest] = {
     ("invalid_dollar_escape", "literal"): probe_invalid_dollar_escape,
     ("double_quote_strings", "error"): probe_double_quote_strings,
     ("for_end_eval", "each"): probe_for_end_eval,
+    ("open_array_bounds", "actual"): probe_open_array_bounds,
+    ("subrange_check", "store"): probe_subrange_check,
     ("skt_send_copy", "at_service"):
         "tests/stdlib/test_sockets.py::test_send_copies_the_data_when_the_setting_says",
     ("skt_errorid_reset", "start_only"):

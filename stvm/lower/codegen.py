@@ -22,7 +22,7 @@ from stvm.semantics.model import EXTERNAL, GLOBAL, IN_OUT, INPUT, OUTPUT, TEMP, 
 from stvm.lower.names import method_attr, unit_name, var_attr
 from stvm.syntax import nodes as n
 from stvm.syntax.walk import calls_in, name_uses, root_name, walk
-from stvm.settings import ArrayOob, EnumDefault, ForEndEval, IntDivZero
+from stvm.settings import ArrayOob, EnumDefault, ForEndEval, IntDivZero, OpenArrayBounds, SubrangeCheck
 from stvm.lower.product import LineMap, LoweredProject  # noqa: F401 (API)
 
 
@@ -906,6 +906,13 @@ class Lowerer:
     def coerce(self, code: str, src: t.Type, dst: t.Type, span: n.Span | None = None) -> str:
         if src == dst:
             return code
+        if isinstance(dst, t.SubrangeType) and isinstance(src, t.IntType):
+            code = code if _contains(dst, src) else _wrap(code, dst)
+            if isinstance(src, t.SubrangeType) and dst.low <= src.low and src.high <= dst.high:
+                return code
+            if self.settings.subrange_check is SubrangeCheck.FAULT:
+                return f"_subrange({code}, {dst.low}, {dst.high})"
+            return code
         if isinstance(dst, t.IntType) and isinstance(src, t.IntType):
             return code if _contains(dst, src) else _wrap(code, dst)
         if isinstance(dst, t.RealType):
@@ -1043,6 +1050,11 @@ class Lowerer:
             # an ARRAY[*] parameter: index 0 .. elements passed - 1, checked like any array
             # access in user code (`array_oob`); ArrayRef's own check is the instructions'
             ix = self.expr(e.indices[0])
+            if self.settings.open_array_bounds is OpenArrayBounds.ACTUAL:
+                # the argument's own bounds: lo .. lo + elements passed - 1
+                tmp = self.new_tmp("i")
+                return code, (f"{tmp} - {code}.lo if {code}.lo <= ({tmp} := {ix}) < {code}.lo + len({code}) "
+                              f"else _oob({tmp}, {code}.lo, {code}.lo + len({code}) - 1)")
             if not ix.replace(".", "").replace("_", "").isalnum():
                 tmp = self.new_tmp("i")
                 return code, f"{tmp} if 0 <= ({tmp} := {ix}) < len({code}) else _oob({tmp}, 0, len({code}) - 1)"
@@ -1086,7 +1098,7 @@ class Lowerer:
             return operand
         if isinstance(ty, t.IntType):
             return _wrap(f"-{operand}", ty)
-        if ty.name == "TIME":
+        if getattr(ty, "family", "") == "TIME":
             return _wrap(f"-{operand}", t.LINT)  # type: ignore[arg-type]
         return f"(-{operand})"
 
@@ -1194,10 +1206,31 @@ class Lowerer:
             return f"{'_tdiv0' if zero else '_tdiv'}({left}, {right})"
         return _wrap(f"{'_idiv0' if zero else '_idiv'}({left}, {right})", t.LINT)  # type: ignore[arg-type]
 
+    def open_array_code(self, code: str, vtype: t.Type | None) -> str:
+        """A whole fixed array passed to an ARRAY[*] parameter (see `open_array_bounds`)."""
+        if self.settings.open_array_bounds is OpenArrayBounds.ACTUAL and isinstance(vtype, t.ArrayType) \
+                and vtype.dims and vtype.dims[0][0] != 0:
+            return f"_ArrayRef({code}, 0, {vtype.dims[0][0]})"
+        return f"_ArrayRef({code}, 0)"
+
+    def type_query_code(self, e: n.Call) -> str:
+        """LOWER_BOUND / UPPER_BOUND of an ARRAY[*] parameter, or a constant (see body.py)."""
+        word, operand = self.facts.type_queries[id(e)]
+        if word == "CONST":
+            ty = self.facts.types.get(id(e))
+            converted = self.convert_const(operand, ty) if ty is not None else None
+            return _lit(operand if converted is None else converted)
+        code = self.expr(operand)  # type: ignore[arg-type]
+        if word == "LOWER_BOUND":
+            return f"{code}.lo"
+        return f"({code}.lo + len({code}) - 1)"
+
     # ---- calls
     def ex_Call(self, e: n.Call) -> str:
         if id(e) in self.facts.ref_calls:
             return self.reference_code(e.args[0].value)
+        if id(e) in self.facts.type_queries:
+            return self.type_query_code(e)
         if self.facts.intrinsics and id(e) in self.facts.intrinsics:
             what, key = self.facts.intrinsics[id(e)]
             if what == "valid":
@@ -1224,13 +1257,13 @@ class Lowerer:
                 code = self.expr(value)
                 if isinstance(vtype, t.ArrayType) and vtype.dims is None:
                     return code
-                return f"_ArrayRef({code}, 0)"
+                return self.open_array_code(code, vtype)
             if isinstance(vtype, (t.StructType, t.ArrayType, t.FBType)):
                 return self.expr(value)
             return self.ref_code(value)
         if isinstance(ptype, t.ArrayType) and ptype.dims is None:
             code = self.expr(value)
-            return code if isinstance(vtype, t.ArrayType) and vtype.dims is None else f"_ArrayRef({code}, 0)"
+            return code if isinstance(vtype, t.ArrayType) and vtype.dims is None else self.open_array_code(code, vtype)
         if isinstance(ptype, t.GenericType):
             return self.expr(value)
         code = self.expr_as(value, ptype)

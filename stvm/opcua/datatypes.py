@@ -81,10 +81,10 @@ def ua_type(ty: t.Type) -> UaType | None:
         return UaType(ua.VariantType.String, _dt(ua.ObjectIds.String), _string_out, _string_in(ty.max_bytes, text),
                       text)
     if isinstance(ty, t.TimeType):
-        if ty.name in ("DATE", "DATE_AND_TIME"):
+        if ty.family in ("DATE", "DATE_AND_TIME"):     # LDATE / LDT alike (same 64-bit ns)
             return UaType(ua.VariantType.DateTime, _dt(ua.ObjectIds.DateTime), datetime_of,
-                          _datetime_in(ty.name == "DATE", ty.name), ty.name)
-        if ty.name == "TIME_OF_DAY":
+                          _datetime_in(ty.family == "DATE", ty.name), ty.name)
+        if ty.family == "TIME_OF_DAY":
             return UaType(ua.VariantType.Int64, _dt(ua.ObjectIds.Int64), int, _int_in(0, NS_PER_DAY - 1, ty.name),
                           ty.name)
         return UaType(ua.VariantType.Int64, _dt(ua.ObjectIds.Int64), int, _int_in(INT64_MIN, INT64_MAX, ty.name),

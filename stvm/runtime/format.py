@@ -137,8 +137,9 @@ def format_value(value: object, ty: t.Type, pous: dict | None = None) -> str:
         return format_real(float(value), ty.bits)  # type: ignore[arg-type]
     if isinstance(ty, t.TimeType):
         ns = int(value)  # type: ignore[arg-type]
-        return {"TIME": format_time, "DATE": format_date, "TIME_OF_DAY": format_tod,
-                "DATE_AND_TIME": format_dt}[ty.name](ns)
+        text = {"TIME": format_time, "DATE": format_date, "TIME_OF_DAY": format_tod,
+                "DATE_AND_TIME": format_dt}[ty.family](ns)
+        return "L" + text if ty.long else text   # LTIME#…, LDATE#…, LTOD#…, LDT#…
     if isinstance(ty, t.StringType):
         return format_string(value)  # type: ignore[arg-type]
     if isinstance(ty, t.EnumType):

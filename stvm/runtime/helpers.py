@@ -90,6 +90,16 @@ def _oob(index: int, lo: int, hi: int) -> int:
     raise ArrayIndexError(f"array index {index} out of bounds {lo}..{hi}")
 
 
+class SubrangeError(STFault):
+    """A value outside its subrange type, computed at run time (`subrange_check=fault`)."""
+
+
+def _subrange(value: int, low: int, high: int) -> int:
+    if low <= value <= high:
+        return value
+    raise SubrangeError(f"value {value} is outside the subrange {low}..{high}")
+
+
 class NullReference(STFault):
     """A dereference of NULL (REF_TO / POINTER TO / REFERENCE TO never bound)."""
 
@@ -156,7 +166,7 @@ class _Frame:
 
 HELPERS = {
     "_f32": f32, "_idiv": _idiv, "_idiv0": _idiv0, "_imod": _imod, "_imod0": _imod0, "_fdiv": _fdiv,
-    "_tdiv": _tdiv, "_tdiv0": _tdiv0, "_expt": _expt, "_oob": _oob, "_endless_for": _endless_for, "_strfit": strfit, "_copy_value": copy_value,
+    "_tdiv": _tdiv, "_tdiv0": _tdiv0, "_expt": _expt, "_oob": _oob, "_subrange": _subrange, "_endless_for": _endless_for, "_strfit": strfit, "_copy_value": copy_value,
     "_assign_array": _assign_array, "_setbit": _setbit, "_with": _with, "_Frame": _Frame,
     "_AttrRef": AttrRef, "_MapRef": MapRef, "_ItemRef": ItemRef, "_ArrayRef": ArrayRef, "_FunctionError": FunctionError,
     "_STFault": STFault, "_null_ref": _null_ref, "_null_itf": _null_itf, "_query_itf": _query_itf, "_same_ref": _same_ref, "_ArrayIndexError": ArrayIndexError,

@@ -3,7 +3,7 @@
 Native stdlib code receives plain Python values (see `stvm.semantics.types` for the table) plus
 these few wrappers:
 
-* `ArrayRef(data, start)`: an ARRAY[*] parameter. Sysmac passes "the array from this element on"
+* `ArrayRef(data, start, lo)`: an ARRAY[*] parameter. Sysmac passes "the array from this element on"
   when an element is given where an array is expected (sysmac.md 3 #4); `data` is the caller's own
   list, so writes go straight into the caller's variable. `len(ref)` is the number of elements left.
 * `AttrRef` / `ItemRef`: a VAR_IN_OUT of an elementary type (a reference to a variable, a struct
@@ -31,11 +31,14 @@ class ArrayIndexError(STFault):
 
 
 class ArrayRef:
-    __slots__ = ("data", "start")
+    # `lo`: the ST index of the first element passed — 0, except under `open_array_bounds=actual`
+    # where a whole ARRAY[lo..hi] keeps its bounds (LOWER_BOUND/UPPER_BOUND read them here)
+    __slots__ = ("data", "start", "lo")
 
-    def __init__(self, data: list, start: int = 0) -> None:
+    def __init__(self, data: list, start: int = 0, lo: int = 0) -> None:
         self.data = data
         self.start = start
+        self.lo = lo
 
     def __len__(self) -> int:
         return len(self.data) - self.start

@@ -27,6 +27,8 @@ _ARITH = {"PLUS": "+", "MINUS": "-", "STAR": "*", "SLASH": "/", "MOD": "MOD", "P
 _COMPARE = {"EQ": "=", "NE": "<>", "LT": "<", "GT": ">", "LE": "<=", "GE": ">="}
 _LOGIC = {"AND": "AND", "AMP": "AND", "OR": "OR", "XOR": "XOR"}
 OP_TEXT = {**_ARITH, **_COMPARE, **_LOGIC, "NOT": "NOT"}
+# operators answered from their operand's type (a user POU of the same name wins)
+TYPE_QUERIES = ("LOWER_BOUND", "UPPER_BOUND", "SIZEOF", "XSIZEOF")
 
 
 def int_literal_type(value: int, settings) -> t.Type:
@@ -83,7 +85,8 @@ def implicit_ok(src: t.Type, dst: t.Type) -> bool:
                 and (src.element == dst.element or (isinstance(src.element, t.StringType) and isinstance(dst.element, t.StringType))
                      or (getattr(src.element, "qualname", None) or "x").lower() == (getattr(dst.element, "qualname", None) or "y").lower()))
     if isinstance(src, t.TimeType) and isinstance(dst, t.TimeType):
-        return src.name == dst.name
+        # IEC ed. 3 (implicit conversions): TIME -> LTIME, DATE -> LDATE, TOD -> LTOD, DT -> LDT
+        return src.family == dst.family and (dst.long or not src.long)
     return False
 
 
@@ -409,6 +412,8 @@ class BodyChecker:
                 if isinstance(dst, t.IntType):
                     if not dst.lo <= value <= dst.hi:
                         self.error(f"{value} is out of range for {dst.name} ({dst.lo}..{dst.hi})", span, "E022")
+                    elif isinstance(dst, t.SubrangeType) and not dst.low <= value <= dst.high:
+                        self.error(f"{value} is outside the subrange {dst.text}", span, "E022")
                     return
                 if isinstance(dst, t.RealType):
                     return
@@ -868,6 +873,73 @@ class BodyChecker:
         self.facts.ref_calls.add(id(e))
         return t.ref_type(ty, "POINTER" if word == "ADR" else "REF_TO")
 
+    # ---- operators answered from the types (LOWER_BOUND, UPPER_BOUND, SIZEOF, XSIZEOF)
+    def type_query(self, e: n.Call, word: str) -> t.Type | None:
+        """Operators computed from the static type of their operand. A fixed array's bounds and
+        every SIZEOF are constants; the bounds of an ARRAY[*] parameter are read at run time from
+        what the caller passed (`open_array_bounds`)."""
+        if word in ("LOWER_BOUND", "UPPER_BOUND"):
+            return self.array_bound(e, word)
+        if len(e.args) != 1 or e.args[0].kind != "positional":
+            self.check_args_loosely(e)
+            self.error(f"{word}() takes one variable or type name", e.span, "E070")
+            return None
+        arg = e.args[0].value
+        ty = self.sizeof_operand(arg)
+        if ty is None:
+            return None
+        size = t.byte_size(ty)
+        if size is None:
+            self.error(f"{word}() of {ty.name}: its size in bytes is not defined here "
+                       "(stvm does not model the memory of function blocks or references)", arg.span, "E070")
+            return None
+        if word == "XSIZEOF":
+            self.facts.type_queries[id(e)] = ("CONST", size)
+            return t.UDINT   # Choice: a 32-bit platform (CODESYS: UDINT there, ULINT on 64-bit ones)
+        # CODESYS/TwinCAT: "the type adapts to the size" (USINT < 256 <= UINT ...): a constant that
+        # takes the type its context needs, like an untyped literal
+        return self.constant_type_query(e, size)
+
+    def constant_type_query(self, e: n.Call, value: int) -> t.Type:
+        self.facts.type_queries[id(e)] = ("CONST", value)
+        self.facts.consts[id(e)] = value
+        self.facts.untyped.add(id(e))
+        return int_literal_type(value, self.settings)
+
+    def sizeof_operand(self, arg: n.Expr) -> t.Type | None:
+        """The type SIZEOF measures: a variable's, or a type named directly (`SIZEOF(INT)`)."""
+        if isinstance(arg, n.Name) and self.resolve_name(arg) is None:
+            spec = n.NamedTypeSpec(arg.parts, False, arg.span)
+            if len(arg.parts) == 1 and (arg.parts[0].upper() in t.ELEMENTARY or arg.parts[0].upper() == "WSTRING") \
+                    or self.c.lookup_type_key(arg.parts, False, self.pou_namespace) is not None:
+                return self.c.resolve_type_spec(spec, self.pou_namespace)
+        return self.expr(arg)
+
+    def array_bound(self, e: n.Call, word: str) -> t.Type | None:
+        """LOWER_BOUND(arr, dim) / UPPER_BOUND(arr, dim) (IEC 61131-3 ed. 3, 6.5.3.2): DINT."""
+        if len(e.args) != 2 or any(a.kind != "positional" for a in e.args):
+            self.check_args_loosely(e)
+            self.error(f"{word}() takes an array and a constant dimension: {word}(arr, 1)", e.span, "E070")
+            return None
+        arr, dim_expr = e.args[0].value, e.args[1].value
+        ty = self.expr(arr)
+        self.expr(dim_expr)
+        if ty is None:
+            return None
+        if not isinstance(ty, t.ArrayType):
+            self.error(f"{word}() needs an array; '{self.describe(arr)}' is {ty.name}", arr.span, "E070")
+            return None
+        dim = self.c.const_value(dim_expr, self.pou_namespace, self.pou)
+        ndims = 1 if ty.dims is None else len(ty.dims)
+        if isinstance(dim, bool) or not isinstance(dim, int) or not 1 <= dim <= ndims:
+            self.error(f"the dimension of {word}() must be a constant 1..{ndims}", dim_expr.span, "E070")
+            return None
+        if ty.dims is not None:
+            lo, hi = ty.dims[dim - 1]
+            return self.constant_type_query(e, lo if word == "LOWER_BOUND" else hi)
+        self.facts.type_queries[id(e)] = (word, arr)
+        return t.DINT
+
     def stmt_RefAssign(self, s: n.RefAssign) -> None:
         target = s.target
         raw = None
@@ -927,7 +999,7 @@ class BodyChecker:
                 return ty
             self.error(f"NOT needs BOOL or a bit string, not {ty.name}", e.span, "E038")
             return None
-        if isinstance(ty, (t.IntType, t.RealType)) or ty.name == "TIME":
+        if isinstance(ty, (t.IntType, t.RealType)) or getattr(ty, "family", "") == "TIME":
             if id(e.operand) in self.facts.untyped:
                 value = self.facts.consts[id(e.operand)]
                 folded = -value if e.op == "MINUS" else value
@@ -1055,7 +1127,7 @@ class BodyChecker:
         if isinstance(lt, t.BoolType) and isinstance(rt, t.BoolType):
             return True
         if isinstance(lt, t.TimeType) and isinstance(rt, t.TimeType):
-            return lt.name == rt.name
+            return lt.family == rt.family
         if (isinstance(lt, t.InterfaceType) or isinstance(rt, t.InterfaceType)) and op in ("EQ", "NE"):
             others = [(ty, ex) for ty, ex in ((lt, le), (rt, re_)) if not isinstance(ty, t.InterfaceType)]
             return all(isinstance(ty, t.FBType) or (isinstance(ty, t.RefType) and ty.is_null) or self.is_zero_literal(ex)
@@ -1065,25 +1137,27 @@ class BodyChecker:
         return False
 
     def time_arith(self, e: n.Binary, lt: t.Type, rt: t.Type) -> t.Type | None:
+        """IEC table 30 on the TIME family; a long operand (LTIME, LDT, …) makes the result long."""
         op = e.op
-        ln, rn = lt.name, rt.name
+        ln, rn = getattr(lt, "family", lt.name), getattr(rt, "family", rt.name)
+        long = getattr(lt, "long", False) or getattr(rt, "long", False)
         if op == "PLUS":
             if ln == rn == "TIME":
-                return t.TIME
+                return t.time_type("TIME", long)
             if ln in ("DATE_AND_TIME", "TIME_OF_DAY") and rn == "TIME":
-                return lt
+                return t.time_type(ln, long)
             if rn in ("DATE_AND_TIME", "TIME_OF_DAY") and ln == "TIME":
-                return rt
+                return t.time_type(rn, long)
         if op == "MINUS":
             if ln == rn:
-                return t.TIME
+                return t.time_type("TIME", long)
             if ln in ("DATE_AND_TIME", "TIME_OF_DAY") and rn == "TIME":
-                return lt
+                return t.time_type(ln, long)
         if op in ("STAR", "SLASH") and ln == "TIME" and isinstance(rt, (t.IntType, t.RealType)):
-            return t.TIME
+            return lt
         if op == "STAR" and rn == "TIME" and isinstance(lt, (t.IntType, t.RealType)):
-            return t.TIME
-        self.error(f"operator {OP_TEXT.get(op, op)} cannot be applied to {ln} and {rn}", e.span, "E039")
+            return rt
+        self.error(f"operator {OP_TEXT.get(op, op)} cannot be applied to {lt.name} and {rt.name}", e.span, "E039")
         return None
 
     def describe(self, e: n.Expr) -> str:
@@ -1114,6 +1188,9 @@ class BodyChecker:
         if isinstance(callee, n.Name) and len(callee.parts) == 1 and callee.parts[0].upper() in ("REF", "ADR") \
                 and self.resolve_name(callee) is None and self.lookup_callable(callee) is None:
             return self.reference_of(e)
+        if isinstance(callee, n.Name) and len(callee.parts) == 1 and callee.parts[0].upper() in TYPE_QUERIES \
+                and self.resolve_name(callee) is None and self.lookup_callable(callee) is None:
+            return self.type_query(e, callee.parts[0].upper())
         if isinstance(callee, n.Name):
             ref = self.resolve_name(callee) if len(callee.parts) == 1 else None
             if ref is not None and getattr(ref, "variable", None) is not None and isinstance(ref.variable.type, t.FBType):  # type: ignore[attr-defined]

@@ -876,8 +876,12 @@ class Checker:
             if not isinstance(base, t.IntType):
                 self.error(f"subrange base must be an integer type, not {spec.base}", spec.span, "E019")
                 return None
-            # Choice: a subrange is its base type (range checks at run time are not modelled).
-            return base
+            low, high = spec.low, spec.high
+            if not base.lo <= low <= high <= base.hi:
+                self.error(f"subrange {low}..{high} is empty or outside {base.name} ({base.lo}..{base.hi})",
+                           spec.span, "E019")
+                return base
+            return t.subrange_of(base, low, high)
         if isinstance(spec, n.RefTypeSpec):
             target = self.resolve_type_spec(spec.target, namespace)
             if target is None:
@@ -902,6 +906,10 @@ class Checker:
 
     def const_value(self, expr: n.Expr, namespace: tuple[str, ...], pou: POUInfo | None) -> object:
         """Evaluate a constant expression at compile time; `NOT_CONST` if it is not one."""
+        if isinstance(expr, n.Call):
+            # LOWER_BOUND/UPPER_BOUND of a declared array, SIZEOF: constants once checked
+            word, value = self.facts.type_queries.get(id(expr), ("", None))
+            return value if word == "CONST" else NOT_CONST
         if isinstance(expr, (n.IntLiteral, n.BoolLiteral, n.StringLiteral)):
             return expr.value
         if isinstance(expr, n.RealLiteral):
@@ -1083,7 +1091,10 @@ class Checker:
                     if not typed:
                         self.error(f"{value} is out of range for {ty.name} ({ty.lo}..{ty.hi})", span, "E022")
                         return None
-                    return ty.wrap(value)
+                    value = ty.wrap(value)
+                if isinstance(ty, t.SubrangeType) and not ty.low <= value <= ty.high:
+                    self.error(f"{value} is outside the subrange {ty.text}", span, "E022")
+                    return None
                 return value
         elif isinstance(ty, t.RealType):
             if isinstance(value, (int, float)) and not isinstance(value, bool):
@@ -1346,7 +1357,9 @@ def _round_real(value: float, ty: t.Type) -> float:
 
 
 def _time_compatible(literal_type: str, target: str) -> bool:
-    return literal_type == target
+    """May a T#/D#/TOD#/DT# literal (or its long form) initialise a variable of `target`?"""
+    literal, wanted = t.ELEMENTARY[literal_type], t.ELEMENTARY[target]
+    return literal.family == wanted.family and (wanted.long or not literal.long)  # type: ignore[attr-defined]
 
 
 

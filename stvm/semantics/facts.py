@@ -55,6 +55,8 @@ class Facts:
     array_from_element: set[int] = field(default_factory=set)  # Index exprs passed as "array from here"
     operand_types: dict[int, t.Type] = field(default_factory=dict)  # comparisons: the type compared in
     ref_calls: set[int] = field(default_factory=set)      # REF(x) / ADR(x) calls
+    # LOWER_BOUND/UPPER_BOUND/SIZEOF calls: ("CONST", value) or (word, ARRAY[*] operand)
+    type_queries: dict[int, tuple[str, object]] = field(default_factory=dict)
     auto_deref: set[int] = field(default_factory=set)     # names of REFERENCE TO variables (used as the target)
     addressed: set[tuple[str, str]] = field(default_factory=set)  # (POU key, variable key) whose reference is taken
     keep: list = field(default_factory=list)              # keeps nodes alive so ids stay unique

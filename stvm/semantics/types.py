@@ -77,6 +77,24 @@ class IntType(Type):
 
 
 @dataclass(frozen=True)
+class SubrangeType(IntType):
+    """`INT(0..100)` (IEC 61131-3 ed. 3, 6.4.4.3): an integer of the base type (same `name`,
+    width and wrap) whose values must lie in low..high. A constant outside is a check-time error;
+    a value computed at run time outside follows `subrange_check`."""
+
+    low: int = 0
+    high: int = 0
+
+    @property
+    def text(self) -> str:
+        return f"{self.name}({self.low}..{self.high})"
+
+
+def subrange_of(base: IntType, low: int, high: int) -> SubrangeType:
+    return SubrangeType(base.name, base.bits, base.signed, base.bitstring, low, high)
+
+
+@dataclass(frozen=True)
 class RealType(Type):
     bits: int = 32
 
@@ -89,13 +107,27 @@ class RealType(Type):
         return 3 if self.bits == 32 else 5
 
 
+_LONG_TIMES = {"LTIME": "TIME", "LDATE": "DATE", "LTIME_OF_DAY": "TIME_OF_DAY", "LDATE_AND_TIME": "DATE_AND_TIME"}
+
+
 @dataclass(frozen=True)
 class TimeType(Type):
-    """TIME (a duration) and DATE/TOD/DT (points in time), all integer nanoseconds."""
+    """TIME (a duration) and DATE/TOD/DT (points in time), all integer nanoseconds; their long
+    forms LTIME, LDATE, LTIME_OF_DAY, LDATE_AND_TIME (IEC ed. 3) are distinct types of the same
+    `family`. Sysmac's TIME is already 64-bit nanoseconds, so both forms hold the same values."""
 
     @property
     def kind(self) -> str:
         return "time"
+
+    @property
+    def family(self) -> str:
+        """TIME, DATE, TIME_OF_DAY or DATE_AND_TIME, for the long forms too."""
+        return _LONG_TIMES.get(self.name, self.name)
+
+    @property
+    def long(self) -> bool:
+        return self.name in _LONG_TIMES
 
 
 @dataclass(frozen=True)
@@ -218,7 +250,7 @@ class GenericType(Type):
         if n == "ANY_NUM":
             return k in ("int", "real") and not getattr(other, "bitstring", False)
         if n == "ANY_MAGNITUDE":
-            return (k in ("int", "real") and not getattr(other, "bitstring", False)) or other.name == "TIME"
+            return (k in ("int", "real") and not getattr(other, "bitstring", False)) or getattr(other, "family", "") == "TIME"
         if n == "ANY_INT":
             return k == "int" and not other.bitstring  # type: ignore[attr-defined]
         if n == "ANY_REAL":
@@ -228,7 +260,7 @@ class GenericType(Type):
         if n == "ANY_STRING":
             return k == "string"
         if n == "ANY_DATE":
-            return k == "time" and other.name != "TIME"
+            return k == "time" and other.family != "TIME"  # type: ignore[attr-defined]
         return False
 
 
@@ -303,13 +335,18 @@ TIME = TimeType("TIME")
 DATE = TimeType("DATE")
 TOD = TimeType("TIME_OF_DAY")
 DT = TimeType("DATE_AND_TIME")
+LTIME = TimeType("LTIME")
+LDATE = TimeType("LDATE")
+LTOD = TimeType("LTIME_OF_DAY")
+LDT = TimeType("LDATE_AND_TIME")
 STRING = StringType("STRING", 1986)
 VOID = VoidType("VOID")
 
 ELEMENTARY: dict[str, Type] = {
     "BOOL": BOOL, "REAL": REAL, "LREAL": LREAL,
-    "TIME": TIME, "LTIME": TIME, "DATE": DATE, "TIME_OF_DAY": TOD, "TOD": TOD,
-    "DATE_AND_TIME": DT, "DT": DT, "STRING": STRING,
+    "TIME": TIME, "DATE": DATE, "TIME_OF_DAY": TOD, "TOD": TOD, "DATE_AND_TIME": DT, "DT": DT,
+    "LTIME": LTIME, "LDATE": LDATE, "LTIME_OF_DAY": LTOD, "LTOD": LTOD, "LDATE_AND_TIME": LDT, "LDT": LDT,
+    "STRING": STRING,
     **_ints(),
 }
 GENERICS: dict[str, Type] = {
@@ -323,6 +360,13 @@ USINT, UINT, UDINT, ULINT = (ELEMENTARY[n] for n in ("USINT", "UINT", "UDINT", "
 BYTE, WORD, DWORD, LWORD = (ELEMENTARY[n] for n in ("BYTE", "WORD", "DWORD", "LWORD"))
 
 
+def time_type(family: str, long: bool) -> TimeType:
+    """The TIME-family type of `family` (TIME, DATE, TIME_OF_DAY, DATE_AND_TIME), long or not."""
+    if not long:
+        return ELEMENTARY[family]  # type: ignore[return-value]
+    return next(ty for ty in (LTIME, LDATE, LTOD, LDT) if ty.family == family)
+
+
 def string_type(size: int) -> StringType:
     return STRING if size == 1986 else StringType(f"STRING[{size}]", size)
 
@@ -333,3 +377,48 @@ def is_integer(t: Type) -> bool:
 
 def is_numeric(t: Type) -> bool:
     return isinstance(t, (IntType, RealType))
+
+
+# ---- sizes in bytes (SIZEOF / XSIZEOF) ---------------------------------------------------------
+# Choice (no controller memory is modelled): the sizes a CODESYS/TwinCAT x86 target reports, with
+# Sysmac's own widths where they differ — TIME, DATE, TOD and DT are 64-bit (Sysmac, and LTIME
+# everywhere); STRING[n] is its n bytes of storage (Sysmac counts the NUL in n); an enumeration
+# is its base type (INT unless it names one). STRUCTs use natural alignment (every member at a multiple of its
+# own alignment, the struct padded to its largest one: CODESYS's default pack mode 8). Function
+# block instances and references have no defined size here: None.
+
+def byte_size(ty: Type) -> int | None:
+    if isinstance(ty, BoolType):
+        return 1
+    if isinstance(ty, (IntType, RealType)):
+        return ty.bits // 8
+    if isinstance(ty, TimeType):
+        return 8
+    if isinstance(ty, StringType):
+        return ty.size
+    if isinstance(ty, EnumType):
+        return byte_size(ty.base) if ty.base is not None else 2
+    if isinstance(ty, ArrayType):
+        element = byte_size(ty.element)
+        return None if element is None or ty.dims is None else element * ty.length
+    if isinstance(ty, StructType):
+        offset, largest = 0, 1
+        for _, field_type in ty.fields:
+            size, align = byte_size(field_type), _alignment(field_type)
+            if size is None or align is None:
+                return None
+            offset = -(-offset // align) * align + size
+            largest = max(largest, align)
+        return -(-offset // largest) * largest
+    return None
+
+
+def _alignment(ty: Type) -> int | None:
+    if isinstance(ty, ArrayType):
+        return _alignment(ty.element)
+    if isinstance(ty, StructType):
+        aligns = [_alignment(f) for _, f in ty.fields]
+        return None if None in aligns else max(aligns, default=1)  # type: ignore[type-var]
+    if isinstance(ty, StringType):
+        return 1
+    return byte_size(ty)

@@ -34,8 +34,8 @@ from stvm.settings import ByteToStringFormat, StouPlus, StouTrailing
 
 NUMERIC_TYPES = ["BOOL", "SINT", "INT", "DINT", "LINT", "USINT", "UINT", "UDINT", "ULINT",
                  "BYTE", "WORD", "DWORD", "LWORD", "REAL", "LREAL"]
-TIME_TYPES = ["TIME", "DATE", "TOD", "DT"]
-LONG_NAMES = {"TOD": "TIME_OF_DAY", "DT": "DATE_AND_TIME"}
+TIME_TYPES = ["TIME", "DATE", "TOD", "DT", "LTIME", "LDATE", "LTOD", "LDT"]
+LONG_NAMES = {"TOD": "TIME_OF_DAY", "DT": "DATE_AND_TIME", "LTOD": "LTIME_OF_DAY", "LDT": "LDATE_AND_TIME"}
 
 NS_PER_S = 1_000_000_000
 NS_PER_DAY = 86_400 * NS_PER_S
@@ -119,7 +119,8 @@ def to_text(ctx, value, source: Type) -> bytes:
         return str(value).encode()  # sysmac.md 6: plain decimal, '-' if negative, no '+'
     if isinstance(source, RealType):
         return real_to_text(value, source.bits)
-    return TIME_TEXT_WRITERS[source.name](value)
+    text = TIME_TEXT_WRITERS[source.family](value)  # type: ignore[attr-defined]
+    return b"L" + text if source.long else text     # type: ignore[attr-defined]  # LT#…, LDT#…
 
 
 TIME_TEXT_WRITERS = {"TIME": time_to_text, "DATE": date_to_text, "TIME_OF_DAY": tod_to_text,
@@ -286,7 +287,9 @@ def from_text(ctx, text: bytes, target: Type, what: str):
         return text_to_integer(ctx, text, target, what)
     if isinstance(target, RealType):
         return text_to_real(ctx, text, target, what)
-    return TIME_TEXT_READERS[target.name](ctx, text, what)
+    if target.long and text.lstrip(b" ")[:1] in (b"L", b"l"):  # type: ignore[attr-defined]
+        text = text.lstrip(b" ")[1:]                              # LTIME#… / LT#… / LDT#…
+    return TIME_TEXT_READERS[target.family](ctx, text, what)     # type: ignore[attr-defined]
 
 
 TIME_TEXT_READERS = {"TIME": text_to_time, "DATE": text_to_date, "TIME_OF_DAY": text_to_tod,
@@ -316,7 +319,7 @@ def _make_converter(what: str, source_name: str, target_name: str):
         def convert(ctx, text):
             return from_text(ctx, text, target, what)
     elif isinstance(source, TimeType) and isinstance(target, (IntType, RealType)):
-        unit = time_unit_ns(source.name)
+        unit = time_unit_ns(source)
 
         def convert(ctx, value):
             if isinstance(target, RealType):
@@ -324,7 +327,7 @@ def _make_converter(what: str, source_name: str, target_name: str):
             whole = abs(value) // unit   # toward zero, as integer division in ST
             return target.wrap(whole if value >= 0 else -whole)
     elif isinstance(target, TimeType) and not isinstance(source, TimeType):
-        unit = time_unit_ns(target.name)
+        unit = time_unit_ns(target)
 
         def convert(ctx, value):
             if isinstance(source, RealType):
@@ -333,9 +336,12 @@ def _make_converter(what: str, source_name: str, target_name: str):
                 return real_to_integer(value * unit)
             return int(value) * unit
     elif isinstance(source, TimeType):
-        # DT_TO_DATE / DT_TO_TOD: the date part, or the time of day (IEC 2.5.1.5.1)
+        # DT_TO_DATE / DT_TO_TOD: the date part, or the time of day (IEC 2.5.1.5.1); between a
+        # type and its long form (TIME_TO_LTIME, LDT_TO_DT, …) the value itself (both 64-bit ns)
         def convert(ctx, value):
-            return value - value % NS_PER_DAY if target.name == "DATE" else value % NS_PER_DAY
+            if source.family == target.family:  # type: ignore[attr-defined]
+                return value
+            return value - value % NS_PER_DAY if target.family == "DATE" else value % NS_PER_DAY  # type: ignore[attr-defined]
     else:
         def convert(ctx, value):
             return numeric_to_numeric(value, source, target)
@@ -348,20 +354,25 @@ def conversion_pairs() -> list[tuple[str, str]]:
     pairs = [(a, b) for a in NUMERIC_TYPES for b in NUMERIC_TYPES if a != b]
     for name in NUMERIC_TYPES + TIME_TYPES:
         pairs += [(name, "STRING"), ("STRING", name)]
-    pairs += [("DT", "DATE"), ("DT", "TOD")]
+    pairs += [("DT", "DATE"), ("DT", "TOD"), ("LDT", "LDATE"), ("LDT", "LTOD")]
+    for short in ("TIME", "DATE", "TOD", "DT"):
+        pairs += [(short, "L" + short), ("L" + short, short)]
     for name in TIME_TYPES:
         pairs += [(name, number) for number in NUMERIC_TYPES if number != "BOOL"]
         pairs += [(number, name) for number in NUMERIC_TYPES if number != "BOOL"]
     return pairs
 
 
-def time_unit_ns(type_name: str) -> int:
+def time_unit_ns(ty: TimeType) -> int:
     """What one integer unit means in TIME/TOD/DATE/DT <-> integer and REAL conversions.
 
     Choice (CODESYS/TwinCAT, the most common convention in code that uses these conversions;
     IEC leaves it to the implementation): TIME and TIME_OF_DAY count milliseconds, DATE and
-    DATE_AND_TIME seconds since 1970-01-01. The single switch a dialect may change."""
-    return 1_000_000 if type_name in ("TIME", "TOD", "TIME_OF_DAY") else 1_000_000_000
+    DATE_AND_TIME seconds since 1970-01-01; the long forms (LTIME, LTOD, LDATE, LDT) count
+    nanoseconds, as their CODESYS conversions do. The single switch a dialect may change."""
+    if ty.long:
+        return 1
+    return 1_000_000 if ty.family in ("TIME", "TIME_OF_DAY") else 1_000_000_000
 
 
 def _spellings(name: str) -> list[str]:

@@ -61,6 +61,10 @@ _PRECEDENCE = {"OR": 1, "XOR": 2, "AND": 3, "AMP": 3, "EQ": 4, "NE": 4, "LT": 5,
 class _Modifier(str):
     """PUBLIC, PRIVATE, ABSTRACT, FINAL, … in a POU, METHOD or PROPERTY header."""
 
+def _long_form(items, short: str, long: str) -> str:
+    """The literal's type from its prefix: `LTIME#…` / `LT#…` (etc.) are the long form."""
+    return long if str(items[0]).upper().startswith("L") else short
+
 
 class _ToNodes(Transformer):
     """Turns the Lark tree into nodes; literal errors become diagnostics, not exceptions."""
@@ -516,17 +520,19 @@ class _ToNodes(Transformer):
             self._error(str(exc) if isinstance(exc, LiteralError) else f"malformed literal {text!r}", self._s(meta))
             return n.TimeLiteral(type_name, 0, self._s(meta))
 
+    # the long forms (LT#, LTIME#, LDATE#, LD#, LTOD#, LTIME_OF_DAY#, LDT#, LDATE_AND_TIME#) are
+    # the IEC ed. 3 64-bit types; DATE_AND_TIME# starts with D too, so the prefix decides
     def time_literal(self, meta, items):
-        return self._literal(meta, items, "TIME", decode_time)
+        return self._literal(meta, items, _long_form(items, "TIME", "LTIME"), decode_time)
 
     def date_literal(self, meta, items):
-        return self._literal(meta, items, "DATE", decode_date)
+        return self._literal(meta, items, _long_form(items, "DATE", "LDATE"), decode_date)
 
     def tod_literal(self, meta, items):
-        return self._literal(meta, items, "TIME_OF_DAY", decode_tod)
+        return self._literal(meta, items, _long_form(items, "TIME_OF_DAY", "LTIME_OF_DAY"), decode_tod)
 
     def dt_literal(self, meta, items):
-        return self._literal(meta, items, "DATE_AND_TIME", decode_dt)
+        return self._literal(meta, items, _long_form(items, "DATE_AND_TIME", "LDATE_AND_TIME"), decode_dt)
 
     def hash_literal(self, meta, items):
         return self._hash(items[0])
