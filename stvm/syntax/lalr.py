@@ -1,0 +1,521 @@
+"""A fast LALR(1) driver over Lark's own parse table and contextual lexer.
+
+Lark's `parse()` builds a Tree (with a Meta per node and a Token per terminal), which
+`parser._ToNodes` then walks. This driver runs the same automaton from Lark's tables and the
+same per-state scanners (the regular expressions Lark compiled for each parser state), but
+calls the node-building callbacks at reduction time, so no Tree, no Meta and no Token for
+dropped keywords or punctuation is ever made.
+
+It is generic over the grammar: for every rule it derives, from Lark's own rule options, what
+Lark's tree builder would do (drop filtered tokens, insert `[ ]` placeholders, inline
+`_rules`, expand `?rules` with one child, keep `!rules`' tokens) and how Lark would propagate
+positions, so the callbacks receive the same children and the same spans.
+
+Anything unusual — a syntax error, a character no scanner matches, nesting deep enough that
+Lark's recursive transformer could fail, a grammar feature not handled here — raises
+`Fallback`, and the caller runs Lark's own parser instead, so diagnostics are Lark's, byte for
+byte. `tests/syntax/test_syntax_fast_parser.py` checks both paths give equal results.
+
+Lark internals used (pinned in pyproject.toml; `check_lark_internals` fails loudly if they
+change): `Lark.parser.parser.parser.parse_table` (an IntParseTable: `states`, `start_states`,
+`end_states`, actions `(Shift, state)` / `(Reduce, rule)`), `Lark.parser.lexer` (a
+ContextualLexer: `lexers` per state, each BasicLexer with `scanner._mres`, `callback`,
+`ignore_types`), `lark.lexer.UnlessCallback.scanner`, and the rule options (`expand1`,
+`keep_all_tokens`, `empty_indices`, `template_source`) and terminals' `filter_out`.
+"""
+
+from __future__ import annotations
+
+from bisect import bisect_right
+from itertools import accumulate
+from typing import Any
+
+from lark import Lark, Token, Tree
+from lark.lexer import UnlessCallback
+from lark.parsers.lalr_analysis import Reduce, Shift
+from lark.tree import Meta
+
+MAX_DEPTH = 150
+"""Deeper parse trees go to Lark's parser: its transformer recurses twice per tree level, and
+what happens near Python's recursion limit (the "nesting too deep" diagnostic) must stay Lark's."""
+
+
+class Fallback(Exception):
+    """This input needs Lark's own parser (a syntax error, or nesting too deep)."""
+
+
+class Unsupported(Exception):
+    """The grammar or the Lark version uses something this driver does not implement."""
+
+
+class Inline:
+    """An `_rule`'s children, spliced into its parent (Lark's ChildFilter)."""
+
+    __slots__ = ("children", "spans")
+
+    def __init__(self, children, spans):
+        self.children = children
+        self.spans = spans
+
+
+class Meta2:
+    """What a callback gets as `meta`: start and end offsets in the text (or an empty span).
+    `positions.span(meta)` turns it into line/column; the attributes Lark's Meta has are here too."""
+
+    __slots__ = ("start", "end", "_lines")
+
+    def __init__(self, start, end, lines):
+        self.start = start
+        self.end = end
+        self._lines = lines
+
+    @property
+    def empty(self):
+        return self.start < 0
+
+    @property
+    def line(self):
+        return bisect_right(self._lines, self.start)
+
+    @property
+    def column(self):
+        lines = self._lines
+        return self.start - lines[bisect_right(lines, self.start) - 1] + 1
+
+    @property
+    def end_line(self):
+        return bisect_right(self._lines, self.end)
+
+    @property
+    def end_column(self):
+        lines = self._lines
+        return self.end - lines[bisect_right(lines, self.end) - 1] + 1
+
+    @property
+    def start_pos(self):
+        return self.start
+
+    @property
+    def end_pos(self):
+        return self.end
+
+
+def line_starts(text: str) -> list[int]:
+    """Offsets where each line starts (index 0 is line 1)."""
+    starts = [0]
+    starts += accumulate(len(line) + 1 for line in text.split("\n"))
+    return starts
+
+
+# a reduction's kind
+_PASS, _GENERAL = 0, 1
+
+_new_str = str.__new__
+
+
+def _lark_meta(meta: Meta2) -> Meta:
+    out = Meta()
+    if meta.start >= 0:
+        out.empty = False
+        out.line, out.column, out.start_pos = meta.line, meta.column, meta.start
+        out.end_line, out.end_column, out.end_pos = meta.end_line, meta.end_column, meta.end
+    return out
+
+
+class Driver:
+    """Built once per Lark object and start symbol; `parse(text, handler)` runs it."""
+
+    def __init__(self, lark: Lark, start: str) -> None:
+        try:
+            frontend = lark.parser
+            table = frontend.parser.parser.parse_table
+            contextual = frontend.lexer
+            states = table.states
+            self.start_state = table.start_states[start]
+            self.end_state = table.end_states[start]
+        except (AttributeError, KeyError) as exc:
+            raise Unsupported(f"Lark's parser internals changed: {exc!r}") from exc
+        if lark.options.lexer != "contextual" or lark.options.parser != "lalr":
+            raise Unsupported("needs parser='lalr', lexer='contextual'")
+        if not lark.options.propagate_positions or lark.options.propagate_positions is not True:
+            raise Unsupported("needs propagate_positions=True")
+        if lark.options.postlex is not None or lark.options.lexer_callbacks:
+            raise Unsupported("postlex and lexer callbacks are not supported")
+        if lark.options.tree_class not in (None, Tree):
+            raise Unsupported("a custom tree_class is not supported")
+        self.maybe_placeholders = bool(lark.options.maybe_placeholders)
+        n_states = max(states) + 1
+        if set(states) != set(range(n_states)):
+            raise Unsupported("parse table states are not 0..n-1")
+
+        # reductions: one plan per rule
+        rules: dict[int, Any] = {}
+        for acts in states.values():
+            for action, arg in acts.values():
+                if action is Reduce:
+                    rules.setdefault(id(arg), arg)
+                elif action is not Shift:
+                    raise Unsupported(f"unknown parse action {action!r}")
+        rule_list = list(rules.values())
+        rule_index = {id(r): i for i, r in enumerate(rule_list)}
+        self._rules = rule_list
+
+        # gotos: nonterminal -> {state: next state}
+        gotos: dict[str, dict[int, int]] = {}
+        actions: list[dict[str, int]] = []
+        for s in range(n_states):
+            row = {}
+            for sym, (action, arg) in states[s].items():
+                if action is Shift:
+                    if sym.isupper() or sym == "$END":
+                        row[sym] = arg
+                    else:
+                        gotos.setdefault(sym, {})[s] = arg
+                else:
+                    row[sym] = ~rule_index[id(arg)]
+            actions.append(row)
+        self.actions = actions
+
+        inline_min = self._min_inline_children(rule_list)
+        self.kept_terminals: set[str] = set()
+        self.plans = [self._plan(r, gotos.get(r.origin.name, {}), inline_min) for r in rule_list]
+        self._inline_spans = self._inlines_needing_spans(rule_list, inline_min)
+        # the inline plans learn whether to carry their children's spans
+        for i, r in enumerate(rule_list):
+            if r.origin.name.startswith("_"):
+                plan = list(self.plans[i])
+                plan[9] = r.origin.name in self._inline_spans
+                self.plans[i] = tuple(plan)
+
+        # per-state scanners: Lark's BasicLexer for that state
+        try:
+            lexers = contextual.lexers
+            scanners = []
+            by_lexer: dict[int, tuple] = {}
+            for s in range(n_states):
+                basic = lexers[s]
+                entry = by_lexer.get(id(basic))
+                if entry is None:
+                    scanner = basic.scanner
+                    mres = scanner._mres
+                    retype = {}
+                    for type_, cb in basic.callback.items():
+                        if not isinstance(cb, UnlessCallback):
+                            raise Unsupported(f"lexer callback for {type_} is not an UnlessCallback")
+                        retype[type_] = (cb.scanner, {})
+                    entry = (mres, frozenset(basic.ignore_types), retype)
+                    by_lexer[id(basic)] = entry
+                scanners.append(entry)
+        except AttributeError as exc:
+            raise Unsupported(f"Lark's lexer internals changed: {exc!r}") from exc
+        self.scanners = scanners
+        self._fn_cache: dict[type, list] = {}
+
+    # ---- build time --------------------------------------------------------------------------
+
+    def _keep(self, rule) -> list[tuple[int, bool, int]]:
+        """Lark's maybe_create_child_filter: (raw index, inline it, Nones before it)."""
+        expansion = rule.expansion
+        keep_all = rule.options.keep_all_tokens
+        empty = rule.options.empty_indices if self.maybe_placeholders else None
+        if empty:
+            s = "".join(str(int(b)) for b in empty)
+            nones = [len(ones) for ones in s.split("0")]
+        else:
+            nones = [0] * (len(expansion) + 1)
+        out = []
+        pending = 0
+        for i, sym in enumerate(expansion):
+            pending += nones[i]
+            if keep_all or not (sym.is_term and sym.filter_out):
+                out.append((i, (not sym.is_term) and sym.name.startswith("_"), pending))
+                pending = 0
+        pending += nones[len(expansion)]
+        return out, pending
+
+    def _min_inline_children(self, rules) -> dict[str, int]:
+        """Fewest children each `_rule` can splice into its parent (for the `?rule` analysis)."""
+        inf = float("inf")
+        best: dict[str, float] = {r.origin.name: inf for r in rules if r.origin.name.startswith("_")}
+        changed = True
+        while changed:
+            changed = False
+            for r in rules:
+                name = r.origin.name
+                if name not in best:
+                    continue
+                keep, tail = self._keep(r)
+                count = tail + sum(nb + (best.get(rule_sym_name(r, i), inf) if inl else 1) for i, inl, nb in keep)
+                if count < best[name]:
+                    best[name] = count
+                    changed = True
+        return best
+
+    def _inlines_needing_spans(self, rules, inline_min) -> set[str]:
+        """`_rules` whose children may end up the only child of a `?rule` (which then needs
+        each child's position kind)."""
+        need: set[str] = set()
+        changed = True
+        while changed:
+            changed = False
+            for r in rules:
+                if not (r.options.expand1 and not r.alias) and r.origin.name not in need:
+                    continue
+                keep, tail = self._keep(r)
+                for i, inl, _nb in keep:
+                    name = rule_sym_name(r, i)
+                    if inl and name not in need:
+                        need.add(name)
+                        changed = True
+        return need
+
+    def _plan(self, rule, goto: dict[int, int], inline_min) -> tuple:
+        expansion = rule.expansion
+        size = len(expansion)
+        name = rule.alias or rule.options.template_source or rule.origin.name
+        expand1 = bool(rule.options.expand1 and not rule.alias)
+        inline = rule.origin.name.startswith("_")
+        if inline and expand1:
+            raise Unsupported(f"inlined rule {rule.origin.name} with '?' is not supported")
+        keep, tail = self._keep(rule)
+        for i, _inl, _nb in keep:
+            if expansion[i].is_term:
+                self.kept_terminals.add(expansion[i].name)
+        if expand1 and size == 1 and keep == [(0, False, 0)] and not tail:
+            return (_PASS, goto, size, name, None, None, expand1, inline, (), False)
+        simple = all(not inl and not nb for _i, inl, nb in keep) and not tail
+        if simple:
+            idx = tuple(i for i, _inl, _nb in keep)
+            keep_idx = None if idx == tuple(range(size)) else idx
+        else:
+            keep_idx = tuple(keep)
+        # can this ?rule end up with a single child (then the child's position kind matters)?
+        single = False
+        if expand1:
+            lo = tail + sum(nb + (inline_min.get(expansion[i].name, 0) if inl else 1) for i, inl, nb in keep)
+            single = lo <= 1
+        return (_GENERAL, goto, size, name, simple, keep_idx, single, inline, tail, False)
+
+    def _functions(self, handler_type: type) -> list:
+        fns = self._fn_cache.get(handler_type)
+        if fns is None:
+            fns = []
+            for plan in self.plans:
+                fn = getattr(handler_type, plan[3], None)
+                fns.append(fn if callable(fn) else None)
+            self._fn_cache[handler_type] = fns
+        return fns
+
+    # ---- run time ----------------------------------------------------------------------------
+
+    def parse(self, text: str, handler) -> Any:
+        """The start rule's callback result; raises Fallback when Lark must parse this text."""
+        lines = line_starts(text)
+        actions = self.actions
+        scanners = self.scanners
+        plans = self.plans
+        fns = self._functions(type(handler))
+        kept = self.kept_terminals
+        end_state = self.end_state
+        n = len(text)
+        states = [self.start_state]
+        values: list = []
+        spans: list = []
+        pos = 0
+        new_str = _new_str
+        token_cls = Token
+        bisect = bisect_right
+        max_depth = MAX_DEPTH
+        while True:
+            state = states[-1]
+            # ---- next token, with the scanner of the current state
+            mres, ignore, retype = scanners[state]
+            while True:
+                if pos >= n:
+                    ttype = "$END"
+                    break
+                m = None
+                for mre in mres:
+                    m = mre.match(text, pos)
+                    if m is not None:
+                        break
+                if m is None:
+                    raise Fallback
+                ttype = m.lastgroup
+                end = m.end()
+                if ttype in ignore:
+                    pos = end
+                    continue
+                if retype:
+                    rt = retype.get(ttype)
+                    if rt is not None:
+                        scanner, memo = rt
+                        value = m.group()
+                        new = memo.get(value, 0)
+                        if new == 0:
+                            new = memo[value] = scanner.fullmatch(value)
+                        if new is not None:
+                            ttype = new
+                break
+            # ---- reduce while the table says so, then shift
+            while True:
+                act = actions[state].get(ttype)
+                if act is None:
+                    raise Fallback
+                if act >= 0:
+                    if ttype == "$END":
+                        raise Fallback
+                    states.append(act)
+                    if ttype in kept:
+                        value = m.group()
+                        tok = new_str(token_cls, value)
+                        tok.type = ttype
+                        tok.value = value
+                        tok.start_pos = pos
+                        tok.end_pos = end
+                        li = bisect(lines, pos)
+                        tok.line = li
+                        tok.column = col = pos - lines[li - 1] + 1
+                        if "\n" in value:
+                            lj = bisect(lines, end)
+                            tok.end_line = lj
+                            tok.end_column = end - lines[lj - 1] + 1
+                        else:
+                            tok.end_line = li
+                            tok.end_column = col + end - pos
+                        values.append(tok)
+                    else:
+                        values.append(None)
+                    spans.append((pos, end, 0))
+                    pos = end
+                    break
+                plan = plans[~act]
+                if plan[0] == _PASS:
+                    del states[-1]
+                    state = plan[1][states[-1]]
+                    states.append(state)
+                    if state == end_state and ttype == "$END":
+                        return values[-1]
+                    continue
+                _k, goto, size, name, simple, keep_idx, single, inline, tail, carry = plan
+                if size:
+                    vals = values[-size:]
+                    sps = spans[-size:]
+                    del values[-size:], spans[-size:], states[-size:]
+                    # Lark's PropagatePositions: first and last child with a position
+                    a = sps[0]
+                    if not a:
+                        for a in sps:
+                            if a:
+                                break
+                    b = sps[-1]
+                    if not b:
+                        for b in reversed(sps):
+                            if b:
+                                break
+                    depth = 0
+                    for sp in sps:
+                        if sp and sp[2] > depth:
+                            depth = sp[2]
+                else:
+                    vals = []
+                    sps = ()
+                    a = b = None
+                    depth = 0
+                # ---- children (Lark's ChildFilter)
+                cspans = None
+                if simple:
+                    if keep_idx is None:
+                        children = vals
+                        if single or carry:
+                            cspans = sps
+                    else:
+                        children = [vals[i] for i in keep_idx]
+                        if single or carry:
+                            cspans = [sps[i] for i in keep_idx]
+                elif not (single or carry):
+                    children = []
+                    for i, to_expand, add_none in keep_idx:
+                        if add_none:
+                            children += [None] * add_none
+                        if to_expand:
+                            if children:
+                                children += vals[i].children
+                            else:
+                                children = vals[i].children
+                        else:
+                            children.append(vals[i])
+                    if tail:
+                        children += [None] * tail
+                else:
+                    children = []
+                    cspans = []
+                    for i, to_expand, add_none in keep_idx:
+                        if add_none:
+                            children += [None] * add_none
+                            cspans += [False] * add_none
+                        if to_expand:
+                            inl = vals[i]
+                            if children:
+                                children += inl.children
+                                if inl.spans is not None:
+                                    cspans += inl.spans
+                            else:
+                                children = inl.children
+                                cspans = inl.spans if inl.spans is not None else []
+                        else:
+                            children.append(vals[i])
+                            cspans.append(sps[i])
+                    if tail:
+                        children += [None] * tail
+                        cspans += [False] * tail
+                if single and len(children) == 1:
+                    # a ?rule with one child returns it; positions as Lark propagates them
+                    value = children[0]
+                    csp = cspans[0]
+                    if csp is False or csp is None:
+                        if csp is None and a:
+                            raise Fallback   # Lark would set the empty child tree's meta here
+                        span = csp
+                    elif csp[2] == 0:
+                        span = csp
+                    else:
+                        span = (a[0], b[1], csp[2])
+                elif inline:
+                    value = Inline(children, cspans if carry else None)
+                    span = (a[0], b[1], depth) if a else None
+                else:
+                    if depth >= max_depth:
+                        raise Fallback
+                    fn = fns[~act]
+                    if a:
+                        meta = Meta2(a[0], b[1], lines)
+                        span = (a[0], b[1], depth + 1)
+                    else:
+                        meta = Meta2(-1, -1, lines)
+                        span = None
+                    if fn is not None:
+                        value = fn(handler, meta, children)
+                    else:
+                        value = Tree(name, children, _lark_meta(meta))
+                state = goto[states[-1]]
+                states.append(state)
+                values.append(value)
+                spans.append(span)
+                if ttype == "$END" and state == end_state:
+                    return value
+
+
+def rule_sym_name(rule, i: int) -> str:
+    return rule.expansion[i].name
+
+
+def check_lark_internals(lark: Lark) -> list[str]:
+    """What of Lark's internals this driver needs is missing (empty when all is there)."""
+    problems = []
+    for start in lark.options.start:
+        try:
+            Driver(lark, start)
+        except Unsupported as exc:
+            problems.append(f"{start}: {exc}")
+    return problems
