@@ -843,7 +843,6 @@ class Checker:
         """FB instances nested in FB instances (or structs), and POUs calling POUs, at most
         NESTING_LIMIT deep: the same limit for `stvm run` and `stvm debug` (the VM builds and
         calls them on the Python stack). Returns False if a chain is too deep."""
-        from stvm.lower.codegen import _calls_in
         contains: dict[str, list[tuple[str, str]]] = {}
         for key, pou in self.pous.items():
             if pou.kind != "FUNCTION":
@@ -856,7 +855,7 @@ class Checker:
         calls: dict[str, list[tuple[str, str]]] = {key: [] for key in self.index.pou_nodes}
         for key, node in self.index.pou_nodes.items():
             seen: set[str] = set()
-            for call in _calls_in(node.body):
+            for call in self._calls_of(key, node):
                 info = self.facts.calls.get(id(call))
                 if info is not None and info.pou.key not in seen:
                     seen.add(info.pou.key)
@@ -884,6 +883,15 @@ class Checker:
                            self._span_of_key(root), "E028")
         return ok
 
+    def _calls_of(self, key: str, node) -> list[n.Call]:
+        """Every Call in a POU's body, in `lower.codegen._calls_in`'s order (one walk per POU,
+        shared by the nesting and the recursion check)."""
+        cache = self.__dict__.setdefault("_calls_cache", {})
+        calls = cache.get(key)
+        if calls is None:
+            calls = cache[key] = calls_in(node.body)
+        return calls
+
     def _struct_members(self, key: str, decl) -> list[tuple[str, str]]:
         out = []
         for fdecl in decl.body.fields:
@@ -910,10 +918,9 @@ class Checker:
 
     def check_recursion(self) -> None:
         """IEC 61131-3 (and Sysmac) forbid recursive calls of functions and FBs."""
-        from stvm.lower.codegen import _calls_in
         graph: dict[str, set[str]] = {key: set() for key in self.index.pou_nodes}
         for key, node in self.index.pou_nodes.items():
-            for call in _calls_in(node.body):
+            for call in self._calls_of(key, node):
                 info = self.facts.calls.get(id(call))
                 if info is not None and info.pou.kind == "FUNCTION":
                     graph[key].add(info.pou.key)
@@ -991,6 +998,45 @@ def _round_real(value: float, ty: t.Type) -> float:
         from stvm.runtime.helpers import _f32
         return _f32(value)
     return float(value)
+
+
+_WALK_FIELDS: dict[type, tuple[str, ...]] = {}
+_WALK_KIND: dict[type, int] = {}   # 0: skip, 1: tuple (splice), 2: node (visit)
+
+
+def calls_in(body) -> list[n.Call]:
+    """Every Call node under a statement list, in the order of `lower.codegen._walk` (a stack:
+    the last child first), without its per-node reflection."""
+    out: list[n.Call] = []
+    stack: list = list(body)
+    pop, push, extend = stack.pop, stack.append, stack.extend
+    fields_of, kind_of = _WALK_FIELDS, _WALK_KIND
+    call_cls = n.Call
+    while stack:
+        node = pop()
+        cls = node.__class__
+        kind = kind_of.get(cls)
+        if kind is None:
+            kind = kind_of[cls] = 1 if issubclass(cls, tuple) else 2 if hasattr(cls, "__dataclass_fields__") else 0
+        if kind == 1:
+            extend(node)
+            continue
+        if kind == 0:
+            continue
+        if isinstance(node, call_cls):
+            out.append(node)
+        names = fields_of.get(cls)
+        if names is None:
+            names = fields_of[cls] = tuple(f for f in cls.__dataclass_fields__ if f != "span")
+        for name in names:
+            value = getattr(node, name)
+            vcls = value.__class__
+            vkind = kind_of.get(vcls)
+            if vkind is None:
+                vkind = kind_of[vcls] = 1 if issubclass(vcls, tuple) else 2 if hasattr(vcls, "__dataclass_fields__") else 0
+            if vkind:
+                push(value)
+    return out
 
 
 def _time_compatible(literal_type: str, target: str) -> bool:

@@ -107,8 +107,8 @@ def line_starts(text: str) -> list[int]:
     return starts
 
 
-# a reduction's kind
-_PASS, _GENERAL = 0, 1
+# kinds of reduction plan (see Driver._plan)
+_ONE, _APPEND, _GENERAL = 1, 2, 3
 
 _new_str = str.__new__
 
@@ -122,10 +122,23 @@ def _lark_meta(meta: Meta2) -> Meta:
     return out
 
 
-class Driver:
-    """Built once per Lark object and start symbol; `parse(text, handler)` runs it."""
+def _multi_match(mres):
+    """One scanner split over several compiled patterns (Python's group limit): first match wins."""
+    def match(text, pos):
+        for mre in mres:
+            m = mre.match(text, pos)
+            if m is not None:
+                return m
+        return None
+    return match
 
-    def __init__(self, lark: Lark, start: str) -> None:
+
+class Driver:
+    """Built once per Lark object, start symbol and callback class; `parse(text, handler)`
+    runs it. `handler_type` has one function per rule name (or alias) taking
+    (handler, meta, children); a rule without one becomes a lark Tree, as Lark would build."""
+
+    def __init__(self, lark: Lark, start: str, handler_type: type) -> None:
         try:
             frontend = lark.parser
             table = frontend.parser.parser.parse_table
@@ -133,22 +146,22 @@ class Driver:
             states = table.states
             self.start_state = table.start_states[start]
             self.end_state = table.end_states[start]
+            options = lark.options
         except (AttributeError, KeyError) as exc:
             raise Unsupported(f"Lark's parser internals changed: {exc!r}") from exc
-        if lark.options.lexer != "contextual" or lark.options.parser != "lalr":
+        if options.lexer != "contextual" or options.parser != "lalr":
             raise Unsupported("needs parser='lalr', lexer='contextual'")
-        if not lark.options.propagate_positions or lark.options.propagate_positions is not True:
+        if options.propagate_positions is not True:
             raise Unsupported("needs propagate_positions=True")
-        if lark.options.postlex is not None or lark.options.lexer_callbacks:
+        if options.postlex is not None or options.lexer_callbacks:
             raise Unsupported("postlex and lexer callbacks are not supported")
-        if lark.options.tree_class not in (None, Tree):
-            raise Unsupported("a custom tree_class is not supported")
-        self.maybe_placeholders = bool(lark.options.maybe_placeholders)
-        n_states = max(states) + 1
+        if options.tree_class not in (None, Tree) or options.transformer is not None:
+            raise Unsupported("a custom tree_class or an inline transformer is not supported")
+        self.maybe_placeholders = bool(options.maybe_placeholders)
+        n_states = len(states)
         if set(states) != set(range(n_states)):
             raise Unsupported("parse table states are not 0..n-1")
 
-        # reductions: one plan per rule
         rules: dict[int, Any] = {}
         for acts in states.values():
             for action, arg in acts.values():
@@ -157,35 +170,28 @@ class Driver:
                 elif action is not Shift:
                     raise Unsupported(f"unknown parse action {action!r}")
         rule_list = list(rules.values())
-        rule_index = {id(r): i for i, r in enumerate(rule_list)}
-        self._rules = rule_list
-
-        # gotos: nonterminal -> {state: next state}
         gotos: dict[str, dict[int, int]] = {}
-        actions: list[dict[str, int]] = []
+        for s in range(n_states):
+            for sym, (action, arg) in states[s].items():
+                if action is Shift and not (sym.isupper() or sym == "$END"):
+                    gotos.setdefault(sym, {})[s] = arg
+
+        inline_min = self._min_inline_children(rule_list)
+        carry = self._inlines_needing_spans(rule_list)
+        self.kept_terminals: set[str] = set()
+        plans = {id(r): self._plan(r, gotos.get(r.origin.name, {}), inline_min, carry, handler_type)
+                 for r in rule_list}
+        # one row per state: terminal -> shift target (int), PASS goto (dict) or a plan (tuple)
+        self.actions = []
         for s in range(n_states):
             row = {}
             for sym, (action, arg) in states[s].items():
                 if action is Shift:
                     if sym.isupper() or sym == "$END":
                         row[sym] = arg
-                    else:
-                        gotos.setdefault(sym, {})[s] = arg
                 else:
-                    row[sym] = ~rule_index[id(arg)]
-            actions.append(row)
-        self.actions = actions
-
-        inline_min = self._min_inline_children(rule_list)
-        self.kept_terminals: set[str] = set()
-        self.plans = [self._plan(r, gotos.get(r.origin.name, {}), inline_min) for r in rule_list]
-        self._inline_spans = self._inlines_needing_spans(rule_list, inline_min)
-        # the inline plans learn whether to carry their children's spans
-        for i, r in enumerate(rule_list):
-            if r.origin.name.startswith("_"):
-                plan = list(self.plans[i])
-                plan[9] = r.origin.name in self._inline_spans
-                self.plans[i] = tuple(plan)
+                    row[sym] = plans[id(arg)]
+            self.actions.append(row)
 
         # per-state scanners: Lark's BasicLexer for that state
         try:
@@ -196,25 +202,24 @@ class Driver:
                 basic = lexers[s]
                 entry = by_lexer.get(id(basic))
                 if entry is None:
-                    scanner = basic.scanner
-                    mres = scanner._mres
+                    mres = basic.scanner._mres
                     retype = {}
                     for type_, cb in basic.callback.items():
                         if not isinstance(cb, UnlessCallback):
                             raise Unsupported(f"lexer callback for {type_} is not an UnlessCallback")
                         retype[type_] = (cb.scanner, {})
-                    entry = (mres, frozenset(basic.ignore_types), retype)
+                    match = mres[0].match if len(mres) == 1 else _multi_match(mres)
+                    entry = (match, frozenset(basic.ignore_types), retype)
                     by_lexer[id(basic)] = entry
                 scanners.append(entry)
         except AttributeError as exc:
             raise Unsupported(f"Lark's lexer internals changed: {exc!r}") from exc
         self.scanners = scanners
-        self._fn_cache: dict[type, list] = {}
 
     # ---- build time --------------------------------------------------------------------------
 
-    def _keep(self, rule) -> list[tuple[int, bool, int]]:
-        """Lark's maybe_create_child_filter: (raw index, inline it, Nones before it)."""
+    def _keep(self, rule):
+        """Lark's maybe_create_child_filter: [(raw index, inline it, Nones before it)], Nones after."""
         expansion = rule.expansion
         keep_all = rule.options.keep_all_tokens
         empty = rule.options.empty_indices if self.maybe_placeholders else None
@@ -233,7 +238,7 @@ class Driver:
         pending += nones[len(expansion)]
         return out, pending
 
-    def _min_inline_children(self, rules) -> dict[str, int]:
+    def _min_inline_children(self, rules) -> dict[str, float]:
         """Fewest children each `_rule` can splice into its parent (for the `?rule` analysis)."""
         inf = float("inf")
         best: dict[str, float] = {r.origin.name: inf for r in rules if r.origin.name.startswith("_")}
@@ -245,15 +250,15 @@ class Driver:
                 if name not in best:
                     continue
                 keep, tail = self._keep(r)
-                count = tail + sum(nb + (best.get(rule_sym_name(r, i), inf) if inl else 1) for i, inl, nb in keep)
+                count = tail + sum(nb + (best.get(r.expansion[i].name, inf) if inl else 1) for i, inl, nb in keep)
                 if count < best[name]:
                     best[name] = count
                     changed = True
         return best
 
-    def _inlines_needing_spans(self, rules, inline_min) -> set[str]:
-        """`_rules` whose children may end up the only child of a `?rule` (which then needs
-        each child's position kind)."""
+    def _inlines_needing_spans(self, rules) -> set[str]:
+        """`_rules` whose children may become a `?rule`'s only child, which then needs each
+        child's position (token, tree or None)."""
         need: set[str] = set()
         changed = True
         while changed:
@@ -261,15 +266,14 @@ class Driver:
             for r in rules:
                 if not (r.options.expand1 and not r.alias) and r.origin.name not in need:
                     continue
-                keep, tail = self._keep(r)
-                for i, inl, _nb in keep:
-                    name = rule_sym_name(r, i)
+                for i, inl, _nb in self._keep(r)[0]:
+                    name = r.expansion[i].name
                     if inl and name not in need:
                         need.add(name)
                         changed = True
         return need
 
-    def _plan(self, rule, goto: dict[int, int], inline_min) -> tuple:
+    def _plan(self, rule, goto: dict[int, int], inline_min, carry_set, handler_type):
         expansion = rule.expansion
         size = len(expansion)
         name = rule.alias or rule.options.template_source or rule.origin.name
@@ -277,12 +281,22 @@ class Driver:
         inline = rule.origin.name.startswith("_")
         if inline and expand1:
             raise Unsupported(f"inlined rule {rule.origin.name} with '?' is not supported")
+        carry = inline and rule.origin.name in carry_set
         keep, tail = self._keep(rule)
         for i, _inl, _nb in keep:
             if expansion[i].is_term:
                 self.kept_terminals.add(expansion[i].name)
+        fn = None if inline else getattr(handler_type, name, None)
+        if not callable(fn):
+            fn = None
         if expand1 and size == 1 and keep == [(0, False, 0)] and not tail:
-            return (_PASS, goto, size, name, None, None, expand1, inline, (), False)
+            return goto                                   # a `?rule` passing its one child on
+        if not expand1 and not inline and size == 1 and keep == [(0, False, 0)] and not tail:
+            return (_ONE, goto, fn, name)
+        rest = keep[1:]
+        if (inline and not tail and keep and keep[0] == (0, True, 0)
+                and all(not inl and not nb for _i, inl, nb in rest)):
+            return (_APPEND, goto, tuple(i for i, _inl, _nb in rest), size, carry)
         simple = all(not inl and not nb for _i, inl, nb in keep) and not tail
         if simple:
             idx = tuple(i for i, _inl, _nb in keep)
@@ -294,17 +308,7 @@ class Driver:
         if expand1:
             lo = tail + sum(nb + (inline_min.get(expansion[i].name, 0) if inl else 1) for i, inl, nb in keep)
             single = lo <= 1
-        return (_GENERAL, goto, size, name, simple, keep_idx, single, inline, tail, False)
-
-    def _functions(self, handler_type: type) -> list:
-        fns = self._fn_cache.get(handler_type)
-        if fns is None:
-            fns = []
-            for plan in self.plans:
-                fn = getattr(handler_type, plan[3], None)
-                fns.append(fn if callable(fn) else None)
-            self._fn_cache[handler_type] = fns
-        return fns
+        return (_GENERAL, goto, size, name, simple, keep_idx, single, inline, tail, carry, fn)
 
     # ---- run time ----------------------------------------------------------------------------
 
@@ -313,8 +317,6 @@ class Driver:
         lines = line_starts(text)
         actions = self.actions
         scanners = self.scanners
-        plans = self.plans
-        fns = self._functions(type(handler))
         kept = self.kept_terminals
         end_state = self.end_state
         n = len(text)
@@ -326,19 +328,19 @@ class Driver:
         token_cls = Token
         bisect = bisect_right
         max_depth = MAX_DEPTH
+        int_ = int
+        dict_ = dict
+        m = None
+        end = 0
         while True:
             state = states[-1]
             # ---- next token, with the scanner of the current state
-            mres, ignore, retype = scanners[state]
+            match, ignore, retype = scanners[state]
             while True:
                 if pos >= n:
                     ttype = "$END"
                     break
-                m = None
-                for mre in mres:
-                    m = mre.match(text, pos)
-                    if m is not None:
-                        break
+                m = match(text, pos)
                 if m is None:
                     raise Fallback
                 ttype = m.lastgroup
@@ -349,20 +351,19 @@ class Driver:
                 if retype:
                     rt = retype.get(ttype)
                     if rt is not None:
-                        scanner, memo = rt
                         value = m.group()
+                        memo = rt[1]
                         new = memo.get(value, 0)
                         if new == 0:
-                            new = memo[value] = scanner.fullmatch(value)
+                            new = memo[value] = rt[0].fullmatch(value)
                         if new is not None:
                             ttype = new
                 break
             # ---- reduce while the table says so, then shift
             while True:
                 act = actions[state].get(ttype)
-                if act is None:
-                    raise Fallback
-                if act >= 0:
+                cls = act.__class__
+                if cls is int_:                                         # shift
                     if ttype == "$END":
                         raise Fallback
                     states.append(act)
@@ -389,15 +390,67 @@ class Driver:
                     spans.append((pos, end, 0))
                     pos = end
                     break
-                plan = plans[~act]
-                if plan[0] == _PASS:
-                    del states[-1]
-                    state = plan[1][states[-1]]
-                    states.append(state)
-                    if state == end_state and ttype == "$END":
+                if cls is dict_:                                        # ?rule: one child passes
+                    state = act[states[-2]]
+                    states[-1] = state
+                    if state == end_state:
                         return values[-1]
                     continue
-                _k, goto, size, name, simple, keep_idx, single, inline, tail, carry = plan
+                if act is None:
+                    raise Fallback
+                kind = act[0]
+                if kind == _ONE:                                        # one child, a new tree
+                    sp = spans[-1]
+                    if sp:
+                        depth = sp[2] + 1
+                        if depth >= max_depth:
+                            raise Fallback
+                        meta = Meta2(sp[0], sp[1], lines)
+                        spans[-1] = (sp[0], sp[1], depth)
+                    else:
+                        meta = Meta2(-1, -1, lines)
+                    fn = act[2]
+                    if fn is not None:
+                        values[-1] = fn(handler, meta, [values[-1]])
+                    else:
+                        values[-1] = Tree(act[3], [values[-1]], _lark_meta(meta))
+                    state = act[1][states[-2]]
+                    states[-1] = state
+                    if state == end_state:
+                        return values[-1]
+                    continue
+                if kind == _APPEND:                                     # _rule: more children
+                    _k, goto, rest, size, carry = act
+                    vals = values[-size:]
+                    sps = spans[-size:]
+                    del values[-size:], spans[-size:], states[-size:]
+                    inl = vals[0]
+                    children = inl.children
+                    for i in rest:
+                        children.append(vals[i])
+                    if carry:
+                        for i in rest:
+                            inl.spans.append(sps[i])
+                    a = sps[0]
+                    if not a:
+                        for a in sps:
+                            if a:
+                                break
+                    b = sps[-1]
+                    if not b:
+                        for b in reversed(sps):
+                            if b:
+                                break
+                    depth = 0
+                    for sp in sps:
+                        if sp and sp[2] > depth:
+                            depth = sp[2]
+                    state = goto[states[-1]]
+                    states.append(state)
+                    values.append(inl)
+                    spans.append((a[0], b[1], depth) if a else None)
+                    continue
+                _k, goto, size, name, simple, keep_idx, single, inline, tail, carry, fn = act
                 if size:
                     vals = values[-size:]
                     sps = spans[-size:]
@@ -458,11 +511,10 @@ class Driver:
                             inl = vals[i]
                             if children:
                                 children += inl.children
-                                if inl.spans is not None:
-                                    cspans += inl.spans
+                                cspans += inl.spans
                             else:
                                 children = inl.children
-                                cspans = inl.spans if inl.spans is not None else []
+                                cspans = inl.spans
                         else:
                             children.append(vals[i])
                             cspans.append(sps[i])
@@ -475,19 +527,18 @@ class Driver:
                     csp = cspans[0]
                     if csp is False or csp is None:
                         if csp is None and a:
-                            raise Fallback   # Lark would set the empty child tree's meta here
+                            raise Fallback   # Lark would give the empty child tree a position here
                         span = csp
                     elif csp[2] == 0:
-                        span = csp
+                        span = csp       # a token keeps its own position
                     else:
                         span = (a[0], b[1], csp[2])
                 elif inline:
                     value = Inline(children, cspans if carry else None)
                     span = (a[0], b[1], depth) if a else None
                 else:
-                    if depth >= max_depth:
+                    if depth + 1 >= max_depth:
                         raise Fallback
-                    fn = fns[~act]
                     if a:
                         meta = Meta2(a[0], b[1], lines)
                         span = (a[0], b[1], depth + 1)
@@ -502,20 +553,16 @@ class Driver:
                 states.append(state)
                 values.append(value)
                 spans.append(span)
-                if ttype == "$END" and state == end_state:
+                if state == end_state:
                     return value
 
 
-def rule_sym_name(rule, i: int) -> str:
-    return rule.expansion[i].name
-
-
-def check_lark_internals(lark: Lark) -> list[str]:
+def check_lark_internals(lark: Lark, handler_type: type = object) -> list[str]:
     """What of Lark's internals this driver needs is missing (empty when all is there)."""
     problems = []
     for start in lark.options.start:
         try:
-            Driver(lark, start)
+            Driver(lark, start, handler_type)
         except Unsupported as exc:
             problems.append(f"{start}: {exc}")
     return problems

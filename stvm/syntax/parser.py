@@ -21,6 +21,7 @@ from stvm.settings import DEFAULT_SETTINGS, DoubleQuoteStrings, SysmacSettings
 from stvm.source import read_source
 from stvm.syntax import nodes as n
 from stvm.syntax import lalr
+from stvm.syntax.lalr import Meta2 as _Meta2
 
 _GRAMMAR_FILE = "st.lark"
 
@@ -73,7 +74,7 @@ class _ToNodes:
         self.diagnostics = diagnostics
 
     def _s(self, meta) -> n.Span:
-        if meta.__class__ is lalr.Meta2:
+        if meta.__class__ is _Meta2:
             start = meta.start
             if start < 0:
                 return n.Span(self.file, 0, 0, 0, 0)
@@ -630,7 +631,7 @@ def _driver(start: str) -> lalr.Driver | None:
     """The fast driver over the parser's tables, or None (then Lark parses everything) if this
     Lark version's internals are not what the driver knows."""
     try:
-        return lalr.Driver(_parser(), start)
+        return lalr.Driver(_parser(), start, _ToNodes)
     except lalr.Unsupported:
         return None
 
