@@ -1004,6 +1004,25 @@ _WALK_FIELDS: dict[type, tuple[str, ...]] = {}
 _WALK_KIND: dict[type, int] = {}   # 0: skip, 1: tuple (splice), 2: node (visit)
 
 
+_SCALARS = {"str", "int", "bool", "float", "bytes", "None", "Span", "n.Span"}
+
+
+def _walk_fields(cls) -> tuple[str, ...]:
+    """The fields of a node class that can hold nodes: not `span`, and not declared as only
+    scalars (str, int, tuples of str, …), whose values never hold a Call."""
+    import re
+    out = []
+    for name, f in cls.__dataclass_fields__.items():
+        if name == "span":
+            continue
+        kind = f.type if isinstance(f.type, str) else getattr(f.type, "__name__", "?")
+        atoms = set(re.findall(r"[A-Za-z_][A-Za-z0-9_.]*", kind)) - {"tuple"}
+        if atoms and atoms <= _SCALARS:
+            continue
+        out.append(name)
+    return tuple(out)
+
+
 def calls_in(body) -> list[n.Call]:
     """Every Call node under a statement list, in the order of `lower.codegen._walk` (a stack:
     the last child first), without its per-node reflection."""
@@ -1027,7 +1046,7 @@ def calls_in(body) -> list[n.Call]:
             out.append(node)
         names = fields_of.get(cls)
         if names is None:
-            names = fields_of[cls] = tuple(f for f in cls.__dataclass_fields__ if f != "span")
+            names = fields_of[cls] = _walk_fields(cls)
         for name in names:
             value = getattr(node, name)
             vcls = value.__class__
