@@ -28,6 +28,7 @@ from __future__ import annotations
 
 from bisect import bisect_right
 from itertools import accumulate
+from operator import itemgetter
 from typing import Any
 
 from lark import Lark, Token, Tree
@@ -58,46 +59,39 @@ class Inline:
         self.spans = spans
 
 
-class Meta2:
-    """What a callback gets as `meta`: start and end offsets in the text (or an empty span).
-    `positions.span(meta)` turns it into line/column; the attributes Lark's Meta has are here too."""
+class Meta2(tuple):
+    """What a callback gets as `meta`: (start offset, end offset, line starts); start -1 for a
+    rule that matched nothing. A tuple, so making one per reduction is cheap; it has the
+    attributes of Lark's Meta too (line, column, end_line, end_column, empty, …)."""
 
-    __slots__ = ("start", "end", "_lines")
+    __slots__ = ()
 
-    def __init__(self, start, end, lines):
-        self.start = start
-        self.end = end
-        self._lines = lines
+    start = property(itemgetter(0))
+    end = property(itemgetter(1))
+    start_pos = start
+    end_pos = end
 
     @property
     def empty(self):
-        return self.start < 0
+        return self[0] < 0
 
     @property
     def line(self):
-        return bisect_right(self._lines, self.start)
+        return bisect_right(self[2], self[0])
 
     @property
     def column(self):
-        lines = self._lines
-        return self.start - lines[bisect_right(lines, self.start) - 1] + 1
+        lines = self[2]
+        return self[0] - lines[bisect_right(lines, self[0]) - 1] + 1
 
     @property
     def end_line(self):
-        return bisect_right(self._lines, self.end)
+        return bisect_right(self[2], self[1])
 
     @property
     def end_column(self):
-        lines = self._lines
-        return self.end - lines[bisect_right(lines, self.end) - 1] + 1
-
-    @property
-    def start_pos(self):
-        return self.start
-
-    @property
-    def end_pos(self):
-        return self.end
+        lines = self[2]
+        return self[1] - lines[bisect_right(lines, self[1]) - 1] + 1
 
 
 def line_starts(text: str) -> list[int]:
@@ -294,9 +288,10 @@ class Driver:
         if not expand1 and not inline and size == 1 and keep == [(0, False, 0)] and not tail:
             return (_ONE, goto, fn, name)
         rest = keep[1:]
+        nts = tuple(i for i, sym in enumerate(expansion) if not sym.is_term)   # tokens have depth 0
         if (inline and not tail and keep and keep[0] == (0, True, 0)
                 and all(not inl and not nb for _i, inl, nb in rest)):
-            return (_APPEND, goto, tuple(i for i, _inl, _nb in rest), size, carry)
+            return (_APPEND, goto, tuple(i for i, _inl, _nb in rest), size, carry, nts)
         simple = all(not inl and not nb for _i, inl, nb in keep) and not tail
         if simple:
             idx = tuple(i for i, _inl, _nb in keep)
@@ -308,7 +303,7 @@ class Driver:
         if expand1:
             lo = tail + sum(nb + (inline_min.get(expansion[i].name, 0) if inl else 1) for i, inl, nb in keep)
             single = lo <= 1
-        return (_GENERAL, goto, size, name, simple, keep_idx, single, inline, tail, carry, fn)
+        return (_GENERAL, goto, size, name, simple, keep_idx, single, inline, tail, carry, fn, nts)
 
     # ---- run time ----------------------------------------------------------------------------
 
@@ -325,6 +320,7 @@ class Driver:
         spans: list = []
         pos = 0
         new_str = _new_str
+        new_meta = tuple.__new__
         token_cls = Token
         bisect = bisect_right
         max_depth = MAX_DEPTH
@@ -405,10 +401,10 @@ class Driver:
                         depth = sp[2] + 1
                         if depth >= max_depth:
                             raise Fallback
-                        meta = Meta2(sp[0], sp[1], lines)
+                        meta = new_meta(Meta2, (sp[0], sp[1], lines))
                         spans[-1] = (sp[0], sp[1], depth)
                     else:
-                        meta = Meta2(-1, -1, lines)
+                        meta = new_meta(Meta2, (-1, -1, lines))
                     fn = act[2]
                     if fn is not None:
                         values[-1] = fn(handler, meta, [values[-1]])
@@ -420,7 +416,7 @@ class Driver:
                         return values[-1]
                     continue
                 if kind == _APPEND:                                     # _rule: more children
-                    _k, goto, rest, size, carry = act
+                    _k, goto, rest, size, carry, nts = act
                     vals = values[-size:]
                     sps = spans[-size:]
                     del values[-size:], spans[-size:], states[-size:]
@@ -442,7 +438,8 @@ class Driver:
                             if b:
                                 break
                     depth = 0
-                    for sp in sps:
+                    for i in nts:
+                        sp = sps[i]
                         if sp and sp[2] > depth:
                             depth = sp[2]
                     state = goto[states[-1]]
@@ -450,7 +447,7 @@ class Driver:
                     values.append(inl)
                     spans.append((a[0], b[1], depth) if a else None)
                     continue
-                _k, goto, size, name, simple, keep_idx, single, inline, tail, carry, fn = act
+                _k, goto, size, name, simple, keep_idx, single, inline, tail, carry, fn, nts = act
                 if size:
                     vals = values[-size:]
                     sps = spans[-size:]
@@ -467,7 +464,8 @@ class Driver:
                             if b:
                                 break
                     depth = 0
-                    for sp in sps:
+                    for i in nts:
+                        sp = sps[i]
                         if sp and sp[2] > depth:
                             depth = sp[2]
                 else:
@@ -540,10 +538,10 @@ class Driver:
                     if depth + 1 >= max_depth:
                         raise Fallback
                     if a:
-                        meta = Meta2(a[0], b[1], lines)
+                        meta = new_meta(Meta2, (a[0], b[1], lines))
                         span = (a[0], b[1], depth + 1)
                     else:
-                        meta = Meta2(-1, -1, lines)
+                        meta = new_meta(Meta2, (-1, -1, lines))
                         span = None
                     if fn is not None:
                         value = fn(handler, meta, children)

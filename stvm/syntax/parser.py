@@ -75,12 +75,10 @@ class _ToNodes:
 
     def _s(self, meta) -> n.Span:
         if meta.__class__ is _Meta2:
-            start = meta.start
+            start, end, lines = meta
             if start < 0:
                 return n.Span(self.file, 0, 0, 0, 0)
-            lines = meta._lines
             li = bisect_right(lines, start)
-            end = meta.end
             lj = bisect_right(lines, end)
             return n.Span(self.file, li, start - lines[li - 1] + 1, lj, end - lines[lj - 1] + 1)
         return _span_of(self.file, meta)
@@ -381,6 +379,8 @@ class _ToNodes:
         return items[0]
 
     def qualified_name(self, meta, items):
+        if len(items) == 1:                     # the common case: one IDENT
+            return n.Name((items[0].value,), False, self._s(meta))
         rooted = bool(items) and isinstance(items[0], Token) and items[0].type == "ROOT_SEP"
         parts = tuple(str(t) for t in items if isinstance(t, Token) and t.type == "IDENT")
         return n.Name(parts, rooted, self._s(meta))
