@@ -1224,7 +1224,7 @@ class Checker:
         calls: dict[str, list[tuple[str, str]]] = {key: [] for key in self.index.pou_nodes}
         for key, node in self.index.pou_nodes.items():
             seen: set[str] = set()
-            for call in calls_in(node.body):
+            for call in self._calls_of(key, node):
                 info = self.facts.calls.get(id(call))
                 if info is not None and info.pou.key not in seen:
                     seen.add(info.pou.key)
@@ -1251,6 +1251,15 @@ class Checker:
                 self.error(f"{text}; stvm's limit is {NESTING_LIMIT} levels (for run and debug alike)",
                            self._span_of_key(root), "E028")
         return ok
+
+    def _calls_of(self, key: str, node) -> list[n.Call]:
+        """Every Call in a POU's body, in `syntax.walk`'s order (one walk per POU,
+        shared by the nesting and the recursion check)."""
+        cache = self.__dict__.setdefault("_calls_cache", {})
+        calls = cache.get(key)
+        if calls is None:
+            calls = cache[key] = calls_in(node.body)
+        return calls
 
     def _struct_members(self, key: str, decl) -> list[tuple[str, str]]:
         out = []
@@ -1280,7 +1289,7 @@ class Checker:
         """IEC 61131-3 (and Sysmac) forbid recursive calls of functions and FBs."""
         graph: dict[str, set[str]] = {key: set() for key in self.index.pou_nodes}
         for key, node in self.index.pou_nodes.items():
-            for call in calls_in(node.body):
+            for call in self._calls_of(key, node):
                 info = self.facts.calls.get(id(call))
                 if info is not None and info.pou.kind == "FUNCTION":
                     graph[key].add(info.pou.key)

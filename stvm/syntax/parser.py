@@ -7,19 +7,22 @@ stages only see values.
 
 from __future__ import annotations
 
+from bisect import bisect_right
 from dataclasses import replace
 from functools import lru_cache
 from importlib import resources
 from pathlib import Path
 from typing import Sequence
 
-from lark import Lark, Token, Transformer
+from lark import Lark, Token, Transformer, Tree
 from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken
 
 from stvm.diagnostics import Diagnostic
 from stvm.settings import DEFAULT_SETTINGS, DoubleQuoteStrings, SysmacSettings
 from stvm.source import read_source
 from stvm.syntax import nodes as n
+from stvm.syntax import lalr
+from stvm.syntax.lalr import Meta2 as _Meta2
 
 _GRAMMAR_FILE = "st.lark"
 
@@ -61,35 +64,33 @@ _PRECEDENCE = {"OR": 1, "XOR": 2, "AND": 3, "AMP": 3, "EQ": 4, "NE": 4, "LT": 5,
 class _Modifier(str):
     """PUBLIC, PRIVATE, ABSTRACT, FINAL, … in a POU, METHOD or PROPERTY header."""
 
+
 def _long_form(items, short: str, long: str) -> str:
     """The literal's type from its prefix: `LTIME#…` / `LT#…` (etc.) are the long form."""
     return long if str(items[0]).upper().startswith("L") else short
 
 
-class _ToNodes(Transformer):
-    """Turns the Lark tree into nodes; literal errors become diagnostics, not exceptions."""
+class _ToNodes:
+    """The node-building callbacks, one per grammar rule (or alias), each taking (meta, items).
+
+    `lalr.Driver` calls them at reduction time (meta is then an `lalr.Meta2`); on the fallback
+    path `_FromTree` calls them over Lark's tree (meta is Lark's Meta). Either way, get a span
+    with `self._s(meta)`. Literal errors become diagnostics, not exceptions."""
 
     def __init__(self, file: str, settings: SysmacSettings, diagnostics: list[Diagnostic]) -> None:
-        super().__init__(visit_tokens=False)
-        self._methods: dict[str, object] = {}
         self.namespace_names: list[tuple[str, n.Span]] = []
         self.file = file
         self.settings = settings
         self.diagnostics = diagnostics
 
-    def _call_userfunc(self, tree, new_children=None):
-        # Every method takes (meta, items). Calling them directly avoids Lark's per-call
-        # `v_args` wrapper objects, a large share of the transform time.
-        children = new_children if new_children is not None else tree.children
-        method = self._methods.get(tree.data)
-        if method is None:
-            method = getattr(self, tree.data, None)
-            if method is None:
-                return self.__default__(tree.data, children, tree.meta)
-            self._methods[tree.data] = method
-        return method(tree.meta, children)
-
     def _s(self, meta) -> n.Span:
+        if meta.__class__ is _Meta2:
+            start, end, lines = meta
+            if start < 0:
+                return n.Span(self.file, 0, 0, 0, 0)
+            li = bisect_right(lines, start)
+            lj = bisect_right(lines, end)
+            return n.Span(self.file, li, start - lines[li - 1] + 1, lj, end - lines[lj - 1] + 1)
         return _span_of(self.file, meta)
 
     def _ts(self, tok: Token) -> n.Span:
@@ -446,6 +447,8 @@ class _ToNodes(Transformer):
         return items[0]
 
     def qualified_name(self, meta, items):
+        if len(items) == 1:                     # the common case: one IDENT
+            return n.Name((items[0].value,), False, self._s(meta))
         rooted = bool(items) and isinstance(items[0], Token) and items[0].type == "ROOT_SEP"
         parts = tuple(str(t) for t in items if isinstance(t, Token) and t.type == "IDENT")
         return n.Name(parts, rooted, self._s(meta))
@@ -673,8 +676,67 @@ def _missing_semicolon_recovery(file: str, recovered: list[Diagnostic]):
     return on_error
 
 
+class _FromTree(Transformer):
+    """The fallback path: Lark's tree to nodes through the same `_ToNodes` callbacks. This class
+    defines no rule-named methods, so Lark's public `__default__` hook gets every tree."""
+
+    def __init__(self, nodes: _ToNodes) -> None:
+        super().__init__(visit_tokens=False)
+        self._nodes = nodes
+        self._fns: dict[str, object] = {}
+
+    def __default__(self, data, children, meta):
+        fn = self._fns.get(data, 0)
+        if fn == 0:
+            fn = getattr(type(self._nodes), data, None)
+            fn = self._fns[data] = fn if callable(fn) else None
+        if fn is None:
+            return Tree(data, children, meta)
+        return fn(self._nodes, meta, children)
+
+
+@lru_cache(maxsize=None)
+def _driver(start: str) -> lalr.Driver | None:
+    """The fast driver over the parser's tables, or None (then Lark parses everything) if this
+    Lark version's internals are not what the driver knows."""
+    try:
+        return lalr.Driver(_parser(), start, _ToNodes)
+    except lalr.Unsupported:
+        return None
+
+
+def _fast(text: str, file: str, settings: SysmacSettings, start: str):
+    """(result, nodes, diagnostics) from the fast driver, or None when Lark must parse."""
+    driver = _driver(start)
+    if driver is None:
+        return None
+    diagnostics: list[Diagnostic] = []
+    nodes = _ToNodes(file, settings, diagnostics)
+    try:
+        return driver.parse(text, nodes), nodes, diagnostics
+    except (lalr.Fallback, RecursionError):
+        return None
+
+
+def _unit(file: str, items: list, nodes: _ToNodes) -> n.CompilationUnit:
+    out: dict[str, list] = {"types": [], "pous": [], "globals": [], "configurations": []}
+    _collect(file, items, (), out)
+    return n.CompilationUnit(file, tuple(out["types"]), tuple(out["pous"]), tuple(out["globals"]),
+                             tuple(out["configurations"]), tuple(nodes.namespace_names))
+
+
 def parse_text(text: str, file: str, settings: SysmacSettings = DEFAULT_SETTINGS) -> tuple[n.CompilationUnit, list[Diagnostic]]:
     """Parse one ST file. On a syntax error the unit is empty and the error is a diagnostic."""
+    fast = _fast(text, file, settings, "start")
+    if fast is not None:
+        items, nodes, diagnostics = fast
+        return _unit(file, items, nodes), diagnostics
+    return parse_text_lark(text, file, settings)
+
+
+def parse_text_lark(text: str, file: str, settings: SysmacSettings = DEFAULT_SETTINGS) -> tuple[n.CompilationUnit, list[Diagnostic]]:
+    """`parse_text` by Lark's own parser and tree (the fallback path, and the reference the
+    fast driver is tested against): syntax errors, recovery of missing ';', deep nesting."""
     diagnostics: list[Diagnostic] = []
     recovered: list[Diagnostic] = []
     try:
@@ -684,29 +746,33 @@ def parse_text(text: str, file: str, settings: SysmacSettings = DEFAULT_SETTINGS
         return n.CompilationUnit(file, (), (), (), ()), diagnostics
     if recovered:
         return n.CompilationUnit(file, (), (), (), ()), recovered
-    transformer = _ToNodes(file, settings, diagnostics)
+    nodes = _ToNodes(file, settings, diagnostics)
     try:
-        items = transformer.transform(tree)
+        items = _FromTree(nodes).transform(tree)
     except RecursionError:
         diagnostics.append(Diagnostic.error(
             "expression or statement nesting too deep for stvm (split it into smaller parts)",
             n.Span(file, 1, 1, 1, 2), "E003"))
         return n.CompilationUnit(file, (), (), (), ()), diagnostics
-    out: dict[str, list] = {"types": [], "pous": [], "globals": [], "configurations": []}
-    _collect(file, items, (), out)
-    unit = n.CompilationUnit(file, tuple(out["types"]), tuple(out["pous"]), tuple(out["globals"]),
-                             tuple(out["configurations"]), tuple(transformer.namespace_names))
-    return unit, diagnostics
+    return _unit(file, items, nodes), diagnostics
 
 
 def parse_expression(text: str, file: str = "<expr>", settings: SysmacSettings = DEFAULT_SETTINGS) -> tuple[n.Expr | None, list[Diagnostic]]:
     """Parse a lone ST expression (used by `--set`, the debugger's `print`, scenarios)."""
+    fast = _fast(text, file, settings, "expression")
+    if fast is not None:
+        return fast[0], fast[2]
+    return parse_expression_lark(text, file, settings)
+
+
+def parse_expression_lark(text: str, file: str = "<expr>", settings: SysmacSettings = DEFAULT_SETTINGS) -> tuple[n.Expr | None, list[Diagnostic]]:
+    """`parse_expression` by Lark's own parser (the fallback path and the reference)."""
     diagnostics: list[Diagnostic] = []
     try:
         tree = _parser().parse(text, start="expression")
     except UnexpectedInput as exc:
         return None, [_syntax_diagnostic(file, exc)]
-    expr = _ToNodes(file, settings, diagnostics).transform(tree)
+    expr = _FromTree(_ToNodes(file, settings, diagnostics)).transform(tree)
     return expr, diagnostics
 
 

@@ -4,6 +4,8 @@ the variable at the root of an access path. The checker and the lowering both us
 
 from __future__ import annotations
 
+import re
+
 from stvm.syntax import nodes as n
 
 LOOP_WEIGHT = 10
@@ -55,6 +57,58 @@ def root_name(expr) -> str | None:
     return expr.parts[0].lower() if isinstance(expr, n.Name) and len(expr.parts) == 1 else None
 
 
+_WALK_FIELDS: dict[type, tuple[str, ...]] = {}
+_WALK_KIND: dict[type, int] = {}   # 0: skip, 1: tuple (splice), 2: node (visit)
+
+
+_SCALARS = {"str", "int", "bool", "float", "bytes", "None", "Span", "n.Span"}
+
+
+def _walk_fields(cls) -> tuple[str, ...]:
+    """The fields of a node class that can hold nodes: not `span`, and not declared as only
+    scalars (str, int, tuples of str, …), whose values never hold a Call."""
+    out = []
+    for name, f in cls.__dataclass_fields__.items():
+        if name == "span":
+            continue
+        kind = f.type if isinstance(f.type, str) else getattr(f.type, "__name__", "?")
+        atoms = set(re.findall(r"[A-Za-z_][A-Za-z0-9_.]*", kind)) - {"tuple"}
+        if atoms and atoms <= _SCALARS:
+            continue
+        out.append(name)
+    return tuple(out)
+
+
 def calls_in(body) -> list[n.Call]:
-    """Every Call node in a statement list (for the by-reference analysis)."""
-    return [node for node in walk(body) if isinstance(node, n.Call)]
+    """Every Call node under a statement list, in the order of `walk` (a stack: the last child
+    first), without its per-node reflection (the checker and the lowering call it per POU)."""
+    out: list[n.Call] = []
+    stack: list = list(body)
+    pop, push, extend = stack.pop, stack.append, stack.extend
+    fields_of, kind_of = _WALK_FIELDS, _WALK_KIND
+    call_cls = n.Call
+    while stack:
+        node = pop()
+        cls = node.__class__
+        kind = kind_of.get(cls)
+        if kind is None:
+            kind = kind_of[cls] = 1 if issubclass(cls, tuple) else 2 if hasattr(cls, "__dataclass_fields__") else 0
+        if kind == 1:
+            extend(node)
+            continue
+        if kind == 0:
+            continue
+        if isinstance(node, call_cls):
+            out.append(node)
+        names = fields_of.get(cls)
+        if names is None:
+            names = fields_of[cls] = _walk_fields(cls)
+        for name in names:
+            value = getattr(node, name)
+            vcls = value.__class__
+            vkind = kind_of.get(vcls)
+            if vkind is None:
+                vkind = kind_of[vcls] = 1 if issubclass(vcls, tuple) else 2 if hasattr(vcls, "__dataclass_fields__") else 0
+            if vkind:
+                push(value)
+    return out

@@ -1,0 +1,566 @@
+"""A fast LALR(1) driver over Lark's own parse table and contextual lexer.
+
+Lark's `parse()` builds a Tree (with a Meta per node and a Token per terminal), which
+`parser._ToNodes` then walks. This driver runs the same automaton from Lark's tables and the
+same per-state scanners (the regular expressions Lark compiled for each parser state), but
+calls the node-building callbacks at reduction time, so no Tree, no Meta and no Token for
+dropped keywords or punctuation is ever made.
+
+It is generic over the grammar: for every rule it derives, from Lark's own rule options, what
+Lark's tree builder would do (drop filtered tokens, insert `[ ]` placeholders, inline
+`_rules`, expand `?rules` with one child, keep `!rules`' tokens) and how Lark would propagate
+positions, so the callbacks receive the same children and the same spans.
+
+Anything unusual — a syntax error, a character no scanner matches, nesting deep enough that
+Lark's recursive transformer could fail, a grammar feature not handled here — raises
+`Fallback`, and the caller runs Lark's own parser instead, so diagnostics are Lark's, byte for
+byte. `tests/syntax/test_syntax_fast_parser.py` checks both paths give equal results.
+
+Lark internals used (pinned in pyproject.toml; `check_lark_internals` fails loudly if they
+change): `Lark.parser.parser.parser.parse_table` (an IntParseTable: `states`, `start_states`,
+`end_states`, actions `(Shift, state)` / `(Reduce, rule)`), `Lark.parser.lexer` (a
+ContextualLexer: `lexers` per state, each BasicLexer with `scanner._mres`, `callback`,
+`ignore_types`), `lark.lexer.UnlessCallback.scanner`, and the rule options (`expand1`,
+`keep_all_tokens`, `empty_indices`, `template_source`) and terminals' `filter_out`.
+"""
+
+from __future__ import annotations
+
+from bisect import bisect_right
+from itertools import accumulate
+from operator import itemgetter
+from typing import Any
+
+from lark import Lark, Token, Tree
+from lark.lexer import UnlessCallback
+from lark.parsers.lalr_analysis import Reduce, Shift
+from lark.tree import Meta
+
+MAX_DEPTH = 150
+"""Deeper parse trees go to Lark's parser: its transformer recurses twice per tree level, and
+what happens near Python's recursion limit (the "nesting too deep" diagnostic) must stay Lark's."""
+
+
+class Fallback(Exception):
+    """This input needs Lark's own parser (a syntax error, or nesting too deep)."""
+
+
+class Unsupported(Exception):
+    """The grammar or the Lark version uses something this driver does not implement."""
+
+
+class Inline:
+    """An `_rule`'s children, spliced into its parent (Lark's ChildFilter)."""
+
+    __slots__ = ("children", "spans")
+
+    def __init__(self, children, spans):
+        self.children = children
+        self.spans = spans
+
+
+class Meta2(tuple):
+    """What a callback gets as `meta`: (start offset, end offset, line starts); start -1 for a
+    rule that matched nothing. A tuple, so making one per reduction is cheap; it has the
+    attributes of Lark's Meta too (line, column, end_line, end_column, empty, …)."""
+
+    __slots__ = ()
+
+    start = property(itemgetter(0))
+    end = property(itemgetter(1))
+    start_pos = start
+    end_pos = end
+
+    @property
+    def empty(self):
+        return self[0] < 0
+
+    @property
+    def line(self):
+        return bisect_right(self[2], self[0])
+
+    @property
+    def column(self):
+        lines = self[2]
+        return self[0] - lines[bisect_right(lines, self[0]) - 1] + 1
+
+    @property
+    def end_line(self):
+        return bisect_right(self[2], self[1])
+
+    @property
+    def end_column(self):
+        lines = self[2]
+        return self[1] - lines[bisect_right(lines, self[1]) - 1] + 1
+
+
+def line_starts(text: str) -> list[int]:
+    """Offsets where each line starts (index 0 is line 1)."""
+    starts = [0]
+    starts += accumulate(len(line) + 1 for line in text.split("\n"))
+    return starts
+
+
+# kinds of reduction plan (see Driver._plan)
+_ONE, _APPEND, _GENERAL = 1, 2, 3
+
+_new_str = str.__new__
+
+
+def _lark_meta(meta: Meta2) -> Meta:
+    out = Meta()
+    if meta.start >= 0:
+        out.empty = False
+        out.line, out.column, out.start_pos = meta.line, meta.column, meta.start
+        out.end_line, out.end_column, out.end_pos = meta.end_line, meta.end_column, meta.end
+    return out
+
+
+def _multi_match(mres):
+    """One scanner split over several compiled patterns (Python's group limit): first match wins."""
+    def match(text, pos):
+        for mre in mres:
+            m = mre.match(text, pos)
+            if m is not None:
+                return m
+        return None
+    return match
+
+
+class Driver:
+    """Built once per Lark object, start symbol and callback class; `parse(text, handler)`
+    runs it. `handler_type` has one function per rule name (or alias) taking
+    (handler, meta, children); a rule without one becomes a lark Tree, as Lark would build."""
+
+    def __init__(self, lark: Lark, start: str, handler_type: type) -> None:
+        try:
+            frontend = lark.parser
+            table = frontend.parser.parser.parse_table
+            contextual = frontend.lexer
+            states = table.states
+            self.start_state = table.start_states[start]
+            self.end_state = table.end_states[start]
+            options = lark.options
+        except (AttributeError, KeyError) as exc:
+            raise Unsupported(f"Lark's parser internals changed: {exc!r}") from exc
+        if options.lexer != "contextual" or options.parser != "lalr":
+            raise Unsupported("needs parser='lalr', lexer='contextual'")
+        if options.propagate_positions is not True:
+            raise Unsupported("needs propagate_positions=True")
+        if options.postlex is not None or options.lexer_callbacks:
+            raise Unsupported("postlex and lexer callbacks are not supported")
+        if options.tree_class not in (None, Tree) or options.transformer is not None:
+            raise Unsupported("a custom tree_class or an inline transformer is not supported")
+        self.maybe_placeholders = bool(options.maybe_placeholders)
+        n_states = len(states)
+        if set(states) != set(range(n_states)):
+            raise Unsupported("parse table states are not 0..n-1")
+
+        rules: dict[int, Any] = {}
+        for acts in states.values():
+            for action, arg in acts.values():
+                if action is Reduce:
+                    rules.setdefault(id(arg), arg)
+                elif action is not Shift:
+                    raise Unsupported(f"unknown parse action {action!r}")
+        rule_list = list(rules.values())
+        gotos: dict[str, dict[int, int]] = {}
+        for s in range(n_states):
+            for sym, (action, arg) in states[s].items():
+                if action is Shift and not (sym.isupper() or sym == "$END"):
+                    gotos.setdefault(sym, {})[s] = arg
+
+        inline_min = self._min_inline_children(rule_list)
+        carry = self._inlines_needing_spans(rule_list)
+        self.kept_terminals: set[str] = set()
+        plans = {id(r): self._plan(r, gotos.get(r.origin.name, {}), inline_min, carry, handler_type)
+                 for r in rule_list}
+        # one row per state: terminal -> shift target (int), PASS goto (dict) or a plan (tuple)
+        self.actions = []
+        for s in range(n_states):
+            row = {}
+            for sym, (action, arg) in states[s].items():
+                if action is Shift:
+                    if sym.isupper() or sym == "$END":
+                        row[sym] = arg
+                else:
+                    row[sym] = plans[id(arg)]
+            self.actions.append(row)
+
+        # per-state scanners: Lark's BasicLexer for that state
+        try:
+            lexers = contextual.lexers
+            scanners = []
+            by_lexer: dict[int, tuple] = {}
+            for s in range(n_states):
+                basic = lexers[s]
+                entry = by_lexer.get(id(basic))
+                if entry is None:
+                    mres = basic.scanner._mres
+                    retype = {}
+                    for type_, cb in basic.callback.items():
+                        if not isinstance(cb, UnlessCallback):
+                            raise Unsupported(f"lexer callback for {type_} is not an UnlessCallback")
+                        retype[type_] = (cb.scanner, {})
+                    match = mres[0].match if len(mres) == 1 else _multi_match(mres)
+                    entry = (match, frozenset(basic.ignore_types), retype)
+                    by_lexer[id(basic)] = entry
+                scanners.append(entry)
+        except AttributeError as exc:
+            raise Unsupported(f"Lark's lexer internals changed: {exc!r}") from exc
+        self.scanners = scanners
+
+    # ---- build time --------------------------------------------------------------------------
+
+    def _keep(self, rule):
+        """Lark's maybe_create_child_filter: [(raw index, inline it, Nones before it)], Nones after."""
+        expansion = rule.expansion
+        keep_all = rule.options.keep_all_tokens
+        empty = rule.options.empty_indices if self.maybe_placeholders else None
+        if empty:
+            s = "".join(str(int(b)) for b in empty)
+            nones = [len(ones) for ones in s.split("0")]
+        else:
+            nones = [0] * (len(expansion) + 1)
+        out = []
+        pending = 0
+        for i, sym in enumerate(expansion):
+            pending += nones[i]
+            if keep_all or not (sym.is_term and sym.filter_out):
+                out.append((i, (not sym.is_term) and sym.name.startswith("_"), pending))
+                pending = 0
+        pending += nones[len(expansion)]
+        return out, pending
+
+    def _min_inline_children(self, rules) -> dict[str, float]:
+        """Fewest children each `_rule` can splice into its parent (for the `?rule` analysis)."""
+        inf = float("inf")
+        best: dict[str, float] = {r.origin.name: inf for r in rules if r.origin.name.startswith("_")}
+        changed = True
+        while changed:
+            changed = False
+            for r in rules:
+                name = r.origin.name
+                if name not in best:
+                    continue
+                keep, tail = self._keep(r)
+                count = tail + sum(nb + (best.get(r.expansion[i].name, inf) if inl else 1) for i, inl, nb in keep)
+                if count < best[name]:
+                    best[name] = count
+                    changed = True
+        return best
+
+    def _inlines_needing_spans(self, rules) -> set[str]:
+        """`_rules` whose children may become a `?rule`'s only child, which then needs each
+        child's position (token, tree or None)."""
+        need: set[str] = set()
+        changed = True
+        while changed:
+            changed = False
+            for r in rules:
+                if not (r.options.expand1 and not r.alias) and r.origin.name not in need:
+                    continue
+                for i, inl, _nb in self._keep(r)[0]:
+                    name = r.expansion[i].name
+                    if inl and name not in need:
+                        need.add(name)
+                        changed = True
+        return need
+
+    def _plan(self, rule, goto: dict[int, int], inline_min, carry_set, handler_type):
+        expansion = rule.expansion
+        size = len(expansion)
+        name = rule.alias or rule.options.template_source or rule.origin.name
+        expand1 = bool(rule.options.expand1 and not rule.alias)
+        inline = rule.origin.name.startswith("_")
+        if inline and expand1:
+            raise Unsupported(f"inlined rule {rule.origin.name} with '?' is not supported")
+        carry = inline and rule.origin.name in carry_set
+        keep, tail = self._keep(rule)
+        for i, _inl, _nb in keep:
+            if expansion[i].is_term:
+                self.kept_terminals.add(expansion[i].name)
+        fn = None if inline else getattr(handler_type, name, None)
+        if not callable(fn):
+            fn = None
+        if expand1 and size == 1 and keep == [(0, False, 0)] and not tail:
+            return goto                                   # a `?rule` passing its one child on
+        if not expand1 and not inline and size == 1 and keep == [(0, False, 0)] and not tail:
+            return (_ONE, goto, fn, name)
+        rest = keep[1:]
+        nts = tuple(i for i, sym in enumerate(expansion) if not sym.is_term)   # tokens have depth 0
+        if (inline and not tail and keep and keep[0] == (0, True, 0)
+                and all(not inl and not nb for _i, inl, nb in rest)):
+            return (_APPEND, goto, tuple(i for i, _inl, _nb in rest), size, carry, nts)
+        simple = all(not inl and not nb for _i, inl, nb in keep) and not tail
+        if simple:
+            idx = tuple(i for i, _inl, _nb in keep)
+            keep_idx = None if idx == tuple(range(size)) else idx
+        else:
+            keep_idx = tuple(keep)
+        # can this ?rule end up with a single child (then the child's position kind matters)?
+        single = False
+        if expand1:
+            lo = tail + sum(nb + (inline_min.get(expansion[i].name, 0) if inl else 1) for i, inl, nb in keep)
+            single = lo <= 1
+        return (_GENERAL, goto, size, name, simple, keep_idx, single, inline, tail, carry, fn, nts)
+
+    # ---- run time ----------------------------------------------------------------------------
+
+    def parse(self, text: str, handler) -> Any:
+        """The start rule's callback result; raises Fallback when Lark must parse this text."""
+        lines = line_starts(text)
+        actions = self.actions
+        scanners = self.scanners
+        kept = self.kept_terminals
+        end_state = self.end_state
+        n = len(text)
+        states = [self.start_state]
+        values: list = []
+        spans: list = []
+        pos = 0
+        new_str = _new_str
+        new_meta = tuple.__new__
+        token_cls = Token
+        bisect = bisect_right
+        max_depth = MAX_DEPTH
+        int_ = int
+        dict_ = dict
+        m = None
+        end = 0
+        while True:
+            state = states[-1]
+            # ---- next token, with the scanner of the current state
+            match, ignore, retype = scanners[state]
+            while True:
+                if pos >= n:
+                    ttype = "$END"
+                    break
+                m = match(text, pos)
+                if m is None:
+                    raise Fallback
+                ttype = m.lastgroup
+                end = m.end()
+                if ttype in ignore:
+                    pos = end
+                    continue
+                if retype:
+                    rt = retype.get(ttype)
+                    if rt is not None:
+                        value = m.group()
+                        memo = rt[1]
+                        new = memo.get(value, 0)
+                        if new == 0:
+                            new = memo[value] = rt[0].fullmatch(value)
+                        if new is not None:
+                            ttype = new
+                break
+            # ---- reduce while the table says so, then shift
+            while True:
+                act = actions[state].get(ttype)
+                cls = act.__class__
+                if cls is int_:                                         # shift
+                    if ttype == "$END":
+                        raise Fallback
+                    states.append(act)
+                    if ttype in kept:
+                        value = m.group()
+                        tok = new_str(token_cls, value)
+                        tok.type = ttype
+                        tok.value = value
+                        tok.start_pos = pos
+                        tok.end_pos = end
+                        li = bisect(lines, pos)
+                        tok.line = li
+                        tok.column = col = pos - lines[li - 1] + 1
+                        if "\n" in value:
+                            lj = bisect(lines, end)
+                            tok.end_line = lj
+                            tok.end_column = end - lines[lj - 1] + 1
+                        else:
+                            tok.end_line = li
+                            tok.end_column = col + end - pos
+                        values.append(tok)
+                    else:
+                        values.append(None)
+                    spans.append((pos, end, 0))
+                    pos = end
+                    break
+                if cls is dict_:                                        # ?rule: one child passes
+                    state = act[states[-2]]
+                    states[-1] = state
+                    if state == end_state:
+                        return values[-1]
+                    continue
+                if act is None:
+                    raise Fallback
+                kind = act[0]
+                if kind == _ONE:                                        # one child, a new tree
+                    sp = spans[-1]
+                    if sp:
+                        depth = sp[2] + 1
+                        if depth >= max_depth:
+                            raise Fallback
+                        meta = new_meta(Meta2, (sp[0], sp[1], lines))
+                        spans[-1] = (sp[0], sp[1], depth)
+                    else:
+                        meta = new_meta(Meta2, (-1, -1, lines))
+                    fn = act[2]
+                    if fn is not None:
+                        values[-1] = fn(handler, meta, [values[-1]])
+                    else:
+                        values[-1] = Tree(act[3], [values[-1]], _lark_meta(meta))
+                    state = act[1][states[-2]]
+                    states[-1] = state
+                    if state == end_state:
+                        return values[-1]
+                    continue
+                if kind == _APPEND:                                     # _rule: more children
+                    _k, goto, rest, size, carry, nts = act
+                    vals = values[-size:]
+                    sps = spans[-size:]
+                    del values[-size:], spans[-size:], states[-size:]
+                    inl = vals[0]
+                    children = inl.children
+                    for i in rest:
+                        children.append(vals[i])
+                    if carry:
+                        for i in rest:
+                            inl.spans.append(sps[i])
+                    a = sps[0]
+                    if not a:
+                        for a in sps:
+                            if a:
+                                break
+                    b = sps[-1]
+                    if not b:
+                        for b in reversed(sps):
+                            if b:
+                                break
+                    depth = 0
+                    for i in nts:
+                        sp = sps[i]
+                        if sp and sp[2] > depth:
+                            depth = sp[2]
+                    state = goto[states[-1]]
+                    states.append(state)
+                    values.append(inl)
+                    spans.append((a[0], b[1], depth) if a else None)
+                    continue
+                _k, goto, size, name, simple, keep_idx, single, inline, tail, carry, fn, nts = act
+                if size:
+                    vals = values[-size:]
+                    sps = spans[-size:]
+                    del values[-size:], spans[-size:], states[-size:]
+                    # Lark's PropagatePositions: first and last child with a position
+                    a = sps[0]
+                    if not a:
+                        for a in sps:
+                            if a:
+                                break
+                    b = sps[-1]
+                    if not b:
+                        for b in reversed(sps):
+                            if b:
+                                break
+                    depth = 0
+                    for i in nts:
+                        sp = sps[i]
+                        if sp and sp[2] > depth:
+                            depth = sp[2]
+                else:
+                    vals = []
+                    sps = ()
+                    a = b = None
+                    depth = 0
+                # ---- children (Lark's ChildFilter)
+                cspans = None
+                if simple:
+                    if keep_idx is None:
+                        children = vals
+                        if single or carry:
+                            cspans = sps
+                    else:
+                        children = [vals[i] for i in keep_idx]
+                        if single or carry:
+                            cspans = [sps[i] for i in keep_idx]
+                elif not (single or carry):
+                    children = []
+                    for i, to_expand, add_none in keep_idx:
+                        if add_none:
+                            children += [None] * add_none
+                        if to_expand:
+                            if children:
+                                children += vals[i].children
+                            else:
+                                children = vals[i].children
+                        else:
+                            children.append(vals[i])
+                    if tail:
+                        children += [None] * tail
+                else:
+                    children = []
+                    cspans = []
+                    for i, to_expand, add_none in keep_idx:
+                        if add_none:
+                            children += [None] * add_none
+                            cspans += [False] * add_none
+                        if to_expand:
+                            inl = vals[i]
+                            if children:
+                                children += inl.children
+                                cspans += inl.spans
+                            else:
+                                children = inl.children
+                                cspans = inl.spans
+                        else:
+                            children.append(vals[i])
+                            cspans.append(sps[i])
+                    if tail:
+                        children += [None] * tail
+                        cspans += [False] * tail
+                if single and len(children) == 1:
+                    # a ?rule with one child returns it; positions as Lark propagates them
+                    value = children[0]
+                    csp = cspans[0]
+                    if csp is False or csp is None:
+                        if csp is None and a:
+                            raise Fallback   # Lark would give the empty child tree a position here
+                        span = csp
+                    elif csp[2] == 0:
+                        span = csp       # a token keeps its own position
+                    else:
+                        span = (a[0], b[1], csp[2])
+                elif inline:
+                    value = Inline(children, cspans if carry else None)
+                    span = (a[0], b[1], depth) if a else None
+                else:
+                    if depth + 1 >= max_depth:
+                        raise Fallback
+                    if a:
+                        meta = new_meta(Meta2, (a[0], b[1], lines))
+                        span = (a[0], b[1], depth + 1)
+                    else:
+                        meta = new_meta(Meta2, (-1, -1, lines))
+                        span = None
+                    if fn is not None:
+                        value = fn(handler, meta, children)
+                    else:
+                        value = Tree(name, children, _lark_meta(meta))
+                state = goto[states[-1]]
+                states.append(state)
+                values.append(value)
+                spans.append(span)
+                if state == end_state:
+                    return value
+
+
+def check_lark_internals(lark: Lark, handler_type: type = object) -> list[str]:
+    """What of Lark's internals this driver needs is missing (empty when all is there)."""
+    problems = []
+    for start in lark.options.start:
+        try:
+            Driver(lark, start, handler_type)
+        except Unsupported as exc:
+            problems.append(f"{start}: {exc}")
+    return problems
