@@ -95,9 +95,10 @@ def expand_paths(paths: Sequence[str | Path]) -> tuple[list[Path], dict, Path | 
                 listed = project_files(manifest, path, path / MANIFEST)
             # a folder with a manifest that lists its files is that project (the files may be in
             # other folders, e.g. a library the project builds on); else every *.st in it
-            found = listed or sorted(p for p in path.glob("*.st") if p.is_file())
+            found = listed or sorted(p for p in path.glob("*.st") if p.is_file()) or _vendor_sources(path)
             if not found:
-                raise LoadError([Diagnostic.error(f"no .st files in {path}", _file_span(path))], {})
+                raise LoadError([Diagnostic.error(f"no .st files (nor TwinCAT or PLCopen XML sources) in {path}",
+                                                  _file_span(path))], {})
             out += found
         else:
             out.append(path)
@@ -115,6 +116,27 @@ def expand_paths(paths: Sequence[str | Path]) -> tuple[list[Path], dict, Path | 
             seen.add(key)
             unique.append(p)
     return unique, manifest, root
+
+
+def _vendor_sources(folder: Path) -> list[Path]:
+    """A folder without .st files: its TwinCAT (.TcPOU …, a .plcproj's) and PLCopen XML sources."""
+    from stvm.syntax.vendor_xml import folder_sources
+    return folder_sources(folder)
+
+
+def _read(path: Path, encoding: str) -> str:
+    if path.suffix.lower() in _VENDOR_SUFFIXES:
+        from stvm.syntax.vendor_xml import read_vendor   # ST text laid out on the XML's lines
+        return read_vendor(path, encoding)
+    return read_source(path, encoding)
+
+
+_VENDOR_SUFFIXES = (".tcpou", ".tcdut", ".tcgvl", ".tcio", ".xml")
+
+
+def source_texts(texts: Sequence[tuple[str, str]]) -> dict[str, str]:
+    """What excerpts show for each file: its text, the XML itself for a vendor XML file."""
+    return {name: getattr(text, "original", text) for name, text in texts}
 
 
 def source_encoding(manifest: dict) -> str:
@@ -199,9 +221,13 @@ def read_files(paths: Sequence[Path], encoding: str = "utf-8") -> tuple[list[tup
     diags = []
     for path in paths:
         try:
-            texts.append((str(path), read_source(path, encoding)))
+            texts.append((str(path), _read(path, encoding)))
         except SourceError as exc:
-            texts.append((str(path), exc.text))
+            if path.suffix.lower() in _VENDOR_SUFFIXES and exc.text:   # malformed XML: shown, never parsed
+                from stvm.syntax.vendor_xml import unreadable
+                texts.append((str(path), unreadable(exc.text)))
+            else:
+                texts.append((str(path), exc.text))
             diags.append(Diagnostic.error(exc.message, Span(str(path), exc.line, exc.column, exc.line,
                                                              exc.column + 1), "E001"))
         except OSError as exc:
@@ -281,7 +307,7 @@ def _check_texts(texts, diags, settings):
 def _check_texts_unpaused(texts, diags, settings):
     from stvm.semantics import analyze
     from stvm.syntax.parser import parse_text
-    sources = dict(texts)
+    sources = source_texts(texts)
     units, stdlib_diags, stdlib_sources = stdlib_units(settings)
     units = list(units)
     diags += stdlib_diags
@@ -338,7 +364,7 @@ def load(paths: Sequence[str | Path], settings: SysmacSettings | None = None, us
     files, manifest, root = expand_paths(paths)
     texts, read_diags = read_files(files, source_encoding(manifest))
     if read_diags:
-        raise LoadError(read_diags, dict(texts))
+        raise LoadError(read_diags, source_texts(texts))
     key = _cache_key(texts + _stdlib(settings), settings)
     cache_name = f"{key}.bin"
     payload = _cache().get(cache_name) if use_cache else None

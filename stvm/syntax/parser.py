@@ -607,6 +607,8 @@ def _missing_semicolon_recovery(file: str, recovered: list[Diagnostic]):
 
 def parse_text(text: str, file: str, settings: SysmacSettings = DEFAULT_SETTINGS) -> tuple[n.CompilationUnit, list[Diagnostic]]:
     """Parse one ST file. On a syntax error the unit is empty and the error is a diagnostic."""
+    if type(text) is not str and hasattr(text, "remap"):   # a vendor XML file (syntax/vendor_xml.py)
+        return text.remap(*parse_text(str(text), file, settings))
     diagnostics: list[Diagnostic] = []
     recovered: list[Diagnostic] = []
     try:
