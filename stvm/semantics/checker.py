@@ -1002,4 +1002,9 @@ from stvm.semantics.body import _BodyChecker  # noqa: E402  (body checker needs 
 
 def analyze(units: list[n.CompilationUnit], settings: SysmacSettings = DEFAULT_SETTINGS) -> Analysis:
     """Check all units together; returns the model, per-node facts and every diagnostic."""
-    return Checker(units, settings).run()
+    from stvm.semantics.qualified import resolve   # `GVL.x`, `Enum.member`, qualified_only
+    units, qualified = resolve(list(units))
+    analysis = Checker(units, settings).run()
+    if qualified:
+        analysis.diagnostics[:0] = qualified
+    return analysis

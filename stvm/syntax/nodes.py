@@ -364,6 +364,7 @@ class TypeDecl(Node):
     namespace: tuple[str, ...]
     body: StructDecl | EnumDecl | AliasDecl
     span: Span = _span()
+    pragmas: tuple[str, ...] = ()   # `{attribute 'qualified_only'}` … before it (syntax/pragmas.py)
 
 
 @dataclass(frozen=True)
@@ -384,6 +385,8 @@ class GlobalVars(Node):
     block: VarBlock
     namespace: tuple[str, ...]
     span: Span = _span()
+    pragmas: tuple[str, ...] = ()   # attributes before VAR_GLOBAL (syntax/pragmas.py)
+    gvl: str = ""                   # the name of its global variable list (TwinCAT/CODESYS GVL)
 
 
 @dataclass(frozen=True)

@@ -7,6 +7,7 @@ stages only see values.
 
 from __future__ import annotations
 
+import threading
 from functools import lru_cache
 from importlib import resources
 from pathlib import Path
@@ -29,7 +30,18 @@ def _parser(start: str = "start") -> Lark:
     # cache=True: Lark stores the built LALR tables in the temp dir, keyed by a hash of the
     # grammar, the options and Lark's version; building them takes most of a second.
     return Lark(grammar, parser="lalr", lexer="contextual", propagate_positions=True,
-                start=["start", "expression"], maybe_placeholders=True, cache=True)
+                start=["start", "expression"], maybe_placeholders=True, cache=True,
+                lexer_callbacks={"PRAGMA": _pragma_seen})
+
+
+_PRAGMAS = threading.local()   # the `{…}` tokens the lexer dropped during the current parse_text
+
+
+def _pragma_seen(token: Token) -> Token:
+    seen = getattr(_PRAGMAS, "tokens", None)
+    if seen is not None:
+        seen.append(token)
+    return token
 
 
 def grammar_text() -> str:
@@ -332,6 +344,11 @@ class _ToNodes(Transformer):
 
     def case_name(self, meta, items):
         tok = items[0]
+        first, dot, member = str(tok).partition(".")
+        if dot:   # `Enum.member:` (CODESYS/TwinCAT)
+            span = self._ts(tok)
+            return n.Member(n.Name((first,), False, n.Span(self.file, span.line, span.column, span.line,
+                                                         span.column + len(first))), member, span)
         return n.Name((str(tok),), False, self._ts(tok))
 
     def case_hash(self, meta, items):
@@ -611,6 +628,7 @@ def parse_text(text: str, file: str, settings: SysmacSettings = DEFAULT_SETTINGS
         return text.remap(*parse_text(str(text), file, settings))
     diagnostics: list[Diagnostic] = []
     recovered: list[Diagnostic] = []
+    _PRAGMAS.tokens = pragma_tokens = []
     try:
         tree = _parser().parse(text, start="start", on_error=_missing_semicolon_recovery(file, recovered))
     except UnexpectedInput as exc:
@@ -630,6 +648,10 @@ def parse_text(text: str, file: str, settings: SysmacSettings = DEFAULT_SETTINGS
     _collect(file, items, (), out)
     unit = n.CompilationUnit(file, tuple(out["types"]), tuple(out["pous"]), tuple(out["globals"]),
                              tuple(out["configurations"]), tuple(transformer.namespace_names))
+    _PRAGMAS.tokens = None
+    if pragma_tokens:
+        from stvm.syntax.pragmas import attach
+        unit = attach(unit, pragma_tokens)
     return unit, diagnostics
 
 

@@ -137,18 +137,15 @@ class VendorText(str):
 
     original: str
     source_map: SourceMap
-    gvl_names: tuple[tuple[str, int], ...]
 
-    def __new__(cls, text: str, original: str, source_map: SourceMap,
-                gvl_names: tuple[tuple[str, int], ...] = ()) -> "VendorText":
+    def __new__(cls, text: str, original: str, source_map: SourceMap) -> "VendorText":
         obj = super().__new__(cls, text)
         obj.original = original
         obj.source_map = source_map
-        obj.gvl_names = gvl_names
         return obj
 
     def __reduce__(self):
-        return (VendorText, (str(self), self.original, self.source_map, self.gvl_names))
+        return (VendorText, (str(self), self.original, self.source_map))
 
     def remap(self, unit, diagnostics):
         """The parsed unit and diagnostics with every span moved to its place in the XML."""
@@ -478,7 +475,6 @@ class _Reader:
         self.root = builder.root
         self.lines = _Lines(text)
         self.out = _Out(self.lines)
-        self.gvl_names: list[tuple[str, int]] = []
 
     def error(self, message: str, el: _El) -> SourceError:
         line, col = self.lines.position(el.start)
@@ -489,6 +485,12 @@ class _Reader:
         tag = self.text[el.start:el.content_start]
         m = re.search(r"\b" + re.escape(name) + r"\s*=\s*([\"'])", tag)
         return el.start + m.end() if m else el.start
+
+    def gvl_name(self, name: str, el: _El) -> None:
+        """The name of a global variable list, as an attribute before its VAR_GLOBAL: its
+        variables are then also `Name.var` (and only that with `qualified_only`)."""
+        if _IDENT.match(name):
+            self.out.glue(f"{{attribute 'gvl' := '{name}'}}", el.start + 1)
 
     def emit_content(self, el: _El | None) -> str:
         if el is None:
@@ -506,9 +508,9 @@ class _Reader:
             if obj.tag in ("POU", "Itf"):
                 self.tc_pou(obj)
             elif obj.tag in ("DUT", "GVL"):
+                if obj.tag == "GVL":
+                    self.gvl_name(obj.attrib.get("Name", ""), obj)
                 self.emit_content(obj.find("Declaration"))
-                if obj.tag == "GVL" and obj.attrib.get("Name"):
-                    self.gvl_names.append((obj.attrib["Name"], self.out.line))
             elif obj.tag in ("Task", "Library", "PlcTask"):
                 continue
             else:
@@ -576,9 +578,8 @@ class _Reader:
             for pou in pous.findall("pou") if pous is not None else []:
                 self.plc_pou(pou)
         for gvl in self._add_data(self.root, "globalvars", "globalVars"):
+            self.gvl_name(gvl.attrib.get("name", ""), gvl)
             self.var_list(gvl, "VAR_GLOBAL")
-            if gvl.attrib.get("name"):
-                self.gvl_names.append((gvl.attrib["name"], self.out.line))
         instances = self.root.find("instances")
         configurations = instances.find("configurations") if instances is not None else None
         for conf in configurations.findall("configuration") if configurations is not None else []:
@@ -849,6 +850,7 @@ class _Reader:
         self.out.glue(";", inst.end)
 
 
+_IDENT = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
 _XSD_DURATION = re.compile(r"^P(?:(\d+)D)?(?:T(?:(\d+)H)?(?:(\d+)M)?(?:(\d+(?:\.\d+)?)S)?)?$", re.I)
 
 
@@ -897,4 +899,4 @@ def translate(text: str, name: str) -> VendorText:
         reader.twincat()
     else:
         reader.plcopen()
-    return VendorText(reader.out.text(), text, reader.out.map, tuple(reader.gvl_names))
+    return VendorText(reader.out.text(), text, reader.out.map)
