@@ -577,13 +577,13 @@ class _Reader:
             pous = types.find("pous")
             for pou in pous.findall("pou") if pous is not None else []:
                 self.plc_pou(pou)
-        for gvl in self._add_data(self.root, "globalvars", "globalVars"):
-            self.gvl_name(gvl.attrib.get("name", ""), gvl)
-            self.var_list(gvl, "VAR_GLOBAL")
         instances = self.root.find("instances")
         configurations = instances.find("configurations") if instances is not None else None
         for conf in configurations.findall("configuration") if configurations is not None else []:
             self.configuration(conf)
+        for gvl in self._add_data(self.root, "globalvars", "globalVars"):   # CODESYS: after <instances>
+            self.gvl_name(gvl.attrib.get("name", ""), gvl)
+            self.var_list(gvl, "VAR_GLOBAL")
 
     def _add_data(self, el: _El, kind: str, tag: str) -> list[_El]:
         out = []
