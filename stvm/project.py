@@ -100,6 +100,13 @@ def expand_paths(paths: Sequence[str | Path]) -> tuple[list[Path], dict, Path | 
                 raise LoadError([Diagnostic.error(f"no .st files (nor TwinCAT or PLCopen XML sources) in {path}",
                                                   _file_span(path))], {})
             out += found
+        elif path.suffix.lower() == ".plcproj":   # a TwinCAT PLC project: the sources it lists
+            from stvm.syntax.vendor_xml import plcproj_items
+            items = plcproj_items(path)
+            if not items:
+                raise LoadError([Diagnostic.error(f"{path} lists no TwinCAT sources (<Compile Include=\"….TcPOU\">)",
+                                                  _file_span(path))], {})
+            out += items
         else:
             out.append(path)
     if len(paths) == 1 and not Path(paths[0]).is_dir():
