@@ -162,6 +162,9 @@ def project_settings(paths: Sequence[str | Path], overrides: Sequence[str] = ())
     the setting, the file and the allowed values."""
     _, manifest, root = expand_paths(paths)
     settings = DEFAULT_SETTINGS
+    dialect = manifest.get("project", {}).get("dialect")
+    if dialect is not None:
+        settings = settings.with_table({"dialect": dialect}, f"{Path(root or '.') / MANIFEST}: [project]")
     table = manifest.get("sysmac")
     if table is not None:
         where = f"{Path(root or '.') / MANIFEST}: [sysmac]"

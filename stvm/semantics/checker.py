@@ -15,7 +15,7 @@ from stvm.diagnostics import Diagnostic
 from stvm.semantics import types as t
 from stvm.semantics.model import (EXTERNAL, GLOBAL, IN_OUT, INPUT, LOCAL, POUInfo,
                                   ProjectModel, TaskInfo, Variable)
-from stvm.settings import BareEnumerators, DEFAULT_SETTINGS, StringOverflow, SysmacSettings
+from stvm.settings import BareEnumerators, DEFAULT_SETTINGS, Dialect, StringOverflow, SysmacSettings
 from stvm.syntax import nodes as n
 
 # Reserved words that the contextual lexer may still let through as names.
@@ -213,9 +213,18 @@ class Checker:
             return
         if _is_stdlib(span.file):
             return  # system names (`_sSOCKET`, `_CLOSED`) live in the stdlib
-        # sysmac.md 1 (CONFIRMED, W501): rules for user-defined names
+        dialect = self.settings.dialect
         problem = None
-        if name.startswith("_"):
+        if dialect is Dialect.IEC:
+            # IEC 61131-3 ed. 3 6.1.2: letters, digits and single underscores, not at the end
+            if "__" in name:
+                problem = "may not contain '__' (IEC 61131-3 6.1.2)"
+            elif name.endswith("_"):
+                problem = "may not end with '_' (IEC 61131-3 6.1.2)"
+        elif dialect is not Dialect.SYSMAC:
+            return    # CODESYS, TwinCAT: any identifier that is not a keyword
+        # sysmac.md 1 (CONFIRMED, W501): rules for user-defined names
+        elif name.startswith("_"):
             problem = "may not start with '_' (reserved for system names)"
         elif name.upper().startswith("P_"):
             problem = "may not start with 'P_' (reserved for system-defined variables)"
