@@ -174,6 +174,10 @@ class Checker:
                 self.check_identifier(name, span)
             for decl in unit.types:
                 key = "\\".join(decl.namespace + (decl.name,)).lower()
+                known = self.index.type_decls.get(key)
+                if known is not None and known.span.file in _VENDOR_EXTRAS and not _is_stdlib(decl.span.file):
+                    self.index.type_decls[key] = decl   # a user declaration shadows a vendor extra
+                    continue
                 if key in self.index.type_decls or decl.name.upper() in t.ELEMENTARY:
                     self.error(f"duplicate declaration of type '{decl.name}'", decl.span, "E010")
                     continue
@@ -989,6 +993,9 @@ class Checker:
 
 
 _NOT_CONST = object()
+
+
+_VENDOR_EXTRAS = {"<stdlib>/twincat_types.st"}   # a dialect's own types, which user code may redeclare
 
 
 def _is_stdlib(file: str) -> bool:
