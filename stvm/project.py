@@ -160,9 +160,16 @@ def project_settings(paths: Sequence[str | Path], overrides: Sequence[str] = ())
     the project's `stvm.toml` (when the files belong to one), then `--sysmac NAME=VALUE`
     overrides; the last one wins. Raises ValueError (SettingError, ManifestError) that names
     the setting, the file and the allowed values."""
-    _, manifest, root = expand_paths(paths)
+    files, manifest, root = expand_paths(paths)
     settings = DEFAULT_SETTINGS
     dialect = manifest.get("project", {}).get("dialect")
+    if dialect is None and files:
+        # TwinCAT and PLCopen XML sources are read in their vendor's dialect unless told otherwise
+        suffixes = {p.suffix.lower() for p in files}
+        if suffixes <= set(_VENDOR_SUFFIXES[:4]):
+            dialect = "twincat"
+        elif suffixes <= set(_VENDOR_SUFFIXES):
+            dialect = "codesys"
     if dialect is not None:
         settings = settings.with_table({"dialect": dialect}, f"{Path(root or '.') / MANIFEST}: [project]")
     table = manifest.get("sysmac")

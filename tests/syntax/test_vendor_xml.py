@@ -341,3 +341,20 @@ Reset := nTravel &gt;= 0;</xhtml>
     st_line, st_col = _st_position(st, "Reset := nTravel >= 0;")
     zero = st_col + len("Reset := nTravel >= ")
     assert st.source_map.position(st_line, zero) == (line, col + len("Reset := nTravel &gt;= "))
+
+
+def test_twincat_sources_are_read_in_the_twincat_dialect(tmp_path):
+    xml = (TWINCAT / "POUs" / "FB_Counter.TcPOU").read_text(encoding="utf-8").replace("nCount", "_nCount")
+    (tmp_path / "FB_Counter.TcPOU").write_text(xml, encoding="utf-8")
+    main = ('<?xml version="1.0" encoding="utf-8"?>\n<TcPlcObject Version="1.1.0.1">\n'
+            '  <POU Name="MAIN" Id="{00000000-0000-0000-0000-000000000001}" SpecialFunc="None">\n'
+            '    <Declaration><![CDATA[PROGRAM MAIN\nVAR\n\tfb : FB_Counter;\n\ts : T_MaxString;\nEND_VAR\n]]>'
+            '</Declaration>\n    <Implementation>\n      <ST><![CDATA[fb(bEnable := TRUE);\ns := \'ok\';]]></ST>\n'
+            '    </Implementation>\n  </POU>\n</TcPlcObject>\n')
+    (tmp_path / "MAIN.TcPOU").write_text(main, encoding="utf-8")
+    # `_nCount` (a leading underscore, rejected by Sysmac) and T_MaxString (TwinCAT's) need no option
+    rc, out, err = cli(["run", tmp_path, "--cycles", "2", "--print", "MAIN.fb._nCount", "--print", "MAIN.s",
+                        "--no-cache"])
+    assert (rc, out) == (0, "MAIN.fb._nCount = 2\nMAIN.s = 'ok'\n"), err
+    rc, _, err = cli(["check", tmp_path, "--dialect", "sysmac"])
+    assert rc == 1 and "name '_nCount' may not start with '_'" in err
