@@ -68,10 +68,14 @@ def resolve(units: list[n.CompilationUnit]) -> tuple[list[n.CompilationUnit], li
             not any(isinstance(d.body, n.EnumDecl) for u in user for d in u.types):
         return units, []
     scope = _collect(units)
+    qualifiers = set(scope.gvls) | set(scope.enums)
+    strict = bool(scope.strict_globals or scope.strict_members)
     diagnostics: list[Diagnostic] = []
     out = []
     for unit in units:
-        if _is_stdlib(unit.path):
+        # a unit is walked only if it may name a GVL or an enum with a dot, or if an unqualified
+        # name may break a qualified_only rule
+        if _is_stdlib(unit.path) or not (strict or qualifiers & unit.member_bases):
             out.append(unit)
             continue
         pous = tuple(_Rewriter(scope, _locals(p), diagnostics).pou(p) for p in unit.pous)
@@ -88,9 +92,22 @@ def _locals(pou: n.POU) -> set[str]:
     return names
 
 
+_LEAVES = {str, int, float, bool, bytes, type(None), n.Span, n.IntLiteral, n.RealLiteral, n.BoolLiteral,
+           n.StringLiteral, n.TimeLiteral, n.HashLiteral}
+_FIELDS: dict[type, tuple[str, ...]] = {}
+
+
+def _fields_of(cls: type) -> tuple[str, ...]:
+    names = _FIELDS.get(cls)
+    if names is None:
+        names = _FIELDS[cls] = tuple(f.name for f in dataclasses.fields(cls) if f.init and f.name != "span")
+    return names
+
+
 class _Rewriter:
     def __init__(self, scope: _Scope, local_names: set[str], diagnostics: list[Diagnostic]) -> None:
         self.scope = scope
+        self.check_names = bool(scope.strict_globals or scope.strict_members)
         self.locals = local_names
         self.diagnostics = diagnostics
 
@@ -103,26 +120,37 @@ class _Rewriter:
     externals: set[str] = set()
 
     def walk(self, obj):
-        if isinstance(obj, n.Member):
+        cls = type(obj)
+        if cls is n.Member:
             return self.member(obj)
-        if isinstance(obj, n.Name):
-            self.name(obj)
+        if cls is n.Name:
+            if self.check_names:
+                self.name(obj)
             return obj
-        if isinstance(obj, tuple):
-            items = tuple(self.walk(x) for x in obj)
-            return obj if all(a is b for a, b in zip(items, obj)) else items
-        if isinstance(obj, n.Node) and dataclasses.is_dataclass(obj):
-            changes = {}
-            for f in dataclasses.fields(obj):
-                if f.name == "span":
+        if cls is tuple:
+            out = None
+            for i, x in enumerate(obj):
+                if type(x) in _LEAVES:
                     continue
-                value = getattr(obj, f.name)
-                if isinstance(value, (n.Node, tuple)):
-                    new = self.walk(value)
-                    if new is not value:
-                        changes[f.name] = new
-            return dataclasses.replace(obj, **changes) if changes else obj
-        return obj
+                y = self.walk(x)
+                if y is not x:
+                    if out is None:
+                        out = list(obj)
+                    out[i] = y
+            return obj if out is None else tuple(out)
+        if cls in _LEAVES or not isinstance(obj, n.Node):
+            return obj
+        changes = None
+        for name in _fields_of(cls):
+            value = getattr(obj, name)
+            if type(value) in _LEAVES:
+                continue
+            new = self.walk(value)
+            if new is not value:
+                if changes is None:
+                    changes = {}
+                changes[name] = new
+        return dataclasses.replace(obj, **changes) if changes else obj
 
     def member(self, e: n.Member):
         base = e.base

@@ -430,3 +430,4 @@ class CompilationUnit:
     globals: tuple[GlobalVars, ...]
     configurations: tuple[Configuration, ...]
     namespace_names: tuple[tuple[str, Span], ...] = ()   # every NAMESPACE name as written
+    member_bases: frozenset[str] = frozenset()   # lower-cased X of every `X.y` (semantics/qualified.py)

@@ -76,6 +76,7 @@ class _ToNodes(Transformer):
         super().__init__(visit_tokens=False)
         self._methods: dict[str, object] = {}
         self.namespace_names: list[tuple[str, n.Span]] = []
+        self.member_bases: set[str] = set()
         self.file = file
         self.settings = settings
         self.diagnostics = diagnostics
@@ -347,6 +348,7 @@ class _ToNodes(Transformer):
         first, dot, member = str(tok).partition(".")
         if dot:   # `Enum.member:` (CODESYS/TwinCAT)
             span = self._ts(tok)
+            self.member_bases.add(first.lower())
             return n.Member(n.Name((first,), False, n.Span(self.file, span.line, span.column, span.line,
                                                          span.column + len(first))), member, span)
         return n.Name((str(tok),), False, self._ts(tok))
@@ -401,7 +403,10 @@ class _ToNodes(Transformer):
         return n.Name(parts, rooted, self._s(meta))
 
     def member(self, meta, items):
-        return n.Member(items[0], str(items[1]), self._s(meta))
+        base = items[0]
+        if type(base) is n.Name:   # `X.y` with a plain name: maybe a GVL or an enum (semantics/qualified.py)
+            self.member_bases.add(base.parts[-1].lower())
+        return n.Member(base, str(items[1]), self._s(meta))
 
     def bit_access(self, meta, items):
         return n.BitAccess(items[0], int(str(items[1]).replace("_", "")), self._s(meta))
@@ -647,7 +652,8 @@ def parse_text(text: str, file: str, settings: SysmacSettings = DEFAULT_SETTINGS
     out: dict[str, list] = {"types": [], "pous": [], "globals": [], "configurations": []}
     _collect(file, items, (), out)
     unit = n.CompilationUnit(file, tuple(out["types"]), tuple(out["pous"]), tuple(out["globals"]),
-                             tuple(out["configurations"]), tuple(transformer.namespace_names))
+                             tuple(out["configurations"]), tuple(transformer.namespace_names),
+                             frozenset(transformer.member_bases))
     _PRAGMAS.tokens = None
     if pragma_tokens:
         from stvm.syntax.pragmas import attach
