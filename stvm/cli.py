@@ -53,10 +53,13 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version="stvm " + __import__("stvm").__version__)
     sub = parser.add_subparsers(dest="command", parser_class=_Parser)
     sysmac_help = "override a Sysmac UNCERTAIN setting, NAME=VALUE (see README)"
+    dialects = ["iec", "sysmac", "codesys", "twincat"]
+    dialect_help = "vendor dialect: name rules and vendor types (default: stvm.toml's, else sysmac)"
 
     check = sub.add_parser("check", help="check ST files and print diagnostics")
     check.add_argument("files", nargs="+")
     check.add_argument("--sysmac", action="append", metavar="NAME=VALUE", help=sysmac_help)
+    check.add_argument("--dialect", choices=dialects, help=dialect_help)
     check.set_defaults(func=cmd_check)
 
     run = sub.add_parser("run", help="run ST programs on the VM")
@@ -89,6 +92,7 @@ def build_parser() -> argparse.ArgumentParser:
                      help="serve the project's HMI pages (stvm.toml [hmi], docs/hmi.md) while the VM runs; "
                           "host 127.0.0.1 unless given, any other host needs the token printed at start-up")
     run.add_argument("--sysmac", action="append", metavar="NAME=VALUE", help=sysmac_help)
+    run.add_argument("--dialect", choices=dialects, help=dialect_help)
     run.set_defaults(func=cmd_run)
     _register_extensions(sub)
     return parser

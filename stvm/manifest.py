@@ -3,6 +3,7 @@
     [project]
     files = ["Types.st", "Main.st"]     # the project's sources, in this folder (default: every *.st)
     encoding = "utf-8"                  # how the sources are encoded (default UTF-8)
+    dialect = "sysmac"                  # iec, sysmac (default), codesys or twincat (README)
 
     [sysmac]                            # Sysmac UNCERTAIN settings of the project (README)
     int_div_zero = "zero"
@@ -52,6 +53,8 @@ _SCHEMA: dict[str, dict[str, tuple[Any, str]] | None] = {
     "project": {
         "files": (_string_list, "a list of file names, e.g. files = [\"Main.st\"]"),
         "encoding": (lambda v: isinstance(v, str), "an encoding name, e.g. encoding = \"cp1252\""),
+        "dialect": (lambda v: isinstance(v, str), "a dialect name, e.g. dialect = \"twincat\" (iec, sysmac, "
+                                                  "codesys, twincat)"),
         "name": (lambda v: isinstance(v, str), "a string"),
         "description": (lambda v: isinstance(v, str), "a string"),
     },

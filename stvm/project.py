@@ -98,10 +98,18 @@ def expand_paths(paths: Sequence[str | Path]) -> tuple[list[Path], dict, Path | 
                 listed = project_files(manifest, path, path / MANIFEST)
             # a folder with a manifest that lists its files is that project (the files may be in
             # other folders, e.g. a library the project builds on); else every *.st in it
-            found = listed or sorted(p for p in path.glob("*.st") if p.is_file())
+            found = listed or sorted(p for p in path.glob("*.st") if p.is_file()) or _vendor_sources(path)
             if not found:
-                raise LoadError([Diagnostic.error(f"no .st files in {path}", _file_span(path))], {})
+                raise LoadError([Diagnostic.error(f"no .st files (nor TwinCAT or PLCopen XML sources) in {path}",
+                                                  _file_span(path))], {})
             out += found
+        elif path.suffix.lower() == ".plcproj":   # a TwinCAT PLC project: the sources it lists
+            from stvm.syntax.vendor_xml import plcproj_items
+            items = plcproj_items(path)
+            if not items:
+                raise LoadError([Diagnostic.error(f"{path} lists no TwinCAT sources (<Compile Include=\"….TcPOU\">)",
+                                                  _file_span(path))], {})
+            out += items
         else:
             out.append(path)
     if len(paths) == 1 and not Path(paths[0]).is_dir():
@@ -120,6 +128,27 @@ def expand_paths(paths: Sequence[str | Path]) -> tuple[list[Path], dict, Path | 
     return unique, manifest, root
 
 
+def _vendor_sources(folder: Path) -> list[Path]:
+    """A folder without .st files: its TwinCAT (.TcPOU …, a .plcproj's) and PLCopen XML sources."""
+    from stvm.syntax.vendor_xml import folder_sources
+    return folder_sources(folder)
+
+
+def _read(path: Path, encoding: str) -> str:
+    if path.suffix.lower() in _VENDOR_SUFFIXES:
+        from stvm.syntax.vendor_xml import read_vendor   # ST text laid out on the XML's lines
+        return read_vendor(path, encoding)
+    return read_source(path, encoding)
+
+
+_VENDOR_SUFFIXES = (".tcpou", ".tcdut", ".tcgvl", ".tcio", ".xml")
+
+
+def source_texts(texts: Sequence[tuple[str, str]]) -> dict[str, str]:
+    """What excerpts show for each file: its text, the XML itself for a vendor XML file."""
+    return {name: getattr(text, "original", text) for name, text in texts}
+
+
 def source_encoding(manifest: dict) -> str:
     """The encoding of the project's sources (`[project] encoding`, default UTF-8)."""
     return manifest.get("project", {}).get("encoding", "utf-8")
@@ -134,8 +163,18 @@ def project_settings(paths: Sequence[str | Path], overrides: Sequence[str] = ())
     the project's `stvm.toml` (when the files belong to one), then `--sysmac NAME=VALUE`
     overrides; the last one wins. Raises ValueError (SettingError, ManifestError) that names
     the setting, the file and the allowed values."""
-    _, manifest, root = expand_paths(paths)
+    files, manifest, root = expand_paths(paths)
     settings = DEFAULT_SETTINGS
+    dialect = manifest.get("project", {}).get("dialect")
+    if dialect is None and files:
+        # TwinCAT and PLCopen XML sources are read in their vendor's dialect unless told otherwise
+        suffixes = {p.suffix.lower() for p in files}
+        if suffixes <= set(_VENDOR_SUFFIXES[:4]):
+            dialect = "twincat"
+        elif suffixes <= set(_VENDOR_SUFFIXES):
+            dialect = "codesys"
+    if dialect is not None:
+        settings = settings.with_table({"dialect": dialect}, f"{Path(root or '.') / MANIFEST}: [project]")
     table = manifest.get("sysmac")
     if table is not None:
         where = f"{Path(root or '.') / MANIFEST}: [sysmac]"
@@ -206,9 +245,13 @@ def read_files(paths: Sequence[Path], encoding: str = "utf-8") -> tuple[list[tup
     diags = []
     for path in paths:
         try:
-            texts.append((str(path), read_source(path, encoding)))
+            texts.append((str(path), _read(path, encoding)))
         except SourceError as exc:
-            texts.append((str(path), exc.text))
+            if path.suffix.lower() in _VENDOR_SUFFIXES and exc.text:   # malformed XML: shown, never parsed
+                from stvm.syntax.vendor_xml import unreadable
+                texts.append((str(path), unreadable(exc.text)))
+            else:
+                texts.append((str(path), exc.text))
             diags.append(Diagnostic.error(exc.message, Span(str(path), exc.line, exc.column, exc.line,
                                                              exc.column + 1), "E001"))
         except OSError as exc:
@@ -240,7 +283,7 @@ def check(paths: Sequence[str | Path], settings: SysmacSettings | None = None, g
             except Exception:  # a stale entry (an older stvm's classes) is rebuilt, never fatal
                 pass
             else:
-                sources = dict(texts)
+                sources = source_texts(texts)
                 sources.update(extra_sources)
                 analysis = _DeferredAnalysis(texts, settings) if ok else None
                 return analysis, list(cached_diags), sources
@@ -371,7 +414,7 @@ def _check_texts(texts, diags, settings, use_cache: bool = True):
 def _check_texts_unpaused(texts, diags, settings, use_cache: bool = True):
     from stvm.semantics import analyze
     from stvm.stdlib import NATIVE_FUNCTIONS
-    sources = dict(texts)
+    sources = source_texts(texts)
     units, stdlib_diags, stdlib_sources = stdlib_units(settings)
     units = list(units)
     diags += stdlib_diags
@@ -429,7 +472,7 @@ def load(paths: Sequence[str | Path], settings: SysmacSettings | None = None, us
     files, manifest, root = expand_paths(paths)
     texts, read_diags = read_files(files, source_encoding(manifest))
     if read_diags:
-        raise LoadError(read_diags, dict(texts))
+        raise LoadError(read_diags, source_texts(texts))
     key = _cache_key(texts, settings, "load")
     cache_name = f"{key}.bin"
     payload = _cache().get(cache_name) if use_cache else None

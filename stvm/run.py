@@ -32,10 +32,12 @@ def print_diagnostics(diags, sources) -> None:
 
 
 def run_settings(args):
-    """The Sysmac settings of the run: the manifest's `[sysmac]`, then `--sysmac` (usage errors)."""
+    """The Sysmac settings of the run: the manifest's `[sysmac]`, then `--sysmac`, then
+    `--dialect` (usage errors)."""
     from stvm.project import project_settings   # lazy: start-up
     try:
-        return project_settings(args.files, getattr(args, "sysmac", None) or [])
+        dialect = [f"dialect={vars(args)['dialect']}"] if vars(args).get("dialect") else []
+        return project_settings(args.files, (getattr(args, "sysmac", None) or []) + dialect)
     except ValueError as exc:
         raise UsageError(str(exc)) from exc
 

@@ -95,6 +95,14 @@ class StringOverflow(Enum):
     ERROR = "error"                   # a constant: a check-time error; at run time: a fault
 
 
+class Dialect(Enum):
+    """The vendor dialect: which name rules apply and which vendor base types exist (`--dialect`)."""
+    SYSMAC = "sysmac"           # Omron Sysmac Studio: W501's name rules (no leading `_`, `P_`, trailing `_`, `__`)
+    IEC = "iec"                 # IEC 61131-3 ed. 3 6.1.2: one leading `_` allowed, no `__`, no trailing `_`
+    CODESYS = "codesys"         # CODESYS V3: any identifier that is not a keyword
+    TWINCAT = "twincat"         # TwinCAT 3: as codesys, plus T_MaxString, PVOID, XWORD, XINT, UXINT (x64)
+
+
 class BareEnumerators(Enum):
     """An enumerator written without `Type#`."""
     RESOLVE_UNIQUE = "resolve_unique"  # looked up in every visible enum; ambiguity is an error
@@ -375,6 +383,7 @@ class SysmacSettings:
     string_overflow: StringOverflow = setting(StringOverflow.TRUNCATE_WARN, "2")
     subrange_check: SubrangeCheck = setting(SubrangeCheck.FAULT, "2")
     # section 3: dialect
+    dialect: Dialect = setting(Dialect.SYSMAC, "3")
     bare_enumerators: BareEnumerators = setting(BareEnumerators.RESOLVE_UNIQUE, "3 #3")
     dollar_n: DollarN = setting(DollarN.LF, "3 #7")
     invalid_dollar_escape: InvalidDollarEscape = setting(InvalidDollarEscape.ERROR, "3 #7")

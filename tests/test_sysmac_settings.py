@@ -212,6 +212,17 @@ def probe_string_overflow_constant(settings):
     return _check_program("PROGRAM Main VAR s : STRING[4]; END_VAR s := 'overflow'; END_PROGRAM\n", settings)
 
 
+def probe_dialect(settings):
+    # names Sysmac reserves (`_`, `P_`) and a TwinCAT base type: errors or a run, by dialect
+    return _run_program("PROGRAM Main VAR _rmp : INT; p_count : INT; s : T_MaxString; END_VAR\n"
+                        "_rmp := 2; p_count := _rmp + 1; END_PROGRAM\n", settings, ["Main.p_count"])
+
+
+def probe_dialect_twincat(settings):
+    return _run_program("PROGRAM Main VAR s : T_MaxString; x : __XWORD := 16#FFFF_FFFF_FFFF; n : INT; END_VAR\n"
+                        "s := 'abc'; n := LEN(s); END_PROGRAM\n", settings, ["Main.n", "Main.x"])
+
+
 def probe_bare_enumerators(settings):
     return _check_program("TYPE Color : (Red, Green); END_TYPE\n"
                           "PROGRAM Main VAR c : Color; END_VAR c := Green; END_PROGRAM\n", settings)
@@ -265,6 +276,9 @@ OBSERVED: dict[tuple[str, str], Probe | StdlibTest] = {
         "tests/runtime/test_runtime_types.py::test_int_literal_type_lint_setting_removes_32_bit_wrap",
     ("string_length_unit", "bytes"): "tests/stdlib/test_strings.py::test_bytes_unit_counts_bytes",
     ("string_overflow", "error"): probe_string_overflow,
+    ("dialect", "iec"): probe_dialect,
+    ("dialect", "codesys"): probe_dialect,
+    ("dialect", "twincat"): probe_dialect_twincat,
     ("bare_enumerators", "require_type"): probe_bare_enumerators,
     ("dollar_n", "crlf"): "tests/syntax/test_syntax_literals.py::test_dollar_n_setting",
     ("invalid_dollar_escape", "literal"): probe_invalid_dollar_escape,

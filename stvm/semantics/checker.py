@@ -19,7 +19,7 @@ from stvm.semantics.body import BodyChecker
 from stvm.semantics.facts import NOT_CONST, CallInfo, Facts, NameRef  # noqa: F401 (API: checker.Facts)
 from stvm.semantics.model import (EXTERNAL, GLOBAL, IN_OUT, INPUT, LOCAL, OUTPUT, POUInfo,
                                   ProjectModel, PropertyInfo, TaskInfo, Variable)
-from stvm.settings import BareEnumerators, DEFAULT_SETTINGS, StringOverflow, SysmacSettings
+from stvm.settings import BareEnumerators, DEFAULT_SETTINGS, Dialect, StringOverflow, SysmacSettings
 from stvm.syntax import nodes as n
 from stvm.syntax.walk import calls_in
 
@@ -144,6 +144,10 @@ class Checker:
                 self.check_identifier(name, span)
             for decl in unit.types:
                 key = "\\".join(decl.namespace + (decl.name,)).lower()
+                known = self.index.type_decls.get(key)
+                if known is not None and known.span.file in _VENDOR_EXTRAS and not _is_stdlib(decl.span.file):
+                    self.index.type_decls[key] = decl   # a user declaration shadows a vendor extra
+                    continue
                 if key in self.index.type_decls or decl.name.upper() in t.ELEMENTARY:
                     self.error(f"duplicate declaration of type '{decl.name}'", decl.span, "E010")
                     continue
@@ -184,9 +188,18 @@ class Checker:
             return
         if _is_stdlib(span.file):
             return  # system names (`_sSOCKET`, `_CLOSED`) live in the stdlib
-        # sysmac.md 1 (CONFIRMED, W501): rules for user-defined names
+        dialect = self.settings.dialect
         problem = None
-        if name.startswith("_"):
+        if dialect is Dialect.IEC:
+            # IEC 61131-3 ed. 3 6.1.2: letters, digits and single underscores, not at the end
+            if "__" in name:
+                problem = "may not contain '__' (IEC 61131-3 6.1.2)"
+            elif name.endswith("_"):
+                problem = "may not end with '_' (IEC 61131-3 6.1.2)"
+        elif dialect is not Dialect.SYSMAC:
+            return    # CODESYS, TwinCAT: any identifier that is not a keyword
+        # sysmac.md 1 (CONFIRMED, W501): rules for user-defined names
+        elif name.startswith("_"):
             problem = "may not start with '_' (reserved for system names)"
         elif name.upper().startswith("P_"):
             problem = "may not start with 'P_' (reserved for system-defined variables)"
@@ -1355,6 +1368,9 @@ class Checker:
         return [], programs
 
 
+_VENDOR_EXTRAS = {"<stdlib>/twincat_types.st"}   # a dialect's own types, which user code may redeclare
+
+
 def _is_stdlib(file: str) -> bool:
     return file.startswith("<stdlib")
 
@@ -1378,4 +1394,9 @@ def analyze(units: list[n.CompilationUnit], settings: SysmacSettings = DEFAULT_S
 
     `natives`: the stdlib's native functions (stvm.stdlib.NATIVE_FUNCTIONS), for the result types
     of generic ones (SHL, MUX, TRUNC, …); without it their result is the common input type."""
-    return Checker(units, settings, natives).run()
+    from stvm.semantics.qualified import resolve   # `GVL.x`, `Enum.member`, qualified_only
+    units, qualified = resolve(list(units))
+    analysis = Checker(units, settings, natives).run()
+    if qualified:
+        analysis.diagnostics[:0] = qualified
+    return analysis

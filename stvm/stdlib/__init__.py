@@ -16,7 +16,7 @@ from __future__ import annotations
 from functools import lru_cache
 from importlib import resources
 
-from stvm.settings import DEFAULT_SETTINGS, IecPinAliases, RtrigFirstCall, SockaddrPortnoType, SysmacSettings
+from stvm.settings import DEFAULT_SETTINGS, Dialect, IecPinAliases, RtrigFirstCall, SockaddrPortnoType, SysmacSettings
 
 # Importing the implementation modules registers the natives.
 from stvm.stdlib import conversions, numeric, omron, sockets, strings, timefns, timers  # noqa: F401
@@ -82,6 +82,8 @@ def stdlib_sources(settings: SysmacSettings = DEFAULT_SETTINGS) -> list[tuple[st
     iec_standard = _apply_settings("iec_standard.st", _packaged_text("iec_standard.st"), settings)
     sources.append((f"{DISPLAY_PREFIX}typed_counters.st", typed_counters_source(iec_standard)))
     sources.append((f"{DISPLAY_PREFIX}bcd.st", bcd.bcd_declarations()))
+    if settings.dialect is Dialect.TWINCAT:   # vendor extras exist only in their dialect
+        sources.append((f"{DISPLAY_PREFIX}twincat_types.st", _packaged_text("twincat_types.st")))
     return sources
 
 

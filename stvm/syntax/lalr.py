@@ -147,8 +147,9 @@ class Driver:
             raise Unsupported("needs parser='lalr', lexer='contextual'")
         if options.propagate_positions is not True:
             raise Unsupported("needs propagate_positions=True")
-        if options.postlex is not None or options.lexer_callbacks:
-            raise Unsupported("postlex and lexer callbacks are not supported")
+        if options.postlex is not None:
+            raise Unsupported("postlex is not supported")
+        user_callbacks = dict(options.lexer_callbacks or {})
         if options.tree_class not in (None, Tree) or options.transformer is not None:
             raise Unsupported("a custom tree_class or an inline transformer is not supported")
         self.maybe_placeholders = bool(options.maybe_placeholders)
@@ -198,12 +199,16 @@ class Driver:
                 if entry is None:
                     mres = basic.scanner._mres
                     retype = {}
+                    notify = {}   # ignored terminals with a user callback (the pragmas): seen, dropped
                     for type_, cb in basic.callback.items():
+                        if type_ in user_callbacks and type_ in basic.ignore_types:
+                            notify[type_] = user_callbacks[type_]
+                            continue
                         if not isinstance(cb, UnlessCallback):
                             raise Unsupported(f"lexer callback for {type_} is not an UnlessCallback")
                         retype[type_] = (cb.scanner, {})
                     match = mres[0].match if len(mres) == 1 else _multi_match(mres)
-                    entry = (match, frozenset(basic.ignore_types), retype)
+                    entry = (match, frozenset(basic.ignore_types), retype, notify)
                     by_lexer[id(basic)] = entry
                 scanners.append(entry)
         except AttributeError as exc:
@@ -331,7 +336,7 @@ class Driver:
         while True:
             state = states[-1]
             # ---- next token, with the scanner of the current state
-            match, ignore, retype = scanners[state]
+            match, ignore, retype, notify = scanners[state]
             while True:
                 if pos >= n:
                     ttype = "$END"
@@ -342,6 +347,9 @@ class Driver:
                 ttype = m.lastgroup
                 end = m.end()
                 if ttype in ignore:
+                    if notify and ttype in notify:   # what Lark's lexer does for an ignored token
+                        line = bisect(lines, pos)
+                        notify[ttype](token_cls(ttype, m.group(), pos, line, pos - lines[line - 1] + 1))
                     pos = end
                     continue
                 if retype:

@@ -361,6 +361,7 @@ class TypeDecl(Node):
     namespace: tuple[str, ...]
     body: StructDecl | EnumDecl | AliasDecl
     span: Span = _span()
+    pragmas: tuple[str, ...] = ()   # `{attribute 'qualified_only'}` … before it (syntax/pragmas.py)
 
 
 @dataclass(frozen=True)
@@ -427,6 +428,8 @@ class GlobalVars(Node):
     block: VarBlock
     namespace: tuple[str, ...]
     span: Span = _span()
+    pragmas: tuple[str, ...] = ()   # attributes before VAR_GLOBAL (syntax/pragmas.py)
+    gvl: str = ""                   # the name of its global variable list (TwinCAT/CODESYS GVL)
 
 
 @dataclass(frozen=True)
@@ -470,3 +473,4 @@ class CompilationUnit:
     globals: tuple[GlobalVars, ...]
     configurations: tuple[Configuration, ...]
     namespace_names: tuple[tuple[str, Span], ...] = ()   # every NAMESPACE name as written
+    member_bases: frozenset[str] = frozenset()   # lower-cased X of every `X.y` (semantics/qualified.py)

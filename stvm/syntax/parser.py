@@ -7,6 +7,7 @@ stages only see values.
 
 from __future__ import annotations
 
+import threading
 from bisect import bisect_right
 from dataclasses import replace
 from functools import lru_cache
@@ -33,7 +34,18 @@ def _parser(start: str = "start") -> Lark:
     # cache=True: Lark stores the built LALR tables in the temp dir, keyed by a hash of the
     # grammar, the options and Lark's version; building them takes most of a second.
     return Lark(grammar, parser="lalr", lexer="contextual", propagate_positions=True,
-                start=["start", "expression"], maybe_placeholders=True, cache=True)
+                start=["start", "expression"], maybe_placeholders=True, cache=True,
+                lexer_callbacks={"PRAGMA": _pragma_seen})
+
+
+_PRAGMAS = threading.local()   # the `{…}` tokens the lexer dropped during the current parse_text
+
+
+def _pragma_seen(token: Token) -> Token:
+    seen = getattr(_PRAGMAS, "tokens", None)
+    if seen is not None:
+        seen.append(token)
+    return token
 
 
 def grammar_text() -> str:
@@ -79,6 +91,7 @@ class _ToNodes:
 
     def __init__(self, file: str, settings: SysmacSettings, diagnostics: list[Diagnostic]) -> None:
         self.namespace_names: list[tuple[str, n.Span]] = []
+        self.member_bases: set[str] = set()
         self.file = file
         self.settings = settings
         self.diagnostics = diagnostics
@@ -400,6 +413,12 @@ class _ToNodes:
 
     def case_name(self, meta, items):
         tok = items[0]
+        first, dot, member = str(tok).partition(".")
+        if dot:   # `Enum.member:` (CODESYS/TwinCAT)
+            span = self._ts(tok)
+            self.member_bases.add(first.lower())
+            return n.Member(n.Name((first,), False, n.Span(self.file, span.line, span.column, span.line,
+                                                         span.column + len(first))), member, span)
         return n.Name((str(tok),), False, self._ts(tok))
 
     def case_hash(self, meta, items):
@@ -454,7 +473,10 @@ class _ToNodes:
         return n.Name(parts, rooted, self._s(meta))
 
     def member(self, meta, items):
-        return n.Member(items[0], str(items[1]), self._s(meta))
+        base = items[0]
+        if type(base) is n.Name:   # `X.y` with a plain name: maybe a GVL or an enum (semantics/qualified.py)
+            self.member_bases.add(base.parts[-1].lower())
+        return n.Member(base, str(items[1]), self._s(meta))
 
     def bit_access(self, meta, items):
         return n.BitAccess(items[0], int(str(items[1]).replace("_", "")), self._s(meta))
@@ -722,21 +744,48 @@ def _unit(file: str, items: list, nodes: _ToNodes) -> n.CompilationUnit:
     out: dict[str, list] = {"types": [], "pous": [], "globals": [], "configurations": []}
     _collect(file, items, (), out)
     return n.CompilationUnit(file, tuple(out["types"]), tuple(out["pous"]), tuple(out["globals"]),
-                             tuple(out["configurations"]), tuple(nodes.namespace_names))
+                             tuple(out["configurations"]), tuple(nodes.namespace_names),
+                             frozenset(nodes.member_bases))
 
 
 def parse_text(text: str, file: str, settings: SysmacSettings = DEFAULT_SETTINGS) -> tuple[n.CompilationUnit, list[Diagnostic]]:
     """Parse one ST file. On a syntax error the unit is empty and the error is a diagnostic."""
-    fast = _fast(text, file, settings, "start")
-    if fast is not None:
-        items, nodes, diagnostics = fast
-        return _unit(file, items, nodes), diagnostics
-    return parse_text_lark(text, file, settings)
+    if type(text) is not str and hasattr(text, "remap"):   # a vendor XML file (syntax/vendor_xml.py)
+        return text.remap(*parse_text(str(text), file, settings))
+    # the lexer hands the `{…}` pragmas it drops to `_pragma_seen` (both parsers); the ones before
+    # a POU, type or global block are attached to it (syntax/pragmas.py)
+    _PRAGMAS.tokens = pragma_tokens = []
+    try:
+        fast = _fast(text, file, settings, "start")
+        if fast is not None:
+            items, nodes, diagnostics = fast
+            unit = _unit(file, items, nodes)
+        else:
+            del pragma_tokens[:]    # the fast driver gave up part-way: Lark lexes it all again
+            unit, diagnostics = _parse_text_lark(text, file, settings)
+    finally:
+        _PRAGMAS.tokens = None
+    if pragma_tokens:
+        from stvm.syntax.pragmas import attach   # lazy: start-up (only files with pragmas)
+        unit = attach(unit, pragma_tokens)
+    return unit, diagnostics
 
 
 def parse_text_lark(text: str, file: str, settings: SysmacSettings = DEFAULT_SETTINGS) -> tuple[n.CompilationUnit, list[Diagnostic]]:
     """`parse_text` by Lark's own parser and tree (the fallback path, and the reference the
     fast driver is tested against): syntax errors, recovery of missing ';', deep nesting."""
+    _PRAGMAS.tokens = pragma_tokens = []
+    try:
+        unit, diagnostics = _parse_text_lark(text, file, settings)
+    finally:
+        _PRAGMAS.tokens = None
+    if pragma_tokens:
+        from stvm.syntax.pragmas import attach   # lazy: start-up (only files with pragmas)
+        unit = attach(unit, pragma_tokens)
+    return unit, diagnostics
+
+
+def _parse_text_lark(text: str, file: str, settings: SysmacSettings) -> tuple[n.CompilationUnit, list[Diagnostic]]:
     diagnostics: list[Diagnostic] = []
     recovered: list[Diagnostic] = []
     try:

@@ -1,0 +1,80 @@
+"""Pragmas and attributes (`{…}`): CODESYS and TwinCAT write them anywhere, before declarations,
+POUs, variables, inside var blocks and statements (`{attribute 'qualified_only'}`, `{attribute
+'hide'}`, `{warning 'text'}`, `{IF defined(X)}`). The lexer drops every one (st.lark `%ignore
+PRAGMA`) and hands the tokens to `parse_text`; `attach` gives each POU, type declaration and
+global block the pragmas that stand right before it, outside any other element. The ones stvm
+gives a meaning are read from there (`{native}` & co. of the stdlib on POUs, `qualified_only` on a
+global block or an enumeration, the GVL name a vendor file gives its global block); the rest are
+accepted and ignored.
+"""
+
+from __future__ import annotations
+
+import bisect
+import dataclasses
+import re
+
+from stvm.syntax import nodes as n
+
+_ATTRIBUTE = re.compile(r"^\s*attribute\s+'([^']*)'(?:\s*:=\s*'([^']*)')?\s*$", re.I | re.S)
+
+
+def attribute(pragma: str) -> tuple[str, str] | None:
+    """`attribute 'name' := 'value'` → (name lower-cased, value); None for other pragmas."""
+    m = _ATTRIBUTE.match(pragma)
+    if m is None:
+        return None
+    return m.group(1).strip().lower(), m.group(2) or ""
+
+
+def has_attribute(pragmas: tuple[str, ...], name: str) -> bool:
+    return any((a := attribute(p)) is not None and a[0] == name for p in pragmas)
+
+
+def attribute_value(pragmas: tuple[str, ...], name: str) -> str | None:
+    for p in pragmas:
+        a = attribute(p)
+        if a is not None and a[0] == name:
+            return a[1]
+    return None
+
+
+def attach(unit: n.CompilationUnit, tokens: list) -> n.CompilationUnit:
+    """The unit with each element's leading pragmas (text inside the braces, stripped)."""
+    elements: list[tuple[tuple[int, int], tuple[int, int], str, int]] = []
+    for kind, items in (("pous", unit.pous), ("types", unit.types), ("globals", unit.globals)):
+        for i, item in enumerate(items):
+            s = item.span
+            elements.append(((s.line, s.column), (s.end_line, s.end_column), kind, i))
+    for conf in unit.configurations:
+        s = conf.span
+        elements.append(((s.line, s.column), (s.end_line, s.end_column), "", -1))
+    elements.sort()
+    starts = [e[0] for e in elements]
+    found: dict[tuple[str, int], list[str]] = {}
+    for tok in tokens:
+        where = (tok.line, tok.column)
+        i = bisect.bisect_left(starts, where)
+        if i >= len(elements) or elements[i][3] < 0:
+            continue
+        if i > 0 and elements[i - 1][1] > where:
+            continue      # inside the element before it (a variable's or a statement's pragma)
+        found.setdefault((elements[i][2], elements[i][3]), []).append(str(tok)[1:-1].strip())
+    if not found:
+        return unit
+
+    def with_pragmas(kind: str, items: tuple) -> tuple:
+        out = []
+        for i, item in enumerate(items):
+            extra = found.get((kind, i))
+            if extra:
+                item = dataclasses.replace(item, pragmas=tuple(item.pragmas) + tuple(extra))
+                if kind == "globals":
+                    gvl = attribute_value(item.pragmas, "gvl")
+                    if gvl:
+                        item = dataclasses.replace(item, gvl=gvl)
+            out.append(item)
+        return tuple(out)
+
+    return dataclasses.replace(unit, pous=with_pragmas("pous", unit.pous), types=with_pragmas("types", unit.types),
+                               globals=with_pragmas("globals", unit.globals))
