@@ -69,7 +69,7 @@ class Project:
 
 def parse_duration(text: str) -> int:
     """'10ms', '1s', '500us', 'T#1ms' → nanoseconds (used by the CLI and the API)."""
-    from stvm.syntax.literals import LiteralError, decode_time
+    from stvm.syntax.literals import LiteralError, decode_time   # lazy: start-up
     body = text.strip()
     if "#" not in body:
         body = "T#" + body
@@ -146,19 +146,19 @@ def project_settings(paths: Sequence[str | Path], overrides: Sequence[str] = ())
 
 def _stdlib(settings: SysmacSettings = DEFAULT_SETTINGS) -> list[tuple[str, str]]:
     # part of the stdlib text depends on the settings (R_TRIG's first call, pin aliases, …)
-    from stvm.stdlib import stdlib_sources
+    from stvm.stdlib import stdlib_sources   # lazy: start-up
     return stdlib_sources(settings)
 
 
 def _cache_dir() -> Path:
-    from stvm.cache import default_folder
+    from stvm.cache import default_folder   # lazy: start-up
     return default_folder()
 
 
 def _cache() -> "SignedCache":
     """The compile cache: entries signed with the user's key (stvm/cache.py), so a shared
     STVM_CACHE_DIR cannot hand stvm a pickle someone else wrote."""
-    from stvm.cache import SignedCache
+    from stvm.cache import SignedCache   # lazy: start-up
     folder = _cache_dir()
     cached = _CACHES.get(folder)
     if cached is None:
@@ -242,7 +242,7 @@ def stdlib_units(settings: SysmacSettings) -> tuple[list, list[Diagnostic], dict
     if key in _STDLIB_UNITS:
         units, diags = _STDLIB_UNITS[key]
         return units, list(diags), sources
-    from stvm.syntax.parser import parse_text
+    from stvm.syntax.parser import parse_text   # lazy: start-up
     cache = _cache()
     name = f"stdlib-{key}.ast"
     try:
@@ -281,9 +281,9 @@ def _check_texts(texts, diags, settings):
 
 
 def _check_texts_unpaused(texts, diags, settings):
-    from stvm.semantics import analyze
-    from stvm.stdlib import NATIVE_FUNCTIONS
-    from stvm.syntax.parser import parse_text
+    from stvm.semantics import analyze   # lazy: start-up
+    from stvm.stdlib import NATIVE_FUNCTIONS   # lazy: start-up
+    from stvm.syntax.parser import parse_text   # lazy: start-up
     sources = dict(texts)
     units, stdlib_diags, stdlib_sources = stdlib_units(settings)
     units = list(units)
@@ -311,7 +311,7 @@ def _lower_and_compile(analysis, settings, texts, sources):
 
 def _lower_and_compile_unpaused(analysis, settings, texts, sources):
     """Generate and compile the Python module; Python's own limits become diagnostics."""
-    from stvm.lower import lower_project
+    from stvm.lower import lower_project   # lazy: start-up
     fallback = Span(texts[-1][0] if texts else "<input>", 1, 1, 1, 2)
     lowered = None
     try:

@@ -289,15 +289,32 @@ def test_imports_follow_the_layers():
     assert not found, "\n".join(found)
 
 
-def test_the_checker_finds_what_it_should(tmp_path):
-    # The rules themselves, on a graph made up for the purpose.
+def test_the_rules_themselves():
+    # on a graph made up for the purpose
     graph = {"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}}
     assert cycles(graph) == [["a", "b", "c", "a"]]
     assert cycles({"a": {"b"}, "b": set()}) == []
-    assert layer_of("stvm.syntax.parser") < layer_of("stvm.semantics.checker")
-    assert layer_of("stvm.stdlib.registry") < layer_of("stvm.semantics.checker")
-    assert layer_of("stvm.stdlib.timers") > layer_of("stvm.runtime.vm")
+    # the order the stages run in
+    assert layer_of("stvm.source") < layer_of("stvm.syntax.parser") < layer_of("stvm.semantics.checker") \
+        < layer_of("stvm.lower.codegen") < layer_of("stvm.runtime.vm") < layer_of("stvm.stdlib.registry") \
+        < layer_of("stvm.project") < layer_of("stvm.cli")
+    assert layer_of("stvm.numeric") < layer_of("stvm.semantics.checker")
+    assert layer_of("stvm") == layer_of("stvm.cli")            # the package is the API, at the top
     assert _private("_f32") and not _private("__version__") and not _private("f32")
+
+
+def test_imports_are_found_wherever_they_are():
+    tree = ast.parse("import stvm.a\n"
+                     "if TYPE_CHECKING:\n    from stvm.b import B\n"
+                     "def f():\n    from stvm.c import C   # lazy: start-up\n"
+                     "class K:\n    def m(self):\n        import stvm.d\n")
+    found: list = []
+    _scan(tree, "module", found)
+    where = {(node.names[0].name if isinstance(node, ast.Import) else node.module): kind for node, kind in found}
+    assert where == {"stvm.a": "module", "stvm.b": "typing", "stvm.c": "function", "stvm.d": "function"}
+    lines = ["def f():", "    # lazy: start-up", "    from a import b", "    from c import (d,", "        e)",
+             "    x = 1", "    from f import g"]
+    assert _said(lines, 2) and _said(lines, 3) and not _said(lines, 6)
 
 
 if __name__ == "__main__":

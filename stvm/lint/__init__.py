@@ -81,7 +81,7 @@ def lint(paths: Sequence[str | Path], settings: SysmacSettings = DEFAULT_SETTING
     """Parse, check and lint `paths` (files or folders, as `stvm check`). `select`/`ignore` take
     codes, prefixes (SA2) or names; the project's stvm.toml `[lint]` adds to them, and
     `(* stvm: noqa SAnnn *)` on a line suppresses that line's findings."""
-    from stvm.lint.loader import load_for_lint
+    from stvm.lint.loader import load_for_lint   # lazy: start-up
     loaded = load_for_lint(paths, settings, use_cache, texts)
     if config is None:
         config = load_config(loaded.manifest, loaded.root)
