@@ -11,7 +11,7 @@ Typing rules follow shared/spec/sysmac.md section 2:
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import Any
 
 from stvm.semantics import types as t
 from stvm.semantics.facts import NOT_CONST, CallInfo, NameRef
@@ -19,8 +19,6 @@ from stvm.semantics.model import EXTERNAL, IN_OUT, INPUT, OUTPUT, POUInfo, Varia
 from stvm.syntax import nodes as n
 from stvm.settings import IntLiteralType
 
-if TYPE_CHECKING:
-    from stvm.semantics.checker import Checker
 
 _ARITH = {"PLUS": "+", "MINUS": "-", "STAR": "*", "SLASH": "/", "MOD": "MOD", "POW": "**"}
 _COMPARE = {"EQ": "=", "NE": "<>", "LT": "<", "GT": ">", "LE": "<=", "GE": ">="}
@@ -112,7 +110,8 @@ def native_result_rule(pou: POUInfo, natives):
 
 
 class BodyChecker:
-    def __init__(self, checker: "Checker", pou: POUInfo, node: n.POU) -> None:
+    # `checker`: the Checker that runs this body check (stvm.semantics.checker imports this module)
+    def __init__(self, checker: Any, pou: POUInfo, node: n.POU) -> None:
         self.c = checker
         self.pou = pou
         self.node = node
