@@ -13,15 +13,15 @@ from stvm.version import __version__  # noqa: F401 (API)
 
 
 def load(paths, settings=None, use_cache=True):
-    from stvm.project import load as _load
+    from stvm.project import load as _load   # lazy: start-up (`import stvm.syntax` must not load the driver and the VM)
     return _load(paths, settings, use_cache)   # None: the project's settings (stvm.toml [sysmac])
 
 
 def __getattr__(name):
     if name in ("LoadError", "Project"):
-        import stvm.project as project
+        import stvm.project as project   # lazy: start-up (`import stvm.syntax` must not load the driver and the VM)
         return getattr(project, name)
     if name in ("RuntimeFault", "VM"):
-        import stvm.runtime.vm as vm
+        import stvm.runtime.vm as vm   # lazy: start-up (`import stvm.syntax` must not load the driver and the VM)
         return getattr(vm, name)
     raise AttributeError(name)

@@ -14,6 +14,7 @@ import warnings
 
 from stvm.run import (EXIT_COMPILE, EXIT_FAULT, EXIT_OK, EXIT_USAGE, UsageError,  # noqa: F401 (API)
                       cmd_run, demo_cycles_flag, print_diagnostics, require_files, run_settings)
+from stvm.version import __version__
 
 
 class _Parser(argparse.ArgumentParser):
@@ -50,7 +51,7 @@ def _watchdog_seconds(text: str) -> float | None:
 
 def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(prog="stvm", description="Structured Text virtual machine")
-    parser.add_argument("--version", action="version", version="stvm " + __import__("stvm").__version__)
+    parser.add_argument("--version", action="version", version="stvm " + __version__)
     sub = parser.add_subparsers(dest="command", parser_class=_Parser)
     sysmac_help = "override a Sysmac UNCERTAIN setting, NAME=VALUE (see README)"
     dialects = ["iec", "sysmac", "codesys", "twincat"]
@@ -99,8 +100,9 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def _register_extensions(sub) -> None:
-    """Commands living in their own modules (demo, trace, debug) register themselves here."""
-    for module_name in ("stvm.demo.cli", "stvm.trace.cli", "stvm.debug.cli", "stvm.lint.cli"):
+    """Commands living in their own modules (trace, debug, lint) register themselves here.
+    (The demo is `stvm run` on a project with a `[demo]` table: it has no command of its own.)"""
+    for module_name in ("stvm.trace.cli", "stvm.debug.cli", "stvm.lint.cli"):
         try:
             module = importlib.import_module(module_name)
         except ModuleNotFoundError as exc:

@@ -70,7 +70,7 @@ class Project:
 
 def parse_duration(text: str) -> int:
     """'10ms', '1s', '500us', 'T#1ms' → nanoseconds (used by the CLI and the API)."""
-    from stvm.syntax.literals import LiteralError, decode_time
+    from stvm.syntax.literals import LiteralError, decode_time   # lazy: start-up
     body = text.strip()
     if "#" not in body:
         body = "T#" + body
@@ -104,7 +104,7 @@ def expand_paths(paths: Sequence[str | Path]) -> tuple[list[Path], dict, Path | 
                                                   _file_span(path))], {})
             out += found
         elif path.suffix.lower() == ".plcproj":   # a TwinCAT PLC project: the sources it lists
-            from stvm.syntax.vendor_xml import plcproj_items
+            from stvm.syntax.vendor_xml import plcproj_items   # lazy: start-up (vendor XML projects only)
             items = plcproj_items(path)
             if not items:
                 raise LoadError([Diagnostic.error(f"{path} lists no TwinCAT sources (<Compile Include=\"….TcPOU\">)",
@@ -130,13 +130,13 @@ def expand_paths(paths: Sequence[str | Path]) -> tuple[list[Path], dict, Path | 
 
 def _vendor_sources(folder: Path) -> list[Path]:
     """A folder without .st files: its TwinCAT (.TcPOU …, a .plcproj's) and PLCopen XML sources."""
-    from stvm.syntax.vendor_xml import folder_sources
+    from stvm.syntax.vendor_xml import folder_sources   # lazy: start-up (vendor XML projects only)
     return folder_sources(folder)
 
 
 def _read(path: Path, encoding: str) -> str:
     if path.suffix.lower() in _VENDOR_SUFFIXES:
-        from stvm.syntax.vendor_xml import read_vendor   # ST text laid out on the XML's lines
+        from stvm.syntax.vendor_xml import read_vendor   # lazy: start-up; ST text laid out on the XML's lines
         return read_vendor(path, encoding)
     return read_source(path, encoding)
 
@@ -186,19 +186,19 @@ def project_settings(paths: Sequence[str | Path], overrides: Sequence[str] = ())
 
 def _stdlib(settings: SysmacSettings = DEFAULT_SETTINGS) -> list[tuple[str, str]]:
     # part of the stdlib text depends on the settings (R_TRIG's first call, pin aliases, …)
-    from stvm.stdlib import stdlib_sources
+    from stvm.stdlib import stdlib_sources   # lazy: start-up
     return stdlib_sources(settings)
 
 
 def _cache_dir() -> Path:
-    from stvm.cache import default_folder
+    from stvm.cache import default_folder   # lazy: start-up
     return default_folder()
 
 
 def _cache() -> "SignedCache":
     """The compile cache: entries signed with the user's key (stvm/cache.py), so a shared
     STVM_CACHE_DIR cannot hand stvm a pickle someone else wrote."""
-    from stvm.cache import SignedCache
+    from stvm.cache import SignedCache   # lazy: start-up
     folder = _cache_dir()
     cached = _CACHES.get(folder)
     if cached is None:
@@ -248,7 +248,7 @@ def read_files(paths: Sequence[Path], encoding: str = "utf-8") -> tuple[list[tup
             texts.append((str(path), _read(path, encoding)))
         except SourceError as exc:
             if path.suffix.lower() in _VENDOR_SUFFIXES and exc.text:   # malformed XML: shown, never parsed
-                from stvm.syntax.vendor_xml import unreadable
+                from stvm.syntax.vendor_xml import unreadable   # lazy: start-up (vendor XML only)
                 texts.append((str(path), unreadable(exc.text)))
             else:
                 texts.append((str(path), exc.text))
@@ -338,12 +338,12 @@ def stdlib_units(settings: SysmacSettings) -> tuple[list, list[Diagnostic], dict
     if key in _STDLIB_UNITS:
         units, diags = _STDLIB_UNITS[key]
         return units, list(diags), sources
-    from stvm.stdlib import prebuilt
+    from stvm.stdlib import prebuilt   # lazy: start-up
     shipped = prebuilt.load(texts, settings)    # parsed once when stvm was built (default settings)
     if shipped is not None:
         _STDLIB_UNITS[key] = shipped
         return shipped[0], list(shipped[1]), sources
-    from stvm.syntax.parser import parse_text
+    from stvm.syntax.parser import parse_text   # lazy: start-up
     cache = _cache()
     entry = f"stdlib-{key}.ast"
     try:
@@ -379,7 +379,7 @@ def _collector_paused():
 def parse_unit(name: str, text: str, settings: SysmacSettings, use_cache: bool = True):
     """(unit, parse diagnostics) of one file, from the cache when its text, the settings and
     stvm are unchanged: an edit re-parses only the file edited."""
-    from stvm.syntax.parser import parse_text
+    from stvm.syntax.parser import parse_text   # lazy: start-up (a cached project never parses)
     if not use_cache:
         return parse_text(text, name, settings)
     entry = f"unit-{_cache_key([(name, text)], settings, 'unit')}.ast"
@@ -412,8 +412,8 @@ def _check_texts(texts, diags, settings, use_cache: bool = True):
 
 
 def _check_texts_unpaused(texts, diags, settings, use_cache: bool = True):
-    from stvm.semantics import analyze
-    from stvm.stdlib import NATIVE_FUNCTIONS
+    from stvm.semantics import analyze   # lazy: start-up
+    from stvm.stdlib import NATIVE_FUNCTIONS   # lazy: start-up
     sources = source_texts(texts)
     units, stdlib_diags, stdlib_sources = stdlib_units(settings)
     units = list(units)
@@ -441,8 +441,8 @@ def _lower_and_compile(analysis, settings, texts, sources):
 
 def _lower_and_compile_unpaused(analysis, settings, texts, sources):
     """Generate and compile the Python module; Python's own limits become diagnostics."""
-    from stvm.lower import lower_project
-    from stvm.runtime.vm import GENERATED_FILENAME
+    from stvm.lower import lower_project   # lazy: start-up
+    from stvm.runtime.vm import GENERATED_FILENAME   # lazy: start-up
     fallback = Span(texts[-1][0] if texts else "<input>", 1, 1, 1, 2)
     lowered = None
     try:

@@ -73,8 +73,9 @@ class GoldenTrace:
     def check(self, name: str, spec=None, *, context: int = 5, project=None, **spec_fields):
         """Run `spec` (or `TraceSpec(**spec_fields)`), compare with the golden `name`; returns the
         `TraceRun`. Fails the test with the first-divergence report on a difference."""
+        # lazy: start-up (the plugin loads with every pytest run)
         from stvm.trace import TraceSpec, compare, locate_writer, read_trace, render_report, run_trace, write_trace
-        from stvm.trace.writers import to_jsonl
+        from stvm.trace.writers import to_jsonl   # lazy: start-up (the plugin loads with every pytest run)
         if spec is None:
             spec = TraceSpec(**spec_fields)
         run = run_trace(spec, project)

@@ -45,6 +45,11 @@ class SourceError(Exception):
         self.text = text
 
 
+def is_stdlib_file(file: str) -> bool:
+    """A unit of stvm's own standard library (`<stdlib>/…`), not the user's."""
+    return file.startswith("<stdlib")
+
+
 def _is_utf8(encoding: str) -> bool:
     return encoding.lower().replace("-", "").replace("_", "") == "utf8"
 

@@ -3,9 +3,6 @@
 * The compile cache goes to a temporary folder for the whole session (never the user's cache).
 * `pytest --update-goldens` (or STVM_UPDATE_GOLDENS=1) rewrites snapshot files instead of
   comparing them (tests/semantics/diagnostics/*.stderr).
-* If stvm does not memoise the parsed stdlib itself, the suite parses the stdlib's ST interface
-  files once per session instead of once per load (`core_helpers.memoize_stdlib_parse`): syntax
-  trees are frozen dataclasses, so sharing them changes nothing but the suite's runtime.
 """
 
 from __future__ import annotations
@@ -40,11 +37,3 @@ def pytest_addoption(parser: pytest.Parser) -> None:
 @pytest.fixture(scope="session")
 def update_goldens(request: pytest.FixtureRequest) -> bool:
     return bool(request.config.getoption("--update-goldens") or os.environ.get("STVM_UPDATE_GOLDENS"))
-
-
-@pytest.fixture(scope="session", autouse=True)
-def _memoized_stdlib_parse():
-    import core_helpers
-    undo = core_helpers.memoize_stdlib_parse()
-    yield
-    undo()

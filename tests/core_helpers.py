@@ -34,39 +34,6 @@ _WORK = Path(tempfile.mkdtemp(prefix="stvm-core-tests-"))
 atexit.register(shutil.rmtree, _WORK, ignore_errors=True)
 
 
-# ---------------------------------------------------------------- speed: parse the stdlib once
-def memoize_stdlib_parse():
-    """Patch `stvm.project.parse_text` so each stdlib text is parsed once per session.
-
-    Only files whose display name starts with '<stdlib>/' are memoised (user files are always
-    parsed). Returns an undo function."""
-    import stvm.project as project
-
-    if not hasattr(project, "parse_text"):   # stvm memoises the stdlib itself: nothing to do
-        return lambda: None
-    original = project.parse_text
-    memo: dict[tuple, tuple] = {}
-
-    def parse_text(text, file, settings=None, *args, **kwargs):
-        if settings is None:
-            from stvm.settings import DEFAULT_SETTINGS
-            settings = DEFAULT_SETTINGS
-        if not str(file).startswith("<stdlib>/"):
-            return original(text, file, settings, *args, **kwargs)
-        key = (text, file, repr(settings))
-        if key not in memo:
-            memo[key] = original(text, file, settings, *args, **kwargs)
-        unit, diags = memo[key]
-        return unit, list(diags)
-
-    project.parse_text = parse_text
-
-    def undo():
-        project.parse_text = original
-
-    return undo
-
-
 # ---------------------------------------------------------------- files
 def write_st(source: str, name: str | None = None, folder: Path | None = None) -> Path:
     """Write ST text to a fresh file (named by content hash unless `name` is given)."""

@@ -29,6 +29,7 @@ from stvm.semantics.model import POUInfo
 from stvm.settings import DEFAULT_SETTINGS, SysmacSettings
 from stvm.stdlib import NATIVE_FUNCTIONS
 from stvm.syntax import nodes as n
+from stvm.syntax.parser import parse_text
 
 
 class DebugLowering:
@@ -142,7 +143,6 @@ class DebugBuild:
 
 def load_debug(paths: Sequence[str | os.PathLike], settings: SysmacSettings = DEFAULT_SETTINGS) -> DebugBuild:
     """Parse, check and lower `paths` for debugging (raises LoadError with every diagnostic)."""
-    from stvm.syntax.parser import parse_text
     files, manifest, root = expand_paths(paths)
     texts, read_diags = read_files(files, source_encoding(manifest))
     if read_diags:

@@ -37,7 +37,7 @@ def register(subparsers) -> None:
     debug.add_argument("--hmi", metavar="[HOST:]PORT",
                        help="serve the project's HMI pages while debugging (values between scans, "
                             "writes at the next scan start; docs/hmi.md)")
-    from stvm.opcua.cli import add_option
+    from stvm.opcua.cli import add_option   # lazy: start-up
     add_option(debug)
     debug.set_defaults(func=cmd_debug)
 
@@ -55,10 +55,10 @@ def _error(message: str, code: int = EXIT_USAGE) -> int:
 
 
 def cmd_debug(args) -> int:
-    from stvm.debug.console import Console
-    from stvm.debug.session import SessionOptions, open_session
-    from stvm.project import LoadError
-    from stvm.scenario import ScenarioError
+    from stvm.debug.console import Console   # lazy: start-up
+    from stvm.debug.session import SessionOptions, open_session   # lazy: start-up
+    from stvm.project import LoadError   # lazy: start-up
+    from stvm.scenario import ScenarioError   # lazy: start-up
     for f in args.files:
         if not Path(f).exists():
             return _error(f"no such file: {f}")
@@ -79,14 +79,14 @@ def cmd_debug(args) -> int:
     except (ValueError, KeyError, ScenarioError) as exc:
         return _error(str(exc))
     for warning in session.build.project.warnings:
-        from stvm.diagnostics import render
+        from stvm.diagnostics import render   # lazy: start-up
         sys.stderr.write(render(warning, session.build.project.sources))
     if session.robot != "none":
         print(f"robot: {session.robot}" + (f" on port {session.server.port}" if session.server else ""))
     hmi = None
     opcua = None
     try:
-        from stvm.opcua.cli import start_server
+        from stvm.opcua.cli import start_server   # lazy: start-up
         # the debugger is the run control: no Runtime.Scan/Pause/Resume beside it
         opcua = start_server(args, session.build.project, session.engine.vm, args.files, run_control=False)
     except (ValueError, RuntimeError) as exc:
@@ -110,12 +110,12 @@ def cmd_debug(args) -> int:
 
 def _start_hmi(address: str, session):
     """`--hmi`: the web HMI on the debugged VM; the robot view reads the session's emulator."""
-    from stvm.hmi.cli import report_load_error, start_hmi
-    from stvm.hmi.pages import HmiLoadError
-    from stvm.hmi.robot import from_lockstep, from_tcp_server
+    from stvm.hmi.cli import report_load_error, start_hmi   # lazy: start-up
+    from stvm.hmi.pages import HmiLoadError   # lazy: start-up
+    from stvm.hmi.robot import from_lockstep, from_tcp_server   # lazy: start-up
     pose = parameters = None
     if session.transport is not None:
-        from stvm.lockstep import LOCKSTEP_HOST, LOCKSTEP_PORT
+        from stvm.lockstep import LOCKSTEP_HOST, LOCKSTEP_PORT   # lazy: start-up
         pose = from_lockstep(session.transport)
         parameters = {"robot_host": LOCKSTEP_HOST, "robot_port": LOCKSTEP_PORT}
     elif session.server is not None:
@@ -130,7 +130,7 @@ def _start_hmi(address: str, session):
 
 
 def cmd_dap(args) -> int:
-    from stvm.debug.dap import serve
+    from stvm.debug.dap import serve   # lazy: start-up
     protocol_out = sys.stdout.buffer
     # stdout carries the protocol only: anything else printed during the session goes to stderr
     sys.stdout = sys.stderr

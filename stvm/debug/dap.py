@@ -31,6 +31,7 @@ from stvm.semantics import types as t
 from stvm.semantics.model import EXTERNAL, IN_OUT, INPUT, OUTPUT
 from stvm.project import LoadError
 from stvm.diagnostics import render
+from stvm.debug.console import parse_assignment
 
 _REASONS = {ENTRY: "entry", BREAKPOINT: "breakpoint", STEPPED: "step", PAUSED: "pause", SCANNED: "step",
             FAULT: "exception"}
@@ -275,8 +276,8 @@ class DapServer:
         }
 
     def on_launch(self, args: dict) -> dict:
-        from stvm.debug.session import SessionOptions, open_session
-        from stvm.scenario import ScenarioError
+        from stvm.debug.session import SessionOptions, open_session   # lazy: start-up
+        from stvm.scenario import ScenarioError   # lazy: start-up
         program = args.get("program")
         if not program:
             raise ProtocolError("launch needs \"program\": an ST file (or a list of files)")
@@ -532,7 +533,6 @@ class DapServer:
 
     def _repl_command(self, engine: Engine, text: str, frame: int) -> str | None:
         """Console commands typed in the Debug Console (None: an expression to evaluate)."""
-        from stvm.debug.console import parse_assignment
         word, _, rest = text.partition(" ")
         word = word.lower()
         if word == "force" and rest:

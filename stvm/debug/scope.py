@@ -30,6 +30,8 @@ from stvm.semantics.facts import Facts, NameRef
 from stvm.semantics.model import EXTERNAL, GLOBAL, IN_OUT, POUInfo, Variable
 from stvm.syntax import nodes as n
 from stvm.syntax import parse_expression
+from stvm.runtime.values import FunctionError, STFault
+from stvm.debug.build import DebugLowering
 
 EXPR_FILENAME = "<stvm-debug>"   # never GENERATED_FILENAME: the tracer must not step into these
 
@@ -204,7 +206,6 @@ class ScopeCompiler:
 
     # ---- checking and lowering
     def _session(self, scope: Scope):
-        from stvm.debug.build import DebugLowering
         pou = scope.pou or _GLOBAL_POU
         node = scope.node or _GLOBAL_NODE
         facts = Facts()
@@ -314,7 +315,6 @@ def _internal_errors_as_debug_errors(fn, *args):
 
 def run_guarded(fn):
     """Run debugger code; ST faults and instruction errors become DebugError."""
-    from stvm.runtime.values import FunctionError, STFault
     try:
         return fn()
     except STFault as exc:

@@ -59,7 +59,7 @@ class Session:
 def open_session(options: SessionOptions, build: DebugBuild | None = None) -> Session:
     """Load (unless `build` is given) and prepare a session; raises LoadError, ValueError (bad
     options) or ScenarioError. The engine is not started yet."""
-    from stvm.scenario import Scenario, load_scenario
+    from stvm.scenario import Scenario, load_scenario   # lazy: start-up
     settings = project_settings(options.files, list(options.sysmac))
     scenario = load_scenario(options.scenario) if options.scenario else Scenario()
     scan_ns = parse_duration(options.scan or scenario.scan or "10ms")
@@ -72,7 +72,7 @@ def open_session(options: SessionOptions, build: DebugBuild | None = None) -> Se
         build = load_debug(options.files, settings)
     transport = None
     if robot == "lockstep":
-        from stvm.lockstep import LockstepTransport
+        from stvm.lockstep import LockstepTransport   # lazy: start-up
         emu_settings, plan = scenario.emulator_plan()
         latency = options.latency_scans if options.latency_scans is not None else \
             (scenario.latency_scans if scenario.latency_scans is not None else 1)
@@ -94,17 +94,17 @@ def open_session(options: SessionOptions, build: DebugBuild | None = None) -> Se
 def _wire(session: Session, scenario, robot: str | None, options: SessionOptions) -> None:
     """Robot address, scenario hooks and the emulator clock, in `stvm trace`'s order: forces
     (first, see Engine), scenario events, then the emulator's step to the next scan."""
-    from stvm.scenario import ScenarioDriver
+    from stvm.scenario import ScenarioDriver   # lazy: start-up
     vm = session.engine.vm
     address: tuple[str, int] | None = None
     fault_sink = None
     if robot == "lockstep":
-        from stvm.lockstep import LOCKSTEP_HOST, LOCKSTEP_PORT
+        from stvm.lockstep import LOCKSTEP_HOST, LOCKSTEP_PORT   # lazy: start-up
         address = (LOCKSTEP_HOST, LOCKSTEP_PORT)
         fault_sink = session.transport.inject_fault
     elif robot == "emulator":
-        import emulator
-        from stvm.demo import free_loopback_port
+        import emulator   # lazy: start-up
+        from stvm.demo import free_loopback_port   # lazy: start-up
         session.server = emulator.start_server(host="127.0.0.1", port=free_loopback_port())
         address = ("127.0.0.1", session.server.port)
         fault_sink = lambda text: _inject_fault(session.server, text)  # noqa: E731
@@ -131,7 +131,7 @@ def _parse_robot(text: str) -> tuple[str, int]:
 
 
 def _inject_fault(server: Any, text: str) -> None:
-    from emulator import parse_fault
+    from emulator import parse_fault   # lazy: start-up
 
     def apply(core, now_ns):
         plan = parse_fault(text, core.faults)

@@ -40,6 +40,7 @@ from stvm.runtime.format import format_value
 from stvm.runtime.vm import VM, PathError, UnboundInOut, coerce_python_value
 from stvm.semantics import types as t
 from stvm.semantics.literals import literal_value   # Choice: the one literal reader `--set` uses
+from stvm.trace.signals import Signal, all_nodes, make_sampler
 
 MAX_PENDING_WRITES = 1024
 """Write batches queued for the next scan; more are rejected (a front end cannot stall the VM)."""
@@ -164,7 +165,6 @@ class VariableBridge:
         by one generated function, one attribute or item access per step from the globals or a
         program instance (~0.05 µs a value instead of a path lookup per value); the rest (paths
         through a VAR_IN_OUT) through their accessors."""
-        from stvm.trace.signals import Signal, all_nodes, make_sampler
         if self._routes is None:
             self._routes = {name.lower().replace(" ", ""): (ty, root, steps)
                             for name, ty, root, steps in all_nodes(self.vm)}

@@ -10,7 +10,7 @@ import asyncio
 import json
 import secrets
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import Any
 
 from starlette.applications import Starlette
 from starlette.requests import Request
@@ -25,8 +25,7 @@ from stvm.hmi.wire import (MAX_BODY_BYTES, MAX_WEBSOCKETS, SEND_TIMEOUT_S, TOKEN
 
 STATIC = Path(__file__).resolve().parent / "static"
 
-if TYPE_CHECKING:
-    from stvm.hmi.server import HmiServer
+# `server` below is the HmiServer (stvm/hmi/server.py), which builds this app: not imported here
 
 
 def _error(status: int, reason: str, path: str | None = None) -> JSONResponse:
@@ -41,7 +40,7 @@ class Gate:
     header of a loopback server (DNS rebinding) and the Origin of writes and WebSockets (another
     site's page in the operator's browser must not drive the cell)."""
 
-    def __init__(self, app, server: "HmiServer") -> None:
+    def __init__(self, app, server: Any) -> None:
         self.app = app
         self.server = server
 
@@ -81,7 +80,7 @@ class Gate:
         return None
 
 
-def build_app(server: "HmiServer") -> Starlette:
+def build_app(server: Any) -> Starlette:
     hmi = server.hmi
 
     async def root(request: Request) -> Response:
@@ -207,7 +206,7 @@ def build_app(server: "HmiServer") -> Starlette:
     return Gate(app, server)
 
 
-async def _send_loop(server: "HmiServer", client: Client) -> None:
+async def _send_loop(server: Any, client: Client) -> None:
     ws = client.websocket
     try:
         while True:

@@ -31,10 +31,10 @@ def __getattr__(name):
     # lazy: start-up (`stvm.lint.cli` registers its sub-commands on every `stvm` call; the rule
     # registry and the config reader load only when lint runs)
     if name in ("all_rules", "select_rules"):
-        from stvm.lint import registry
+        from stvm.lint import registry   # lazy: start-up
         return getattr(registry, name)
     if name in ("LintConfig", "load_config", "suppressed"):
-        from stvm.lint import config
+        from stvm.lint import config   # lazy: start-up
         return getattr(config, name)
     raise AttributeError(name)
 
@@ -97,8 +97,8 @@ def lint(paths: Sequence[str | Path], settings: SysmacSettings = DEFAULT_SETTING
     codes, prefixes (SA2) or names; the project's stvm.toml `[lint]` adds to them, and
     `(* stvm: noqa SAnnn *)` on a line suppresses that line's findings."""
     from stvm.lint.config import load_config, suppressed   # lazy: start-up
-    from stvm.lint.loader import load_for_lint
-    from stvm.lint.registry import select_rules
+    from stvm.lint.loader import load_for_lint   # lazy: start-up
+    from stvm.lint.registry import select_rules   # lazy: start-up
     loaded = load_for_lint(paths, settings, use_cache, texts)
     if config is None:
         config = load_config(loaded.manifest, loaded.root)

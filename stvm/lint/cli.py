@@ -52,7 +52,7 @@ def _settings(args):
 
 
 def cmd_lint(args) -> int:
-    from stvm.lint.report import explain
+    from stvm.lint.report import explain   # lazy: start-up
     if args.explain:
         try:
             chosen = select_rules([args.explain])
@@ -69,7 +69,7 @@ def cmd_lint(args) -> int:
         settings = _settings(args)
     except ValueError as exc:
         return _usage(str(exc))
-    from stvm.lint.report import render_json, render_sarif, render_text
+    from stvm.lint.report import render_json, render_sarif, render_text   # lazy: start-up
     try:
         report = lint(args.files, settings, select=args.select, ignore=args.ignore, use_cache=not args.no_cache)
     except (SelectionError, ConfigError) as exc:
@@ -104,7 +104,7 @@ def cmd_lsp(args) -> int:
     except ValueError as exc:
         return _usage(str(exc))
     try:
-        from stvm.lint.lsp import serve
+        from stvm.lint.lsp import serve   # lazy: start-up
     except ImportError as exc:
         return _usage(f"the language server needs pygls: pip install 'stvm[lsp]' ({exc})")
     serve(settings)

@@ -67,7 +67,7 @@ _MEMO: dict[str, tuple] = {}
 
 def parse_cached(text: str, name: str, settings: SysmacSettings, use_cache: bool = True):
     """(unit, diagnostics) of one ST text; memoised in-process and pickled on disk."""
-    from stvm.syntax.parser import parse_text
+    from stvm.syntax.parser import parse_text   # lazy: start-up
     key = hashlib.sha256(b"\0".join([_code_digest().encode(), repr(settings).encode(), name.encode(),
                                      text.encode("utf-8", "replace")])).hexdigest()
     if key in _MEMO:
@@ -97,8 +97,8 @@ def load_for_lint(paths: Sequence[str | Path], settings: SysmacSettings, use_cac
                   texts: dict[str, str] | None = None) -> Loaded:
     """Expand `paths` as `stvm check` does (a folder's *.st, a file's stvm.toml project), parse
     (cached) and check. `texts` overrides file contents (an editor's unsaved buffer)."""
-    from stvm.project import expand_paths
-    from stvm.stdlib import NATIVE_FUNCTIONS, stdlib_sources
+    from stvm.project import expand_paths   # lazy: start-up
+    from stvm.stdlib import NATIVE_FUNCTIONS, stdlib_sources   # lazy: start-up
     files, manifest, root = expand_paths(paths)
     diags: list[Diagnostic] = []
     sources: dict[str, str] = {}

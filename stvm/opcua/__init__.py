@@ -15,7 +15,7 @@ from stvm.opcua.config import DEFAULT_ENDPOINT, OpcUaConfig, OpcUaConfigError, l
 
 def __getattr__(name: str):
     if name == "OpcUaServer":   # asyncua takes ~0.3 s to import: only when a server starts
-        from stvm.opcua.server import OpcUaServer
+        from stvm.opcua.server import OpcUaServer   # lazy: start-up (asyncua)
         return OpcUaServer
     raise AttributeError(name)
 

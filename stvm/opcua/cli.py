@@ -21,7 +21,7 @@ def start_server(args, project, vm, files, run_control: bool = True):
         return None
     config = load_config(project.manifest, project.root, files, args.opcua or None)
     try:
-        from stvm.opcua.server import OpcUaServer
+        from stvm.opcua.server import OpcUaServer   # lazy: start-up (asyncua)
     except ModuleNotFoundError as exc:
         raise RuntimeError(f"--opcua needs the asyncua package ({exc.name} is missing): "
                            f"pip install 'stvm[opcua]'") from exc

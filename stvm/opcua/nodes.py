@@ -33,6 +33,7 @@ from stvm.frontend.catalog import VariableInfo
 from stvm.opcua.config import OpcUaConfig, OpcUaConfigError
 from stvm.opcua.datatypes import UaType, ua_type
 from stvm.semantics import types as t
+from stvm.trace.signals import compile_pattern
 
 GLOBALS_ID = "@Globals"
 RUNTIME_ID = "@Runtime"
@@ -87,7 +88,6 @@ class _Rules:
     """One list of rules (`publish`, …): sets and path patterns with a hit count each."""
 
     def __init__(self, key: str, rules: tuple[str, ...]) -> None:
-        from stvm.trace.signals import compile_pattern
         self.key = key
         self.sets = [r for r in rules if r.startswith("@")]
         self.patterns = [(r, compile_pattern(r)) for r in rules if not r.startswith("@")]

@@ -12,7 +12,7 @@ Typing rules follow shared/spec/sysmac.md section 2:
 from __future__ import annotations
 
 from dataclasses import replace
-from typing import TYPE_CHECKING
+from typing import Any
 
 from stvm.semantics import types as t
 from stvm.semantics.facts import NOT_CONST, CallInfo, NameRef
@@ -20,8 +20,6 @@ from stvm.semantics.model import EXTERNAL, IN_OUT, INPUT, OUTPUT, POUInfo, Varia
 from stvm.syntax import nodes as n
 from stvm.settings import IntLiteralType
 
-if TYPE_CHECKING:
-    from stvm.semantics.checker import Checker
 
 _ARITH = {"PLUS": "+", "MINUS": "-", "STAR": "*", "SLASH": "/", "MOD": "MOD", "POW": "**"}
 _COMPARE = {"EQ": "=", "NE": "<>", "LT": "<", "GT": ">", "LE": "<=", "GE": ">="}
@@ -121,7 +119,8 @@ def native_result_rule(pou: POUInfo, natives):
 
 
 class BodyChecker:
-    def __init__(self, checker: "Checker", pou: POUInfo, node, fb: POUInfo | None = None,
+    # `checker`: the Checker that runs this body check (stvm.semantics.checker imports this module)
+    def __init__(self, checker: Any, pou: POUInfo, node, fb: POUInfo | None = None,
                  fb_node: n.POU | None = None) -> None:
         self.c = checker
         self.pou = pou
@@ -612,7 +611,6 @@ class BodyChecker:
     # ---- object orientation
     def this_or_super(self, e: n.Name) -> t.Type | None:
         """THIS (a POINTER TO the instance) and SUPER (to its base part), inside an FB or method."""
-        from stvm.semantics.checker import NameRef
         word = e.parts[0].upper()
         if self.fb is None or self.fb.kind not in ("FUNCTION_BLOCK", "PROGRAM"):
             self.error(f"{word} is only meaningful inside a function block or its methods", e.span, "E070")
@@ -686,7 +684,6 @@ class BodyChecker:
 
     def method_call(self, e: n.Call, method: POUInfo, oo: str, instance: n.Expr | None, static_owner: str,
                     expected) -> t.Type | None:
-        from stvm.semantics.checker import CallInfo
         self.check_access(method, "method", e.callee.span)
         if oo == "super" and method.abstract:
             self.error(f"SUPER^.{method.name}: the method is ABSTRACT in {self.c.pous[method.owner].name}",
@@ -702,7 +699,6 @@ class BodyChecker:
 
     def oo_call(self, e: n.Call, expected, statement: bool) -> tuple[bool, t.Type | None]:
         """A METHOD call or SUPER^(): (True, result type) when `e` is one; (False, None) if not."""
-        from stvm.semantics.checker import CallInfo
         callee = e.callee
         if isinstance(callee, n.Name):
             if len(callee.parts) == 1 and not callee.rooted and self.fb is not None:

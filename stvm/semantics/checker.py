@@ -13,10 +13,12 @@ from dataclasses import dataclass, field
 from typing import Any, Mapping
 
 from stvm.diagnostics import Diagnostic
+from stvm.source import is_stdlib_file
 from stvm.numeric import f32
 from stvm.semantics import types as t
 from stvm.semantics.body import BodyChecker
 from stvm.semantics.facts import NOT_CONST, CallInfo, Facts, NameRef  # noqa: F401 (API: checker.Facts)
+from stvm.semantics.qualified import resolve as resolve_qualified
 from stvm.semantics.model import (EXTERNAL, GLOBAL, IN_OUT, INPUT, LOCAL, OUTPUT, POUInfo,
                                   ProjectModel, PropertyInfo, TaskInfo, Variable)
 from stvm.settings import BareEnumerators, DEFAULT_SETTINGS, Dialect, StringOverflow, SysmacSettings
@@ -1372,7 +1374,7 @@ _VENDOR_EXTRAS = {"<stdlib>/twincat_types.st"}   # a dialect's own types, which 
 
 
 def _is_stdlib(file: str) -> bool:
-    return file.startswith("<stdlib")
+    return is_stdlib_file(file)
 
 
 def _round_real(value: float, ty: t.Type) -> float:
@@ -1394,8 +1396,7 @@ def analyze(units: list[n.CompilationUnit], settings: SysmacSettings = DEFAULT_S
 
     `natives`: the stdlib's native functions (stvm.stdlib.NATIVE_FUNCTIONS), for the result types
     of generic ones (SHL, MUX, TRUNC, …); without it their result is the common input type."""
-    from stvm.semantics.qualified import resolve   # `GVL.x`, `Enum.member`, qualified_only
-    units, qualified = resolve(list(units))
+    units, qualified = resolve_qualified(list(units))   # `GVL.x`, `Enum.member`, qualified_only
     analysis = Checker(units, settings, natives).run()
     if qualified:
         analysis.diagnostics[:0] = qualified

@@ -16,12 +16,8 @@ import dataclasses
 
 from stvm.diagnostics import Diagnostic
 from stvm.syntax import nodes as n
+from stvm.source import is_stdlib_file
 from stvm.syntax.pragmas import has_attribute
-
-
-def _is_stdlib(file: str) -> bool:
-    from stvm.semantics.checker import _is_stdlib as stdlib_file
-    return stdlib_file(file)
 
 
 class _Scope:
@@ -52,7 +48,7 @@ def _collect(units: list[n.CompilationUnit]) -> _Scope:
             if isinstance(decl.body, n.EnumDecl):
                 members = {m[0].lower() for m in decl.body.members}
                 scope.enums.setdefault(decl.name.lower(), (decl.name, members))
-                strict = has_attribute(decl.pragmas, "qualified_only") and not _is_stdlib(decl.span.file)
+                strict = has_attribute(decl.pragmas, "qualified_only") and not is_stdlib_file(decl.span.file)
                 for member in members:
                     if strict:
                         scope.strict_members.setdefault(member, decl.name)
@@ -63,7 +59,7 @@ def _collect(units: list[n.CompilationUnit]) -> _Scope:
 
 def resolve(units: list[n.CompilationUnit]) -> tuple[list[n.CompilationUnit], list[Diagnostic]]:
     """The units with qualified names resolved, and the diagnostics of `qualified_only`."""
-    user = [u for u in units if not _is_stdlib(u.path)]
+    user = [u for u in units if not is_stdlib_file(u.path)]
     if not any(g.gvl for u in user for g in u.globals) and \
             not any(isinstance(d.body, n.EnumDecl) for u in user for d in u.types):
         return units, []
@@ -75,7 +71,7 @@ def resolve(units: list[n.CompilationUnit]) -> tuple[list[n.CompilationUnit], li
     for unit in units:
         # a unit is walked only if it may name a GVL or an enum with a dot, or if an unqualified
         # name may break a qualified_only rule
-        if _is_stdlib(unit.path) or not (strict or qualifiers & unit.member_bases):
+        if is_stdlib_file(unit.path) or not (strict or qualifiers & unit.member_bases):
             out.append(unit)
             continue
         pous = tuple(_Rewriter(scope, _locals(p), diagnostics).pou(p) for p in unit.pous)

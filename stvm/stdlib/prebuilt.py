@@ -23,6 +23,9 @@ import pickle
 import zlib
 from pathlib import Path
 
+from stvm.settings import DEFAULT_SETTINGS
+from stvm.version import __version__
+
 FILE = Path(__file__).with_name("prebuilt_units.pickle.z")
 
 # what the parse result depends on, beside the stdlib text and the settings (relative to stvm/)
@@ -42,7 +45,6 @@ def _code_files(package: Path) -> list[Path]:
 
 
 def key(texts: list[tuple[str, str]], settings) -> str:
-    from stvm.version import __version__
     package = Path(__file__).resolve().parent.parent
     digest = hashlib.sha256(b"stdlib-prebuilt\0" + __version__.encode() + b"\0" + repr(settings).encode())
     for path in _code_files(package):
@@ -71,9 +73,8 @@ def load(texts: list[tuple[str, str]], settings):
 
 def build() -> Path:
     """Parse the stdlib with the default settings and write the file (what `python -m` does)."""
-    from stvm.settings import DEFAULT_SETTINGS
-    from stvm.stdlib import stdlib_sources
-    from stvm.syntax.parser import parse_text
+    from stvm.stdlib import stdlib_sources   # lazy: stvm.stdlib imports this module
+    from stvm.syntax.parser import parse_text   # lazy: start-up (lark)
     texts = stdlib_sources(DEFAULT_SETTINGS)
     units, diags = [], []
     for name, text in texts:

@@ -53,8 +53,8 @@ def _usage(message: str) -> int:
 
 
 def cmd_trace(args) -> int:
-    from stvm.project import LoadError, load, project_settings
-    from stvm.scenario import ScenarioError
+    from stvm.project import LoadError, load, project_settings   # lazy: start-up
+    from stvm.scenario import ScenarioError   # lazy: start-up
 
     for f in args.files:
         if not Path(f).exists():
@@ -62,7 +62,7 @@ def cmd_trace(args) -> int:
     outputs = args.output or []
     if not outputs and not args.compare:
         return _usage("give -o OUT (.jsonl .csv .vcd .json .svg .png) and/or --compare GOLDEN")
-    from stvm.trace.tcp_path import PICTURE_SUFFIXES
+    from stvm.trace.tcp_path import PICTURE_SUFFIXES   # lazy: start-up
     pictures = [o for o in outputs if Path(o).suffix.lower() in PICTURE_SUFFIXES]
     outputs = [o for o in outputs if o not in pictures]
     for out in outputs:
@@ -90,10 +90,10 @@ def cmd_trace(args) -> int:
     try:
         settings = project_settings(args.files, args.sysmac or [])
         if args.scan is not None:
-            from stvm.project import parse_duration
+            from stvm.project import parse_duration   # lazy: start-up
             if parse_duration(args.scan) <= 0:
                 return _usage("--scan must be positive")
-        from emulator import parse_faults
+        from emulator import parse_faults   # lazy: start-up
         parse_faults(args.fault or [])
     except ValueError as exc:
         return _usage(str(exc))
@@ -120,7 +120,7 @@ def cmd_trace(args) -> int:
                                        max_columns=args.max_columns):
                 print(f"wrote {written}", file=sys.stderr)
         for out in pictures:
-            from stvm.trace.tcp_path import render_tcp_path
+            from stvm.trace.tcp_path import render_tcp_path   # lazy: start-up
             name = Path(str(args.scenario or args.files[0])).stem
             print(f"wrote {render_tcp_path(run.tcp_path, out, title=f'TCP path of {name}')}", file=sys.stderr)
     except TraceFormatError as exc:

@@ -220,7 +220,7 @@ def locate_writer(spec, actual: Trace, divergence: Divergence, project=None) -> 
     the divergence is not a variable's value, or the variable cannot be resolved)."""
     if divergence.kind != "value":
         return None
-    from stvm.runtime.vm import RuntimeFault
+    from stvm.runtime.vm import RuntimeFault   # lazy: start-up
     index = actual.index_of(divergence.variable)
     target_scan = actual.last_change(index, min(divergence.scan, actual.scans - 1))
     prepared = Prepared(spec, project)
@@ -273,7 +273,7 @@ class _WriteFinder:
     """Line tracer over generated code: remembers the statement after which the value changed."""
 
     def __init__(self, vm, signal) -> None:
-        from stvm.runtime.vm import GENERATED_FILENAME
+        from stvm.runtime.vm import GENERATED_FILENAME   # lazy: start-up
         self.filename = GENERATED_FILENAME
         self.line_map = vm.project.lowered.line_map
         self.root = signal.root

@@ -58,9 +58,9 @@ class Prepared:
     writer search, which replays a run to a given scan)."""
 
     def __init__(self, spec: TraceSpec, project=None) -> None:
-        from stvm.lockstep import LOCKSTEP_HOST, LOCKSTEP_PORT, LockstepTransport
-        from stvm.project import load, project_settings
-        from stvm.scenario import Scenario, ScenarioDriver, load_scenario
+        from stvm.lockstep import LOCKSTEP_HOST, LOCKSTEP_PORT, LockstepTransport   # lazy: start-up
+        from stvm.project import load, project_settings   # lazy: start-up
+        from stvm.scenario import Scenario, ScenarioDriver, load_scenario   # lazy: start-up
         self.spec = spec
         if project is None:
             settings = project_settings(list(spec.files), list(spec.settings_overrides))
@@ -69,7 +69,7 @@ class Prepared:
         self.scenario = load_scenario(spec.scenario) if spec.scenario else Scenario()
         scenario = self.scenario
         emu_settings, plan = scenario.emulator_plan()
-        from emulator import parse_fault
+        from emulator import parse_fault   # lazy: start-up
         for text in spec.faults:
             plan = parse_fault(text, plan)
         latency_scans = spec.latency_scans if spec.latency_scans is not None else \
@@ -101,7 +101,7 @@ class Prepared:
 def run_trace(spec: TraceSpec, project=None, progress: Callable[[int], None] | None = None) -> TraceRun:
     """Run `spec` in lockstep and record it. A runtime fault ends the run early; it is recorded
     as an event and returned in `TraceRun.fault` (not raised)."""
-    from stvm.runtime.vm import RuntimeFault
+    from stvm.runtime.vm import RuntimeFault   # lazy: start-up
     prepared = Prepared(spec, project)
     vm = prepared.vm
     patterns = list(spec.watch) or list(prepared.scenario.watch)
@@ -111,7 +111,7 @@ def run_trace(spec: TraceSpec, project=None, progress: Callable[[int], None] | N
     recorder = Recorder(vm, signals)
     tcp_path = None
     if spec.record_tcp:
-        from stvm.trace.tcp_path import TcpPathRecorder
+        from stvm.trace.tcp_path import TcpPathRecorder   # lazy: start-up
         tcp_path = TcpPathRecorder(prepared.transport)
 
         def sample(vm, recorder_sample=recorder.sample) -> None:

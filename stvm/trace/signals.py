@@ -167,7 +167,7 @@ def select_signals(vm, patterns: list[str]) -> list[Signal]:
 
 
 def _exact(vm, path: str) -> list[Signal]:
-    from stvm.runtime.vm import PathError
+    from stvm.runtime.vm import PathError   # lazy: start-up
     try:
         container, key, ty = vm.resolve(path)
     except PathError as exc:

@@ -8,17 +8,8 @@ import pytest
 
 from emu_helpers import wait_until
 
-try:
-    import techmanpy
-except ImportError:  # pragma: no cover - the test extra installs it
-    techmanpy = None
-try:
-    import pytmrobot
-except ImportError:  # pragma: no cover
-    pytmrobot = None
-
-needs_techmanpy = pytest.mark.skipif(techmanpy is None, reason="techmanpy (PyPI, test extra) is not installed")
-needs_pytmrobot = pytest.mark.skipif(pytmrobot is None, reason="pytmrobot (PyPI, test extra) is not installed")
+import pytmrobot  # noqa: F401 (the test extra installs both: a missing one fails here, never skips)
+import techmanpy
 
 
 @pytest.fixture
@@ -30,7 +21,6 @@ def techman_port(fast_server):
     techmanpy.TMSCT_client.PORT, techmanpy.TMSTA_client.PORT = old
 
 
-@needs_techmanpy
 def test_techmanpy_full_session(techman_port) -> None:
     server = techman_port
 
@@ -73,7 +63,6 @@ def test_techmanpy_full_session(techman_port) -> None:
     assert server.snapshot()["state"] in ("RUNNING", "IN_NODE")
 
 
-@needs_pytmrobot
 def test_pytmrobot_full_session(fast_server) -> None:
     from pytmrobot import CartPoint, JointPoint, TMRobot
     from pytmrobot.exceptions import TMScriptError
@@ -103,7 +92,6 @@ def test_pytmrobot_full_session(fast_server) -> None:
     assert wait_until(lambda: fast_server.snapshot()["connections"] == [])
 
 
-@needs_pytmrobot
 def test_pytmrobot_low_level_client(fast_server) -> None:
     from pytmrobot._protocol import TMClient
 

@@ -9,10 +9,7 @@ import pytest
 from stvm.settings import SysmacSettings
 from stvm.syntax import nodes as n
 from stvm.syntax import parse_expression
-try:  # the literal decoders moved from parser.py to their own module
-    from stvm.syntax.literals import LiteralError, decode_string, decode_time
-except ImportError:
-    from stvm.syntax.parser import LiteralError, decode_string, decode_time
+from stvm.syntax.literals import LiteralError, decode_string, decode_time
 
 NS = 1
 US = 1_000

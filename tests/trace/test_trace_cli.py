@@ -4,8 +4,6 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import pytest
-
 from stvm.cli import main
 
 ST = Path(__file__).parent / "st"
@@ -13,7 +11,6 @@ COUNTER = str(ST / "counter.st")
 
 
 def test_record_every_format(tmp_path, capsys):
-    pytest.importorskip("vcd")
     outs = [str(tmp_path / f"t{suffix}") for suffix in (".jsonl", ".csv", ".vcd", ".json")]
     args = ["trace", COUNTER, "--cycles", "10", "--watch", "Main.counter", "Main.flag"]
     for out in outs:

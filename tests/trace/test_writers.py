@@ -55,7 +55,6 @@ def test_csv_rows_are_change_points_with_full_state(counter_trace):
 
 
 def test_vcd_is_deterministic_and_typed(robot_trace, counter_trace):
-    pytest.importorskip("vcd")
     text = to_vcd(robot_trace)
     assert text == to_vcd(robot_trace)
     assert "$date" not in text and "$timescale 1 ns $end" in text
@@ -80,7 +79,6 @@ def test_wavedrom_lanes(robot_trace):
 
 
 def test_svg_with_wavedrom(tmp_path, robot_trace):
-    pytest.importorskip("wavedrom")
     written = write_trace(robot_trace, tmp_path / "w.json", svg=True, max_columns=20)
     assert written[1].suffix == ".svg" and written[1].read_text().lstrip().startswith("<?xml")
 
