@@ -265,14 +265,24 @@ class Lowerer:
         w.line("def _assign(self, src):")
         w.indent += 1
         w.line("if src is self: return")
-        for (name, fty), attr in zip(st.fields, attrs):
-            if isinstance(fty, t.StructType):
-                w.line(f"self.{attr}._assign(src.{attr})")
-            elif isinstance(fty, t.ArrayType):
-                w.line(f"_assign_array(self.{attr}, src.{attr})")
-            else:
-                w.line(f"self.{attr} = src.{attr}")
+        self.struct_assign_body("self", "src", st, 0)
         w.indent -= 2
+
+    def struct_assign_body(self, dst: str, src: str, st: t.StructType, depth: int) -> None:
+        """Field by field, nested STRUCT fields inline (one Python call per struct assignment,
+        not one per nested struct: the thesis copies `_sSOCKET` into every socket FB call)."""
+        for name, fty in st.fields:
+            attr = var_attr(name)
+            if isinstance(fty, t.StructType) and fty.fields:
+                d, s = f"d{depth}", f"s{depth}"
+                self.w.line(f"{d} = {dst}.{attr}; {s} = {src}.{attr}")
+                self.struct_assign_body(d, s, fty, depth + 1)
+            elif isinstance(fty, t.StructType):
+                self.w.line(f"{dst}.{attr}._assign({src}.{attr})")
+            elif isinstance(fty, t.ArrayType):
+                self.w.line(f"_assign_array({dst}.{attr}, {src}.{attr})")
+            else:
+                self.w.line(f"{dst}.{attr} = {src}.{attr}")
 
     def globals_class(self) -> None:
         w = self.w

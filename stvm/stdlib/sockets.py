@@ -408,8 +408,14 @@ class SocketRequestFB:
         self._last_scan: int | None = None
 
     def call(self, inst, ctx) -> None:
-        settings = ctx.settings
         execute = bool(inst.v_execute)
+        if self._phase == IDLE and (not execute or self._previous_execute):
+            # idle and no rising edge: nothing changes but the memory of this call (most calls
+            # of the thesis's FBs: they call their socket FBs every scan)
+            self._previous_execute = execute
+            self._last_scan = ctx.scan
+            return
+        settings = ctx.settings
         edge = execute and not self._previous_execute
         self._previous_execute = execute
         if (self._phase == HELD and not execute) or self._phase == SHOWN_ONCE:

@@ -1,0 +1,123 @@
+"""Where the thesis PnP scan spends its time: a per-POU profile of the generated code.
+
+Runs the thesis PnP scenario with the robot in lockstep (as `stvm trace` wires it), first
+unprofiled for the median ST time per scan (the VM's own `scan_durations_ns`) next to the
+yardstick of `bench/bench_core.py` (the hand-written Python FOR-100 loop), then under cProfile,
+and attributes every function's own time to the POU whose generated class (or to the stdlib /
+emulator module) it belongs to. Printed as µs per scan, calls per scan and share of the total,
+largest first — the table issue 16 asks to publish before changing the lowering.
+
+    python bench/profile_scan.py                 # 20,000 scans timed, 10,000 profiled
+    python bench/profile_scan.py --scans 5000 --top 15
+"""
+
+from __future__ import annotations
+
+import argparse
+import bisect
+import cProfile
+import pstats
+import re
+import sys
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / "bench"))
+
+from stvm.project import load  # noqa: E402
+from stvm.runtime.vm import GENERATED_FILENAME, timing_us  # noqa: E402
+
+THESIS = ROOT / "st_src" / "PnP_Example.st"
+SCENARIO = ROOT / "st_src" / "scenarios" / "pnp_demo.toml"
+_CLASS = re.compile(r"^class (\w+)|^def (\w+)")
+
+
+def thesis_vm(project, scan_ns: int = 1_000_000):
+    """The thesis PnP scenario with the robot in lockstep, wired as `stvm trace` wires it."""
+    from stvm.lockstep import LockstepTransport
+    from stvm.scenario import ScenarioDriver, load_scenario
+    transport = LockstepTransport()
+    vm = project.start(scan=scan_ns, transport=transport)
+    scenario = load_scenario(SCENARIO)
+    driver = ScenarioDriver(scenario, vm, transport.inject_fault)
+    vm.on_scan_end.append(driver.after_scan)
+    transport.attach(vm)
+    driver.apply_initial({scenario.robot_address: "'127.0.0.1'", scenario.robot_port: 5890})
+    return vm
+
+
+def pou_of_line(project):
+    """A function: generated line number -> the ST POU (or struct) whose class holds it."""
+    names = {py: key for key, py in project.lowered.classes.items()}
+    starts, owners = [], []
+    for number, line in enumerate(project.lowered.source.splitlines(), 1):
+        m = _CLASS.match(line)
+        if m:
+            py = m.group(1) or m.group(2)
+            starts.append(number)
+            owners.append(names.get(py, py))
+
+    def owner(line: int) -> str:
+        i = bisect.bisect_right(starts, line) - 1
+        return owners[i] if i >= 0 else "<module>"
+    return owner
+
+
+def yardstick_us() -> float:
+    """The hand-written Python FOR-100 loop of bench_core.py, best of 5 (µs per call)."""
+    from bench_core import HandForSum, best_of
+    return best_of(HandForSum(), repeat=5, number=2000) * 1e6
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--scans", type=int, default=20000)
+    ap.add_argument("--top", type=int, default=25)
+    args = ap.parse_args()
+    project = load([str(THESIS)], use_cache=False)
+    vm = thesis_vm(project)
+    vm.run(cycles=2000)                        # connected and moving before anything is timed
+    started = time.perf_counter()
+    vm.run(cycles=args.scans)
+    loop_us = (time.perf_counter() - started) / args.scans * 1e6
+    st_us = timing_us(vm.scan_durations_ns)[1]
+    hand = yardstick_us()
+    print(f"thesis PnP in lockstep, {args.scans} scans: median ST time {st_us:.1f} µs per scan, whole loop "
+          f"(with the emulator) {loop_us:.1f} µs per scan")
+    print(f"yardstick: hand-written Python FOR-100 loop {hand:.1f} µs; ST scan / yardstick = {st_us / hand:.2f}× "
+          f"(issue 16 target: ≤ 15 µs, ≤ 2.3×)")
+
+    profiled = max(args.scans // 2, 1)
+    profile = cProfile.Profile()
+    profile.enable()
+    vm.run(cycles=profiled)
+    profile.disable()
+    owner = pou_of_line(project)
+    rows: dict[str, list[float]] = {}
+    stats = pstats.Stats(profile).stats   # (file, line, name) -> (cc, nc, tottime, cumtime, callers)
+    for (file, line, name), (_, calls, own, _, _) in stats.items():
+        if file == GENERATED_FILENAME:
+            where = f"ST {owner(line)}" + ("" if name == "__call__" else f".{name}")
+        elif "/stvm/stdlib/" in file:
+            where = f"stdlib {Path(file).stem}.{name}"
+        elif "/emulator/" in file:
+            where = "emulator (lockstep robot)"
+        elif "/stvm/runtime/" in file:
+            where = f"runtime {Path(file).stem}.{name}"
+        else:
+            where = "other (Python, builtins)"
+        row = rows.setdefault(where, [0.0, 0])
+        row[0] += own
+        row[1] += calls
+    total = sum(r[0] for r in rows.values())
+    print(f"\nper-POU profile (cProfile, {profiled} scans; profiled times are inflated, the shares are what count)")
+    print(f"{'where':58} {'µs/scan':>8} {'calls/scan':>10} {'share':>6}")
+    for where, (own, calls) in sorted(rows.items(), key=lambda kv: -kv[1][0])[:args.top]:
+        print(f"{where[:58]:58} {own / profiled * 1e6:8.2f} {calls / profiled:10.1f} {own / total:6.1%}")
+    vm.close()
+
+
+if __name__ == "__main__":
+    main()
