@@ -24,7 +24,6 @@ where a list belongs is not read letter by letter).
 from __future__ import annotations
 
 import codecs
-import tomllib
 from pathlib import Path
 from typing import Any
 
@@ -70,6 +69,7 @@ _SCHEMA: dict[str, dict[str, tuple[Any, str]] | None] = {
 
 def read_manifest(path: Path) -> dict:
     """The checked contents of a `stvm.toml` (a plain dict, as TOML gives it)."""
+    import tomllib   # lazy: start-up (a run without a manifest never parses TOML)
     try:
         with path.open("rb") as fh:
             data = tomllib.load(fh)
