@@ -10,6 +10,7 @@ manifest's scenario (robot address, PnP segments, Execute inputs), runs on the r
 from __future__ import annotations
 
 import contextlib
+import errno
 import random
 import socket
 import sys
@@ -91,8 +92,17 @@ class Demo:
             self.robot_address = parse_robot(self.args.robot)
         else:
             import emulator
-            port = free_loopback_port()
-            self.server = emulator.start_server(host="127.0.0.1", port=port, log_path=self.args.emulator_log)
+            for attempt in range(5):
+                # another process may take the port between the probe and the bind (parallel
+                # demos, a test suite on several cores): then take another one
+                port = free_loopback_port()
+                try:
+                    self.server = emulator.start_server(host="127.0.0.1", port=port,
+                                                        log_path=self.args.emulator_log)
+                    break
+                except OSError as exc:
+                    if exc.errno != errno.EADDRINUSE or attempt == 4:
+                        raise
             self.robot_address = ("127.0.0.1", self.server.port)
         overrides: dict[str, Any] = {}
         if scenario is not None:
