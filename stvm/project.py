@@ -57,6 +57,7 @@ class Project:
     from_cache: bool = False
     manifest: dict = field(default_factory=dict)
     root: Path | None = None
+    native_modules: tuple[str, ...] = ()   # the stdlib modules implementing what it calls
 
     def start(self, scan: str | int = "10ms", realtime: bool = False, start_dt_ns: int = 0,
               transport=None) -> "VM":
@@ -433,8 +434,9 @@ def load(paths: Sequence[str | Path], settings: SysmacSettings | None = None, us
     if payload is not None:
         try:
             # verified: only this user's stvm (holding the key) can have written it
-            model, lowered, warnings, code_bytes, sources = pickle.loads(payload)
-            return Project(model, lowered, marshal.loads(code_bytes), sources, settings, warnings, True, manifest, root)
+            model, lowered, warnings, code_bytes, sources, native_modules = pickle.loads(payload)
+            return Project(model, lowered, marshal.loads(code_bytes), sources, settings, warnings, True, manifest, root,
+                           native_modules)
         except Exception:  # a stale entry (an older stvm's classes) is rebuilt, never fatal
             pass
     analysis, diags, sources = _check_texts(texts, [], settings, use_cache)
@@ -442,17 +444,26 @@ def load(paths: Sequence[str | Path], settings: SysmacSettings | None = None, us
         raise LoadError(diags, sources)
     lowered, code = _lower_and_compile(analysis, settings, texts, sources)
     warnings = [d for d in diags if not d.is_error]
-    project = Project(analysis.model, lowered, code, sources, settings, warnings, False, manifest, root)
+    project = Project(analysis.model, lowered, code, sources, settings, warnings, False, manifest, root,
+                      _native_modules(lowered))
     if use_cache:
         try:
-            payload = pickle.dumps((analysis.model, lowered, warnings, marshal.dumps(code), sources),
-                                   protocol=pickle.HIGHEST_PROTOCOL)
+            payload = pickle.dumps((analysis.model, lowered, warnings, marshal.dumps(code), sources,
+                                    project.native_modules), protocol=pickle.HIGHEST_PROTOCOL)
         except (pickle.PicklingError, RecursionError, TypeError):
             payload = None
         if payload is not None:
             _cache().put(cache_name, payload)
             _cache().prune("*.bin", CACHE_MAX_ENTRIES)
     return project
+
+
+def _native_modules(lowered) -> tuple[str, ...]:
+    """The stdlib modules that implement the natives `lowered` calls (what a cached load imports)."""
+    from stvm.stdlib.registry import NATIVE_FBS, NATIVE_FUNCTIONS
+    modules = {NATIVE_FUNCTIONS[k].impl.__module__ for k in lowered.natives.values() if k in NATIVE_FUNCTIONS}
+    modules |= {NATIVE_FBS[k].__module__ for k in lowered.native_fbs.values() if k in NATIVE_FBS}
+    return tuple(sorted(modules))
 
 
 CACHE_MAX_ENTRIES = 200

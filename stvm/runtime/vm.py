@@ -47,6 +47,22 @@ def _ensure_recursion_limit() -> None:
         sys.setrecursionlimit(_RECURSION_LIMIT)
 
 
+def _register_natives(project, functions, fbs) -> None:
+    """Import the stdlib modules whose natives `project` calls (a project from the cache names
+    them; any other gets every module): start-up of `stvm run` pays only for what it uses."""
+    lowered = project.lowered
+    if all(k in functions for k in lowered.natives.values()) and all(k in fbs for k in lowered.native_fbs.values()):
+        return
+    import importlib
+    for module in getattr(project, "native_modules", ()):
+        if module.startswith("stvm.stdlib."):
+            importlib.import_module(module)
+    if all(k in functions for k in lowered.natives.values()) and all(k in fbs for k in lowered.native_fbs.values()):
+        return
+    from stvm.stdlib import load_natives
+    load_natives()
+
+
 class RuntimeFault(Exception):
     """A major fault: the task stopped at an ST location."""
 
@@ -106,6 +122,7 @@ class VM:
         from stvm.stdlib.registry import NATIVE_FBS, NATIVE_FUNCTIONS
         ns["_NATIVE_FB"] = NATIVE_FBS
         lowered = project.lowered
+        _register_natives(project, NATIVE_FUNCTIONS, NATIVE_FBS)
         for py_name, key in lowered.natives.items():
             native = NATIVE_FUNCTIONS.get(key)
             if native is None:

@@ -18,12 +18,27 @@ from importlib import resources
 
 from stvm.settings import DEFAULT_SETTINGS, IecPinAliases, RtrigFirstCall, SockaddrPortnoType, SysmacSettings
 
-# Importing the implementation modules registers the natives.
-from stvm.stdlib import conversions, numeric, omron, sockets, strings, timefns, timers  # noqa: F401
-from stvm.stdlib import bcd
-from stvm.stdlib.counters import typed_counters_source
 from stvm.stdlib.registry import NATIVE_FBS, NATIVE_FUNCTIONS, native_fb, native_function
-from stvm.stdlib.sockets import RealTcpTransport, SocketTable, Transport, make_default_transport
+
+# Importing the implementation modules registers the natives: `load_natives()` imports them all
+# (the checker needs every declaration; `stdlib_sources` calls it), a VM from the cache imports
+# only the modules its program calls into (`Project.native_modules`). lazy: start-up
+IMPLEMENTATIONS = ("conversions", "numeric", "omron", "sockets", "strings", "timefns", "timers", "bcd")
+_SOCKET_NAMES = ("RealTcpTransport", "SocketTable", "Transport", "make_default_transport")
+
+
+def load_natives() -> None:
+    """Register every native function and FB (import all the implementation modules)."""
+    import importlib
+    for name in IMPLEMENTATIONS:
+        importlib.import_module(f"stvm.stdlib.{name}")
+
+
+def __getattr__(name: str):
+    if name in _SOCKET_NAMES:
+        from stvm.stdlib import sockets
+        return getattr(sockets, name)
+    raise AttributeError(name)
 
 ST_FILES = ("iec_standard.st", "iec_functions.st", "omron.st", "sockets.st")
 DISPLAY_PREFIX = "<stdlib>/"
@@ -75,6 +90,9 @@ def system_types_source(settings: SysmacSettings = DEFAULT_SETTINGS) -> str:
 
 def stdlib_sources(settings: SysmacSettings = DEFAULT_SETTINGS) -> list[tuple[str, str]]:
     """(display path, ST text) of every stdlib source, packaged and generated."""
+    load_natives()
+    from stvm.stdlib import bcd, conversions
+    from stvm.stdlib.counters import typed_counters_source
     sources = [(f"{DISPLAY_PREFIX}system_types.st", system_types_source(settings))]
     for name in ST_FILES:
         sources.append((DISPLAY_PREFIX + name, _apply_settings(name, _packaged_text(name), settings)))
