@@ -13,6 +13,7 @@ import gc
 import hashlib
 import marshal
 import pickle
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Sequence
@@ -57,7 +58,8 @@ class Project:
     from_cache: bool = False
     manifest: dict = field(default_factory=dict)
     root: Path | None = None
-    native_modules: tuple[str, ...] = ()   # the stdlib modules implementing what it calls
+    native_modules: tuple[str, ...] = ()   # the stdlib modules implementing the natives it calls
+    natives_known: bool = False            # native_modules is complete (a cached load): import only those
 
     def start(self, scan: str | int = "10ms", realtime: bool = False, start_dt_ns: int = 0,
               transport=None) -> "VM":
@@ -69,6 +71,9 @@ class Project:
 
 def parse_duration(text: str) -> int:
     """'10ms', '1s', '500us', 'T#1ms' → nanoseconds (used by the CLI and the API)."""
+    simple = _SIMPLE_DURATION.fullmatch(text.strip())
+    if simple:    # '10ms', '1s': the usual --scan, without the literal decoder (start-up)
+        return int(simple.group(1)) * _DURATION_UNITS[simple.group(2).lower()]
     from stvm.syntax.literals import LiteralError, decode_time
     body = text.strip()
     if "#" not in body:
@@ -78,6 +83,10 @@ def parse_duration(text: str) -> int:
     except (LiteralError, ValueError, KeyError) as exc:
         raise ValueError(f"invalid duration {text!r} (examples: 1ms, 500us, 2s)") from exc
     return ns
+
+
+_SIMPLE_DURATION = re.compile(r"([0-9]{1,15})(ns|us|ms|s)", re.IGNORECASE)
+_DURATION_UNITS = {"ns": 1, "us": 1_000, "ms": 1_000_000, "s": 1_000_000_000}
 
 
 def expand_paths(paths: Sequence[str | Path]) -> tuple[list[Path], dict, Path | None]:
@@ -436,7 +445,7 @@ def load(paths: Sequence[str | Path], settings: SysmacSettings | None = None, us
             # verified: only this user's stvm (holding the key) can have written it
             model, lowered, warnings, code_bytes, sources, native_modules = pickle.loads(payload)
             return Project(model, lowered, marshal.loads(code_bytes), sources, settings, warnings, True, manifest, root,
-                           native_modules)
+                           native_modules, True)
         except Exception:  # a stale entry (an older stvm's classes) is rebuilt, never fatal
             pass
     analysis, diags, sources = _check_texts(texts, [], settings, use_cache)
@@ -459,10 +468,13 @@ def load(paths: Sequence[str | Path], settings: SysmacSettings | None = None, us
 
 
 def _native_modules(lowered) -> tuple[str, ...]:
-    """The stdlib modules that implement the natives `lowered` calls (what a cached load imports)."""
-    from stvm.stdlib.registry import NATIVE_FBS, NATIVE_FUNCTIONS
-    modules = {NATIVE_FUNCTIONS[k].impl.__module__ for k in lowered.natives.values() if k in NATIVE_FUNCTIONS}
-    modules |= {NATIVE_FBS[k].__module__ for k in lowered.native_fbs.values() if k in NATIVE_FBS}
+    """The stdlib modules that implement the natives the generated code of `lowered` names
+    (what a cached load imports; a superset: a name found in the source counts as called). A
+    native FB's class is always in the source: its module is imported when an instance is made."""
+    from stvm.stdlib.registry import NATIVE_FUNCTIONS
+    named = set(re.findall(r"\bN[0-9]+_\w+", lowered.source))
+    modules = {NATIVE_FUNCTIONS[k].impl.__module__ for py, k in lowered.natives.items()
+               if py in named and k in NATIVE_FUNCTIONS}
     return tuple(sorted(modules))
 
 

@@ -47,20 +47,38 @@ def _ensure_recursion_limit() -> None:
         sys.setrecursionlimit(_RECURSION_LIMIT)
 
 
-def _register_natives(project, functions, fbs) -> None:
-    """Import the stdlib modules whose natives `project` calls (a project from the cache names
-    them; any other gets every module): start-up of `stvm run` pays only for what it uses."""
+def _register_natives(project, functions, fbs) -> bool:
+    """Import the stdlib modules with the natives `project` calls. A project from the cache names
+    them (`native_modules`, the modules of the natives its generated code calls): only those are
+    imported, so `stvm run` pays only for what the program uses; returns False then (the registry
+    may lack natives the program never calls). Any other project gets every module: True."""
     lowered = project.lowered
-    if all(k in functions for k in lowered.natives.values()) and all(k in fbs for k in lowered.native_fbs.values()):
-        return
-    import importlib
-    for module in getattr(project, "native_modules", ()):
-        if module.startswith("stvm.stdlib."):
-            importlib.import_module(module)
-    if all(k in functions for k in lowered.natives.values()) and all(k in fbs for k in lowered.native_fbs.values()):
-        return
-    from stvm.stdlib import load_natives
-    load_natives()
+    if getattr(project, "natives_known", False):
+        import importlib
+        for module in project.native_modules:
+            if module.startswith("stvm.stdlib."):
+                importlib.import_module(module)
+        return False
+    if not (all(k in functions for k in lowered.natives.values()) and all(k in fbs for k in lowered.native_fbs.values())):
+        from stvm.stdlib import load_natives
+        load_natives()
+    return True
+
+
+class _NativeFBs:
+    """`_NATIVE_FB` of a VM whose registry holds only the natives its program calls: a native FB
+    that is not there yet (an FB the program instantiates) loads the rest of the stdlib."""
+
+    def __init__(self, registry) -> None:
+        self._registry = registry
+
+    def __getitem__(self, key):
+        try:
+            return self._registry[key]
+        except KeyError:
+            from stvm.stdlib import load_natives
+            load_natives()
+            return self._registry[key]
 
 
 class RuntimeFault(Exception):
@@ -120,16 +138,18 @@ class VM:
         self.realtime = realtime
         ns: dict[str, Any] = dict(HELPERS)
         from stvm.stdlib.registry import NATIVE_FBS, NATIVE_FUNCTIONS
-        ns["_NATIVE_FB"] = NATIVE_FBS
         lowered = project.lowered
-        _register_natives(project, NATIVE_FUNCTIONS, NATIVE_FBS)
+        complete = _register_natives(project, NATIVE_FUNCTIONS, NATIVE_FBS)
+        ns["_NATIVE_FB"] = NATIVE_FBS if complete else _NativeFBs(NATIVE_FBS)
         for py_name, key in lowered.natives.items():
             native = NATIVE_FUNCTIONS.get(key)
             if native is None:
+                if not complete:
+                    continue    # not called by this program (Project.native_modules)
                 raise RuntimeError(f"stdlib declares {key} native but no implementation is registered")
             ns[py_name] = native.impl
         for py_name, key in lowered.native_fbs.items():
-            if key not in NATIVE_FBS:
+            if complete and key not in NATIVE_FBS:
                 raise RuntimeError(f"stdlib declares FB {key} native but no implementation is registered")
         ns["_T"] = lowered.types
         ns["_ctx"] = self.ctx
