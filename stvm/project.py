@@ -239,7 +239,8 @@ def check(paths: Sequence[str | Path], settings: SysmacSettings | None = None, g
     files, manifest, _ = expand_paths(paths)
     texts, diags = read_files(files, source_encoding(manifest))
     cache_name = f"check-{_cache_key(texts, settings, 'check+generate' if generate else 'check')}.diag"
-    if use_cache and not diags:
+    cacheable = use_cache and not diags      # an unreadable file is reported afresh every time
+    if cacheable:
         payload = _cache().get(cache_name)
         if payload is not None:
             try:
@@ -259,7 +260,7 @@ def check(paths: Sequence[str | Path], settings: SysmacSettings | None = None, g
         except LoadError as exc:
             diags = diags + exc.diagnostics
             analysis = None
-    if use_cache:
+    if cacheable:
         user = {name for name, _ in texts}
         # the stdlib's text is kept with the verdict: a diagnostic may point into it
         extra = {name: text for name, text in sources.items() if name not in user}

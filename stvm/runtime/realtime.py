@@ -26,6 +26,7 @@ from __future__ import annotations
 import gc
 import os
 import sys
+import threading
 import time
 
 # the knobs (module level, so bench/bench_realtime.py can measure each alone)
@@ -36,6 +37,10 @@ GC_IDLE_NS = 300_000       # collect between scans only with this much time left
 MANAGE_GC = True           # False: the collector runs whenever it likes, inside scans too
 TIMER_SLACK_NS = 1         # None: keep the OS default (50 µs on Linux)
 _PR_SET_TIMERSLACK = 29
+
+_GC_LOCK = threading.Lock()
+_GC_HOLDERS: set[int] = set()     # the Pacers holding the collector
+_GC_STATE: dict[str, bool] = {}
 
 
 def _set_timer_slack(ns: int) -> bool:
@@ -75,26 +80,33 @@ class Pacer:
         # first deadline, not inside the loop (an import under load stalled a run by 240 ms)
         import numpy  # noqa: F401  (lazy: start-up, real-time runs only)
         self.gc_managed = False
-        self._gc_was_enabled = False
         self.gc_collections = 0     # collections run between scans
 
     # ---- the garbage collector during the scan loop
     def take_gc(self) -> None:
+        """The collector off (the heap frozen) while this VM's loop runs. The collector is the
+        process's: several real-time VMs at once (threads) share one hold, the last gives it back."""
         if self.gc_managed or not self.manage_gc:
             return
-        self._gc_was_enabled = gc.isenabled()
-        gc.collect()
-        gc.freeze()
-        gc.disable()
+        with _GC_LOCK:
+            if not _GC_HOLDERS:
+                _GC_STATE["was_enabled"] = gc.isenabled()
+                gc.collect()
+                gc.freeze()
+                gc.disable()
+            _GC_HOLDERS.add(id(self))
         self.gc_managed = True
 
     def release_gc(self) -> None:
         if not self.gc_managed:
             return
         self.gc_managed = False
-        gc.unfreeze()
-        if self._gc_was_enabled:
-            gc.enable()
+        with _GC_LOCK:
+            _GC_HOLDERS.discard(id(self))
+            if not _GC_HOLDERS:
+                gc.unfreeze()
+                if _GC_STATE.get("was_enabled"):
+                    gc.enable()
 
     def _collect_if_due(self, idle_ns: int) -> None:
         count0, count1, count2 = gc.get_count()

@@ -55,3 +55,13 @@ def test_a_virtual_clock_run_leaves_the_collector_alone():
     vm.on_scan_end.append(lambda _vm: seen.append(gc.isenabled()))
     vm.run(cycles=3)
     assert seen == [True] * 3 and vm.pacer is None
+
+
+def test_two_holders_share_the_collector_and_the_last_gives_it_back():
+    first, second = realtime.Pacer(), realtime.Pacer()
+    first.take_gc()
+    second.take_gc()
+    first.release_gc()
+    assert not gc.isenabled()              # the second loop still runs
+    second.release_gc()
+    assert gc.isenabled() and gc.get_freeze_count() == 0
