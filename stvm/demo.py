@@ -11,8 +11,6 @@ from __future__ import annotations
 
 import contextlib
 import errno
-import random
-import socket
 import sys
 import time
 from dataclasses import dataclass, field
@@ -30,6 +28,8 @@ def free_loopback_port(preferred: int = TM_LISTEN_PORT, below: int = 32768) -> i
 
     The thesis HMI variable for the port (`Connect_Dest_PortIP`, Table 6.2.1) is an INT, so the
     demo only uses ports up to 32767 (the Listen Node default 5890 first)."""
+    import random   # lazy: start-up (`stvm` imports this module on every call)
+    import socket
     candidates = [preferred] + random.Random().sample(range(20000, below), 200)
     for port in candidates:
         with contextlib.closing(socket.socket(socket.AF_INET, socket.SOCK_STREAM)) as probe:
