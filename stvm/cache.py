@@ -24,7 +24,6 @@ from __future__ import annotations
 import hashlib
 import hmac
 import os
-import secrets
 import stat
 import warnings
 from pathlib import Path
@@ -123,6 +122,7 @@ def _create_key(path: Path) -> bytes | None:
     except OSError as exc:
         _warn(f"compile cache disabled: cannot create the cache key {path}: {exc.strerror or exc}")
         return None
+    import secrets   # lazy: start-up (only when the key is created)
     key = secrets.token_bytes(TAG_BYTES)
     try:
         os.write(fd, key)

@@ -11,8 +11,7 @@ cycles = N`, or the short flag it declares: `cycles_flag = "--pnp-cycles"` makes
 from __future__ import annotations
 
 import contextlib
-import random
-import socket
+import errno
 import sys
 import time
 from dataclasses import dataclass, field
@@ -30,6 +29,8 @@ def free_loopback_port(preferred: int = TM_LISTEN_PORT, below: int = 32768) -> i
 
     The thesis HMI variable for the port (`Connect_Dest_PortIP`, Table 6.2.1) is an INT, so the
     demo only uses ports up to 32767 (the Listen Node default 5890 first)."""
+    import random   # lazy: start-up (`stvm` imports this module on every call)
+    import socket
     candidates = [preferred] + random.Random().sample(range(20000, below), 200)
     for port in candidates:
         with contextlib.closing(socket.socket(socket.AF_INET, socket.SOCK_STREAM)) as probe:
@@ -94,8 +95,17 @@ class Demo:
             self.robot_address = parse_robot(self.args.robot)
         else:
             import emulator   # lazy: start-up
-            port = free_loopback_port()
-            self.server = emulator.start_server(host="127.0.0.1", port=port, log_path=self.args.emulator_log)
+            for attempt in range(5):
+                # another process may take the port between the probe and the bind (parallel
+                # demos, a test suite on several cores): then take another one
+                port = free_loopback_port()
+                try:
+                    self.server = emulator.start_server(host="127.0.0.1", port=port,
+                                                        log_path=self.args.emulator_log)
+                    break
+                except OSError as exc:
+                    if exc.errno != errno.EADDRINUSE or attempt == 4:
+                        raise
             self.robot_address = ("127.0.0.1", self.server.port)
         overrides: dict[str, Any] = {}
         if scenario is not None:

@@ -26,7 +26,6 @@ from __future__ import annotations
 
 import codecs
 import re
-import tomllib
 from pathlib import Path
 from typing import Any
 
@@ -81,6 +80,7 @@ _SCHEMA: dict[str, dict[str, tuple[Any, str]] | None] = {
 
 def read_manifest(path: Path) -> dict:
     """The checked contents of a `stvm.toml` (a plain dict, as TOML gives it)."""
+    import tomllib   # lazy: start-up (a run without a manifest never parses TOML)
     try:
         with path.open("rb") as fh:
             data = tomllib.load(fh)

@@ -13,6 +13,7 @@ import gc
 import hashlib
 import marshal
 import pickle
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Sequence
@@ -57,19 +58,25 @@ class Project:
     from_cache: bool = False
     manifest: dict = field(default_factory=dict)
     root: Path | None = None
+    native_modules: tuple[str, ...] = ()   # the stdlib modules implementing the natives it calls
+    natives_known: bool = False            # native_modules is complete (a cached load): import only those
 
     def start(self, scan: str | int = "10ms", realtime: bool = False, start_dt_ns: int = 0,
               transport=None) -> "VM":
         """A fresh VM for this project (all variables at their initial values)."""
         from stvm.runtime.vm import VM   # lazy: start-up (`stvm check` never runs a VM)
-        from stvm.stdlib import NATIVE_FBS, NATIVE_FUNCTIONS   # lazy: start-up (`import stvm.project`)
+        from stvm.stdlib import natives_for   # lazy: start-up (`import stvm.project`)
         scan_ns = parse_duration(scan) if isinstance(scan, str) else int(scan)
+        functions, fbs = natives_for(self)   # only the stdlib modules the program calls, when cached
         return VM(self, scan_ns=scan_ns, realtime=realtime, start_dt_ns=start_dt_ns, transport=transport,
-                  natives=NATIVE_FUNCTIONS, native_fbs=NATIVE_FBS)
+                  natives=functions, native_fbs=fbs)
 
 
 def parse_duration(text: str) -> int:
     """'10ms', '1s', '500us', 'T#1ms' → nanoseconds (used by the CLI and the API)."""
+    simple = _SIMPLE_DURATION.fullmatch(text.strip())
+    if simple:    # '10ms', '1s': the usual --scan, without the literal decoder (start-up)
+        return int(simple.group(1)) * _DURATION_UNITS[simple.group(2).lower()]
     from stvm.syntax.literals import LiteralError, decode_time   # lazy: start-up
     body = text.strip()
     if "#" not in body:
@@ -79,6 +86,10 @@ def parse_duration(text: str) -> int:
     except (LiteralError, ValueError, KeyError) as exc:
         raise ValueError(f"invalid duration {text!r} (examples: 1ms, 500us, 2s)") from exc
     return ns
+
+
+_SIMPLE_DURATION = re.compile(r"([0-9]{1,15})(ns|us|ms|s)", re.IGNORECASE)
+_DURATION_UNITS = {"ns": 1, "us": 1_000, "ms": 1_000_000, "s": 1_000_000_000}
 
 
 def expand_paths(paths: Sequence[str | Path]) -> tuple[list[Path], dict, Path | None]:
@@ -274,7 +285,8 @@ def check(paths: Sequence[str | Path], settings: SysmacSettings | None = None, g
     files, manifest, _ = expand_paths(paths)
     texts, diags = read_files(files, source_encoding(manifest))
     cache_name = f"check-{_cache_key(texts, settings, 'check+generate' if generate else 'check')}.diag"
-    if use_cache and not diags:
+    cacheable = use_cache and not diags      # an unreadable file is reported afresh every time
+    if cacheable:
         payload = _cache().get(cache_name)
         if payload is not None:
             try:
@@ -294,7 +306,7 @@ def check(paths: Sequence[str | Path], settings: SysmacSettings | None = None, g
         except LoadError as exc:
             diags = diags + exc.diagnostics
             analysis = None
-    if use_cache:
+    if cacheable:
         user = {name for name, _ in texts}
         # the stdlib's text is kept with the verdict: a diagnostic may point into it
         extra = {name: text for name, text in sources.items() if name not in user}
@@ -479,8 +491,9 @@ def load(paths: Sequence[str | Path], settings: SysmacSettings | None = None, us
     if payload is not None:
         try:
             # verified: only this user's stvm (holding the key) can have written it
-            model, lowered, warnings, code_bytes, sources = pickle.loads(payload)
-            return Project(model, lowered, marshal.loads(code_bytes), sources, settings, warnings, True, manifest, root)
+            model, lowered, warnings, code_bytes, sources, native_modules = pickle.loads(payload)
+            return Project(model, lowered, marshal.loads(code_bytes), sources, settings, warnings, True, manifest, root,
+                           native_modules, True)
         except Exception:  # a stale entry (an older stvm's classes) is rebuilt, never fatal
             pass
     analysis, diags, sources = _check_texts(texts, [], settings, use_cache)
@@ -488,17 +501,29 @@ def load(paths: Sequence[str | Path], settings: SysmacSettings | None = None, us
         raise LoadError(diags, sources)
     lowered, code = _lower_and_compile(analysis, settings, texts, sources)
     warnings = [d for d in diags if not d.is_error]
-    project = Project(analysis.model, lowered, code, sources, settings, warnings, False, manifest, root)
+    project = Project(analysis.model, lowered, code, sources, settings, warnings, False, manifest, root,
+                      _native_modules(lowered))
     if use_cache:
         try:
-            payload = pickle.dumps((analysis.model, lowered, warnings, marshal.dumps(code), sources),
-                                   protocol=pickle.HIGHEST_PROTOCOL)
+            payload = pickle.dumps((analysis.model, lowered, warnings, marshal.dumps(code), sources,
+                                    project.native_modules), protocol=pickle.HIGHEST_PROTOCOL)
         except (pickle.PicklingError, RecursionError, TypeError):
             payload = None
         if payload is not None:
             _cache().put(cache_name, payload)
             _cache().prune("*.bin", CACHE_MAX_ENTRIES)
     return project
+
+
+def _native_modules(lowered) -> tuple[str, ...]:
+    """The stdlib modules that implement the natives the generated code of `lowered` names
+    (what a cached load imports; a superset: a name found in the source counts as called). A
+    native FB's class is always in the source: its module is imported when an instance is made."""
+    from stvm.stdlib.registry import NATIVE_FUNCTIONS
+    named = set(re.findall(r"\bN[0-9]+_\w+", lowered.source))
+    modules = {NATIVE_FUNCTIONS[k].impl.__module__ for py, k in lowered.natives.items()
+               if py in named and k in NATIVE_FUNCTIONS}
+    return tuple(sorted(modules))
 
 
 CACHE_MAX_ENTRIES = 200

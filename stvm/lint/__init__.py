@@ -17,12 +17,12 @@ from typing import Iterable, Sequence
 from typing import TYPE_CHECKING
 
 from stvm.diagnostics import Diagnostic
-from stvm.lint.findings import Finding, Rule
 from stvm.settings import DEFAULT_SETTINGS, SysmacSettings
 from stvm.lint.context import ProjectContext
 
 if TYPE_CHECKING:
     from stvm.lint.config import LintConfig
+    from stvm.lint.findings import Finding, Rule
 
 __all__ = ["lint", "lint_analysis", "LintReport", "Finding", "Rule", "all_rules", "select_rules"]
 
@@ -33,6 +33,9 @@ def __getattr__(name):
     if name in ("all_rules", "select_rules"):
         from stvm.lint import registry   # lazy: start-up
         return getattr(registry, name)
+    if name in ("Finding", "Rule"):
+        from stvm.lint import findings
+        return getattr(findings, name)
     if name in ("LintConfig", "load_config", "suppressed"):
         from stvm.lint import config   # lazy: start-up
         return getattr(config, name)

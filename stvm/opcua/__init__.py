@@ -10,10 +10,14 @@ OPC UA built-in types, `nodes` chooses and builds the address space, `server` ru
 the scan loop on the front-end bridge. asyncua is imported only when a server is wanted.
 """
 
-from stvm.opcua.config import DEFAULT_ENDPOINT, OpcUaConfig, OpcUaConfigError, load_config, parse_endpoint
 
 
 def __getattr__(name: str):
+    # lazy: start-up (`stvm.opcua.cli` adds `--opcua` to every `stvm run`; the config reader
+    # loads when the option is given)
+    if name in ("DEFAULT_ENDPOINT", "OpcUaConfig", "OpcUaConfigError", "load_config", "parse_endpoint"):
+        from stvm.opcua import config
+        return getattr(config, name)
     if name == "OpcUaServer":   # asyncua takes ~0.3 s to import: only when a server starts
         from stvm.opcua.server import OpcUaServer   # lazy: start-up (asyncua)
         return OpcUaServer

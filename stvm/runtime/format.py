@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import calendar
 import math
 
 from stvm.numeric import f32
@@ -183,4 +182,5 @@ def _format_array(value: list, ty: t.ArrayType, depth: int, pous) -> str:
 
 
 def parse_datetime_ns(y: int, mo: int, d: int, h: int = 0, mi: int = 0, s: int = 0) -> int:
+    import calendar   # lazy: start-up (calendar pulls in datetime and locale)
     return calendar.timegm((y, mo, d, h, mi, s)) * _NS

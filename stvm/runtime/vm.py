@@ -114,10 +114,12 @@ class VM:
         for py_name, key in lowered.natives.items():
             native = NATIVE_FUNCTIONS.get(key)
             if native is None:
+                if not complete:
+                    continue    # not called by this program (Project.native_modules)
                 raise RuntimeError(f"stdlib declares {key} native but no implementation is registered")
             ns[py_name] = native.impl
         for py_name, key in lowered.native_fbs.items():
-            if key not in NATIVE_FBS:
+            if complete and key not in NATIVE_FBS:
                 raise RuntimeError(f"stdlib declares FB {key} native but no implementation is registered")
         ns["_T"] = lowered.types
         ns["_ctx"] = self.ctx
@@ -145,6 +147,7 @@ class VM:
         self.on_scan_start: list[Callable[["VM"], None]] = []   # front ends' queued writes
         self.on_scan_end: list[Callable[["VM"], None]] = []
         self._rt_start: int | None = None
+        self.pacer = None           # real time: the deadline keeper (stvm/runtime/realtime.py)
         self.jitter_ns = TimingStats()
         self.held = False           # a front end's run control holds the VM between two scans
         # called by a loop that holds the VM between two scans (a paused run control, a debugger
@@ -265,11 +268,13 @@ class VM:
         now = time.perf_counter_ns()
         if self._rt_start is None:
             self._rt_start = now - self.base_ns
+        if self.pacer is None:
+            from stvm.runtime.realtime import Pacer   # lazy: start-up (real-time runs only)
+            self.pacer = Pacer()
         deadline = self._rt_start + self.scan_count * self.base_ns
         waited = now < deadline
         if waited:
-            time.sleep((deadline - now) / 1e9)
-            now = time.perf_counter_ns()
+            now = self.pacer.wait_until(deadline)   # sleep, then spin (stvm/runtime/realtime.py)
         lateness = max(0, now - deadline)
         self.jitter_ns.add(lateness)
         if lateness > self.max_lateness_ns:
@@ -307,12 +312,21 @@ class VM:
         """Run `cycles` scans, or until `duration_ns` of VM time, or forever (Ctrl-C stops)."""
         if cycles is None and duration_ns is not None:
             cycles = -(-duration_ns // self.base_ns)
-        count = 0
-        while cycles is None or count < cycles:
-            self.scan()
-            count += 1
-            if until is not None and until():
-                break
+        if self.realtime and self.pacer is None:
+            from stvm.runtime.realtime import Pacer   # lazy: start-up (real-time runs only)
+            self.pacer = Pacer()
+        if self.pacer is not None:
+            self.pacer.take_gc()       # the collector runs between scans, never inside one
+        try:
+            count = 0
+            while cycles is None or count < cycles:
+                self.scan()
+                count += 1
+                if until is not None and until():
+                    break
+        finally:
+            if self.pacer is not None:
+                self.pacer.release_gc()
 
     def close(self) -> None:
         transport = self.ctx.transport

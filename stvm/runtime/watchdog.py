@@ -9,7 +9,6 @@ into a `RuntimeFault` at the ST statement that was running.
 
 from __future__ import annotations
 
-import ctypes
 import threading
 import time
 
@@ -49,5 +48,6 @@ class Watchdog:
                 last_scan, since = self.vm.scan_count, time.monotonic()
                 continue
             if time.monotonic() - since > self.limit_s:
+                import ctypes   # lazy: start-up (only when a scan hangs)
                 ctypes.pythonapi.PyThreadState_SetAsyncExc(ctypes.c_ulong(self.target), ctypes.py_object(WatchdogExpired))
                 since = time.monotonic()

@@ -13,17 +13,69 @@ R_TRIG's first call (`rtrig_first_call`) and the Omron pin aliases (`iec_pin_ali
 
 from __future__ import annotations
 
+import importlib
 from functools import lru_cache
 from importlib import resources
 
 from stvm.settings import DEFAULT_SETTINGS, Dialect, IecPinAliases, RtrigFirstCall, SockaddrPortnoType, SysmacSettings
 
-# Importing the implementation modules registers the natives.
-from stvm.stdlib import conversions, numeric, omron, sockets, strings, timefns, timers  # noqa: F401
-from stvm.stdlib import bcd
-from stvm.stdlib.counters import typed_counters_source
 from stvm.stdlib.registry import NATIVE_FBS, NATIVE_FUNCTIONS, native_fb, native_function
-from stvm.stdlib.sockets import RealTcpTransport, SocketTable, Transport, make_default_transport
+
+# Importing the implementation modules registers the natives: `load_natives()` imports them all
+# (the checker needs every declaration; `stdlib_sources` calls it), a VM from the cache imports
+# only the modules its program calls into (`Project.native_modules`). lazy: start-up
+IMPLEMENTATIONS = ("conversions", "numeric", "omron", "sockets", "strings", "timefns", "timers", "bcd")
+_SOCKET_NAMES = ("RealTcpTransport", "SocketTable", "Transport", "make_default_transport")
+
+
+def natives_for(project):
+    """(native functions, native FBs) for a VM of `project` (what `Project.start` passes it)."""
+    complete = _register_natives(project, NATIVE_FUNCTIONS, NATIVE_FBS)
+    return NATIVE_FUNCTIONS, (NATIVE_FBS if complete else _NativeFBs(NATIVE_FBS))
+
+
+def _register_natives(project, functions, fbs) -> bool:
+    """Import the stdlib modules with the natives `project` calls. A project from the cache names
+    them (`native_modules`, the modules of the natives its generated code calls): only those are
+    imported, so `stvm run` pays only for what the program uses; returns False then (the registry
+    may lack natives the program never calls). Any other project gets every module: True."""
+    lowered = project.lowered
+    if getattr(project, "natives_known", False):
+        for module in project.native_modules:
+            if module.startswith("stvm.stdlib."):
+                importlib.import_module(module)
+        return False
+    if not (all(k in functions for k in lowered.natives.values()) and all(k in fbs for k in lowered.native_fbs.values())):
+        load_natives()
+    return True
+
+
+class _NativeFBs:
+    """`_NATIVE_FB` of a VM whose registry holds only the natives its program calls: a native FB
+    that is not there yet (an FB the program instantiates) loads the rest of the stdlib."""
+
+    def __init__(self, registry) -> None:
+        self._registry = registry
+
+    def __getitem__(self, key):
+        try:
+            return self._registry[key]
+        except KeyError:
+            load_natives()
+            return self._registry[key]
+
+
+def load_natives() -> None:
+    """Register every native function and FB (import all the implementation modules)."""
+    for name in IMPLEMENTATIONS:
+        importlib.import_module(f"stvm.stdlib.{name}")
+
+
+def __getattr__(name: str):
+    if name in _SOCKET_NAMES:
+        from stvm.stdlib import sockets
+        return getattr(sockets, name)
+    raise AttributeError(name)
 
 ST_FILES = ("iec_standard.st", "iec_functions.st", "omron.st", "sockets.st")
 DISPLAY_PREFIX = "<stdlib>/"
@@ -75,6 +127,9 @@ def system_types_source(settings: SysmacSettings = DEFAULT_SETTINGS) -> str:
 
 def stdlib_sources(settings: SysmacSettings = DEFAULT_SETTINGS) -> list[tuple[str, str]]:
     """(display path, ST text) of every stdlib source, packaged and generated."""
+    load_natives()
+    from stvm.stdlib import bcd, conversions
+    from stvm.stdlib.counters import typed_counters_source
     sources = [(f"{DISPLAY_PREFIX}system_types.st", system_types_source(settings))]
     for name in ST_FILES:
         sources.append((DISPLAY_PREFIX + name, _apply_settings(name, _packaged_text(name), settings)))

@@ -13,7 +13,8 @@ ROOT = Path(__file__).resolve().parents[2]
 if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
-import stvm.stdlib  # noqa: E402,F401  (fills the registry)
+import stvm.stdlib  # noqa: E402
+stvm.stdlib.load_natives()   # fills the registry
 from stvm.runtime.context import RunContext  # noqa: E402
 from stvm.settings import SysmacSettings  # noqa: E402
 from stvm.stdlib.registry import NATIVE_FBS, NATIVE_FUNCTIONS  # noqa: E402
