@@ -519,7 +519,7 @@ def _native_modules(lowered) -> tuple[str, ...]:
     """The stdlib modules that implement the natives the generated code of `lowered` names
     (what a cached load imports; a superset: a name found in the source counts as called). A
     native FB's class is always in the source: its module is imported when an instance is made."""
-    from stvm.stdlib.registry import NATIVE_FUNCTIONS
+    from stvm.stdlib.registry import NATIVE_FUNCTIONS   # lazy: start-up
     named = set(re.findall(r"\bN[0-9]+_\w+", lowered.source))
     modules = {NATIVE_FUNCTIONS[k].impl.__module__ for py, k in lowered.natives.items()
                if py in named and k in NATIVE_FUNCTIONS}

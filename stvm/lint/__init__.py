@@ -34,7 +34,7 @@ def __getattr__(name):
         from stvm.lint import registry   # lazy: start-up
         return getattr(registry, name)
     if name in ("Finding", "Rule"):
-        from stvm.lint import findings
+        from stvm.lint import findings   # lazy: start-up
         return getattr(findings, name)
     if name in ("LintConfig", "load_config", "suppressed"):
         from stvm.lint import config   # lazy: start-up

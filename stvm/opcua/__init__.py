@@ -16,7 +16,7 @@ def __getattr__(name: str):
     # lazy: start-up (`stvm.opcua.cli` adds `--opcua` to every `stvm run`; the config reader
     # loads when the option is given)
     if name in ("DEFAULT_ENDPOINT", "OpcUaConfig", "OpcUaConfigError", "load_config", "parse_endpoint"):
-        from stvm.opcua import config
+        from stvm.opcua import config   # lazy: start-up
         return getattr(config, name)
     if name == "OpcUaServer":   # asyncua takes ~0.3 s to import: only when a server starts
         from stvm.opcua.server import OpcUaServer   # lazy: start-up (asyncua)

@@ -73,7 +73,7 @@ def load_natives() -> None:
 
 def __getattr__(name: str):
     if name in _SOCKET_NAMES:
-        from stvm.stdlib import sockets
+        from stvm.stdlib import sockets   # lazy: start-up
         return getattr(sockets, name)
     raise AttributeError(name)
 
@@ -128,8 +128,8 @@ def system_types_source(settings: SysmacSettings = DEFAULT_SETTINGS) -> str:
 def stdlib_sources(settings: SysmacSettings = DEFAULT_SETTINGS) -> list[tuple[str, str]]:
     """(display path, ST text) of every stdlib source, packaged and generated."""
     load_natives()
-    from stvm.stdlib import bcd, conversions
-    from stvm.stdlib.counters import typed_counters_source
+    from stvm.stdlib import bcd, conversions   # lazy: start-up
+    from stvm.stdlib.counters import typed_counters_source   # lazy: start-up
     sources = [(f"{DISPLAY_PREFIX}system_types.st", system_types_source(settings))]
     for name in ST_FILES:
         sources.append((DISPLAY_PREFIX + name, _apply_settings(name, _packaged_text(name), settings)))
