@@ -110,6 +110,9 @@ class VM:
         NATIVE_FUNCTIONS = natives if natives is not None else {}
         NATIVE_FBS = native_fbs if native_fbs is not None else {}
         ns["_NATIVE_FB"] = NATIVE_FBS
+        # a registry that holds only what this program calls (a cached project: see
+        # stvm.stdlib.natives_for) says so with `partial`; then a missing native is not an error
+        complete = not getattr(NATIVE_FBS, "partial", False)
         lowered = project.lowered
         for py_name, key in lowered.natives.items():
             native = NATIVE_FUNCTIONS.get(key)
