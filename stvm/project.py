@@ -228,6 +228,8 @@ def _cache_key(texts: list[tuple[str, str]], settings: SysmacSettings) -> str:
     digest.update(repr(settings).encode())
     for name, text in texts:
         digest.update(name.encode() + b"\0" + text.encode("utf-8", "replace") + b"\0")
+        if hasattr(text, "original"):   # a vendor XML file: its excerpts come from the XML itself
+            digest.update(text.original.encode("utf-8", "replace") + b"\0")
     return digest.hexdigest()
 
 

@@ -132,9 +132,11 @@ def _longest_paths(graph: dict[str, list[tuple[str, str]]]) -> tuple[dict[str, i
 
 class Checker:
     def __init__(self, units: list[n.CompilationUnit], settings: SysmacSettings) -> None:
+        from stvm.semantics.qualified import resolve   # `GVL.x`, `Enum.member`, qualified_only
+        units, qualified = resolve(list(units))
         self.units = units
         self.settings = settings
-        self.diags: list[Diagnostic] = []
+        self.diags: list[Diagnostic] = qualified
         self.facts = Facts()
         self.index = _Index()
         self.resolved_types: dict[str, t.Type | None] = {}
@@ -1018,9 +1020,4 @@ from stvm.semantics.body import _BodyChecker  # noqa: E402  (body checker needs 
 
 def analyze(units: list[n.CompilationUnit], settings: SysmacSettings = DEFAULT_SETTINGS) -> Analysis:
     """Check all units together; returns the model, per-node facts and every diagnostic."""
-    from stvm.semantics.qualified import resolve   # `GVL.x`, `Enum.member`, qualified_only
-    units, qualified = resolve(list(units))
-    analysis = Checker(units, settings).run()
-    if qualified:
-        analysis.diagnostics[:0] = qualified
-    return analysis
+    return Checker(units, settings).run()

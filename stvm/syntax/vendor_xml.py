@@ -431,6 +431,7 @@ class _Out:
 
     def value(self, text: str, offset: int) -> None:
         """Text spelled in the XML at `offset` (an attribute value), mapped character by character."""
+        text = text.replace("\r", " ").replace("\n", " ")   # `&#10;` must not move the lines below
         line, col = self.lines_of.position(offset)
         if not self._goto(line, col):
             if not self._last().isspace():
@@ -479,6 +480,17 @@ class _Reader:
     def error(self, message: str, el: _El) -> SourceError:
         line, col = self.lines.position(el.start)
         return _xml_error(message, self.text, line, col)
+
+    def name(self, el: _El, attr: str = "name") -> None:
+        """The identifier in attribute `attr` of `el`, written at its place (a name that is not
+        an ST identifier is an error there, never ST text)."""
+        value = el.attrib.get(attr)
+        if value is None:
+            raise self.error(f"<{el.tag}> has no {attr}=\"…\"", el)
+        if not _IDENT.match(value):
+            line, col = self.lines.position(self.attr_offset(el, attr))
+            raise _xml_error(f"{attr}={value[:40]!r} of <{el.tag}> is not an ST identifier", self.text, line, col)
+        self.out.value(value, self.attr_offset(el, attr))
 
     def attr_offset(self, el: _El, name: str) -> int:
         """Offset of the value of attribute `name` in el's start tag (the tag itself if absent)."""
@@ -556,7 +568,7 @@ class _Reader:
                 # an action is the POU's code under a name, called as `inst.A()`: a method with
                 # no parameters and no variables of its own
                 self.out.glue("METHOD", child.start + 1)
-                self.out.value(child.attrib.get("Name", "?"), self.attr_offset(child, "Name"))
+                self.name(child, "Name")
                 self.tc_body(child, f"action '{child.attrib.get('Name', '?')}'")
                 self.out.glue("END_METHOD", child.end)
         self.out.glue(_END_OF[kind], pou.end)
@@ -594,7 +606,7 @@ class _Reader:
         return out
 
     def data_type(self, dt: _El) -> None:
-        self.out.value(dt.attrib.get("name", "?"), self.attr_offset(dt, "name"))
+        self.name(dt)
         base = dt.find("baseType")
         if base is None or not base.children:
             raise self.error(f"data type '{dt.attrib.get('name', '?')}' has no <baseType>", dt)
@@ -611,7 +623,7 @@ class _Reader:
             for i, value in enumerate(values.findall("value") if values is not None else []):
                 if i:
                     self.out.glue(",", value.start)
-                self.out.value(value.attrib.get("name", "?"), self.attr_offset(value, "name"))
+                self.name(value)
                 if "value" in value.attrib:
                     self.out.glue(":=", self.attr_offset(value, "value") - 1)
                     self.out.value(value.attrib["value"], self.attr_offset(value, "value"))
@@ -629,7 +641,7 @@ class _Reader:
     def type_spec(self, spec: _El) -> None:
         tag = spec.tag
         if tag == "derived":
-            self.out.value(spec.attrib.get("name", "?"), self.attr_offset(spec, "name"))
+            self.name(spec)
         elif tag in ("string", "wstring"):
             self.out.glue(tag.upper(), spec.start + 1)
             if "length" in spec.attrib:
@@ -701,7 +713,7 @@ class _Reader:
             for i, item in enumerate(val.findall("value")):
                 if i:
                     self.out.glue(",", item.start)
-                self.out.value(item.attrib.get("member", "?"), self.attr_offset(item, "member"))
+                self.name(item, "member")
                 self.out.glue(":=", item.start + 1)
                 if item.children:
                     self.value_element(item.children[0])
@@ -710,7 +722,7 @@ class _Reader:
             raise self.error(f"unknown initial value <{val.tag}>", val)
 
     def variable(self, var: _El) -> None:
-        self.out.value(var.attrib.get("name", "?"), self.attr_offset(var, "name"))
+        self.name(var)
         if "address" in var.attrib:
             self.out.glue("AT", self.attr_offset(var, "address") - 1)
             self.out.value(var.attrib["address"], self.attr_offset(var, "address"))
@@ -765,7 +777,7 @@ class _Reader:
             raise self.error(f"pou '{name}' has pouType {pou.attrib.get('pouType')!r}; expected function, "
                              f"functionBlock or program", pou)
         self.out.glue(kind, pou.start + 1)
-        self.out.value(name, self.attr_offset(pou, "name"))
+        self.name(pou)
         iface = pou.find("interface")
         ret = iface.find("returnType") if iface is not None else None
         if ret is not None and ret.children:
@@ -776,7 +788,7 @@ class _Reader:
         for method in self._add_data(pou, "method", "Method"):
             mname = method.attrib.get("name", "?")
             self.out.glue("METHOD", method.start + 1)
-            self.out.value(mname, self.attr_offset(method, "name"))
+            self.name(method)
             miface = method.find("interface")
             mret = miface.find("returnType") if miface is not None else None
             if mret is not None and mret.children:
@@ -788,7 +800,7 @@ class _Reader:
         for prop in self._add_data(pou, "property", "Property"):
             pname = prop.attrib.get("name", "?")
             self.out.glue("PROPERTY", prop.start + 1)
-            self.out.value(pname, self.attr_offset(prop, "name"))
+            self.name(prop)
             piface = prop.find("interface")
             pret = piface.find("returnType") if piface is not None else None
             if pret is None or not pret.children:
@@ -806,25 +818,25 @@ class _Reader:
         actions = pou.find("actions")
         for action in actions.findall("action") if actions is not None else []:
             self.out.glue("METHOD", action.start + 1)
-            self.out.value(action.attrib.get("name", "?"), self.attr_offset(action, "name"))
+            self.name(action)
             self.plc_body(action, f"action '{action.attrib.get('name', '?')}'")
             self.out.glue("END_METHOD", action.end)
         self.out.glue(_END_OF[kind], pou.end)
 
     def configuration(self, conf: _El) -> None:
         self.out.glue("CONFIGURATION", conf.start + 1)
-        self.out.value(conf.attrib.get("name", "?"), self.attr_offset(conf, "name"))
+        self.name(conf)
         for gv in conf.findall("globalVars"):
             self.var_list(gv, "VAR_GLOBAL")
         for res in conf.findall("resource"):
             self.out.glue("RESOURCE", res.start + 1)
-            self.out.value(res.attrib.get("name", "?"), self.attr_offset(res, "name"))
+            self.name(res)
             self.out.glue("ON PLC", res.content_start - 1)
             for gv in res.findall("globalVars"):
                 self.var_list(gv, "VAR_GLOBAL")
             for task in res.findall("task"):
                 self.out.glue("TASK", task.start + 1)
-                self.out.value(task.attrib.get("name", "?"), self.attr_offset(task, "name"))
+                self.name(task)
                 params = [(k, task.attrib[k]) for k in ("interval", "single", "priority") if k in task.attrib]
                 for i, (key, value) in enumerate(params):
                     self.out.glue("(" if i == 0 else ",", self.attr_offset(task, key) - len(key) - 2)
@@ -842,11 +854,11 @@ class _Reader:
 
     def program_instance(self, inst: _El, task: str | None) -> None:
         self.out.glue("PROGRAM", inst.start + 1)
-        self.out.value(inst.attrib.get("name", "?"), self.attr_offset(inst, "name"))
+        self.name(inst)
         if task:
             self.out.glue(f"WITH {task}", self.attr_offset(inst, "typeName") - len('typeName="'))
         self.out.glue(":", self.attr_offset(inst, "typeName") - 1)
-        self.out.value(inst.attrib.get("typeName", "?"), self.attr_offset(inst, "typeName"))
+        self.name(inst, "typeName")
         self.out.glue(";", inst.end)
 
 

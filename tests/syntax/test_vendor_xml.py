@@ -358,3 +358,25 @@ def test_twincat_sources_are_read_in_the_twincat_dialect(tmp_path):
     assert (rc, out) == (0, "MAIN.fb._nCount = 2\nMAIN.s = 'ok'\n"), err
     rc, _, err = cli(["check", tmp_path, "--dialect", "sysmac"])
     assert rc == 1 and "name '_nCount' may not start with '_'" in err
+
+
+def test_a_plcopen_name_that_is_not_an_identifier_is_an_error_at_its_attribute(tmp_path):
+    xml = PLCOPEN.read_text(encoding="utf-8").replace('<variable name="nMax">', '<variable name="n Max;">')
+    path = tmp_path / "Conveyor.xml"
+    path.write_text(xml, encoding="utf-8")
+    rc, _, err = cli(["check", path])
+    assert rc == 1
+    assert_no_traceback(err)
+    line, col = _xml_position(xml, 'n Max;"')
+    assert f"{path}:{line}:{col}: error: name='n Max;' of <variable> is not an ST identifier" in err
+
+
+def test_the_debug_build_reads_vendor_files():
+    from stvm.debug.build import load_debug
+    build = load_debug([TWINCAT])
+    main = str(TWINCAT / "POUs" / "MAIN.TcPOU")
+    assert build.project.sources[main].startswith("<?xml")
+    xml = (TWINCAT / "POUs" / "MAIN.TcPOU").read_text(encoding="utf-8")
+    line, _ = _xml_position(xml, "stData.nValue := fbCounter.nCount;")
+    found = build.pou_at(main, line)
+    assert found is not None and found[1].name == "MAIN"
