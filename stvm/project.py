@@ -131,7 +131,9 @@ def _vendor_sources(folder: Path) -> list[Path]:
     return folder_sources(folder)
 
 
-def _read(path: Path, encoding: str) -> str:
+def read_source_text(path: Path, encoding: str = "utf-8") -> str:
+    """The ST text of one source file: an ST file's text, a vendor XML file's ST (a VendorText,
+    whose `original` is the XML). Raises SourceError and OSError like `read_source`."""
     if path.suffix.lower() in _VENDOR_SUFFIXES:
         from stvm.syntax.vendor_xml import read_vendor   # ST text laid out on the XML's lines
         return read_vendor(path, encoding)
@@ -240,7 +242,7 @@ def read_files(paths: Sequence[Path], encoding: str = "utf-8") -> tuple[list[tup
     diags = []
     for path in paths:
         try:
-            texts.append((str(path), _read(path, encoding)))
+            texts.append((str(path), read_source_text(path, encoding)))
         except SourceError as exc:
             if path.suffix.lower() in _VENDOR_SUFFIXES and exc.text:   # malformed XML: shown, never parsed
                 from stvm.syntax.vendor_xml import unreadable
