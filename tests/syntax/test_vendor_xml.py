@@ -399,3 +399,40 @@ def test_lint_reads_vendor_files_and_reports_at_the_xml_position(tmp_path):
     assert rc != 0
     assert_no_traceback(out + err)
     assert f"{broken}:3:" in out + err and "malformed XML" in out + err
+
+
+def test_mutated_vendor_files_never_raise_anything_but_a_source_error():
+    """Deterministic mutation fuzz: cut, insert and replace markup in the fixtures; reading them is
+    ST text or a located SourceError, and the ST text parses to diagnostics, never an exception."""
+    import random
+
+    from stvm.source import SourceError
+    from stvm.syntax.parser import parse_text
+
+    files = sorted(DATA.rglob("*.Tc*")) + [PLCOPEN]
+    texts = [(p.name, p.read_text(encoding="utf-8")) for p in files]
+    pieces = ["<", ">", "&", "&lt;", "]]>", "<![CDATA[", '"', "'", "\n", "{", "}", "</ST>", "<ST>", "&#10;",
+              "(*", "//", "<a/>", 'name="x"', "<variable/>", "<dimension/>", "<baseType/>"]
+    rnd = random.Random(11)
+    outcomes = {"st": 0, "error": 0}
+    for _ in range(400):
+        name, text = rnd.choice(texts)
+        chars = list(text)
+        for _ in range(rnd.randint(1, 4)):
+            k = rnd.randrange(len(chars))
+            op = rnd.random()
+            if op < 0.4:
+                del chars[k:k + rnd.randint(1, 30)]
+            elif op < 0.8:
+                chars.insert(k, rnd.choice(pieces))
+            else:
+                chars[k] = rnd.choice("<>&\"' x\n;")
+        try:
+            st = translate("".join(chars), name)
+        except SourceError as exc:
+            assert exc.line >= 1 and exc.column >= 1 and exc.message
+            outcomes["error"] += 1
+            continue
+        parse_text(st, name)
+        outcomes["st"] += 1
+    assert outcomes["st"] > 50 and outcomes["error"] > 50, outcomes
