@@ -102,6 +102,20 @@ class SourceMap:
                 return
         segs.append((col, col, xml_line, delta, fixed_col))
 
+    def add_range(self, line: int, col: int, length: int, xml_line: int, xml_col: int) -> None:
+        """ST columns col … col+length-1 of `line` stand at XML (xml_line, xml_col …)."""
+        if line == xml_line and col == xml_col:
+            return
+        segs = self.segments.setdefault(line, [])
+        delta = xml_col - col
+        last = col + length - 1
+        if segs:
+            first, prev_last, l2, d2, f2 = segs[-1]
+            if prev_last == col - 1 and l2 == xml_line and d2 == delta and not f2:
+                segs[-1] = (first, last, l2, d2, 0)
+                return
+        segs.append((col, last, xml_line, delta, 0))
+
     @property
     def identity(self) -> bool:
         return not self.segments
@@ -328,25 +342,55 @@ def _parse_xml(text: str) -> _Builder:
 _ENTITIES = {"lt": "<", "gt": ">", "amp": "&", "apos": "'", "quot": '"'}
 
 
+_MARKUP = re.compile(r"[<&\r]")
+
+
+def _verbatim(out: list[tuple[str, int]], text: str, start: int, end: int) -> None:
+    """text[start:end] as runs of one line each (CR LF and a lone CR as LF)."""
+    i = start
+    while i < end:
+        j = text.find("\n", i, end)
+        stop = end if j < 0 else j
+        if j >= 0 and stop > i and text[stop - 1] == "\r":
+            stop -= 1                      # CR LF
+        k = i
+        while True:
+            r = text.find("\r", k, stop)
+            piece_end = stop if r < 0 else r
+            if piece_end > k:
+                out.append((text[k:piece_end], k))
+            if r < 0:
+                break
+            out.append(("\n", r))          # a lone CR
+            k = r + 1
+        if j < 0:
+            break
+        out.append(("\n", j))
+        i = j + 1
+
+
 def _content(text: str, start: int, end: int) -> list[tuple[str, int]]:
-    """The characters of text[start:end] as XML reads them (CDATA verbatim, entities decoded,
-    comments, processing instructions and nested tags dropped, CR LF as LF), each with the offset
-    it stands at in the XML."""
+    """The text of text[start:end] as XML reads it (CDATA verbatim, entities decoded, comments,
+    processing instructions and nested tags dropped, CR LF as LF), as runs `(piece, offset)`:
+    "\n", or a piece without line breaks whose characters stand from `offset` on in the XML
+    (an entity is a one-character piece at its '&')."""
     out: list[tuple[str, int]] = []
     i = start
     while i < end:
+        m = _MARKUP.search(text, i, end)
+        if m is None:
+            _verbatim(out, text, i, end)
+            break
+        k = m.start()
+        if k > i:
+            _verbatim(out, text, i, k)
+        i = k
         ch = text[i]
         if ch == "<":
             if text.startswith("<![CDATA[", i):
                 j = text.find("]]>", i + 9, end)
                 j = end if j < 0 else j
-                for k in range(i + 9, j):
-                    c = text[k]
-                    if c == "\r":
-                        if k + 1 < j and text[k + 1] == "\n":
-                            continue
-                        c = "\n"
-                    out.append((c, k))
+                _verbatim(out, text, i + 9, j)
                 i = j + 3
             elif text.startswith("<!--", i):
                 j = text.find("-->", i + 4, end)
@@ -366,18 +410,11 @@ def _content(text: str, start: int, end: int) -> list[tuple[str, int]]:
             else:
                 out.append((_ENTITIES.get(name, "?"), i))
             i = j + 1 if j > 0 else i + 1
-        elif ch == "\r":
+        else:   # "\r"
             if not (i + 1 < end and text[i + 1] == "\n"):
                 out.append(("\n", i))
             i += 1
-        else:
-            out.append((ch, i))
-            i += 1
     return out
-
-
-def _content_text(text: str, el: _El) -> str:
-    return "".join(c for c, _ in _content(text, el.content_start, el.end))
 
 
 # ---- the ST text, laid out on the XML's lines ----------------------------------------------------------
@@ -439,21 +476,22 @@ class _Out:
         for i, ch in enumerate(text):
             self._write(ch, line, col + i, False)
 
-    def content(self, chars: list[tuple[str, int]]) -> None:
-        """Decoded XML text: the first character of each line at its own place when it can stand
+    def content(self, runs: list[tuple[str, int]]) -> None:
+        """Decoded XML text: the first piece of each line at its own place when it can stand
         there, the others right after the one before (as XML concatenates them: an entity before
-        a character is longer in the XML than in the ST)."""
+        a piece is longer in the XML than in the ST)."""
         at_start = True
-        for ch, offset in chars:
-            line, col = self.lines_of.position(offset)
-            if ch == "\n":
+        for piece, offset in runs:
+            if piece == "\n":
                 self.rows.append([])
                 at_start = True
                 continue
+            line, col = self.lines_of.position(offset)
             if at_start and not self._goto(line, col) and not self._last().isspace():
                 self._write(" ", line, col, True)
             at_start = False
-            self._write(ch, line, col, False)
+            self.map.add_range(self.line, self.col, len(piece), line, col)
+            self.rows[-1].extend(piece)
 
     def newline(self) -> None:
         self.rows.append([])
@@ -507,9 +545,9 @@ class _Reader:
     def emit_content(self, el: _El | None) -> str:
         if el is None:
             return ""
-        chars = _content(self.text, el.content_start, el.end)
-        self.out.content(chars)
-        return "".join(c for c, _ in chars)
+        runs = _content(self.text, el.content_start, el.end)
+        self.out.content(runs)
+        return "".join(piece for piece, _ in runs)
 
     # -- TwinCAT
     def twincat(self) -> None:
