@@ -436,3 +436,17 @@ def test_mutated_vendor_files_never_raise_anything_but_a_source_error():
         parse_text(st, name)
         outcomes["st"] += 1
     assert outcomes["st"] > 50 and outcomes["error"] > 50, outcomes
+
+
+def test_content_runs_keep_offsets_through_crlf_entities_and_cdata():
+    from stvm.syntax.vendor_xml import _content
+    xml = "<ST>a &lt;= b;\r\n<!-- note --><![CDATA[x\r\ny]]>&#65;\rz</ST>"
+    runs = _content(xml, 4, xml.index("</ST>"))
+    assert "".join(piece for piece, _ in runs) == "a <= b;\nx\nyA\nz"
+    for piece, offset in runs:
+        if piece == "\n":
+            assert xml[offset] in "\r\n"
+        elif len(piece) == 1 and xml[offset] == "&":
+            continue                      # an entity: one character at its '&'
+        else:
+            assert xml[offset:offset + len(piece)] == piece
