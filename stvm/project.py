@@ -157,6 +157,19 @@ def _file_span(path: Path):
     return Span(str(path), 0, 0, 0, 0)
 
 
+def vendor_dialect(files: Sequence[Path]) -> str | None:
+    """The dialect vendor sources are read in unless told otherwise: `twincat` for TwinCAT files,
+    `codesys` for PLCopen XML (with or without TwinCAT files), None when there is an ST file."""
+    suffixes = {Path(p).suffix.lower() for p in files}
+    if not suffixes:
+        return None
+    if suffixes <= set(_VENDOR_SUFFIXES[:4]):
+        return "twincat"
+    if suffixes <= set(_VENDOR_SUFFIXES):
+        return "codesys"
+    return None
+
+
 def project_settings(paths: Sequence[str | Path], overrides: Sequence[str] = ()) -> SysmacSettings:
     """The Sysmac settings of a run on `paths`: the spec's defaults, then the `[sysmac]` table of
     the project's `stvm.toml` (when the files belong to one), then `--sysmac NAME=VALUE`
@@ -165,13 +178,8 @@ def project_settings(paths: Sequence[str | Path], overrides: Sequence[str] = ())
     files, manifest, root = expand_paths(paths)
     settings = DEFAULT_SETTINGS
     dialect = manifest.get("project", {}).get("dialect")
-    if dialect is None and files:
-        # TwinCAT and PLCopen XML sources are read in their vendor's dialect unless told otherwise
-        suffixes = {p.suffix.lower() for p in files}
-        if suffixes <= set(_VENDOR_SUFFIXES[:4]):
-            dialect = "twincat"
-        elif suffixes <= set(_VENDOR_SUFFIXES):
-            dialect = "codesys"
+    if dialect is None:
+        dialect = vendor_dialect(files)
     if dialect is not None:
         settings = settings.with_table({"dialect": dialect}, f"{Path(root or '.') / MANIFEST}: [project]")
     table = manifest.get("sysmac")

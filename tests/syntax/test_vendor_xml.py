@@ -385,14 +385,16 @@ def test_the_debug_build_reads_vendor_files():
 def test_lint_reads_vendor_files_and_reports_at_the_xml_position(tmp_path):
     xml = ('<?xml version="1.0" encoding="utf-8"?>\n<TcPlcObject Version="1.1.0.1">\n'
            '  <POU Name="F_Add" Id="{00000000-0000-0000-0000-000000000002}" SpecialFunc="None">\n'
-           '    <Declaration><![CDATA[FUNCTION F_Add : INT\nVAR_INPUT\n\ta : INT;\nEND_VAR\nVAR\n\tt : INT;\n'
+           '    <Declaration><![CDATA[FUNCTION F_Add : INT\nVAR_INPUT\n\ta : INT;\nEND_VAR\nVAR\n\tt : INT;\n\t_nSpare : INT;\n'
            'END_VAR\n]]></Declaration>\n    <Implementation>\n      <ST><![CDATA[F_Add := t + a;]]></ST>\n'
            '    </Implementation>\n  </POU>\n</TcPlcObject>\n')
     path = tmp_path / "F_Add.TcPOU"
     path.write_text(xml, encoding="utf-8")
     rc, out, err = cli(["lint", path])
     line, col = _xml_position(xml, "t + a")
+    # `_nSpare` (a leading underscore) is fine: TwinCAT files are linted in the twincat dialect
     assert rc == 1 and f"{path}:{line}:{col}: warning[SA101]: 't' is read before it is written" in out + err
+    assert "error" not in err
     broken = tmp_path / "Broken.TcPOU"
     broken.write_text("<TcPlcObject>\n<POU>\n</TcPlcObject>\n", encoding="utf-8")
     rc, out, err = cli(["lint", broken])
