@@ -452,3 +452,16 @@ def test_content_runs_keep_offsets_through_crlf_entities_and_cdata():
             continue                      # an entity: one character at its '&'
         else:
             assert xml[offset:offset + len(piece)] == piece
+
+
+def test_a_breakpoint_on_an_xml_line_stops_there(tmp_path):
+    main = TWINCAT / "POUs" / "MAIN.TcPOU"
+    xml = main.read_text(encoding="utf-8")
+    line, _ = _xml_position(xml, "stData.nValue := fbCounter.nCount;")
+    commands = tmp_path / "cmds"
+    commands.write_text(f"break {main}:{line}\ncontinue\nprint fbCounter.nCount\nquit\n", encoding="utf-8")
+    rc, out, err = cli(["debug", TWINCAT, "-x", commands])
+    assert_no_traceback(out + err)
+    assert f"Breakpoint 1: {main}:{line} in MAIN" in out
+    assert f"   {line}  stData.nValue := fbCounter.nCount;" in out   # the listing is the XML file's line
+    assert "fbCounter.nCount = 2" in out
