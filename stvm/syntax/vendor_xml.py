@@ -633,6 +633,7 @@ class _Reader:
             self.configuration(conf)
         for gvl in self._add_data(self.root, "globalvars", "globalVars"):   # CODESYS: after <instances>
             self.gvl_name(gvl.attrib.get("name", ""), gvl)
+            self.attributes(gvl)
             self.var_list(gvl, "VAR_GLOBAL")
 
     def _add_data(self, el: _El, kind: str, tag: str) -> list[_El]:
@@ -643,7 +644,19 @@ class _Reader:
                 out += data.findall(tag)
         return out
 
+    def attributes(self, el: _El) -> None:
+        """CODESYS writes an object's attributes (`{attribute 'qualified_only'}`) into its
+        `<addData>` as `<Attributes><Attribute Name=… Value=…/>`: as pragmas before it."""
+        for attrs in self._add_data(el, "attributes", "Attributes"):
+            for attr in attrs.findall("Attribute"):
+                name, value = attr.attrib.get("Name", ""), attr.attrib.get("Value", "")
+                if not _ATTRIBUTE_TEXT.match(name) or not _ATTRIBUTE_VALUE.match(value):
+                    raise self.error(f"attribute {name[:40]!r} := {value[:40]!r} cannot be written as a pragma", attr)
+                pragma = f"{{attribute '{name}' := '{value}'}}" if value else f"{{attribute '{name}'}}"
+                self.out.glue(pragma, attr.start + 1)
+
     def data_type(self, dt: _El) -> None:
+        self.attributes(dt)
         self.name(dt)
         base = dt.find("baseType")
         if base is None or not base.children:
@@ -901,6 +914,8 @@ class _Reader:
 
 
 _IDENT = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
+_ATTRIBUTE_TEXT = re.compile(r"^[A-Za-z_][A-Za-z0-9_.\-]*$")
+_ATTRIBUTE_VALUE = re.compile(r"^[^'{}\r\n]*$")
 _XSD_DURATION = re.compile(r"^P(?:(\d+)D)?(?:T(?:(\d+)H)?(?:(\d+)M)?(?:(\d+(?:\.\d+)?)S)?)?$", re.I)
 
 

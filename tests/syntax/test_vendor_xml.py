@@ -465,3 +465,32 @@ def test_a_breakpoint_on_an_xml_line_stops_there(tmp_path):
     assert f"Breakpoint 1: {main}:{line} in MAIN" in out
     assert f"   {line}  stData.nValue := fbCounter.nCount;" in out   # the listing is the XML file's line
     assert "fbCounter.nCount = 2" in out
+
+
+def test_plcopen_codesys_attributes_are_honoured(tmp_path):
+    attrs = ('<addData>\n          <data name="http://www.3s-software.com/plcopenxml/attributes" '
+             'handleUnknown="implementation">\n            <Attributes>\n'
+             '              <Attribute Name="qualified_only" Value="" />\n'
+             '              <Attribute Name="strict" Value="" />\n            </Attributes>\n          </data>\n'
+             '        </addData>\n')
+    xml = PLCOPEN.read_text(encoding="utf-8")
+    # E_Mode and the GVL become qualified_only, as CODESYS exports them
+    xml = xml.replace('''          </enum>
+        </baseType>
+      </dataType>''', '''          </enum>
+        </baseType>
+        ''' + attrs + '''      </dataType>''', 1)
+    xml = xml.replace('''      <globalVars name="GVL">''', '''      <globalVars name="GVL">
+        ''' + attrs.replace("        ", "    "), 1)
+    path = tmp_path / "Conveyor.xml"
+    path.write_text(xml, encoding="utf-8")
+    rc, _, err = cli(["check", path])
+    assert rc == 0, err        # the project writes E_Mode.Running and GVL.bStart
+    bad = xml.replace("eMode := E_Mode.Running;", "eMode := Running;").replace("GVL.bStart", "bStart")
+    path.write_text(bad, encoding="utf-8")
+    rc, _, err = cli(["check", path])
+    assert rc == 1
+    assert "'Running' is an enumerator of E_Mode, which is {attribute 'qualified_only'}" in err
+    assert "'bStart' is in the global variable list GVL, which is {attribute 'qualified_only'}" in err
+    line, col = _xml_position(bad, "bStart, nSpeed")
+    assert f"{path}:{line}:{col}: error: 'bStart'" in err
