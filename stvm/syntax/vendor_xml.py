@@ -27,12 +27,6 @@ PLCOPEN_SUFFIX = ".xml"
 PLCOPEN_NAMESPACE = "plcopen.org/xml/tc6"
 
 
-def is_vendor_file(path: Path | str) -> bool:
-    """A file stvm reads through this module (by its extension; `.xml` only as a PLCopen project)."""
-    suffix = Path(path).suffix.lower()
-    return suffix in TWINCAT_SUFFIXES or suffix == PLCOPEN_SUFFIX
-
-
 def is_plcopen_file(path: Path) -> bool:
     """An `.xml` file whose start names the PLCopen TC6 namespace (for folder scans)."""
     try:
@@ -217,12 +211,6 @@ class _El:
 
     def findall(self, tag: str) -> list["_El"]:
         return [c for c in self.children if c.tag == tag]
-
-    def path(self, *tags: str) -> "_El | None":
-        el: _El | None = self
-        for tag in tags:
-            el = el.find(tag) if el is not None else None
-        return el
 
 
 class _Builder:
@@ -493,9 +481,6 @@ class _Out:
             self.map.add_range(self.line, self.col, len(piece), line, col)
             self.rows[-1].extend(piece)
 
-    def newline(self) -> None:
-        self.rows.append([])
-
     def text(self) -> str:
         return "\n".join("".join(row) for row in self.rows) + "\n"
 
@@ -561,10 +546,7 @@ class _Reader:
                 if obj.tag == "GVL":
                     self.gvl_name(obj.attrib.get("Name", ""), obj)
                 self.emit_content(obj.find("Declaration"))
-            elif obj.tag in ("Task", "Library", "PlcTask"):
-                continue
-            else:
-                continue   # TwinCAT objects without ST (visualisations, text lists …)
+            # other TwinCAT objects (tasks, visualisations, text lists …) hold no ST
 
     def tc_body(self, el: _El, what: str) -> None:
         impl = el.find("Implementation")
