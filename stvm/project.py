@@ -145,7 +145,9 @@ def _vendor_sources(folder: Path) -> list[Path]:
     return folder_sources(folder)
 
 
-def _read(path: Path, encoding: str) -> str:
+def read_source_text(path: Path, encoding: str = "utf-8") -> str:
+    """The ST text of one source file: an ST file's text, a vendor XML file's ST (a VendorText,
+    whose `original` is the XML). Raises SourceError and OSError like `read_source`."""
     if path.suffix.lower() in _VENDOR_SUFFIXES:
         from stvm.syntax.vendor_xml import read_vendor   # lazy: start-up; ST text laid out on the XML's lines
         return read_vendor(path, encoding)
@@ -169,6 +171,19 @@ def _file_span(path: Path):
     return Span(str(path), 0, 0, 0, 0)
 
 
+def vendor_dialect(files: Sequence[Path]) -> str | None:
+    """The dialect vendor sources are read in unless told otherwise: `twincat` for TwinCAT files,
+    `codesys` for PLCopen XML (with or without TwinCAT files), None when there is an ST file."""
+    suffixes = {Path(p).suffix.lower() for p in files}
+    if not suffixes:
+        return None
+    if suffixes <= set(_VENDOR_SUFFIXES[:4]):
+        return "twincat"
+    if suffixes <= set(_VENDOR_SUFFIXES):
+        return "codesys"
+    return None
+
+
 def project_settings(paths: Sequence[str | Path], overrides: Sequence[str] = ()) -> SysmacSettings:
     """The Sysmac settings of a run on `paths`: the spec's defaults, then the `[sysmac]` table of
     the project's `stvm.toml` (when the files belong to one), then `--sysmac NAME=VALUE`
@@ -177,13 +192,8 @@ def project_settings(paths: Sequence[str | Path], overrides: Sequence[str] = ())
     files, manifest, root = expand_paths(paths)
     settings = DEFAULT_SETTINGS
     dialect = manifest.get("project", {}).get("dialect")
-    if dialect is None and files:
-        # TwinCAT and PLCopen XML sources are read in their vendor's dialect unless told otherwise
-        suffixes = {p.suffix.lower() for p in files}
-        if suffixes <= set(_VENDOR_SUFFIXES[:4]):
-            dialect = "twincat"
-        elif suffixes <= set(_VENDOR_SUFFIXES):
-            dialect = "codesys"
+    if dialect is None:
+        dialect = vendor_dialect(files)
     if dialect is not None:
         settings = settings.with_table({"dialect": dialect}, f"{Path(root or '.') / MANIFEST}: [project]")
     table = manifest.get("sysmac")
@@ -246,6 +256,8 @@ def _cache_key(texts: list[tuple[str, str]], settings: SysmacSettings, kind: str
     digest.update(repr(settings).encode())
     for name, text in texts:
         digest.update(name.encode() + b"\0" + text.encode("utf-8", "replace") + b"\0")
+        if hasattr(text, "original"):   # a vendor XML file: its excerpts come from the XML itself
+            digest.update(text.original.encode("utf-8", "replace") + b"\0")
     return digest.hexdigest()
 
 
@@ -256,7 +268,7 @@ def read_files(paths: Sequence[Path], encoding: str = "utf-8") -> tuple[list[tup
     diags = []
     for path in paths:
         try:
-            texts.append((str(path), _read(path, encoding)))
+            texts.append((str(path), read_source_text(path, encoding)))
         except SourceError as exc:
             if path.suffix.lower() in _VENDOR_SUFFIXES and exc.text:   # malformed XML: shown, never parsed
                 from stvm.syntax.vendor_xml import unreadable   # lazy: start-up (vendor XML only)

@@ -146,12 +146,12 @@ def load_debug(paths: Sequence[str | os.PathLike], settings: SysmacSettings = DE
     files, manifest, root = expand_paths(paths)
     texts, read_diags = read_files(files, source_encoding(manifest))
     if read_diags:
-        raise LoadError(read_diags, dict(texts))
+        raise LoadError(read_diags, {name: getattr(text, "original", text) for name, text in texts})
     units, diags, sources = stdlib_units(settings)
     units = list(units)
     sources = dict(sources)
     for name, text in texts:
-        sources[name] = text
+        sources[name] = getattr(text, "original", text)   # a vendor XML file: excerpts show the XML
         unit, unit_diags = parse_text(text, name, settings)
         units.append(unit)
         diags += unit_diags

@@ -48,7 +48,20 @@ def _usage(message: str) -> int:
 
 
 def _settings(args):
-    return DEFAULT_SETTINGS.with_overrides(getattr(args, "sysmac", None) or [])
+    settings = DEFAULT_SETTINGS
+    dialect = _vendor_dialect(getattr(args, "files", None) or [])
+    if dialect is not None:   # TwinCAT / PLCopen XML sources: their vendor's names and types
+        settings = settings.with_overrides([f"dialect={dialect}"])
+    return settings.with_overrides(getattr(args, "sysmac", None) or [])
+
+
+def _vendor_dialect(files) -> str | None:
+    from stvm.project import expand_paths, vendor_dialect   # lazy: start-up
+    try:
+        expanded, _, _ = expand_paths(files)
+    except Exception:  # noqa: BLE001 - the lint run itself reports unusable paths
+        return None
+    return vendor_dialect(expanded)
 
 
 def cmd_lint(args) -> int:

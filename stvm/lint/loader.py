@@ -22,7 +22,7 @@ from stvm.settings import SysmacSettings
 from stvm import syntax
 from stvm.syntax.nodes import Span
 from stvm.version import __version__
-from stvm.source import read_source
+from stvm.source import SourceError, read_source
 from stvm.semantics import analyze
 
 
@@ -97,7 +97,7 @@ def load_for_lint(paths: Sequence[str | Path], settings: SysmacSettings, use_cac
                   texts: dict[str, str] | None = None) -> Loaded:
     """Expand `paths` as `stvm check` does (a folder's *.st, a file's stvm.toml project), parse
     (cached) and check. `texts` overrides file contents (an editor's unsaved buffer)."""
-    from stvm.project import expand_paths   # lazy: start-up
+    from stvm.project import expand_paths, read_source_text   # lazy: start-up
     from stvm.stdlib import NATIVE_FUNCTIONS, stdlib_sources   # lazy: start-up
     files, manifest, root = expand_paths(paths)
     diags: list[Diagnostic] = []
@@ -113,11 +113,16 @@ def load_for_lint(paths: Sequence[str | Path], settings: SysmacSettings, use_cac
         name = str(path)
         names.append(name)
         try:
-            text = texts[name] if texts is not None and name in texts else read_source(Path(path))
+            text = texts[name] if texts is not None and name in texts else read_source_text(Path(path))
         except OSError as exc:
             diags.append(Diagnostic.error(f"cannot read file: {exc.strerror or exc}", Span(name, 0, 0, 0, 0)))
             continue
-        sources[name] = text
+        except SourceError as exc:   # a binary, mis-encoded or malformed XML file
+            diags.append(Diagnostic.error(exc.message, Span(name, exc.line, exc.column, exc.line, exc.column + 1),
+                                          "E001"))
+            sources[name] = exc.text
+            continue
+        sources[name] = getattr(text, "original", text)   # a vendor XML file: excerpts show the XML
         unit, d = parse_cached(text, name, settings, use_cache)
         units.append(unit)
         diags += d

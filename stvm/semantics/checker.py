@@ -100,12 +100,15 @@ def _longest_paths(graph: dict[str, list[tuple[str, str]]]) -> tuple[dict[str, i
 class Checker:
     def __init__(self, units: list[n.CompilationUnit], settings: SysmacSettings,
                  natives: Mapping[str, Any] | None = None) -> None:
+        # `GVL.x`, `Enum.member`, qualified_only: resolved before anything else (the debug build
+        # constructs a Checker too)
+        units, qualified = resolve_qualified(list(units))
         self.units = units
         self.settings = settings
         # the stdlib's native functions by upper-case name (stvm.stdlib.NATIVE_FUNCTIONS): their
         # result-type rules. Given by the caller, which knows the stdlib; the checker sits below it.
         self.natives = natives if natives is not None else {}
-        self.diags: list[Diagnostic] = []
+        self.diags: list[Diagnostic] = qualified
         self.facts = Facts()
         self.index = _Index()
         self.resolved_types: dict[str, t.Type | None] = {}
@@ -1396,8 +1399,4 @@ def analyze(units: list[n.CompilationUnit], settings: SysmacSettings = DEFAULT_S
 
     `natives`: the stdlib's native functions (stvm.stdlib.NATIVE_FUNCTIONS), for the result types
     of generic ones (SHL, MUX, TRUNC, …); without it their result is the common input type."""
-    units, qualified = resolve_qualified(list(units))   # `GVL.x`, `Enum.member`, qualified_only
-    analysis = Checker(units, settings, natives).run()
-    if qualified:
-        analysis.diagnostics[:0] = qualified
-    return analysis
+    return Checker(units, settings, natives).run()

@@ -27,12 +27,6 @@ PLCOPEN_SUFFIX = ".xml"
 PLCOPEN_NAMESPACE = "plcopen.org/xml/tc6"
 
 
-def is_vendor_file(path: Path | str) -> bool:
-    """A file stvm reads through this module (by its extension; `.xml` only as a PLCopen project)."""
-    suffix = Path(path).suffix.lower()
-    return suffix in TWINCAT_SUFFIXES or suffix == PLCOPEN_SUFFIX
-
-
 def is_plcopen_file(path: Path) -> bool:
     """An `.xml` file whose start names the PLCopen TC6 namespace (for folder scans)."""
     try:
@@ -101,6 +95,20 @@ class SourceMap:
                 segs[-1] = (first, col, l2, d2, f2)
                 return
         segs.append((col, col, xml_line, delta, fixed_col))
+
+    def add_range(self, line: int, col: int, length: int, xml_line: int, xml_col: int) -> None:
+        """ST columns col … col+length-1 of `line` stand at XML (xml_line, xml_col …)."""
+        if line == xml_line and col == xml_col:
+            return
+        segs = self.segments.setdefault(line, [])
+        delta = xml_col - col
+        last = col + length - 1
+        if segs:
+            first, prev_last, l2, d2, f2 = segs[-1]
+            if prev_last == col - 1 and l2 == xml_line and d2 == delta and not f2:
+                segs[-1] = (first, last, l2, d2, 0)
+                return
+        segs.append((col, last, xml_line, delta, 0))
 
     @property
     def identity(self) -> bool:
@@ -203,12 +211,6 @@ class _El:
 
     def findall(self, tag: str) -> list["_El"]:
         return [c for c in self.children if c.tag == tag]
-
-    def path(self, *tags: str) -> "_El | None":
-        el: _El | None = self
-        for tag in tags:
-            el = el.find(tag) if el is not None else None
-        return el
 
 
 class _Builder:
@@ -328,25 +330,55 @@ def _parse_xml(text: str) -> _Builder:
 _ENTITIES = {"lt": "<", "gt": ">", "amp": "&", "apos": "'", "quot": '"'}
 
 
+_MARKUP = re.compile(r"[<&\r]")
+
+
+def _verbatim(out: list[tuple[str, int]], text: str, start: int, end: int) -> None:
+    """text[start:end] as runs of one line each (CR LF and a lone CR as LF)."""
+    i = start
+    while i < end:
+        j = text.find("\n", i, end)
+        stop = end if j < 0 else j
+        if j >= 0 and stop > i and text[stop - 1] == "\r":
+            stop -= 1                      # CR LF
+        k = i
+        while True:
+            r = text.find("\r", k, stop)
+            piece_end = stop if r < 0 else r
+            if piece_end > k:
+                out.append((text[k:piece_end], k))
+            if r < 0:
+                break
+            out.append(("\n", r))          # a lone CR
+            k = r + 1
+        if j < 0:
+            break
+        out.append(("\n", j))
+        i = j + 1
+
+
 def _content(text: str, start: int, end: int) -> list[tuple[str, int]]:
-    """The characters of text[start:end] as XML reads them (CDATA verbatim, entities decoded,
-    comments, processing instructions and nested tags dropped, CR LF as LF), each with the offset
-    it stands at in the XML."""
+    """The text of text[start:end] as XML reads it (CDATA verbatim, entities decoded, comments,
+    processing instructions and nested tags dropped, CR LF as LF), as runs `(piece, offset)`:
+    "\n", or a piece without line breaks whose characters stand from `offset` on in the XML
+    (an entity is a one-character piece at its '&')."""
     out: list[tuple[str, int]] = []
     i = start
     while i < end:
+        m = _MARKUP.search(text, i, end)
+        if m is None:
+            _verbatim(out, text, i, end)
+            break
+        k = m.start()
+        if k > i:
+            _verbatim(out, text, i, k)
+        i = k
         ch = text[i]
         if ch == "<":
             if text.startswith("<![CDATA[", i):
                 j = text.find("]]>", i + 9, end)
                 j = end if j < 0 else j
-                for k in range(i + 9, j):
-                    c = text[k]
-                    if c == "\r":
-                        if k + 1 < j and text[k + 1] == "\n":
-                            continue
-                        c = "\n"
-                    out.append((c, k))
+                _verbatim(out, text, i + 9, j)
                 i = j + 3
             elif text.startswith("<!--", i):
                 j = text.find("-->", i + 4, end)
@@ -366,18 +398,11 @@ def _content(text: str, start: int, end: int) -> list[tuple[str, int]]:
             else:
                 out.append((_ENTITIES.get(name, "?"), i))
             i = j + 1 if j > 0 else i + 1
-        elif ch == "\r":
+        else:   # "\r"
             if not (i + 1 < end and text[i + 1] == "\n"):
                 out.append(("\n", i))
             i += 1
-        else:
-            out.append((ch, i))
-            i += 1
     return out
-
-
-def _content_text(text: str, el: _El) -> str:
-    return "".join(c for c, _ in _content(text, el.content_start, el.end))
 
 
 # ---- the ST text, laid out on the XML's lines ----------------------------------------------------------
@@ -431,6 +456,7 @@ class _Out:
 
     def value(self, text: str, offset: int) -> None:
         """Text spelled in the XML at `offset` (an attribute value), mapped character by character."""
+        text = text.replace("\r", " ").replace("\n", " ")   # `&#10;` must not move the lines below
         line, col = self.lines_of.position(offset)
         if not self._goto(line, col):
             if not self._last().isspace():
@@ -438,24 +464,22 @@ class _Out:
         for i, ch in enumerate(text):
             self._write(ch, line, col + i, False)
 
-    def content(self, chars: list[tuple[str, int]]) -> None:
-        """Decoded XML text: the first character of each line at its own place when it can stand
+    def content(self, runs: list[tuple[str, int]]) -> None:
+        """Decoded XML text: the first piece of each line at its own place when it can stand
         there, the others right after the one before (as XML concatenates them: an entity before
-        a character is longer in the XML than in the ST)."""
+        a piece is longer in the XML than in the ST)."""
         at_start = True
-        for ch, offset in chars:
-            line, col = self.lines_of.position(offset)
-            if ch == "\n":
+        for piece, offset in runs:
+            if piece == "\n":
                 self.rows.append([])
                 at_start = True
                 continue
+            line, col = self.lines_of.position(offset)
             if at_start and not self._goto(line, col) and not self._last().isspace():
                 self._write(" ", line, col, True)
             at_start = False
-            self._write(ch, line, col, False)
-
-    def newline(self) -> None:
-        self.rows.append([])
+            self.map.add_range(self.line, self.col, len(piece), line, col)
+            self.rows[-1].extend(piece)
 
     def text(self) -> str:
         return "\n".join("".join(row) for row in self.rows) + "\n"
@@ -480,6 +504,17 @@ class _Reader:
         line, col = self.lines.position(el.start)
         return _xml_error(message, self.text, line, col)
 
+    def name(self, el: _El, attr: str = "name") -> None:
+        """The identifier in attribute `attr` of `el`, written at its place (a name that is not
+        an ST identifier is an error there, never ST text)."""
+        value = el.attrib.get(attr)
+        if value is None:
+            raise self.error(f"<{el.tag}> has no {attr}=\"…\"", el)
+        if not _IDENT.match(value):
+            line, col = self.lines.position(self.attr_offset(el, attr))
+            raise _xml_error(f"{attr}={value[:40]!r} of <{el.tag}> is not an ST identifier", self.text, line, col)
+        self.out.value(value, self.attr_offset(el, attr))
+
     def attr_offset(self, el: _El, name: str) -> int:
         """Offset of the value of attribute `name` in el's start tag (the tag itself if absent)."""
         tag = self.text[el.start:el.content_start]
@@ -495,9 +530,9 @@ class _Reader:
     def emit_content(self, el: _El | None) -> str:
         if el is None:
             return ""
-        chars = _content(self.text, el.content_start, el.end)
-        self.out.content(chars)
-        return "".join(c for c, _ in chars)
+        runs = _content(self.text, el.content_start, el.end)
+        self.out.content(runs)
+        return "".join(piece for piece, _ in runs)
 
     # -- TwinCAT
     def twincat(self) -> None:
@@ -511,10 +546,7 @@ class _Reader:
                 if obj.tag == "GVL":
                     self.gvl_name(obj.attrib.get("Name", ""), obj)
                 self.emit_content(obj.find("Declaration"))
-            elif obj.tag in ("Task", "Library", "PlcTask"):
-                continue
-            else:
-                continue   # TwinCAT objects without ST (visualisations, text lists …)
+            # other TwinCAT objects (tasks, visualisations, text lists …) hold no ST
 
     def tc_body(self, el: _El, what: str) -> None:
         impl = el.find("Implementation")
@@ -556,7 +588,7 @@ class _Reader:
                 # an action is the POU's code under a name, called as `inst.A()`: a method with
                 # no parameters and no variables of its own
                 self.out.glue("METHOD", child.start + 1)
-                self.out.value(child.attrib.get("Name", "?"), self.attr_offset(child, "Name"))
+                self.name(child, "Name")
                 self.tc_body(child, f"action '{child.attrib.get('Name', '?')}'")
                 self.out.glue("END_METHOD", child.end)
         self.out.glue(_END_OF[kind], pou.end)
@@ -583,6 +615,7 @@ class _Reader:
             self.configuration(conf)
         for gvl in self._add_data(self.root, "globalvars", "globalVars"):   # CODESYS: after <instances>
             self.gvl_name(gvl.attrib.get("name", ""), gvl)
+            self.attributes(gvl)
             self.var_list(gvl, "VAR_GLOBAL")
 
     def _add_data(self, el: _El, kind: str, tag: str) -> list[_El]:
@@ -593,8 +626,20 @@ class _Reader:
                 out += data.findall(tag)
         return out
 
+    def attributes(self, el: _El) -> None:
+        """CODESYS writes an object's attributes (`{attribute 'qualified_only'}`) into its
+        `<addData>` as `<Attributes><Attribute Name=… Value=…/>`: as pragmas before it."""
+        for attrs in self._add_data(el, "attributes", "Attributes"):
+            for attr in attrs.findall("Attribute"):
+                name, value = attr.attrib.get("Name", ""), attr.attrib.get("Value", "")
+                if not _ATTRIBUTE_TEXT.match(name) or not _ATTRIBUTE_VALUE.match(value):
+                    raise self.error(f"attribute {name[:40]!r} := {value[:40]!r} cannot be written as a pragma", attr)
+                pragma = f"{{attribute '{name}' := '{value}'}}" if value else f"{{attribute '{name}'}}"
+                self.out.glue(pragma, attr.start + 1)
+
     def data_type(self, dt: _El) -> None:
-        self.out.value(dt.attrib.get("name", "?"), self.attr_offset(dt, "name"))
+        self.attributes(dt)
+        self.name(dt)
         base = dt.find("baseType")
         if base is None or not base.children:
             raise self.error(f"data type '{dt.attrib.get('name', '?')}' has no <baseType>", dt)
@@ -611,7 +656,7 @@ class _Reader:
             for i, value in enumerate(values.findall("value") if values is not None else []):
                 if i:
                     self.out.glue(",", value.start)
-                self.out.value(value.attrib.get("name", "?"), self.attr_offset(value, "name"))
+                self.name(value)
                 if "value" in value.attrib:
                     self.out.glue(":=", self.attr_offset(value, "value") - 1)
                     self.out.value(value.attrib["value"], self.attr_offset(value, "value"))
@@ -629,7 +674,7 @@ class _Reader:
     def type_spec(self, spec: _El) -> None:
         tag = spec.tag
         if tag == "derived":
-            self.out.value(spec.attrib.get("name", "?"), self.attr_offset(spec, "name"))
+            self.name(spec)
         elif tag in ("string", "wstring"):
             self.out.glue(tag.upper(), spec.start + 1)
             if "length" in spec.attrib:
@@ -701,7 +746,7 @@ class _Reader:
             for i, item in enumerate(val.findall("value")):
                 if i:
                     self.out.glue(",", item.start)
-                self.out.value(item.attrib.get("member", "?"), self.attr_offset(item, "member"))
+                self.name(item, "member")
                 self.out.glue(":=", item.start + 1)
                 if item.children:
                     self.value_element(item.children[0])
@@ -710,7 +755,7 @@ class _Reader:
             raise self.error(f"unknown initial value <{val.tag}>", val)
 
     def variable(self, var: _El) -> None:
-        self.out.value(var.attrib.get("name", "?"), self.attr_offset(var, "name"))
+        self.name(var)
         if "address" in var.attrib:
             self.out.glue("AT", self.attr_offset(var, "address") - 1)
             self.out.value(var.attrib["address"], self.attr_offset(var, "address"))
@@ -765,7 +810,7 @@ class _Reader:
             raise self.error(f"pou '{name}' has pouType {pou.attrib.get('pouType')!r}; expected function, "
                              f"functionBlock or program", pou)
         self.out.glue(kind, pou.start + 1)
-        self.out.value(name, self.attr_offset(pou, "name"))
+        self.name(pou)
         iface = pou.find("interface")
         ret = iface.find("returnType") if iface is not None else None
         if ret is not None and ret.children:
@@ -776,7 +821,7 @@ class _Reader:
         for method in self._add_data(pou, "method", "Method"):
             mname = method.attrib.get("name", "?")
             self.out.glue("METHOD", method.start + 1)
-            self.out.value(mname, self.attr_offset(method, "name"))
+            self.name(method)
             miface = method.find("interface")
             mret = miface.find("returnType") if miface is not None else None
             if mret is not None and mret.children:
@@ -788,7 +833,7 @@ class _Reader:
         for prop in self._add_data(pou, "property", "Property"):
             pname = prop.attrib.get("name", "?")
             self.out.glue("PROPERTY", prop.start + 1)
-            self.out.value(pname, self.attr_offset(prop, "name"))
+            self.name(prop)
             piface = prop.find("interface")
             pret = piface.find("returnType") if piface is not None else None
             if pret is None or not pret.children:
@@ -806,25 +851,25 @@ class _Reader:
         actions = pou.find("actions")
         for action in actions.findall("action") if actions is not None else []:
             self.out.glue("METHOD", action.start + 1)
-            self.out.value(action.attrib.get("name", "?"), self.attr_offset(action, "name"))
+            self.name(action)
             self.plc_body(action, f"action '{action.attrib.get('name', '?')}'")
             self.out.glue("END_METHOD", action.end)
         self.out.glue(_END_OF[kind], pou.end)
 
     def configuration(self, conf: _El) -> None:
         self.out.glue("CONFIGURATION", conf.start + 1)
-        self.out.value(conf.attrib.get("name", "?"), self.attr_offset(conf, "name"))
+        self.name(conf)
         for gv in conf.findall("globalVars"):
             self.var_list(gv, "VAR_GLOBAL")
         for res in conf.findall("resource"):
             self.out.glue("RESOURCE", res.start + 1)
-            self.out.value(res.attrib.get("name", "?"), self.attr_offset(res, "name"))
+            self.name(res)
             self.out.glue("ON PLC", res.content_start - 1)
             for gv in res.findall("globalVars"):
                 self.var_list(gv, "VAR_GLOBAL")
             for task in res.findall("task"):
                 self.out.glue("TASK", task.start + 1)
-                self.out.value(task.attrib.get("name", "?"), self.attr_offset(task, "name"))
+                self.name(task)
                 params = [(k, task.attrib[k]) for k in ("interval", "single", "priority") if k in task.attrib]
                 for i, (key, value) in enumerate(params):
                     self.out.glue("(" if i == 0 else ",", self.attr_offset(task, key) - len(key) - 2)
@@ -842,15 +887,17 @@ class _Reader:
 
     def program_instance(self, inst: _El, task: str | None) -> None:
         self.out.glue("PROGRAM", inst.start + 1)
-        self.out.value(inst.attrib.get("name", "?"), self.attr_offset(inst, "name"))
+        self.name(inst)
         if task:
             self.out.glue(f"WITH {task}", self.attr_offset(inst, "typeName") - len('typeName="'))
         self.out.glue(":", self.attr_offset(inst, "typeName") - 1)
-        self.out.value(inst.attrib.get("typeName", "?"), self.attr_offset(inst, "typeName"))
+        self.name(inst, "typeName")
         self.out.glue(";", inst.end)
 
 
 _IDENT = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
+_ATTRIBUTE_TEXT = re.compile(r"^[A-Za-z_][A-Za-z0-9_.\-]*$")
+_ATTRIBUTE_VALUE = re.compile(r"^[^'{}\r\n]*$")
 _XSD_DURATION = re.compile(r"^P(?:(\d+)D)?(?:T(?:(\d+)H)?(?:(\d+)M)?(?:(\d+(?:\.\d+)?)S)?)?$", re.I)
 
 

@@ -358,3 +358,139 @@ def test_twincat_sources_are_read_in_the_twincat_dialect(tmp_path):
     assert (rc, out) == (0, "MAIN.fb._nCount = 2\nMAIN.s = 'ok'\n"), err
     rc, _, err = cli(["check", tmp_path, "--dialect", "sysmac"])
     assert rc == 1 and "name '_nCount' may not start with '_'" in err
+
+
+def test_a_plcopen_name_that_is_not_an_identifier_is_an_error_at_its_attribute(tmp_path):
+    xml = PLCOPEN.read_text(encoding="utf-8").replace('<variable name="nMax">', '<variable name="n Max;">')
+    path = tmp_path / "Conveyor.xml"
+    path.write_text(xml, encoding="utf-8")
+    rc, _, err = cli(["check", path])
+    assert rc == 1
+    assert_no_traceback(err)
+    line, col = _xml_position(xml, 'n Max;"')
+    assert f"{path}:{line}:{col}: error: name='n Max;' of <variable> is not an ST identifier" in err
+
+
+def test_the_debug_build_reads_vendor_files():
+    from stvm.debug.build import load_debug
+    build = load_debug([TWINCAT])
+    main = str(TWINCAT / "POUs" / "MAIN.TcPOU")
+    assert build.project.sources[main].startswith("<?xml")
+    xml = (TWINCAT / "POUs" / "MAIN.TcPOU").read_text(encoding="utf-8")
+    line, _ = _xml_position(xml, "stData.nValue := fbCounter.nCount;")
+    found = build.pou_at(main, line)
+    assert found is not None and found[1].name == "MAIN"
+
+
+def test_lint_reads_vendor_files_and_reports_at_the_xml_position(tmp_path):
+    xml = ('<?xml version="1.0" encoding="utf-8"?>\n<TcPlcObject Version="1.1.0.1">\n'
+           '  <POU Name="F_Add" Id="{00000000-0000-0000-0000-000000000002}" SpecialFunc="None">\n'
+           '    <Declaration><![CDATA[FUNCTION F_Add : INT\nVAR_INPUT\n\ta : INT;\nEND_VAR\nVAR\n\tt : INT;\n\t_nSpare : INT;\n'
+           'END_VAR\n]]></Declaration>\n    <Implementation>\n      <ST><![CDATA[F_Add := t + a;]]></ST>\n'
+           '    </Implementation>\n  </POU>\n</TcPlcObject>\n')
+    path = tmp_path / "F_Add.TcPOU"
+    path.write_text(xml, encoding="utf-8")
+    rc, out, err = cli(["lint", path])
+    line, col = _xml_position(xml, "t + a")
+    # `_nSpare` (a leading underscore) is fine: TwinCAT files are linted in the twincat dialect
+    assert rc == 1 and f"{path}:{line}:{col}: warning[SA101]: 't' is read before it is written" in out + err
+    assert "error" not in err
+    broken = tmp_path / "Broken.TcPOU"
+    broken.write_text("<TcPlcObject>\n<POU>\n</TcPlcObject>\n", encoding="utf-8")
+    rc, out, err = cli(["lint", broken])
+    assert rc != 0
+    assert_no_traceback(out + err)
+    assert f"{broken}:3:" in out + err and "malformed XML" in out + err
+
+
+def test_mutated_vendor_files_never_raise_anything_but_a_source_error():
+    """Deterministic mutation fuzz: cut, insert and replace markup in the fixtures; reading them is
+    ST text or a located SourceError, and the ST text parses to diagnostics, never an exception."""
+    import random
+
+    from stvm.source import SourceError
+    from stvm.syntax.parser import parse_text
+
+    files = sorted(DATA.rglob("*.Tc*")) + [PLCOPEN]
+    texts = [(p.name, p.read_text(encoding="utf-8")) for p in files]
+    pieces = ["<", ">", "&", "&lt;", "]]>", "<![CDATA[", '"', "'", "\n", "{", "}", "</ST>", "<ST>", "&#10;",
+              "(*", "//", "<a/>", 'name="x"', "<variable/>", "<dimension/>", "<baseType/>"]
+    rnd = random.Random(11)
+    outcomes = {"st": 0, "error": 0}
+    for _ in range(400):
+        name, text = rnd.choice(texts)
+        chars = list(text)
+        for _ in range(rnd.randint(1, 4)):
+            k = rnd.randrange(len(chars))
+            op = rnd.random()
+            if op < 0.4:
+                del chars[k:k + rnd.randint(1, 30)]
+            elif op < 0.8:
+                chars.insert(k, rnd.choice(pieces))
+            else:
+                chars[k] = rnd.choice("<>&\"' x\n;")
+        try:
+            st = translate("".join(chars), name)
+        except SourceError as exc:
+            assert exc.line >= 1 and exc.column >= 1 and exc.message
+            outcomes["error"] += 1
+            continue
+        parse_text(st, name)
+        outcomes["st"] += 1
+    assert outcomes["st"] > 50 and outcomes["error"] > 50, outcomes
+
+
+def test_content_runs_keep_offsets_through_crlf_entities_and_cdata():
+    from stvm.syntax.vendor_xml import _content
+    xml = "<ST>a &lt;= b;\r\n<!-- note --><![CDATA[x\r\ny]]>&#65;\rz</ST>"
+    runs = _content(xml, 4, xml.index("</ST>"))
+    assert "".join(piece for piece, _ in runs) == "a <= b;\nx\nyA\nz"
+    for piece, offset in runs:
+        if piece == "\n":
+            assert xml[offset] in "\r\n"
+        elif len(piece) == 1 and xml[offset] == "&":
+            continue                      # an entity: one character at its '&'
+        else:
+            assert xml[offset:offset + len(piece)] == piece
+
+
+def test_a_breakpoint_on_an_xml_line_stops_there(tmp_path):
+    main = TWINCAT / "POUs" / "MAIN.TcPOU"
+    xml = main.read_text(encoding="utf-8")
+    line, _ = _xml_position(xml, "stData.nValue := fbCounter.nCount;")
+    commands = tmp_path / "cmds"
+    commands.write_text(f"break {main}:{line}\ncontinue\nprint fbCounter.nCount\nquit\n", encoding="utf-8")
+    rc, out, err = cli(["debug", TWINCAT, "-x", commands])
+    assert_no_traceback(out + err)
+    assert f"Breakpoint 1: {main}:{line} in MAIN" in out
+    assert f"   {line}  stData.nValue := fbCounter.nCount;" in out   # the listing is the XML file's line
+    assert "fbCounter.nCount = 2" in out
+
+
+def test_plcopen_codesys_attributes_are_honoured(tmp_path):
+    attrs = ('<addData>\n          <data name="http://www.3s-software.com/plcopenxml/attributes" '
+             'handleUnknown="implementation">\n            <Attributes>\n'
+             '              <Attribute Name="qualified_only" Value="" />\n'
+             '              <Attribute Name="strict" Value="" />\n            </Attributes>\n          </data>\n'
+             '        </addData>\n')
+    xml = PLCOPEN.read_text(encoding="utf-8")
+    # E_Mode and the GVL become qualified_only, as CODESYS exports them
+    xml = xml.replace('''          </enum>
+        </baseType>
+      </dataType>''', '''          </enum>
+        </baseType>
+        ''' + attrs + '''      </dataType>''', 1)
+    xml = xml.replace('''      <globalVars name="GVL">''', '''      <globalVars name="GVL">
+        ''' + attrs.replace("        ", "    "), 1)
+    path = tmp_path / "Conveyor.xml"
+    path.write_text(xml, encoding="utf-8")
+    rc, _, err = cli(["check", path])
+    assert rc == 0, err        # the project writes E_Mode.Running and GVL.bStart
+    bad = xml.replace("eMode := E_Mode.Running;", "eMode := Running;").replace("GVL.bStart", "bStart")
+    path.write_text(bad, encoding="utf-8")
+    rc, _, err = cli(["check", path])
+    assert rc == 1
+    assert "'Running' is an enumerator of E_Mode, which is {attribute 'qualified_only'}" in err
+    assert "'bStart' is in the global variable list GVL, which is {attribute 'qualified_only'}" in err
+    line, col = _xml_position(bad, "bStart, nSpeed")
+    assert f"{path}:{line}:{col}: error: 'bStart'" in err
