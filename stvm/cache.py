@@ -28,6 +28,8 @@ import stat
 import warnings
 from pathlib import Path
 
+from stvm.folders import default_folder, folder_problem as _folder_problem  # noqa: F401 (API: stvm.cache.default_folder)
+
 TAG_BYTES = 32
 
 
@@ -44,49 +46,11 @@ def _warn(message: str) -> None:
         warnings.warn(message, CacheWarning, stacklevel=3)
 
 
-def default_folder() -> Path:
-    base = os.environ.get("STVM_CACHE_DIR")
-    if base:
-        return Path(base)
-    return Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "stvm"
-
-
 def key_file() -> Path:
     explicit = os.environ.get("STVM_CACHE_KEY_FILE")
     if explicit:
         return Path(explicit)
     return Path(os.environ.get("XDG_CONFIG_HOME") or Path.home() / ".config") / "stvm" / "cache.key"
-
-
-def _writable_by_others(info: os.stat_result) -> bool:
-    return bool(info.st_mode & (stat.S_IWGRP | stat.S_IWOTH))
-
-
-def _folder_problem(folder: Path) -> str | None:
-    """Why `folder` is not safe as a cache (None if it is, or does not exist yet)."""
-    uid = os.getuid()
-    try:
-        info = folder.stat()
-    except FileNotFoundError:
-        info = None
-    except OSError as exc:
-        return f"cannot use the cache folder {folder}: {exc.strerror or exc}"
-    if info is not None:
-        if not stat.S_ISDIR(info.st_mode):
-            return f"the cache folder {folder} is not a folder"
-        if info.st_uid != uid:
-            return f"the cache folder {folder} belongs to another user (uid {info.st_uid})"
-        if _writable_by_others(info):
-            return (f"the cache folder {folder} is writable by other users (mode {stat.S_IMODE(info.st_mode):o}); "
-                    f"chmod go-w it or set STVM_CACHE_DIR to a private folder")
-    parent = folder.resolve().parent
-    try:
-        parent_info = parent.stat()
-    except OSError:
-        return None
-    if _writable_by_others(parent_info) and not parent_info.st_mode & stat.S_ISVTX and parent_info.st_uid != uid:
-        return f"the cache folder's parent {parent} is writable by other users (they could replace the folder)"
-    return None
 
 
 def _load_key(path: Path) -> bytes | None:

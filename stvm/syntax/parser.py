@@ -15,10 +15,12 @@ from importlib import resources
 from pathlib import Path
 from typing import Sequence
 
+import lark
 from lark import Lark, Token, Transformer, Tree
 from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken
 
 from stvm.diagnostics import Diagnostic
+from stvm.folders import content_name, private_file
 from stvm.settings import DEFAULT_SETTINGS, DoubleQuoteStrings, SysmacSettings
 from stvm.source import read_source
 from stvm.syntax import nodes as n
@@ -31,10 +33,14 @@ _GRAMMAR_FILE = "st.lark"
 @lru_cache(maxsize=None)
 def _parser(start: str = "start") -> Lark:
     grammar = resources.files("stvm.syntax").joinpath(_GRAMMAR_FILE).read_text(encoding="utf-8")
-    # cache=True: Lark stores the built LALR tables in the temp dir, keyed by a hash of the
-    # grammar, the options and Lark's version; building them takes most of a second.
+    # Building the LALR tables takes most of a second, so Lark keeps them in a file (it checks a
+    # hash of the grammar, the options and its version at load). Not Lark's default place
+    # (`cache=True`: a predictable name in the shared temp dir, which another user could plant
+    # a pickle under) but a file in stvm's own private cache folder; none if that is not safe.
+    tables = private_file(content_name("lark-tables", grammar, lark.__version__, _GRAMMAR_FILE, suffix=".pickle"))
     return Lark(grammar, parser="lalr", lexer="contextual", propagate_positions=True,
-                start=["start", "expression"], maybe_placeholders=True, cache=True,
+                start=["start", "expression"], maybe_placeholders=True,
+                cache=str(tables) if tables is not None else False,
                 lexer_callbacks={"PRAGMA": _pragma_seen})
 
 
