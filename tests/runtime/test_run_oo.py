@@ -445,3 +445,29 @@ def test_properties_are_used_like_variables():
 
 def test_property_setter_runs_once_per_assignment():
     assert run_st(TANK, cycles=1, prints=["Main.t.writes"]) == {"Main.t.writes": 2}
+
+
+def test_method_outputs_are_written_on_return_and_en_eno_works():
+    src = """
+FUNCTION_BLOCK F
+VAR calls : INT; END_VAR
+METHOD Split : BOOL
+VAR_INPUT v : INT; END_VAR
+VAR_OUTPUT hi, lo : INT; END_VAR
+calls := calls + 1;
+hi := v / 10;
+IF v < 0 THEN RETURN; END_IF;
+lo := v MOD 10;
+Split := TRUE;
+END_METHOD
+END_FUNCTION_BLOCK
+PROGRAM Main VAR f : F; h1, l1, h2, l2 : INT; ok1, ok2, eno : BOOL; END_VAR
+ok1 := f.Split(v := 42, hi => h1, lo => l1);
+ok2 := f.Split(v := -35, hi => h2, lo => l2);
+f.Split(EN := FALSE, v := 7, ENO => eno);
+END_PROGRAM
+"""
+    values = run_st(src, cycles=1, prints=["Main.ok1", "Main.h1", "Main.l1", "Main.ok2", "Main.h2", "Main.l2",
+                                           "Main.eno", "Main.f.calls"])
+    assert values == {"Main.ok1": True, "Main.h1": 4, "Main.l1": 2, "Main.ok2": False, "Main.h2": -3, "Main.l2": 0,
+                      "Main.eno": False, "Main.f.calls": 2}
