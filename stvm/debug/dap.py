@@ -463,7 +463,7 @@ class DapServer:
         if node.kind in ("locals", "io"):
             frame = engine.frames()[node.frame]
             scope, pou = frame.scope, frame.pou
-            holder = scope.frame if pou.kind == "FUNCTION" else scope.instance
+            holder = scope.frame if pou.kind in ("FUNCTION", "METHOD") else scope.instance
             wanted = (INPUT, OUTPUT, IN_OUT) if node.kind == "io" else None
             for var in pou.variables.values():
                 if var.section == EXTERNAL:
@@ -471,7 +471,7 @@ class DapServer:
                 if (wanted is None) == (var.section in (INPUT, OUTPUT, IN_OUT)):
                     continue
                 out.append((var.name, _read(holder, var), var.type, var.name, ()))
-            if node.kind == "locals" and pou.kind == "FUNCTION" and pou.return_type is not None:
+            if node.kind == "locals" and pou.kind in ("FUNCTION", "METHOD") and pou.return_type is not None:
                 out.append((pou.name, scope.result, pou.return_type, None, ()))
         elif node.kind == "globals":
             for var in engine.model.globals.values():
