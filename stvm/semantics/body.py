@@ -125,6 +125,7 @@ class _BodyChecker:
         # the FB (or PROGRAM) whose instance the body runs on: its own body, or a method's owner
         self.fb = fb if fb is not None else (pou if pou.kind in ("FUNCTION_BLOCK", "PROGRAM") else None)
         self.fb_node = fb_node if fb_node is not None else node
+        self.member_base: tuple[n.Expr, t.Type] | None = None   # a callee's base oo_call typed already
         self.facts = checker.facts
         self.settings = checker.settings
         self.loop_depth = 0
@@ -567,7 +568,8 @@ class _BodyChecker:
         return self.implicit_deref(e, var.type)
 
     def expr_Member(self, e: n.Member, expected) -> t.Type | None:
-        base = self.expr(e.base)
+        known, self.member_base = self.member_base, None
+        base = known[1] if known is not None and known[0] is e.base else self.expr(e.base)
         if base is None:
             return None
         if isinstance(base, t.StructType):
@@ -741,6 +743,7 @@ class _BodyChecker:
                     self.error(f"function block {base_type.name} has no method '{callee.name}'", callee.span, "E045")
                     self.check_args_loosely(e)
                     return True, None
+                self.member_base = (callee.base, base_type)   # expr_Call types the callee next
                 return False, None
             how = self.member_how(callee.base, base_type)
             if how == "super":
@@ -748,6 +751,7 @@ class _BodyChecker:
             if isinstance(callee.base, n.Deref) and self.inside_own(callee.base, base_type):
                 return True, self.method_call(e, method, "self", None, "", expected)
             return True, self.method_call(e, method, "inst", callee.base, "", expected)
+        self.member_base = (callee.base, base_type)
         return False, None
 
     def expr_BitAccess(self, e: n.BitAccess, expected) -> t.Type | None:

@@ -471,3 +471,48 @@ END_PROGRAM
                                            "Main.eno", "Main.f.calls"])
     assert values == {"Main.ok1": True, "Main.h1": 4, "Main.l1": 2, "Main.ok2": False, "Main.h2": -3, "Main.l2": 0,
                       "Main.eno": False, "Main.f.calls": 2}
+
+
+VALUES = """
+INTERFACE I_Val
+METHOD Get : INT
+END_METHOD
+END_INTERFACE
+FUNCTION_BLOCK FB_Const IMPLEMENTS I_Val
+VAR_INPUT v : INT; END_VAR
+METHOD Get : INT
+Get := v;
+END_METHOD
+END_FUNCTION_BLOCK
+FUNCTION_BLOCK FB_Sum
+VAR_INPUT src : I_Val; END_VAR
+VAR_OUTPUT total : INT; END_VAR
+IF src <> 0 THEN total := total + src.Get(); END_IF;
+END_FUNCTION_BLOCK
+FUNCTION Read : INT
+VAR_INPUT i : I_Val; END_VAR
+Read := i.Get() * 100;
+END_FUNCTION
+PROGRAM Main
+VAR
+  a : FB_Const; b : FB_Const;
+  list : ARRAY[1..2] OF I_Val;
+  s : FB_Sum; k : INT; r : INT; n : INT;
+END_VAR
+a(v := 1); b(v := 2);
+list[1] := a; list[2] := b;
+FOR k := 1 TO 2 DO
+  s(src := list[k]);
+END_FOR;
+s(src := 0);
+r := Read(list[2]) + Read(i := a);
+n := list[1].Get() + list[2].Get();
+END_PROGRAM
+"""
+
+
+def test_interfaces_as_inputs_array_elements_and_function_parameters():
+    values = run_st(VALUES, cycles=2, prints=["Main.s.total", "Main.r", "Main.n"])
+    # two scans of s(src := a), s(src := b): 2 * (1 + 2); s(src := 0) adds nothing
+    assert values == {"Main.s.total": 6, "Main.r": 300, "Main.n": 3}
+    assert run_st(VALUES, cycles=1, fmt=True, prints=["Main.list"]) == {"Main.list": "[-> FB_Const, -> FB_Const]"}
