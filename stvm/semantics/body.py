@@ -1196,16 +1196,16 @@ class _BodyChecker:
         generic_types: list[t.Type] = []
         bound: set[str] = set()
         if not positional and not formal and pou.variadic and not fb:
-            self.error(f"{pou.name} takes at least {max(len(params) - 1, 1)} arguments, got 0", e.span, "E048")
+            self.error(f"{self.display(pou)} takes at least {max(len(params) - 1, 1)} arguments, got 0", e.span, "E048")
         if positional:
             if fb:
-                self.error(f"function block {pou.name} needs formal arguments (Name := value)", e.span, "E047")
+                self.error(f"function block {self.display(pou)} needs formal arguments (Name := value)", e.span, "E047")
                 return
             if pou.variadic:
                 if len(positional) < max(len(params) - 1, 1):
-                    self.error(f"{pou.name} takes at least {max(len(params) - 1, 1)} arguments, got {len(positional)}", e.span, "E048")
+                    self.error(f"{self.display(pou)} takes at least {max(len(params) - 1, 1)} arguments, got {len(positional)}", e.span, "E048")
             elif len(positional) != len(params):
-                self.error(f"{pou.name} takes {len(params)} argument(s), got {len(positional)}", e.span, "E048")
+                self.error(f"{self.display(pou)} takes {len(params)} argument(s), got {len(positional)}", e.span, "E048")
             for i, arg in enumerate(positional):
                 if i < len(params):
                     self.bind_one(pou, params[i], arg, info, generic_types)
@@ -1227,8 +1227,8 @@ class _BodyChecker:
                 if var is None or var.section not in (INPUT, IN_OUT):
                     what = "output" if var is not None and var.section == OUTPUT else "input"
                     hint = "; outputs are bound with =>" if var is not None and var.section == OUTPUT else ""
-                    self.error(f"{pou.name} has no {what} '{arg.name}'{hint}" if not hint else
-                               f"'{arg.name}' is an output of {pou.name}{hint}", arg.span, "E049")
+                    self.error(f"{self.display(pou)} has no {what} '{arg.name}'{hint}" if not hint else
+                               f"'{arg.name}' is an output of {self.display(pou)}{hint}", arg.span, "E049")
                     self.expr(arg.value)
                     continue
                 if var.key in bound:
@@ -1238,7 +1238,7 @@ class _BodyChecker:
             else:
                 var = pou.pin(arg.name)
                 if var is None or var.section != OUTPUT:
-                    self.error(f"{pou.name} has no output '{arg.name}'", arg.span, "E049")
+                    self.error(f"{self.display(pou)} has no output '{arg.name}'", arg.span, "E049")
                     continue
                 target_type = self.lvalue(arg.value)
                 if target_type is not None:
@@ -1252,9 +1252,9 @@ class _BodyChecker:
             if p.section == IN_OUT and p.key not in bound and not (fb and positional):
                 if fb:
                     # Choice (IEC 6.6.1.2): an FB in-out must be bound on every call
-                    self.error(f"in-out '{p.name}' of {pou.name} is not bound", e.span, "E048")
+                    self.error(f"in-out '{p.name}' of {self.display(pou)} is not bound", e.span, "E048")
                 else:
-                    self.error(f"in-out '{p.name}' of {pou.name} is not bound", e.span, "E048")
+                    self.error(f"in-out '{p.name}' of {self.display(pou)} is not bound", e.span, "E048")
         # static argument types in parameter order (omitted inputs: their declared type), extras last
         given = {var.key: value for var, value in info.inputs}
         arg_types = [self.facts.types.get(id(given[p.key]), p.type) if p.key in given else p.type
@@ -1273,10 +1273,17 @@ class _BodyChecker:
                         and not expected.bitstring and trunc_result_from_context(self.settings):
                     info.generic_type = expected   # IEC: TRUNC is ANY_REAL -> ANY_INT
             except Exception as exc:  # a rule rejecting its arguments is a type error in the user's call
-                self.error(f"{pou.name}: {exc}", e.span, "E046")
+                self.error(f"{self.display(pou)}: {exc}", e.span, "E046")
         elif generic_types:
             typed = [ty for ty, untyped in generic_types if not untyped]
             info.generic_type = self.common_generic(typed or [ty for ty, _ in generic_types], e)
+
+    def display(self, pou: POUInfo) -> str:
+        """A callee's name in diagnostics: `FB.Method` for a METHOD, the POU's name otherwise."""
+        if pou.kind == "METHOD":
+            owner = self.c.pous.get(pou.owner)
+            return f"method {owner.name}.{pou.name}" if owner is not None else pou.name
+        return pou.name
 
     def literal_context_types(self, pou: POUInfo, arg_types: tuple, exprs: list) -> tuple:
         """The argument types a result rule sees: an untyped literal takes the type of the typed
@@ -1373,17 +1380,17 @@ class _BodyChecker:
                 ty = self.lvalue(arg.value) if self.is_lvalue_shape(arg.value) else None
                 if ty is None and not self.is_lvalue_shape(arg.value):
                     self.expr(arg.value)
-                    self.error(f"in-out '{var.name}' of {pou.name} needs a variable, not an expression", arg.value.span, "E053")
+                    self.error(f"in-out '{var.name}' of {self.display(pou)} needs a variable, not an expression", arg.value.span, "E053")
                     return
             if ty is None:
                 return
             if isinstance(ptype, t.GenericType):
                 if not ptype.accepts(ty):
-                    self.error(f"'{var.name}' of {pou.name} needs {ptype.name}, got {ty.name}", arg.value.span, "E052")
+                    self.error(f"'{var.name}' of {self.display(pou)} needs {ptype.name}, got {ty.name}", arg.value.span, "E052")
                 generic_types.append((ty, False))
             elif isinstance(ptype, t.ArrayType) and isinstance(ty, t.ArrayType) and ptype.dims is None:
                 if not self.element_ok(ty.element, ptype.element):
-                    self.error(f"'{var.name}' of {pou.name} needs {ptype.name}, got {ty.name}", arg.value.span, "E052")
+                    self.error(f"'{var.name}' of {self.display(pou)} needs {ptype.name}, got {ty.name}", arg.value.span, "E052")
             elif isinstance(ty, t.FBType) and isinstance(ptype, t.FBType) \
                     and self.c.is_derived(ty.qualname.lower(), ptype.qualname.lower()):
                 pass   # an instance of a derived FB is an instance of its base
@@ -1391,7 +1398,7 @@ class _BodyChecker:
                       or (isinstance(ty, (t.StructType, t.EnumType)) and implicit_ok(ty, ptype))
                       or (isinstance(ty, t.ArrayType) and implicit_ok(ty, ptype))
                       or (isinstance(ty, t.IntType) and isinstance(ptype, t.IntType) and ty.bits == ptype.bits)):
-                self.error(f"in-out '{var.name}' of {pou.name} is {ptype.name}; got {ty.name}", arg.value.span, "E052")
+                self.error(f"in-out '{var.name}' of {self.display(pou)} is {ptype.name}; got {ty.name}", arg.value.span, "E052")
             info.inputs.append((var, arg.value))
             return
         if isinstance(ptype, t.ArrayType) and ptype.dims is None and isinstance(arg.value, n.Index):
@@ -1406,13 +1413,13 @@ class _BodyChecker:
             return
         if isinstance(ptype, t.GenericType):
             if not ptype.accepts(ty) and not self.untyped_bits_literal(arg.value, ptype):
-                self.error(f"'{var.name}' of {pou.name} needs {ptype.name}, got {ty.name}", arg.value.span, "E052")
+                self.error(f"'{var.name}' of {self.display(pou)} needs {ptype.name}, got {ty.name}", arg.value.span, "E052")
             else:
                 # untyped literals only decide the type when no typed argument does
                 generic_types.append((ty, id(arg.value) in self.facts.untyped))
         elif isinstance(ptype, t.ArrayType) and ptype.dims is None:
             if not (isinstance(ty, t.ArrayType) and self.element_ok(ty.element, ptype.element)):
-                self.error(f"'{var.name}' of {pou.name} needs {ptype.name}, got {ty.name}", arg.value.span, "E052")
+                self.error(f"'{var.name}' of {self.display(pou)} needs {ptype.name}, got {ty.name}", arg.value.span, "E052")
         else:
             self.require_assignable(arg.value, ty, ptype, arg.value.span)
         if extra:
