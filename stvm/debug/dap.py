@@ -473,6 +473,11 @@ class DapServer:
                 out.append((var.name, _read(holder, var), var.type, var.name, ()))
             if node.kind == "locals" and pou.kind in ("FUNCTION", "METHOD") and pou.return_type is not None:
                 out.append((pou.name, scope.result, pou.return_type, None, ()))
+            owner = engine.model.pous.get(pou.owner) if pou.kind == "METHOD" else None
+            if node.kind == "locals" and owner is not None and scope.instance is not None:
+                # a METHOD's instance, expandable like any FB instance
+                out.append(("THIS", scope.instance, t.FBType(owner.name, owner.qualname, owner.kind == "PROGRAM"),
+                            "THIS^", ()))
         elif node.kind == "globals":
             for var in engine.model.globals.values():
                 out.append((var.name, getattr(vm.globals, "v_" + var.key), var.type, var.name, ()))

@@ -86,3 +86,25 @@ def test_conditional_breakpoint_in_a_method(engine):
     event = engine.run(CONTINUE, timeout=T)
     assert event is not None and event.scan == 2            # count 3 in the third scan: 10 + 3
     assert engine.evaluate_text("tmp") == "13"
+
+
+def test_dap_method_frame_shows_locals_result_and_this(tmp_path):
+    from dap_client import DapClient
+    path = write_st(SOURCE, "oo.st", tmp_path)
+    dap = DapClient()
+    try:
+        line = _line("Calc := tmp;")
+        results = dap.launch(str(path), breakpoints={str(path): [{"line": line}]})
+        assert results[str(path)]["breakpoints"][0]["verified"]
+        dap.stopped("breakpoint")
+        frames = dap.body("stackTrace", threadId=1)["stackFrames"]
+        assert frames[0]["name"].startswith("Main.c.Calc") and frames[0]["line"] == line
+        scopes = dap.scope_variables(frames[0]["id"])
+        assert scopes["Locals"]["tmp"]["value"] == "11"
+        assert scopes["Inputs/Outputs"]["a"]["value"] == "10" and scopes["Inputs/Outputs"]["twice"]["value"] == "22"
+        this = scopes["Locals"]["THIS"]
+        assert this["variablesReference"] > 0
+        assert dap.variables(this["variablesReference"])["count"]["value"] == "1"
+        assert dap.evaluate("THIS^.count + tmp", frames[0]["id"])["result"] == "12"
+    finally:
+        assert dap.close() == 0
