@@ -466,7 +466,7 @@ class DapServer:
             holder = scope.frame if pou.kind in ("FUNCTION", "METHOD") else scope.instance
             wanted = (INPUT, OUTPUT, IN_OUT) if node.kind == "io" else None
             for var in pou.variables.values():
-                if var.section == EXTERNAL:
+                if var.section in (EXTERNAL, "VAR_INST"):   # (a method's VAR_INST shows under THIS)
                     continue
                 if (wanted is None) == (var.section in (INPUT, OUTPUT, IN_OUT)):
                     continue

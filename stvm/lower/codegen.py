@@ -415,9 +415,9 @@ class Lowerer:
             # locals (the inputs are the arguments, the outputs are written back at the end): no
             # frame object
             every = self.cached_vars(pou, node, min_uses=0, outputs_local=True)
-            if all(v.key in every for v in pou.variables.values()):
+            if all(v.key in every for v in pou.variables.values() if v.section != "VAR_INST"):
                 prologue = [f"{var_attr(v.name)} = {self.var_default(v)}" for v in pou.variables.values()
-                            if v.section not in (INPUT, IN_OUT)]
+                            if v.section not in (INPUT, IN_OUT, "VAR_INST")]
                 prologue.append(f"_r = {self.default_expr(pou.return_type)}" if pou.return_type is not None else "_r = None")
                 epilogue = [f"if o_{var_attr(o.name)} is not None: o_{var_attr(o.name)}.set({var_attr(o.name)})"
                             for o in outputs]
@@ -432,7 +432,7 @@ class Lowerer:
         for p in params:
             prologue.append(f"_f.{var_attr(p.name)} = {var_attr(p.name)}")
         for var in pou.variables.values():
-            if var.section not in (INPUT, IN_OUT, EXTERNAL):
+            if var.section not in (INPUT, IN_OUT, EXTERNAL, "VAR_INST"):
                 prologue.append(f"_f.{var_attr(var.name)} = {self.var_default(var)}")
         prologue.append(f"_r = {self.default_expr(pou.return_type)}" if pou.return_type is not None else "_r = None")
         # VAR_OUTPUT of a function: written through the caller's references when it returns
@@ -865,7 +865,7 @@ class Lowerer:
         uses = _name_uses(node.body)
         out = {}
         for var in pou.variables.values():
-            if var.section in (EXTERNAL, GLOBAL) or var.key in referenced:
+            if var.section in (EXTERNAL, GLOBAL, "VAR_INST") or var.key in referenced:
                 continue
             if var.section == IN_OUT and not isinstance(var.type, (t.StructType, t.ArrayType, t.FBType)):
                 continue  # a scalar in-out is a reference object; keep it on the instance

@@ -288,6 +288,8 @@ class _BodyChecker:
             key = name.parts[0].lower()
             var = self.pou.variables.get(key)
             if var is not None:
+                if var.section == "VAR_INST" and self.fb is not None and key in self.pou.inst_vars:
+                    return NameRef("field", self.fb.variables[self.pou.inst_vars[key]])
                 if var.section == EXTERNAL:
                     g = self.c.globals.get(key)
                     return NameRef("global", g) if g is not None else None

@@ -516,3 +516,24 @@ def test_interfaces_as_inputs_array_elements_and_function_parameters():
     # two scans of s(src := a), s(src := b): 2 * (1 + 2); s(src := 0) adds nothing
     assert values == {"Main.s.total": 6, "Main.r": 300, "Main.n": 3}
     assert run_st(VALUES, cycles=1, fmt=True, prints=["Main.list"]) == {"Main.list": "[-> FB_Const, -> FB_Const]"}
+
+
+def test_var_inst_of_a_method_lives_in_the_instance():
+    src = """
+FUNCTION_BLOCK F
+METHOD Tick : INT
+VAR_INST count : INT := 100; END_VAR
+VAR fresh : INT; END_VAR
+count := count + 1;
+fresh := fresh + 1;
+Tick := count * 10 + fresh;
+END_METHOD
+END_FUNCTION_BLOCK
+PROGRAM Main VAR a, b : F; x, y : INT; END_VAR
+x := a.Tick();
+y := b.Tick() + b.Tick();
+END_PROGRAM
+"""
+    # per instance, kept between calls and scans (CODESYS VAR_INST); VAR starts fresh
+    assert run_st(src, cycles=2, prints=["Main.x", "Main.y"]) == {"Main.x": 1021, "Main.y": 2072}
+    assert run_st(src, cycles=1, fmt=True, prints=["Main.a"]) == {"Main.a": "(Tick__count := 101)"}
