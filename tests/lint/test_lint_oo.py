@@ -65,3 +65,33 @@ def test_lint_runs_on_the_oo_demo(folder):
     rc, out, err = cli(["lint", ROOT / folder])
     assert "Traceback" not in err and "internal error" not in err
     assert rc in (0, 1)
+
+
+def _fb(middle: str) -> str:
+    return f"""
+FUNCTION_BLOCK F
+VAR_OUTPUT q : INT; END_VAR
+VAR d : INT; END_VAR
+d := 0;
+{middle}
+IF d <> 0 THEN
+    q := 1;
+END_IF;
+METHOD Reset
+d := 5;
+END_METHOD
+END_FUNCTION_BLOCK
+PROGRAM Main VAR f : F; END_VAR
+f();
+END_PROGRAM
+"""
+
+
+def test_a_method_call_forgets_what_the_body_knew_about_the_instance():
+    # Reset() sets d: the branch is live (without forgetting, SA402 would call it dead)
+    assert "SA402" not in codes(_fb("Reset();"))
+    assert "SA402" not in codes(_fb("THIS^.Reset();"))
+
+
+def test_the_same_without_the_method_call_is_reported():
+    assert "SA402" in codes(_fb(""))
