@@ -537,3 +537,34 @@ END_PROGRAM
     # per instance, kept between calls and scans (CODESYS VAR_INST); VAR starts fresh
     assert run_st(src, cycles=2, prints=["Main.x", "Main.y"]) == {"Main.x": 1021, "Main.y": 2072}
     assert run_st(src, cycles=1, fmt=True, prints=["Main.a"]) == {"Main.a": "(Tick__count := 101)"}
+
+
+def test_properties_are_inherited_overridden_and_reached_through_super():
+    src = """
+FUNCTION_BLOCK FB_Base
+VAR raw : INT := 4; END_VAR
+PROPERTY Scaled : INT
+GET
+Scaled := raw * 10;
+END_GET
+END_PROPERTY
+METHOD Report : INT
+Report := Scaled + 1;          (* dynamic: the instance's own Scaled *)
+END_METHOD
+END_FUNCTION_BLOCK
+
+FUNCTION_BLOCK FB_Derived EXTENDS FB_Base
+PROPERTY Scaled : INT
+GET
+Scaled := SUPER^.Scaled * 2;
+END_GET
+END_PROPERTY
+END_FUNCTION_BLOCK
+
+PROGRAM Main VAR b : FB_Base; d : FB_Derived; rb, rd, sd : INT; END_VAR
+rb := b.Report();
+rd := d.Report();
+sd := d.Scaled;
+END_PROGRAM
+"""
+    assert run_st(src, cycles=1, prints=["Main.rb", "Main.rd", "Main.sd"]) == {"Main.rb": 41, "Main.rd": 81, "Main.sd": 80}
