@@ -31,6 +31,32 @@ class ProjectContext:
             if node.span.file.startswith("<stdlib") and not include_stdlib:
                 continue
             out.append(PouContext(self, node, info))
+        for key, node in self.analysis.pou_nodes.items():
+            info = self.analysis.model.pous.get(key)
+            if info is None or info.kind not in ("FUNCTION_BLOCK", "PROGRAM"):
+                continue
+            if node.span.file.startswith("<stdlib") and not include_stdlib:
+                continue
+            out += self.method_contexts(node, info)
+        return out
+
+    def method_contexts(self, node: n.POU, info) -> list["PouContext"]:
+        """The FB's METHODs and property accessors, linted like FUNCTIONs (their variables are
+        fresh on every call; the instance's variables they use are not tracked)."""
+        from dataclasses import replace
+        methods = getattr(self.analysis, "method_nodes", {})
+        members = list(info.methods.values())
+        for prop in info.properties.values():
+            members += [m for m in (prop.getter, prop.setter) if m is not None]
+        out = []
+        for method in members:
+            mnode = methods.get(method.key)
+            if mnode is None or method.abstract or not mnode.body:
+                continue
+            view = n.POU("FUNCTION", method.name, node.namespace, mnode.return_type, mnode.var_blocks, mnode.body,
+                         mnode.pragmas, mnode.span, mnode.span)
+            as_function = replace(method, kind="FUNCTION", return_type=method.return_type or t.VOID)
+            out.append(PouContext(self, view, as_function))
         return out
 
 
