@@ -236,6 +236,8 @@ class _BodyChecker:
 
     def stmt_For(self, s: n.For) -> None:
         var_type = self.lvalue(s.variable)
+        if self.is_property(s.variable, "FOR"):
+            var_type = None
         if var_type is not None and not isinstance(var_type, t.IntType):
             self.error(f"FOR variable must be an integer, not {var_type.name}", s.variable.span, "E043")
         for part in (s.start, s.end) + ((s.step,) if s.step is not None else ()):
@@ -611,6 +613,15 @@ class _BodyChecker:
         return True
 
     # ---- object orientation
+    def is_property(self, e: n.Expr, what: str) -> bool:
+        """A property where a variable is needed (FOR, `=>`, an in-out, REF()): an error, since
+        it has no storage of its own (its GET and SET are calls)."""
+        if self.facts.props and id(e) in self.facts.props:
+            self.error(f"{what} needs a variable; property '{self.facts.props[id(e)][0].name}' is a pair of "
+                       f"GET/SET calls (use a variable and assign the property)", e.span, "E073")
+            return True
+        return False
+
     def this_or_super(self, e: n.Name) -> t.Type | None:
         """THIS (a POINTER TO the instance) and SUPER (to its base part), inside an FB or method."""
         from stvm.semantics.checker import NameRef
@@ -845,7 +856,7 @@ class _BodyChecker:
             return None
         arg = e.args[0].value
         ty = self.expr(arg)
-        if ty is None:
+        if ty is None or self.is_property(arg, f"{word}()"):
             return None
         if not isinstance(arg, (n.Name, n.Member, n.Index, n.Deref)):
             what = "a single bit, which has no reference" if isinstance(arg, n.BitAccess) else "a temporary value"
@@ -1243,6 +1254,8 @@ class _BodyChecker:
                     self.error(f"{self.display(pou)} has no output '{arg.name}'", arg.span, "E049")
                     continue
                 target_type = self.lvalue(arg.value)
+                if self.is_property(arg.value, f"the output {arg.name}"):
+                    continue
                 if target_type is not None:
                     if arg.kind == "output_not" and not isinstance(var.type, t.BoolType):
                         self.error("NOT => needs a BOOL output", arg.span, "E049")
@@ -1380,6 +1393,8 @@ class _BodyChecker:
                 ty = self.expr(arg.value)   # an FB instance passed by reference
             else:
                 ty = self.lvalue(arg.value) if self.is_lvalue_shape(arg.value) else None
+                if self.is_property(arg.value, f"the in-out {var.name}"):
+                    return
                 if ty is None and not self.is_lvalue_shape(arg.value):
                     self.expr(arg.value)
                     self.error(f"in-out '{var.name}' of {self.display(pou)} needs a variable, not an expression", arg.value.span, "E053")

@@ -104,6 +104,41 @@ def test_oo_errors(source, line, message):
     assert any(l == line and message in m for l, m in found), found
 
 
+PROPERTY_FB = """
+FUNCTION_BLOCK F
+VAR v : INT; END_VAR
+PROPERTY P : INT
+GET P := v; END_GET
+SET v := P; END_SET
+END_PROPERTY
+METHOD M
+VAR_OUTPUT q : INT; END_VAR
+q := 1;
+END_METHOD
+END_FUNCTION_BLOCK
+FUNCTION Inc : INT
+VAR_IN_OUT x : INT; END_VAR
+x := x + 1;
+Inc := x;
+END_FUNCTION
+"""
+
+
+@pytest.mark.parametrize("statement, message", [
+    ("f.M(q => g.P);", "the output q needs a variable; property 'P'"),
+    ("k := Inc(g.P);", "the in-out x needs a variable; property 'P'"),
+    ("r := REF(g.P);", "REF() needs a variable; property 'P'"),
+])
+def test_a_property_is_no_variable_to_bind(statement, message):
+    found = errors(PROPERTY_FB + f"PROGRAM Main VAR f : F; g : F; r : REF_TO INT; k : INT; END_VAR\n{statement}\nEND_PROGRAM\n")
+    assert [m for _, m in found if message in m], found
+
+
+def test_a_property_is_no_for_variable():
+    found = errors(PROPERTY_FB + "FUNCTION_BLOCK H EXTENDS F\nFOR P := 1 TO 3 DO END_FOR;\nEND_FUNCTION_BLOCK\n")
+    assert [m for _, m in found if m.startswith("FOR needs a variable; property 'P'")], found
+
+
 def test_calling_a_method_of_an_abstract_base_through_super_is_an_error():
     found = errors("""
 FUNCTION_BLOCK ABSTRACT B
