@@ -372,11 +372,15 @@ class _BodyChecker:
             ty = self.expr(target)
             if ty is not None and self.is_constant_path(target.base):
                 self.error("cannot assign to a member of a constant", target.span, "E050")
+            if ty is not None and self.through_property(target.base):
+                return None
             return ty
         if isinstance(target, (n.Index, n.BitAccess)):
             ty = self.expr(target)
             if ty is not None and self.is_constant_path(target.base):
                 self.error("cannot assign into a constant", target.span, "E050")
+            if ty is not None and isinstance(target, n.Index) and self.through_property(target.base):
+                return None
             return ty
         if isinstance(target, n.Call):
             self.expr(target)
@@ -613,6 +617,21 @@ class _BodyChecker:
         return True
 
     # ---- object orientation
+    def through_property(self, base: n.Expr) -> bool:
+        """`fb.P.x := …` / `fb.P[i] := …`: the GET returns a copy, so the write would be lost."""
+        while isinstance(base, (n.Member, n.Index)):
+            if self.facts.props and id(base) in self.facts.props:
+                name = self.facts.props[id(base)][0].name
+                self.error(f"cannot assign into property '{name}': its GET returns a copy; assign the whole "
+                           f"property", base.span, "E073")
+                return True
+            base = base.base
+        if isinstance(base, n.Name) and self.facts.props and id(base) in self.facts.props:
+            self.error(f"cannot assign into property '{base.parts[0]}': its GET returns a copy; assign the whole "
+                       f"property", base.span, "E073")
+            return True
+        return False
+
     def is_property(self, e: n.Expr, what: str) -> bool:
         """A property where a variable is needed (FOR, `=>`, an in-out, REF()): an error, since
         it has no storage of its own (its GET and SET are calls)."""

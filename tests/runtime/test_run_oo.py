@@ -568,3 +568,28 @@ sd := d.Scaled;
 END_PROGRAM
 """
     assert run_st(src, cycles=1, prints=["Main.rb", "Main.rd", "Main.sd"]) == {"Main.rb": 41, "Main.rd": 81, "Main.sd": 80}
+
+
+def test_struct_property_and_a_bit_of_a_property():
+    src = """
+TYPE Pt : STRUCT x : INT; y : INT; END_STRUCT; END_TYPE
+FUNCTION_BLOCK F
+VAR v : Pt; w : INT; END_VAR
+PROPERTY S : Pt
+GET S := v; END_GET
+SET v := S; END_SET
+END_PROPERTY
+PROPERTY B : INT
+GET B := w; END_GET
+SET w := B; END_SET
+END_PROPERTY
+END_FUNCTION_BLOCK
+PROGRAM Main VAR f : F; p : Pt; k : INT; END_VAR
+p.x := 7;
+f.S := p;
+p.x := 9;                  (* the property holds its own copy *)
+k := f.S.x;
+f.B.3 := TRUE;             (* GET, set bit 3, SET *)
+END_PROGRAM
+"""
+    assert run_st(src, cycles=1, prints=["Main.k", "Main.f.w"]) == {"Main.k": 7, "Main.f.w": 8}

@@ -152,3 +152,21 @@ END_METHOD
 END_FUNCTION_BLOCK
 """)
     assert found == [(8, "SUPER^.M: the method is ABSTRACT in B")]
+
+
+def test_assigning_into_a_struct_property_is_an_error():
+    found = errors("""
+TYPE Pt : STRUCT x : INT; END_STRUCT; END_TYPE
+FUNCTION_BLOCK F
+VAR v : Pt; END_VAR
+PROPERTY S : Pt
+GET S := v; END_GET
+SET v := S; END_SET
+END_PROPERTY
+END_FUNCTION_BLOCK
+PROGRAM Main VAR f : F; k : INT; END_VAR
+f.S.x := 5;
+k := f.S.x;
+END_PROGRAM
+""")
+    assert found == [(11, "cannot assign into property 'S': its GET returns a copy; assign the whole property")]
