@@ -56,7 +56,9 @@ class ProjectContext:
             view = n.POU("FUNCTION", method.name, node.namespace, mnode.return_type, mnode.var_blocks, mnode.body,
                          mnode.pragmas, mnode.span, mnode.span)
             as_function = replace(method, kind="FUNCTION", return_type=method.return_type or t.VOID)
-            out.append(PouContext(self, view, as_function))
+            ctx = PouContext(self, view, as_function)
+            ctx.method_of = info.name
+            out.append(ctx)
         return out
 
 
@@ -67,6 +69,7 @@ class PouContext:
         self.info = info
         self.facts = project.facts
         self.settings = project.settings
+        self.method_of = ""       # a METHOD / property accessor (linted like a FUNCTION): its FB's name
 
     @cached_property
     def cfg(self) -> CFG:
