@@ -53,8 +53,11 @@ class ProjectContext:
             mnode = methods.get(method.key)
             if mnode is None or method.abstract or not mnode.body:
                 continue
+            sp = mnode.span
+            word = "END_METHOD" if method.key.rsplit(".", 1)[-1].startswith(method.name.lower()) else "END_GET"
+            end = n.Span(sp.file, sp.end_line, max(1, sp.end_column - len(word)), sp.end_line, sp.end_column)
             view = n.POU("FUNCTION", method.name, node.namespace, mnode.return_type, mnode.var_blocks, mnode.body,
-                         mnode.pragmas, mnode.span, mnode.span)
+                         mnode.pragmas, sp, end)
             as_function = replace(method, kind="FUNCTION", return_type=method.return_type or t.VOID)
             ctx = PouContext(self, view, as_function)
             ctx.method_of = info.name
