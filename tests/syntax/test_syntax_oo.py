@@ -101,3 +101,18 @@ def test_modifier_words_stay_usable_as_variable_names(word):
 def test_method_outside_a_pou_is_a_syntax_error():
     _, diags = parse_text("METHOD M END_METHOD", "t.st")
     assert diags and diags[0].severity.name == "ERROR" and diags[0].span.line == 1
+
+
+def test_oo_words_still_name_variables_at_the_start_of_a_statement():
+    # ed. 2 code may call a variable `method`: METHOD/PROPERTY/EXTENDS/IMPLEMENTS are keywords only
+    # where a name follows them
+    fb = _unit("""
+FUNCTION_BLOCK F
+VAR method, property, extends, implements : INT; END_VAR
+extends := 1;
+method := method + 1;
+property := method;
+implements := property;
+END_FUNCTION_BLOCK""").pous[0]
+    assert [s.target.parts[0] for s in fb.body] == ["extends", "method", "property", "implements"]
+    assert fb.methods == () and fb.extends == ()
