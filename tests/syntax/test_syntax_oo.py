@@ -116,3 +116,25 @@ implements := property;
 END_FUNCTION_BLOCK""").pous[0]
     assert [s.target.parts[0] for s in fb.body] == ["extends", "method", "property", "implements"]
     assert fb.methods == () and fb.extends == ()
+
+
+def test_modifier_words_name_pous_and_methods():
+    unit = _unit("""
+FUNCTION_BLOCK Final
+VAR_INPUT x : INT; END_VAR
+END_FUNCTION_BLOCK
+FUNCTION_BLOCK Internal EXTENDS Final
+METHOD Public : INT
+Public := x;
+END_METHOD
+METHOD PRIVATE FINAL Abstract
+VAR_INPUT a : INT; END_VAR
+END_METHOD
+END_FUNCTION_BLOCK
+FUNCTION_BLOCK ABSTRACT PUBLIC Shape
+END_FUNCTION_BLOCK""")
+    final, internal, shape = unit.pous
+    assert (final.name, final.modifiers) == ("Final", ())
+    assert (internal.name, internal.modifiers) == ("Internal", ())
+    assert [(m.name, m.modifiers) for m in internal.methods] == [("Public", ()), ("Abstract", ("PRIVATE", "FINAL"))]
+    assert (shape.name, shape.modifiers) == ("Shape", ("ABSTRACT", "PUBLIC"))
