@@ -109,9 +109,15 @@ class DebugBuild:
     statements: StatementMap
     unit_pous: dict[str, POUInfo]        # generated class/function name → POU
     files: dict[str, str]                # absolute path → the file name spans use
+    # (FB class name, Python method name) → (METHOD or property accessor, its node, the FB)
+    unit_methods: dict[tuple[str, str], tuple[POUInfo, n.Method, POUInfo]] = field(default_factory=dict)
 
     def pou_at(self, file: str, line: int) -> tuple[POUInfo, n.POU] | None:
-        """The user POU whose text contains `file:line`."""
+        """The user POU (or METHOD / property accessor) whose text contains `file:line`."""
+        for method, node, _ in self.unit_methods.values():
+            span = node.span
+            if span.file == file and span.line <= line <= span.end_line:
+                return method, node  # type: ignore[return-value]
         for key, node in self.analysis.pou_nodes.items():
             span = node.span
             if span.file == file and span.line <= line <= max(span.end_line, node.end_span.line):
@@ -171,5 +177,17 @@ def load_debug(paths: Sequence[str | os.PathLike], settings: SysmacSettings = DE
     user_files = {os.path.normcase(os.path.abspath(name)): name for name, _ in texts}
     user_files.update({os.path.normcase(os.path.realpath(name)): name for name, _ in texts})
     pou_spans = {node.span for node in analysis.pou_nodes.values()}
+    from stvm.lower.names import method_attr
+    unit_methods = {}
+    for cls, pou in unit_pous.items():
+        for method in pou.methods.values():
+            if method.key in analysis.method_nodes:
+                unit_methods[(cls, method_attr(method.name))] = (method, analysis.method_nodes[method.key], pou)
+        for prop in pou.properties.values():
+            for kind, accessor in (("GET", prop.getter), ("SET", prop.setter)):
+                if accessor is not None and accessor.key in analysis.method_nodes:
+                    unit_methods[(cls, method_attr(prop.name, kind))] = (accessor, analysis.method_nodes[accessor.key], pou)
+    # a METHOD's header lines (its frame's set-up) are no statements either
+    pou_spans |= {node.span for _, node, _ in unit_methods.values()}
     return DebugBuild(project, analysis, checker, StatementMap.build(lowered.line_map, pou_spans), unit_pous,
-                      user_files)
+                      user_files, unit_methods)

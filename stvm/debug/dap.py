@@ -464,16 +464,21 @@ class DapServer:
         if node.kind in ("locals", "io"):
             frame = engine.frames()[node.frame]
             scope, pou = frame.scope, frame.pou
-            holder = scope.frame if pou.kind == "FUNCTION" else scope.instance
+            holder = scope.frame if pou.kind in ("FUNCTION", "METHOD") else scope.instance
             wanted = (INPUT, OUTPUT, IN_OUT) if node.kind == "io" else None
             for var in pou.variables.values():
-                if var.section == EXTERNAL:
+                if var.section in (EXTERNAL, "VAR_INST"):   # (a method's VAR_INST shows under THIS)
                     continue
                 if (wanted is None) == (var.section in (INPUT, OUTPUT, IN_OUT)):
                     continue
                 out.append((var.name, _read(holder, var), var.type, var.name, ()))
-            if node.kind == "locals" and pou.kind == "FUNCTION" and pou.return_type is not None:
+            if node.kind == "locals" and pou.kind in ("FUNCTION", "METHOD") and pou.return_type is not None:
                 out.append((pou.name, scope.result, pou.return_type, None, ()))
+            owner = engine.model.pous.get(pou.owner) if pou.kind == "METHOD" else None
+            if node.kind == "locals" and owner is not None and scope.instance is not None:
+                # a METHOD's instance, expandable like any FB instance
+                out.append(("THIS", scope.instance, t.FBType(owner.name, owner.qualname, owner.kind == "PROGRAM"),
+                            "THIS^", ()))
         elif node.kind == "globals":
             for var in engine.model.globals.values():
                 out.append((var.name, getattr(vm.globals, "v_" + var.key), var.type, var.name, ()))

@@ -363,8 +363,8 @@ class Engine:
         self._require_stopped()
         scope = self.scope(frame_index)
         store = self.compiler.compile_store(scope, target, value_text)
-        if store.root_is_local and scope.pou is not None and scope.pou.kind == "FUNCTION":
-            raise DebugError("a FUNCTION's variables exist only during a call; they cannot be forced")
+        if store.root_is_local and scope.pou is not None and scope.pou.kind in ("FUNCTION", "METHOD"):
+            raise DebugError(f"a {scope.pou.kind}'s variables exist only during a call; they cannot be forced")
         value = self.compiler.value(self.vm, scope, store)
         key = (scope.path.lower() + "." if store.root_is_local and scope.path else "") + store.canonical
         forced = Force(target.strip(), key, value_text.strip(), value, store, scope)
@@ -488,7 +488,8 @@ class Engine:
         """Statement lines of a POU body's code object (None for helper code: struct copies,
         constructors, lambdas of output references, which never stop)."""
         unit = code.co_qualname.split(".")[0]
-        if unit not in self.build.unit_pous or code.co_name not in ("__call__", unit):
+        if unit not in self.build.unit_pous or (code.co_name not in ("__call__", unit)
+                                                and (unit, code.co_name) not in self.build.unit_methods):
             return None
         return frozenset(line for _, _, line in code.co_lines() if line in self._stops)
 
@@ -625,6 +626,12 @@ class Engine:
 
     def _make_frame(self, index: int, py_frame: FrameType, line: int) -> StackFrame | None:
         unit = py_frame.f_code.co_qualname.split(".")[0]
+        method = self.build.unit_methods.get((unit, py_frame.f_code.co_name))
+        if method is not None:   # a METHOD / property accessor: shown as `instance.Method`
+            pou, node, fb = method
+            span = self.statements.spans.get(line) or self.build.project.lowered.line_map.span_at(line) or node.span
+            scope = self._frame_scope(py_frame, pou, node)  # type: ignore[arg-type]
+            return StackFrame(index, pou, node, span, f"{scope.path or fb.name}.{pou.name}", scope, py_frame)  # type: ignore[arg-type]
         pou = self.build.unit_pous.get(unit)
         if pou is None or py_frame.f_code.co_name not in ("__call__", unit):
             return None   # helper code (struct copies, output-reference lambdas) is not a POU frame
@@ -636,12 +643,20 @@ class Engine:
 
     def _frame_scope(self, py_frame: FrameType, pou: POUInfo | None = None, node: n.POU | None = None) -> Scope:
         if pou is None:
-            pou = self.build.unit_pous[py_frame.f_code.co_qualname.split(".")[0]]
-            node = self.build.analysis.pou_nodes[pou.key]
+            unit = py_frame.f_code.co_qualname.split(".")[0]
+            method = self.build.unit_methods.get((unit, py_frame.f_code.co_name))
+            if method is not None:
+                pou, node = method[0], method[1]  # type: ignore[assignment]
+            else:
+                pou = self.build.unit_pous[unit]
+                node = self.build.analysis.pou_nodes[pou.key]
         local_vars = py_frame.f_locals
         if pou.kind == "FUNCTION":
             return Scope(pou, node, None, local_vars.get("_f"), local_vars.get("_r"), "")
         instance = local_vars.get("self")
+        if pou.kind == "METHOD":   # its own variables on the call's frame, THIS is the instance
+            return Scope(pou, node, instance, local_vars.get("_f"), local_vars.get("_r"),
+                         self._paths.get(id(instance), ""))
         return Scope(pou, node, instance, None, None, self._paths.get(id(instance), ""))
 
     def _instance_paths(self) -> dict[int, str]:

@@ -78,7 +78,7 @@ class Scope:
 
     @property
     def owner(self) -> str:
-        return "_f" if self.pou is not None and self.pou.kind == "FUNCTION" else "self"
+        return "_f" if self.pou is not None and self.pou.kind in ("FUNCTION", "METHOD") else "self"
 
     def key(self) -> str:
         return self.pou.key if self.pou is not None else ""
@@ -115,7 +115,9 @@ class _ScopeChecker(BodyChecker):
     """The body checker with the debugger's wider scope rules (module docstring)."""
 
     def __init__(self, checker, pou: POUInfo, node: n.POU, programs: dict[str, tuple[str, str]]) -> None:
-        super().__init__(checker, pou, node)
+        owner = checker.pous.get(pou.owner) if pou.kind == "METHOD" else None
+        super().__init__(checker, pou, node, fb=owner,
+                         fb_node=checker.index.pou_nodes.get(pou.owner) if owner is not None else None)
         self.programs = programs            # lower-case instance name → (name, program qualname)
 
     def resolve_name(self, name: n.Name) -> object:

@@ -32,6 +32,37 @@ class ProjectContext:
             if node.span.file.startswith("<stdlib") and not include_stdlib:
                 continue
             out.append(PouContext(self, node, info))
+        for key, node in self.analysis.pou_nodes.items():
+            info = self.analysis.model.pous.get(key)
+            if info is None or info.kind not in ("FUNCTION_BLOCK", "PROGRAM"):
+                continue
+            if node.span.file.startswith("<stdlib") and not include_stdlib:
+                continue
+            out += self.method_contexts(node, info)
+        return out
+
+    def method_contexts(self, node: n.POU, info) -> list["PouContext"]:
+        """The FB's METHODs and property accessors, linted like FUNCTIONs (their variables are
+        fresh on every call; the instance's variables they use are not tracked)."""
+        from dataclasses import replace
+        methods = getattr(self.analysis, "method_nodes", {})
+        members = list(info.methods.values())
+        for prop in info.properties.values():
+            members += [m for m in (prop.getter, prop.setter) if m is not None]
+        out = []
+        for method in members:
+            mnode = methods.get(method.key)
+            if mnode is None or method.abstract or not mnode.body:
+                continue
+            sp = mnode.span
+            word = "END_METHOD" if method.key.rsplit(".", 1)[-1].startswith(method.name.lower()) else "END_GET"
+            end = n.Span(sp.file, sp.end_line, max(1, sp.end_column - len(word)), sp.end_line, sp.end_column)
+            view = n.POU("FUNCTION", method.name, node.namespace, mnode.return_type, mnode.var_blocks, mnode.body,
+                         mnode.pragmas, sp, end)
+            as_function = replace(method, kind="FUNCTION", return_type=method.return_type or t.VOID)
+            ctx = PouContext(self, view, as_function)
+            ctx.method_of = info.name
+            out.append(ctx)
         return out
 
 
@@ -42,6 +73,7 @@ class PouContext:
         self.info = info
         self.facts = project.facts
         self.settings = project.settings
+        self.method_of = ""       # a METHOD / property accessor (linted like a FUNCTION): its FB's name
 
     @cached_property
     def cfg(self) -> CFG:

@@ -235,8 +235,8 @@ class Evaluator:
 
     def call(self, expr: n.Call, state: State, ty: t.Type | None) -> Interval | None:
         info, named, ordered = self.args(expr)
-        if info is None or info.is_fb:
-            return type_range(ty)
+        if info is None or info.is_fb or getattr(info, "oo", ""):
+            return type_range(ty)   # (a METHOD named like a standard function is not one)
         name = info.pou.name.upper()
         length = self.string_length
         if name == "LEN" and ordered:
@@ -494,6 +494,9 @@ class RangeAnalysis:
     def call_effects(self, call: n.Call, state: State) -> None:
         info = self.facts.call(call)
         if info is None:
+            return
+        if getattr(info, "oo", ""):
+            state.clear()   # a METHOD may write any variable of its instance (ours too) and globals
             return
         for var, value in info.inputs:
             if var.section == IN_OUT:

@@ -382,13 +382,29 @@ class Lowerer:
         self.pou = pou
         self.owner = "_f"
         assert node is not None and (pou.return_type is not None or method)
+        if method:
+            # a METHOD none of whose variables is passed by reference keeps them all in Python
+            # locals (the inputs are the arguments, the outputs are written back at the end): no
+            # frame object
+            every = self.cached_vars(pou, node, min_uses=0, outputs_local=True)
+            if all(v.key in every for v in pou.variables.values() if v.section != "VAR_INST"):
+                prologue = [f"{var_attr(v.name)} = {self.var_default(v)}" for v in pou.variables.values()
+                            if v.section not in (INPUT, IN_OUT, "VAR_INST")]
+                prologue.append(f"_r = {self.default_expr(pou.return_type)}" if pou.return_type is not None else "_r = None")
+                epilogue = [f"if o_{var_attr(o.name)} is not None: o_{var_attr(o.name)}.set({var_attr(o.name)})"
+                            for o in outputs]
+                self.cached_body(pou, node, every, prologue, epilogue, frameless=True)
+                w.blank_span()
+                w.line("return _r")
+                w.indent -= 1
+                return
         # every variable lives on the frame `_f` (so in-outs can reference it); the often used
         # ones are copied into Python locals by cached_body
         prologue = ["_f = _Frame()"] if pou.variables or not method else []
         for p in params:
             prologue.append(f"_f.{var_attr(p.name)} = {var_attr(p.name)}")
         for var in pou.variables.values():
-            if var.section not in (INPUT, IN_OUT, EXTERNAL):
+            if var.section not in (INPUT, IN_OUT, EXTERNAL, "VAR_INST"):
                 prologue.append(f"_f.{var_attr(var.name)} = {self.var_default(var)}")
         prologue.append(f"_r = {self.default_expr(pou.return_type)}" if pou.return_type is not None else "_r = None")
         # VAR_OUTPUT of a function: written through the caller's references when it returns
@@ -784,7 +800,8 @@ class Lowerer:
             return var_attr(var.name)
         return f"{self.owner}.{var_attr(var.name)}"
 
-    def cached_vars(self, pou: POUInfo, node: n.POU) -> dict[str, Variable]:
+    def cached_vars(self, pou: POUInfo, node: n.POU, min_uses: int = -1,
+                    outputs_local: bool = False) -> dict[str, Variable]:
         """Variables a call may keep in Python locals (LOAD_FAST instead of attribute access).
 
         Safe for every variable of the POU's own instance/frame that is never passed by reference
@@ -807,7 +824,7 @@ class Lowerer:
                 for var, target, _ in info.outputs:
                     if isinstance(target, n.Name):
                         referenced.add(target.parts[0].lower())
-        if pou.kind in ("FUNCTION", "METHOD"):
+        if pou.kind in ("FUNCTION", "METHOD") and not outputs_local:
             referenced |= {v.key for v in pou.variables.values() if v.section == OUTPUT}
         if pou.kind != "METHOD" and self.has_members(pou):
             # its methods and properties read and write the instance's variables while the body
@@ -820,12 +837,12 @@ class Lowerer:
         uses = name_uses(node.body)
         out = {}
         for var in pou.variables.values():
-            if var.section in (EXTERNAL, GLOBAL) or var.key in referenced:
+            if var.section in (EXTERNAL, GLOBAL, "VAR_INST") or var.key in referenced:
                 continue
             if var.section == IN_OUT and not isinstance(var.type, (t.StructType, t.ArrayType, t.FBType)):
                 continue  # a scalar in-out is a reference object; keep it on the instance
             # a local costs a load on entry (and a store on exit): worth it from a few uses on
-            if uses.get(var.key, 0) < _CACHE_MIN_USES:
+            if uses.get(var.key, 0) < (_CACHE_MIN_USES if min_uses < 0 else min_uses):
                 continue
             out[var.key] = var
         return out
@@ -839,13 +856,14 @@ class Lowerer:
         return False
 
     def cached_body(self, pou: POUInfo, node: n.POU, cached: dict[str, Variable], prologue_extra: list[str],
-                    epilogue_extra: list[str]) -> None:
+                    epilogue_extra: list[str], frameless: bool = False) -> None:
         """Emit the body of a call with `cached` (from `cached_vars`) in Python locals: prologue,
-        try/body/finally write-back."""
+        try/body/finally write-back. `frameless`: every variable is a local already set by the
+        prologue (nothing to load or write back)."""
         outer = self.w
         self.cached = cached
         self.used, self.assigned = set(), set()
-        guarded = bool(self.cached) or bool(epilogue_extra)
+        guarded = bool(epilogue_extra) if frameless else (bool(self.cached) or bool(epilogue_extra))
         body_writer = _Writer()
         body_writer.indent = outer.indent + (1 if guarded else 0)
         self.w = body_writer
@@ -856,7 +874,7 @@ class Lowerer:
         for line in prologue_extra:
             outer.line(line)
         temps = {v.key for v in pou.variables.values() if v.section == TEMP}
-        for key in sorted(self.used):
+        for key in sorted(self.used) if not frameless else ():
             var = self.cached[key]
             attr = var_attr(var.name)
             if key in temps:
@@ -864,7 +882,7 @@ class Lowerer:
             else:
                 outer.line(f"{attr} = {self.owner}.{attr}")
         write_back = [k for k in sorted(self.assigned & self.used)
-                      if not isinstance(self.cached[k].type, (t.StructType, t.ArrayType, t.FBType))]
+                      if not isinstance(self.cached[k].type, (t.StructType, t.ArrayType, t.FBType))] if not frameless else []
         if guarded:
             outer.line("try:")
         outer.append(body_writer)

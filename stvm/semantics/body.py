@@ -128,6 +128,7 @@ class BodyChecker:
         # the FB (or PROGRAM) whose instance the body runs on: its own body, or a method's owner
         self.fb = fb if fb is not None else (pou if pou.kind in ("FUNCTION_BLOCK", "PROGRAM") else None)
         self.fb_node = fb_node if fb_node is not None else node
+        self.member_base: tuple[n.Expr, t.Type] | None = None   # a callee's base oo_call typed already
         self.facts = checker.facts
         self.settings = checker.settings
         self.loop_depth = 0
@@ -238,6 +239,8 @@ class BodyChecker:
 
     def stmt_For(self, s: n.For) -> None:
         var_type = self.lvalue(s.variable)
+        if self.is_property(s.variable, "FOR"):
+            var_type = None
         if var_type is not None and not isinstance(var_type, t.IntType):
             self.error(f"FOR variable must be an integer, not {var_type.name}", s.variable.span, "E043")
         for part in (s.start, s.end) + ((s.step,) if s.step is not None else ()):
@@ -289,6 +292,8 @@ class BodyChecker:
             key = name.parts[0].lower()
             var = self.pou.variables.get(key)
             if var is not None:
+                if var.section == "VAR_INST" and self.fb is not None and key in self.pou.inst_vars:
+                    return NameRef("field", self.fb.variables[self.pou.inst_vars[key]])
                 if var.section == EXTERNAL:
                     g = self.c.globals.get(key)
                     return NameRef("global", g) if g is not None else None
@@ -369,11 +374,15 @@ class BodyChecker:
             ty = self.expr(target)
             if ty is not None and self.is_constant_path(target.base):
                 self.error("cannot assign to a member of a constant", target.span, "E050")
+            if ty is not None and self.through_property(target.base):
+                return None
             return ty
         if isinstance(target, (n.Index, n.BitAccess)):
             ty = self.expr(target)
             if ty is not None and self.is_constant_path(target.base):
                 self.error("cannot assign into a constant", target.span, "E050")
+            if ty is not None and isinstance(target, n.Index) and self.through_property(target.base):
+                return None
             return ty
         if isinstance(target, n.Call):
             self.expr(target)
@@ -569,7 +578,8 @@ class BodyChecker:
         return self.implicit_deref(e, var.type)
 
     def expr_Member(self, e: n.Member, expected) -> t.Type | None:
-        base = self.expr(e.base)
+        known, self.member_base = self.member_base, None
+        base = known[1] if known is not None and known[0] is e.base else self.expr(e.base)
         if base is None:
             return None
         if isinstance(base, t.StructType):
@@ -609,6 +619,30 @@ class BodyChecker:
         return True
 
     # ---- object orientation
+    def through_property(self, base: n.Expr) -> bool:
+        """`fb.P.x := …` / `fb.P[i] := …`: the GET returns a copy, so the write would be lost."""
+        while isinstance(base, (n.Member, n.Index)):
+            if self.facts.props and id(base) in self.facts.props:
+                name = self.facts.props[id(base)][0].name
+                self.error(f"cannot assign into property '{name}': its GET returns a copy; assign the whole "
+                           f"property", base.span, "E073")
+                return True
+            base = base.base
+        if isinstance(base, n.Name) and self.facts.props and id(base) in self.facts.props:
+            self.error(f"cannot assign into property '{base.parts[0]}': its GET returns a copy; assign the whole "
+                       f"property", base.span, "E073")
+            return True
+        return False
+
+    def is_property(self, e: n.Expr, what: str) -> bool:
+        """A property where a variable is needed (FOR, `=>`, an in-out, REF()): an error, since
+        it has no storage of its own (its GET and SET are calls)."""
+        if self.facts.props and id(e) in self.facts.props:
+            self.error(f"{what} needs a variable; property '{self.facts.props[id(e)][0].name}' is a pair of "
+                       f"GET/SET calls (use a variable and assign the property)", e.span, "E073")
+            return True
+        return False
+
     def this_or_super(self, e: n.Name) -> t.Type | None:
         """THIS (a POINTER TO the instance) and SUPER (to its base part), inside an FB or method."""
         word = e.parts[0].upper()
@@ -740,6 +774,7 @@ class BodyChecker:
                     self.error(f"function block {base_type.name} has no method '{callee.name}'", callee.span, "E045")
                     self.check_args_loosely(e)
                     return True, None
+                self.member_base = (callee.base, base_type)   # expr_Call types the callee next
                 return False, None
             how = self.member_how(callee.base, base_type)
             if how == "super":
@@ -747,6 +782,7 @@ class BodyChecker:
             if isinstance(callee.base, n.Deref) and self.inside_own(callee.base, base_type):
                 return True, self.method_call(e, method, "self", None, "", expected)
             return True, self.method_call(e, method, "inst", callee.base, "", expected)
+        self.member_base = (callee.base, base_type)
         return False, None
 
     def expr_BitAccess(self, e: n.BitAccess, expected) -> t.Type | None:
@@ -838,7 +874,7 @@ class BodyChecker:
             return None
         arg = e.args[0].value
         ty = self.expr(arg)
-        if ty is None:
+        if ty is None or self.is_property(arg, f"{word}()"):
             return None
         if not isinstance(arg, (n.Name, n.Member, n.Index, n.Deref)):
             what = "a single bit, which has no reference" if isinstance(arg, n.BitAccess) else "a temporary value"
@@ -1261,16 +1297,16 @@ class BodyChecker:
         generic_types: list[t.Type] = []
         bound: set[str] = set()
         if not positional and not formal and pou.variadic and not fb:
-            self.error(f"{pou.name} takes at least {max(len(params) - 1, 1)} arguments, got 0", e.span, "E048")
+            self.error(f"{self.display(pou)} takes at least {max(len(params) - 1, 1)} arguments, got 0", e.span, "E048")
         if positional:
             if fb:
-                self.error(f"function block {pou.name} needs formal arguments (Name := value)", e.span, "E047")
+                self.error(f"function block {self.display(pou)} needs formal arguments (Name := value)", e.span, "E047")
                 return
             if pou.variadic:
                 if len(positional) < max(len(params) - 1, 1):
-                    self.error(f"{pou.name} takes at least {max(len(params) - 1, 1)} arguments, got {len(positional)}", e.span, "E048")
+                    self.error(f"{self.display(pou)} takes at least {max(len(params) - 1, 1)} arguments, got {len(positional)}", e.span, "E048")
             elif len(positional) != len(params):
-                self.error(f"{pou.name} takes {len(params)} argument(s), got {len(positional)}", e.span, "E048")
+                self.error(f"{self.display(pou)} takes {len(params)} argument(s), got {len(positional)}", e.span, "E048")
             for i, arg in enumerate(positional):
                 if i < len(params):
                     self.bind_one(pou, params[i], arg, info, generic_types)
@@ -1292,8 +1328,8 @@ class BodyChecker:
                 if var is None or var.section not in (INPUT, IN_OUT):
                     what = "output" if var is not None and var.section == OUTPUT else "input"
                     hint = "; outputs are bound with =>" if var is not None and var.section == OUTPUT else ""
-                    self.error(f"{pou.name} has no {what} '{arg.name}'{hint}" if not hint else
-                               f"'{arg.name}' is an output of {pou.name}{hint}", arg.span, "E049")
+                    self.error(f"{self.display(pou)} has no {what} '{arg.name}'{hint}" if not hint else
+                               f"'{arg.name}' is an output of {self.display(pou)}{hint}", arg.span, "E049")
                     self.expr(arg.value)
                     continue
                 if var.key in bound:
@@ -1303,9 +1339,11 @@ class BodyChecker:
             else:
                 var = pou.pin(arg.name)
                 if var is None or var.section != OUTPUT:
-                    self.error(f"{pou.name} has no output '{arg.name}'", arg.span, "E049")
+                    self.error(f"{self.display(pou)} has no output '{arg.name}'", arg.span, "E049")
                     continue
                 target_type = self.lvalue(arg.value)
+                if self.is_property(arg.value, f"the output {arg.name}"):
+                    continue
                 if target_type is not None:
                     if arg.kind == "output_not" and not isinstance(var.type, t.BoolType):
                         self.error("NOT => needs a BOOL output", arg.span, "E049")
@@ -1317,9 +1355,9 @@ class BodyChecker:
             if p.section == IN_OUT and p.key not in bound and not (fb and positional):
                 if fb:
                     # Choice (IEC 6.6.1.2): an FB in-out must be bound on every call
-                    self.error(f"in-out '{p.name}' of {pou.name} is not bound", e.span, "E048")
+                    self.error(f"in-out '{p.name}' of {self.display(pou)} is not bound", e.span, "E048")
                 else:
-                    self.error(f"in-out '{p.name}' of {pou.name} is not bound", e.span, "E048")
+                    self.error(f"in-out '{p.name}' of {self.display(pou)} is not bound", e.span, "E048")
         # static argument types in parameter order (omitted inputs: their declared type), extras last
         given = {var.key: value for var, value in info.inputs}
         arg_types = [self.facts.types.get(id(given[p.key]), p.type) if p.key in given else p.type
@@ -1338,10 +1376,17 @@ class BodyChecker:
                         and not expected.bitstring and trunc_result_from_context(self.settings):
                     info.generic_type = expected   # IEC: TRUNC is ANY_REAL -> ANY_INT
             except Exception as exc:  # a rule rejecting its arguments is a type error in the user's call
-                self.error(f"{pou.name}: {exc}", e.span, "E046")
+                self.error(f"{self.display(pou)}: {exc}", e.span, "E046")
         elif generic_types:
             typed = [ty for ty, untyped in generic_types if not untyped]
             info.generic_type = self.common_generic(typed or [ty for ty, _ in generic_types], e)
+
+    def display(self, pou: POUInfo) -> str:
+        """A callee's name in diagnostics: `FB.Method` for a METHOD, the POU's name otherwise."""
+        if pou.kind == "METHOD":
+            owner = self.c.pous.get(pou.owner)
+            return f"method {owner.name}.{pou.name}" if owner is not None else pou.name
+        return pou.name
 
     def literal_context_types(self, pou: POUInfo, arg_types: tuple, exprs: list) -> tuple:
         """The argument types a result rule sees: an untyped literal takes the type of the typed
@@ -1436,19 +1481,21 @@ class BodyChecker:
                 ty = self.expr(arg.value)   # an FB instance passed by reference
             else:
                 ty = self.lvalue(arg.value) if self.is_lvalue_shape(arg.value) else None
+                if self.is_property(arg.value, f"the in-out {var.name}"):
+                    return
                 if ty is None and not self.is_lvalue_shape(arg.value):
                     self.expr(arg.value)
-                    self.error(f"in-out '{var.name}' of {pou.name} needs a variable, not an expression", arg.value.span, "E053")
+                    self.error(f"in-out '{var.name}' of {self.display(pou)} needs a variable, not an expression", arg.value.span, "E053")
                     return
             if ty is None:
                 return
             if isinstance(ptype, t.GenericType):
                 if not ptype.accepts(ty):
-                    self.error(f"'{var.name}' of {pou.name} needs {ptype.name}, got {ty.name}", arg.value.span, "E052")
+                    self.error(f"'{var.name}' of {self.display(pou)} needs {ptype.name}, got {ty.name}", arg.value.span, "E052")
                 generic_types.append((ty, False))
             elif isinstance(ptype, t.ArrayType) and isinstance(ty, t.ArrayType) and ptype.dims is None:
                 if not self.element_ok(ty.element, ptype.element):
-                    self.error(f"'{var.name}' of {pou.name} needs {ptype.name}, got {ty.name}", arg.value.span, "E052")
+                    self.error(f"'{var.name}' of {self.display(pou)} needs {ptype.name}, got {ty.name}", arg.value.span, "E052")
             elif isinstance(ty, t.FBType) and isinstance(ptype, t.FBType) \
                     and self.c.is_derived(ty.qualname.lower(), ptype.qualname.lower()):
                 pass   # an instance of a derived FB is an instance of its base
@@ -1456,7 +1503,7 @@ class BodyChecker:
                       or (isinstance(ty, (t.StructType, t.EnumType)) and implicit_ok(ty, ptype))
                       or (isinstance(ty, t.ArrayType) and implicit_ok(ty, ptype))
                       or (isinstance(ty, t.IntType) and isinstance(ptype, t.IntType) and ty.bits == ptype.bits)):
-                self.error(f"in-out '{var.name}' of {pou.name} is {ptype.name}; got {ty.name}", arg.value.span, "E052")
+                self.error(f"in-out '{var.name}' of {self.display(pou)} is {ptype.name}; got {ty.name}", arg.value.span, "E052")
             info.inputs.append((var, arg.value))
             return
         if isinstance(ptype, t.ArrayType) and ptype.dims is None and isinstance(arg.value, n.Index):
@@ -1471,13 +1518,13 @@ class BodyChecker:
             return
         if isinstance(ptype, t.GenericType):
             if not ptype.accepts(ty) and not self.untyped_bits_literal(arg.value, ptype):
-                self.error(f"'{var.name}' of {pou.name} needs {ptype.name}, got {ty.name}", arg.value.span, "E052")
+                self.error(f"'{var.name}' of {self.display(pou)} needs {ptype.name}, got {ty.name}", arg.value.span, "E052")
             else:
                 # untyped literals only decide the type when no typed argument does
                 generic_types.append((ty, id(arg.value) in self.facts.untyped))
         elif isinstance(ptype, t.ArrayType) and ptype.dims is None:
             if not (isinstance(ty, t.ArrayType) and self.element_ok(ty.element, ptype.element)):
-                self.error(f"'{var.name}' of {pou.name} needs {ptype.name}, got {ty.name}", arg.value.span, "E052")
+                self.error(f"'{var.name}' of {self.display(pou)} needs {ptype.name}, got {ty.name}", arg.value.span, "E052")
         else:
             self.require_assignable(arg.value, ty, ptype, arg.value.span)
         if extra:

@@ -421,9 +421,19 @@ class Checker:
             info.variables[m.name.lower()] = Variable(m.name, INPUT, prop_type or t.DINT, False, m.name_span)
         self.declare_variables(m, info, pou.namespace)
         self.declaring = outer
-        for key, var in info.variables.items():
-            if var.section in (GLOBAL, "VAR_STAT"):
-                self.error(f"{var.section} is not allowed in a method", var.span, "E012")
+        for block in m.var_blocks:
+            if block.kind == "VAR_STAT":
+                self.error("VAR_STAT is not supported in a method (use VAR_INST: kept in the instance)",
+                           block.span, "E012")
+            elif block.kind == "VAR_INST" and pou.kind not in ("FUNCTION_BLOCK", "PROGRAM"):
+                self.error("VAR_INST is only allowed in a method of a FUNCTION_BLOCK or PROGRAM", block.span, "E012")
+        for key, var in list(info.variables.items()):
+            if var.section == "VAR_INST" and pou.kind in ("FUNCTION_BLOCK", "PROGRAM"):
+                # kept in the instance under a name no ST declaration can take (`Method__x`)
+                hidden = Variable(f"{m.name}__{var.name}", LOCAL, var.type, var.constant, var.span)
+                hidden.init = var.init
+                owner.variables[hidden.key] = hidden
+                info.inst_vars[key] = hidden.key
         if pou.kind == "INTERFACE":
             if m.body:
                 self.error(f"method '{m.name}' of interface {pou.name} cannot have statements", m.body[0].span, "E063")

@@ -65,3 +65,67 @@ def test_lint_runs_on_the_oo_demo(folder):
     rc, out, err = cli(["lint", ROOT / folder])
     assert "Traceback" not in err and "internal error" not in err
     assert rc in (0, 1)
+
+
+def _fb(middle: str) -> str:
+    return f"""
+FUNCTION_BLOCK F
+VAR_OUTPUT q : INT; END_VAR
+VAR d : INT; END_VAR
+d := 0;
+{middle}
+IF d <> 0 THEN
+    q := 1;
+END_IF;
+METHOD Reset
+d := 5;
+END_METHOD
+END_FUNCTION_BLOCK
+PROGRAM Main VAR f : F; END_VAR
+f();
+END_PROGRAM
+"""
+
+
+def test_a_method_call_forgets_what_the_body_knew_about_the_instance():
+    # Reset() sets d: the branch is live (without forgetting, SA402 would call it dead)
+    assert "SA402" not in codes(_fb("Reset();"))
+    assert "SA402" not in codes(_fb("THIS^.Reset();"))
+
+
+def test_the_same_without_the_method_call_is_reported():
+    assert "SA402" in codes(_fb(""))
+
+
+def test_method_bodies_are_linted_like_functions():
+    from lint_helpers import findings
+    found = findings("""
+FUNCTION_BLOCK F
+VAR n : INT; END_VAR
+METHOD Next : INT
+VAR_INST kept : INT; END_VAR
+VAR fresh : INT; END_VAR
+kept := kept + 1;              (* VAR_INST lives in the instance: no finding *)
+fresh := fresh + 1;            (* a method's VAR starts at 0 on every call: SA101 *)
+IF kept > 3 THEN
+    Next := fresh;             (* not assigned when kept <= 3: SA103 *)
+END_IF;
+END_METHOD
+PROPERTY P : INT
+GET
+P := n;
+END_GET
+END_PROPERTY
+END_FUNCTION_BLOCK
+PROGRAM Main VAR f : F; x : INT; END_VAR
+x := f.Next() + f.P;
+END_PROGRAM
+""")
+    got = sorted((f.code, f.span.line) for f in findings_of(found))
+    assert ("SA101", 8) in got
+    assert any(code == "SA103" for code, _ in got)
+    assert not any(line in (7, 15) for _, line in got)
+
+
+def findings_of(found):
+    return [f for f in found if f.code in ("SA101", "SA102", "SA103")]

@@ -445,3 +445,151 @@ def test_properties_are_used_like_variables():
 
 def test_property_setter_runs_once_per_assignment():
     assert run_st(TANK, cycles=1, prints=["Main.t.writes"]) == {"Main.t.writes": 2}
+
+
+def test_method_outputs_are_written_on_return_and_en_eno_works():
+    src = """
+FUNCTION_BLOCK F
+VAR calls : INT; END_VAR
+METHOD Split : BOOL
+VAR_INPUT v : INT; END_VAR
+VAR_OUTPUT hi, lo : INT; END_VAR
+calls := calls + 1;
+hi := v / 10;
+IF v < 0 THEN RETURN; END_IF;
+lo := v MOD 10;
+Split := TRUE;
+END_METHOD
+END_FUNCTION_BLOCK
+PROGRAM Main VAR f : F; h1, l1, h2, l2 : INT; ok1, ok2, eno : BOOL; END_VAR
+ok1 := f.Split(v := 42, hi => h1, lo => l1);
+ok2 := f.Split(v := -35, hi => h2, lo => l2);
+f.Split(EN := FALSE, v := 7, ENO => eno);
+END_PROGRAM
+"""
+    values = run_st(src, cycles=1, prints=["Main.ok1", "Main.h1", "Main.l1", "Main.ok2", "Main.h2", "Main.l2",
+                                           "Main.eno", "Main.f.calls"])
+    assert values == {"Main.ok1": True, "Main.h1": 4, "Main.l1": 2, "Main.ok2": False, "Main.h2": -3, "Main.l2": 0,
+                      "Main.eno": False, "Main.f.calls": 2}
+
+
+VALUES = """
+INTERFACE I_Val
+METHOD Get : INT
+END_METHOD
+END_INTERFACE
+FUNCTION_BLOCK FB_Const IMPLEMENTS I_Val
+VAR_INPUT v : INT; END_VAR
+METHOD Get : INT
+Get := v;
+END_METHOD
+END_FUNCTION_BLOCK
+FUNCTION_BLOCK FB_Sum
+VAR_INPUT src : I_Val; END_VAR
+VAR_OUTPUT total : INT; END_VAR
+IF src <> 0 THEN total := total + src.Get(); END_IF;
+END_FUNCTION_BLOCK
+FUNCTION Read : INT
+VAR_INPUT i : I_Val; END_VAR
+Read := i.Get() * 100;
+END_FUNCTION
+PROGRAM Main
+VAR
+  a : FB_Const; b : FB_Const;
+  list : ARRAY[1..2] OF I_Val;
+  s : FB_Sum; k : INT; r : INT; n : INT;
+END_VAR
+a(v := 1); b(v := 2);
+list[1] := a; list[2] := b;
+FOR k := 1 TO 2 DO
+  s(src := list[k]);
+END_FOR;
+s(src := 0);
+r := Read(list[2]) + Read(i := a);
+n := list[1].Get() + list[2].Get();
+END_PROGRAM
+"""
+
+
+def test_interfaces_as_inputs_array_elements_and_function_parameters():
+    values = run_st(VALUES, cycles=2, prints=["Main.s.total", "Main.r", "Main.n"])
+    # two scans of s(src := a), s(src := b): 2 * (1 + 2); s(src := 0) adds nothing
+    assert values == {"Main.s.total": 6, "Main.r": 300, "Main.n": 3}
+    assert run_st(VALUES, cycles=1, fmt=True, prints=["Main.list"]) == {"Main.list": "[-> FB_Const, -> FB_Const]"}
+
+
+def test_var_inst_of_a_method_lives_in_the_instance():
+    src = """
+FUNCTION_BLOCK F
+METHOD Tick : INT
+VAR_INST count : INT := 100; END_VAR
+VAR fresh : INT; END_VAR
+count := count + 1;
+fresh := fresh + 1;
+Tick := count * 10 + fresh;
+END_METHOD
+END_FUNCTION_BLOCK
+PROGRAM Main VAR a, b : F; x, y : INT; END_VAR
+x := a.Tick();
+y := b.Tick() + b.Tick();
+END_PROGRAM
+"""
+    # per instance, kept between calls and scans (CODESYS VAR_INST); VAR starts fresh
+    assert run_st(src, cycles=2, prints=["Main.x", "Main.y"]) == {"Main.x": 1021, "Main.y": 2072}
+    assert run_st(src, cycles=1, fmt=True, prints=["Main.a"]) == {"Main.a": "(Tick__count := 101)"}
+
+
+def test_properties_are_inherited_overridden_and_reached_through_super():
+    src = """
+FUNCTION_BLOCK FB_Base
+VAR raw : INT := 4; END_VAR
+PROPERTY Scaled : INT
+GET
+Scaled := raw * 10;
+END_GET
+END_PROPERTY
+METHOD Report : INT
+Report := Scaled + 1;          (* dynamic: the instance's own Scaled *)
+END_METHOD
+END_FUNCTION_BLOCK
+
+FUNCTION_BLOCK FB_Derived EXTENDS FB_Base
+PROPERTY Scaled : INT
+GET
+Scaled := SUPER^.Scaled * 2;
+END_GET
+END_PROPERTY
+END_FUNCTION_BLOCK
+
+PROGRAM Main VAR b : FB_Base; d : FB_Derived; rb, rd, sd : INT; END_VAR
+rb := b.Report();
+rd := d.Report();
+sd := d.Scaled;
+END_PROGRAM
+"""
+    assert run_st(src, cycles=1, prints=["Main.rb", "Main.rd", "Main.sd"]) == {"Main.rb": 41, "Main.rd": 81, "Main.sd": 80}
+
+
+def test_struct_property_and_a_bit_of_a_property():
+    src = """
+TYPE Pt : STRUCT x : INT; y : INT; END_STRUCT; END_TYPE
+FUNCTION_BLOCK F
+VAR v : Pt; w : INT; END_VAR
+PROPERTY S : Pt
+GET S := v; END_GET
+SET v := S; END_SET
+END_PROPERTY
+PROPERTY B : INT
+GET B := w; END_GET
+SET w := B; END_SET
+END_PROPERTY
+END_FUNCTION_BLOCK
+PROGRAM Main VAR f : F; p : Pt; k : INT; END_VAR
+p.x := 7;
+f.S := p;
+p.x := 9;                  (* the property holds its own copy *)
+k := f.S.x;
+f.B.3 := TRUE;             (* GET, set bit 3, SET *)
+END_PROGRAM
+"""
+    assert run_st(src, cycles=1, prints=["Main.k", "Main.f.w"]) == {"Main.k": 7, "Main.f.w": 8}

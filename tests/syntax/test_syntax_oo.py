@@ -101,3 +101,40 @@ def test_modifier_words_stay_usable_as_variable_names(word):
 def test_method_outside_a_pou_is_a_syntax_error():
     _, diags = parse_text("METHOD M END_METHOD", "t.st")
     assert diags and diags[0].severity.name == "ERROR" and diags[0].span.line == 1
+
+
+def test_oo_words_still_name_variables_at_the_start_of_a_statement():
+    # ed. 2 code may call a variable `method`: METHOD/PROPERTY/EXTENDS/IMPLEMENTS are keywords only
+    # where a name follows them
+    fb = _unit("""
+FUNCTION_BLOCK F
+VAR method, property, extends, implements : INT; END_VAR
+extends := 1;
+method := method + 1;
+property := method;
+implements := property;
+END_FUNCTION_BLOCK""").pous[0]
+    assert [s.target.parts[0] for s in fb.body] == ["extends", "method", "property", "implements"]
+    assert fb.methods == () and fb.extends == ()
+
+
+def test_modifier_words_name_pous_and_methods():
+    unit = _unit("""
+FUNCTION_BLOCK Final
+VAR_INPUT x : INT; END_VAR
+END_FUNCTION_BLOCK
+FUNCTION_BLOCK Internal EXTENDS Final
+METHOD Public : INT
+Public := x;
+END_METHOD
+METHOD PRIVATE FINAL Abstract
+VAR_INPUT a : INT; END_VAR
+END_METHOD
+END_FUNCTION_BLOCK
+FUNCTION_BLOCK ABSTRACT PUBLIC Shape
+END_FUNCTION_BLOCK""")
+    final, internal, shape = unit.pous
+    assert (final.name, final.modifiers) == ("Final", ())
+    assert (internal.name, internal.modifiers) == ("Internal", ())
+    assert [(m.name, m.modifiers) for m in internal.methods] == [("Public", ()), ("Abstract", ("PRIVATE", "FINAL"))]
+    assert (shape.name, shape.modifiers) == ("Shape", ("ABSTRACT", "PUBLIC"))

@@ -203,7 +203,8 @@ def output_unassigned(ctx: PouContext):
             if key not in at_exit:
                 what = f"the result of {ctx.info.name}" if var is RESULT else f"output '{var.name}'"
                 span = ctx.node.end_span if ctx.node.end_span.line else ctx.node.span
-                yield ctx.finding("SA103", f"{what} is not assigned on some path through the function "
+                pou_word = "method" if getattr(ctx, "method_of", "") else "function"
+                yield ctx.finding("SA103", f"{what} is not assigned on some path through the {pou_word} "
                                            f"(it returns the type's default there)", span)
         return
     if ctx.info.kind != "FUNCTION_BLOCK" or ctx.oo_shared:

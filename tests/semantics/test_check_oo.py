@@ -1,0 +1,172 @@
+"""Checker rules of object orientation, one small source each: every error is
+`FILE:LINE:COL: error: message` with an excerpt, never a traceback (the larger snapshots are
+tests/semantics/diagnostics/oo_*.st)."""
+
+from __future__ import annotations
+
+import re
+
+import pytest
+
+from core_helpers import check_text
+
+HEAD = re.compile(r"^(?:.*/)?case\.st:(\d+):(\d+): error: (.+)$", re.M)
+
+
+def errors(source: str) -> list[tuple[int, str]]:
+    rc, err = check_text(source)
+    assert "Traceback" not in err and "internal error" not in err
+    found = [(int(m[1]), m[3]) for m in HEAD.finditer(err)]
+    assert rc == (1 if found else 0), err
+    return found
+
+
+def test_a_clean_oo_source_checks():
+    assert errors("""
+INTERFACE I
+METHOD M : INT
+VAR_INPUT a : INT; END_VAR
+END_METHOD
+END_INTERFACE
+FUNCTION_BLOCK ABSTRACT B IMPLEMENTS I
+METHOD ABSTRACT M : INT
+VAR_INPUT a : INT; END_VAR
+END_METHOD
+END_FUNCTION_BLOCK
+FUNCTION_BLOCK F EXTENDS B
+METHOD M : INT
+VAR_INPUT a : INT; END_VAR
+M := a;
+END_METHOD
+END_FUNCTION_BLOCK
+PROGRAM Main
+VAR f : F; i : I; x : INT; END_VAR
+i := f;
+x := i.M(1) + f.M(a := 2);
+END_PROGRAM
+""") == []
+
+
+@pytest.mark.parametrize("source, line, message", [
+    # a derived FB redeclares a variable of its base
+    ("FUNCTION_BLOCK B\nVAR_INPUT k : INT; END_VAR\nEND_FUNCTION_BLOCK\n"
+     "FUNCTION_BLOCK D EXTENDS B\nVAR k : INT; END_VAR\nEND_FUNCTION_BLOCK\n",
+     5, "'k' is already declared in the base function block B"),
+    # methods in a FUNCTION
+    ("FUNCTION F : INT\nMETHOD M\nEND_METHOD\nF := 1;\nEND_FUNCTION\n",
+     2, "a FUNCTION has no methods or properties"),
+    # an interface method with statements
+    ("INTERFACE I\nMETHOD M : INT\nM := 1;\nEND_METHOD\nEND_INTERFACE\n",
+     3, "method 'M' of interface I cannot have statements"),
+    # SUPER^() without a base, and SUPER^() inside an expression
+    ("FUNCTION_BLOCK F\nSUPER^();\nEND_FUNCTION_BLOCK\n", 2, "SUPER: F does not EXTEND a function block"),
+    # ABSTRACT on a PROGRAM
+    ("PROGRAM ABSTRACT P\nEND_PROGRAM\n", 1, "ABSTRACT is only allowed on a FUNCTION_BLOCK"),
+    # two methods of one name
+    ("FUNCTION_BLOCK F\nMETHOD M\nEND_METHOD\nMETHOD M\nEND_METHOD\nEND_FUNCTION_BLOCK\n",
+     4, "duplicate method 'M' in F"),
+    # a method named like a variable
+    ("FUNCTION_BLOCK F\nVAR m : INT; END_VAR\nMETHOD M\nEND_METHOD\nEND_FUNCTION_BLOCK\n",
+     3, "'M' is both a variable and a method of F"),
+    # IMPLEMENTS of something that is no interface
+    ("FUNCTION_BLOCK B\nEND_FUNCTION_BLOCK\nFUNCTION_BLOCK F IMPLEMENTS B\nEND_FUNCTION_BLOCK\n",
+     3, "'B' is not an interface"),
+    # EXTENDS of an interface by an FB
+    ("INTERFACE I\nEND_INTERFACE\nFUNCTION_BLOCK F EXTENDS I\nEND_FUNCTION_BLOCK\n",
+     3, "'I' is not a function block; cannot extend"),
+    # a property without SET written, without GET read
+    ("FUNCTION_BLOCK F\nVAR v : INT; END_VAR\nPROPERTY P : INT\nGET\nP := v;\nEND_GET\nEND_PROPERTY\n"
+     "END_FUNCTION_BLOCK\nPROGRAM Main\nVAR f : F; END_VAR\nf.P := 1;\nEND_PROGRAM\n",
+     11, "property 'P' has no SET; it can only be read"),
+    ("FUNCTION_BLOCK F\nVAR v : INT; END_VAR\nPROPERTY P : INT\nSET\nv := P;\nEND_SET\nEND_PROPERTY\n"
+     "END_FUNCTION_BLOCK\nPROGRAM Main\nVAR f : F; x : INT; END_VAR\nx := f.P;\nEND_PROGRAM\n",
+     11, "property 'P' has no GET; it can only be written"),
+    # an instance of an unrelated FB for a base-typed in-out
+    ("FUNCTION_BLOCK B\nEND_FUNCTION_BLOCK\nFUNCTION_BLOCK O\nEND_FUNCTION_BLOCK\n"
+     "FUNCTION Use : INT\nVAR_IN_OUT b : B; END_VAR\nUse := 1;\nEND_FUNCTION\n"
+     "PROGRAM Main\nVAR o : O; x : INT; END_VAR\nx := Use(o);\nEND_PROGRAM\n",
+     11, "in-out 'b' of Use is B; got O"),
+    # a method call where a method result is needed
+    ("FUNCTION_BLOCK F\nMETHOD M\nEND_METHOD\nEND_FUNCTION_BLOCK\n"
+     "PROGRAM Main\nVAR f : F; x : INT; END_VAR\nx := f.M();\nEND_PROGRAM\n",
+     7, "this call has no result value"),
+    # an interface assigned an interface it does not extend
+    ("INTERFACE I1\nEND_INTERFACE\nINTERFACE I2\nEND_INTERFACE\n"
+     "PROGRAM Main\nVAR a : I1; b : I2; END_VAR\na := b;\nEND_PROGRAM\n",
+     7, "interface I2 does not extend I1"),
+    # __QUERYINTERFACE needs an interface variable to fill
+    ("INTERFACE I\nEND_INTERFACE\nPROGRAM Main\nVAR a : I; ok : BOOL; n : INT; END_VAR\n"
+     "ok := __QUERYINTERFACE(a, n);\nEND_PROGRAM\n",
+     5, "the second argument of __QUERYINTERFACE must be an interface variable"),
+])
+def test_oo_errors(source, line, message):
+    found = errors(source)
+    assert any(l == line and message in m for l, m in found), found
+
+
+PROPERTY_FB = """
+FUNCTION_BLOCK F
+VAR v : INT; END_VAR
+PROPERTY P : INT
+GET P := v; END_GET
+SET v := P; END_SET
+END_PROPERTY
+METHOD M
+VAR_OUTPUT q : INT; END_VAR
+q := 1;
+END_METHOD
+END_FUNCTION_BLOCK
+FUNCTION Inc : INT
+VAR_IN_OUT x : INT; END_VAR
+x := x + 1;
+Inc := x;
+END_FUNCTION
+"""
+
+
+@pytest.mark.parametrize("statement, message", [
+    ("f.M(q => g.P);", "the output q needs a variable; property 'P'"),
+    ("k := Inc(g.P);", "the in-out x needs a variable; property 'P'"),
+    ("r := REF(g.P);", "REF() needs a variable; property 'P'"),
+])
+def test_a_property_is_no_variable_to_bind(statement, message):
+    found = errors(PROPERTY_FB + f"PROGRAM Main VAR f : F; g : F; r : REF_TO INT; k : INT; END_VAR\n{statement}\nEND_PROGRAM\n")
+    assert [m for _, m in found if message in m], found
+
+
+def test_a_property_is_no_for_variable():
+    found = errors(PROPERTY_FB + "FUNCTION_BLOCK H EXTENDS F\nFOR P := 1 TO 3 DO END_FOR;\nEND_FUNCTION_BLOCK\n")
+    assert [m for _, m in found if m.startswith("FOR needs a variable; property 'P'")], found
+
+
+def test_calling_a_method_of_an_abstract_base_through_super_is_an_error():
+    found = errors("""
+FUNCTION_BLOCK ABSTRACT B
+METHOD ABSTRACT M : INT
+END_METHOD
+END_FUNCTION_BLOCK
+FUNCTION_BLOCK F EXTENDS B
+METHOD M : INT
+M := SUPER^.M();
+END_METHOD
+END_FUNCTION_BLOCK
+""")
+    assert found == [(8, "SUPER^.M: the method is ABSTRACT in B")]
+
+
+def test_assigning_into_a_struct_property_is_an_error():
+    found = errors("""
+TYPE Pt : STRUCT x : INT; END_STRUCT; END_TYPE
+FUNCTION_BLOCK F
+VAR v : Pt; END_VAR
+PROPERTY S : Pt
+GET S := v; END_GET
+SET v := S; END_SET
+END_PROPERTY
+END_FUNCTION_BLOCK
+PROGRAM Main VAR f : F; k : INT; END_VAR
+f.S.x := 5;
+k := f.S.x;
+END_PROGRAM
+""")
+    assert found == [(11, "cannot assign into property 'S': its GET returns a copy; assign the whole property")]
