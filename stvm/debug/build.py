@@ -22,6 +22,7 @@ from typing import Sequence
 
 from stvm.diagnostics import has_errors, sort_key
 from stvm.lower.codegen import Lowerer
+from stvm.lower.names import method_attr
 from stvm.project import LoadError, Project, read_files, stdlib_units, expand_paths, source_encoding
 from stvm.runtime.vm import GENERATED_FILENAME
 from stvm.semantics.checker import Analysis, Checker
@@ -177,7 +178,6 @@ def load_debug(paths: Sequence[str | os.PathLike], settings: SysmacSettings = DE
     user_files = {os.path.normcase(os.path.abspath(name)): name for name, _ in texts}
     user_files.update({os.path.normcase(os.path.realpath(name)): name for name, _ in texts})
     pou_spans = {node.span for node in analysis.pou_nodes.values()}
-    from stvm.lower.names import method_attr
     unit_methods = {}
     for cls, pou in unit_pous.items():
         for method in pou.methods.values():
