@@ -199,8 +199,8 @@ class Driver:
                     mres = basic.scanner._mres
                     retype = {}
                     for type_, cb in basic.callback.items():
-                        if not isinstance(cb, UnlessCallback):
-                            raise Unsupported(f"lexer callback for {type_} is not an UnlessCallback")
+                        if not isinstance(cb, UnlessCallback) or not callable(getattr(cb.scanner, "fullmatch", None)):
+                            raise Unsupported(f"lexer callback for {type_} is not an UnlessCallback with fullmatch")
                         retype[type_] = (cb.scanner, {})
                     match = mres[0].match if len(mres) == 1 else _multi_match(mres)
                     entry = (match, frozenset(basic.ignore_types), retype)
