@@ -17,6 +17,7 @@ from stvm.semantics import types as t
 from stvm.semantics.model import EXTERNAL, IN_OUT, INPUT, OUTPUT, POUInfo, Variable
 from stvm.syntax import nodes as n
 from stvm.settings import IntLiteralType
+import stvm.semantics.checker as _checker   # NameRef, CallInfo, _NOT_CONST at call time (checker imports this module)
 
 if TYPE_CHECKING:
     from stvm.semantics.checker import Checker
@@ -101,12 +102,18 @@ def trunc_result_from_context(settings) -> bool:
     return True
 
 
+_NATIVE_FUNCTIONS = None
+
+
 def native_result_rule(pou: POUInfo):
     """The stdlib's result-type rule for a generic native (SHL, MUX, TRUNC, …), if it has one."""
     if not pou.native or pou.kind != "FUNCTION":
         return None
-    from stvm.stdlib.registry import NATIVE_FUNCTIONS
-    native = NATIVE_FUNCTIONS.get(pou.qualname.split("\\")[-1].upper())
+    global _NATIVE_FUNCTIONS
+    if _NATIVE_FUNCTIONS is None:
+        from stvm.stdlib.registry import NATIVE_FUNCTIONS
+        _NATIVE_FUNCTIONS = NATIVE_FUNCTIONS
+    native = _NATIVE_FUNCTIONS.get(pou.qualname.split("\\")[-1].upper())
     return native.result_rule if native is not None else None
 
 
@@ -272,7 +279,7 @@ class _BodyChecker:
     # ---- names
     def resolve_name(self, name: n.Name) -> object:
         """Resolve a Name: a NameRef for variables/enumerators/result, or None (diagnosed)."""
-        from stvm.semantics.checker import NameRef
+        NameRef = _checker.NameRef
         if len(name.parts) == 1 and not name.rooted:
             key = name.parts[0].lower()
             var = self.pou.variables.get(key)
@@ -451,10 +458,10 @@ class _BodyChecker:
         ref = self.resolve_name(e)
         if ref is None:
             if len(e.parts) == 1 and isinstance(expected, t.EnumType) and expected.value_of(e.parts[0]) is not None:
-                from stvm.semantics.checker import NameRef
+                NameRef = _checker.NameRef
                 ref = NameRef("enum", value=expected.value_of(e.parts[0]), variable=Variable(e.parts[0], "ENUM", expected))
             elif len(e.parts) == 1 and not e.rooted and e.parts[0].upper() == "NULL":
-                from stvm.semantics.checker import NameRef
+                NameRef = _checker.NameRef
                 self.facts.names[id(e)] = NameRef("null")  # type: ignore[assignment]
                 return t.NULL_REF
             else:
@@ -744,8 +751,7 @@ class _BodyChecker:
             return None
         if lu and ru:
             folded = self.c.const_value(e, self.pou_namespace, self.pou)
-            from stvm.semantics.checker import _NOT_CONST
-            if folded is not _NOT_CONST and isinstance(folded, (int, float)):
+            if folded is not _checker._NOT_CONST and isinstance(folded, (int, float)):
                 self.facts.untyped.add(id(e))
                 self.facts.consts[id(e)] = folded
                 if isinstance(folded, int):
@@ -847,7 +853,7 @@ class _BodyChecker:
 
     # ---- calls
     def expr_Call(self, e: n.Call, expected, statement: bool) -> t.Type | None:
-        from stvm.semantics.checker import CallInfo
+        CallInfo = _checker.CallInfo
         callee = e.callee
         pou: POUInfo | None = None
         instance: n.Expr | None = None

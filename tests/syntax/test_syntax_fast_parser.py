@@ -277,9 +277,7 @@ def test_deep_nesting_gives_lark_results(depth):
     text = ("PROGRAM P VAR x, y : INT; END_VAR\ny := " + "(" * depth + "x" + " + 1)" * depth + ";\n"
             + "x := x" + ".m" * depth + ";\n" + "IF x THEN " * (depth // 10) + "y := 1;" + " END_IF;" * (depth // 10)
             + "\nEND_PROGRAM\n")
-    unit, diags = assert_same(text)
-    if depth >= 1200:
-        assert [d.code for d in diags] == ["E003"]
+    assert_same(text)     # "nesting too deep" (E003) or not, as Lark's recursion limit decides
     if depth * 2 < lalr.MAX_DEPTH:
         fast_only(text)
     else:
