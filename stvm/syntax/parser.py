@@ -27,44 +27,6 @@ from stvm.syntax.lalr import Meta2 as _Meta2
 _GRAMMAR_FILE = "st.lark"
 
 
-def _builder(cls):
-    """A fast constructor for a frozen dataclass: the same object its `__init__` makes (same
-    fields, defaults and key-sharing instance dict), without one `object.__setattr__` call per
-    field, which is most of the cost of building millions of nodes and spans."""
-    import dataclasses
-    fields = dataclasses.fields(cls)
-    if (getattr(cls, "__post_init__", None) is not None or not all(f.init for f in fields)
-            or any(f.default_factory is not dataclasses.MISSING for f in fields)
-            or not dataclasses.is_dataclass(cls) or hasattr(cls, "__slots__") and "__dict__" not in dir(cls)):
-        return cls
-    env = {"new": object.__new__, "cls": cls}
-    params = []
-    for f in fields:
-        if not f.name.isidentifier():
-            return cls
-        if f.default is dataclasses.MISSING:
-            params.append(f.name)
-        else:
-            env["_d_" + f.name] = f.default
-            params.append(f"{f.name}=_d_{f.name}")
-    body = "".join(f"    d[{f.name!r}] = {f.name}\n" for f in fields)
-    code = f"def build({', '.join(params)}):\n    o = new(cls)\n    d = o.__dict__\n{body}    return o\n"
-    exec(code, env)   # field names of stvm's own node classes, checked to be identifiers
-    build = env["build"]
-    build.__name__ = build.__qualname__ = cls.__name__
-    return build
-
-
-class _Nodes:
-    """`N.X(...)` without the frozen-dataclass `__init__` (see `_builder`)."""
-
-
-for _name, _cls in vars(n).items():
-    if isinstance(_cls, type) and hasattr(_cls, "__dataclass_fields__"):
-        setattr(_Nodes, _name, staticmethod(_builder(_cls)))
-N = _Nodes
-
-
 @lru_cache(maxsize=None)
 def _parser(start: str = "start") -> Lark:
     grammar = resources.files("stvm.syntax").joinpath(_GRAMMAR_FILE).read_text(encoding="utf-8")
@@ -86,12 +48,12 @@ from stvm.syntax.literals import (LiteralError, decode_date, decode_dt, decode_i
 
 def _span_of(file: str, meta) -> n.Span:
     if getattr(meta, "empty", False) or not hasattr(meta, "line"):
-        return N.Span(file, 0, 0, 0, 0)
-    return N.Span(file, meta.line, meta.column, meta.end_line, meta.end_column)
+        return n.Span(file, 0, 0, 0, 0)
+    return n.Span(file, meta.line, meta.column, meta.end_line, meta.end_column)
 
 
 def _tok_span(file: str, tok: Token) -> n.Span:
-    return N.Span(file, tok.line, tok.column, tok.end_line or tok.line, tok.end_column or tok.column + len(tok))
+    return n.Span(file, tok.line, tok.column, tok.end_line or tok.line, tok.end_column or tok.column + len(tok))
 
 
 # binding strength of each binary operator token (higher binds tighter)
@@ -116,10 +78,11 @@ class _ToNodes:
         if meta.__class__ is _Meta2:
             start, end, lines = meta
             if start < 0:
-                return N.Span(self.file, 0, 0, 0, 0)
+                return n.Span(self.file, 0, 0, 0, 0)
             li = bisect_right(lines, start)
             lj = bisect_right(lines, end)
-            return N.Span(self.file, li, start - lines[li - 1] + 1, lj, end - lines[lj - 1] + 1)
+            ints = _INTS   # one int object per line number, shared by all spans (memory)
+            return n.Span(self.file, ints[li], start - lines[li - 1] + 1, ints[lj], end - lines[lj - 1] + 1)
         return _span_of(self.file, meta)
 
     def _ts(self, tok: Token) -> n.Span:
@@ -145,7 +108,7 @@ class _ToNodes:
         end = rest[-1]
         body = rest[-2]
         blocks = tuple(rest[:-2])
-        return N.POU(kind, str(name), (), ret, blocks, body, pragmas, self._s(meta), end)
+        return n.POU(kind, str(name), (), ret, blocks, body, pragmas, self._s(meta), end)
 
     def pou_kind(self, meta, items):
         return str(items[0].type)
@@ -160,7 +123,7 @@ class _ToNodes:
         kind = items[0]
         quals = tuple(q for q in items[1:] if isinstance(q, str))
         decls = tuple(d for d in items[1:] if isinstance(d, n.VarDecl))
-        return N.VarBlock(kind, quals, decls, self._s(meta))
+        return n.VarBlock(kind, quals, decls, self._s(meta))
 
     def var_kind(self, meta, items):
         return str(items[0].type)
@@ -173,7 +136,7 @@ class _ToNodes:
         rest = [x for x in items[1:] if x is not None and not (isinstance(x, tuple) and x and x[0] == "location")]
         type_spec = rest[0]
         init = rest[1] if len(rest) > 1 else None
-        return N.VarDecl(names, type_spec, init, self._s(meta))
+        return n.VarDecl(names, type_spec, init, self._s(meta))
 
     def ident_list(self, meta, items):
         return tuple((str(t), self._ts(t)) for t in items)
@@ -182,20 +145,20 @@ class _ToNodes:
         return ("location", str(items[0]))
 
     def global_block(self, meta, items):
-        return N.GlobalVars(items[0], (), self._s(meta))
+        return n.GlobalVars(items[0], (), self._s(meta))
 
     # -- types
     def type_block(self, meta, items):
         return ("types", list(items))
 
     def type_decl(self, meta, items):
-        return N.TypeDecl(str(items[0]), (), items[1], self._s(meta))
+        return n.TypeDecl(str(items[0]), (), items[1], self._s(meta))
 
     def struct_spec(self, meta, items):
-        return N.StructDecl(tuple(items), self._s(meta))
+        return n.StructDecl(tuple(items), self._s(meta))
 
     def field_decl(self, meta, items):
-        return N.VarDecl(items[0], items[1], items[2], self._s(meta))
+        return n.VarDecl(items[0], items[1], items[2], self._s(meta))
 
     def enum_spec(self, meta, items):
         base = None
@@ -208,7 +171,7 @@ class _ToNodes:
                 base = item[1]
             elif isinstance(item, Token):
                 default = str(item)
-        return N.EnumDecl(tuple(members), base, default, self._s(meta))
+        return n.EnumDecl(tuple(members), base, default, self._s(meta))
 
     def enum_member(self, meta, items):
         value = items[1] if len(items) > 1 else None
@@ -223,18 +186,18 @@ class _ToNodes:
         return ("elem", str(items[0]))
 
     def alias_spec(self, meta, items):
-        return N.AliasDecl(items[0], items[1] if len(items) > 1 else None, self._s(meta))
+        return n.AliasDecl(items[0], items[1] if len(items) > 1 else None, self._s(meta))
 
     def type_name(self, meta, items):
         name = items[0]
-        return N.NamedTypeSpec(name.parts, name.rooted, name.span)
+        return n.NamedTypeSpec(name.parts, name.rooted, name.span)
 
     def string_spec(self, meta, items):
         wide = str(items[0]).upper().startswith("W")
-        return N.StringTypeSpec(items[1], wide, self._s(meta))
+        return n.StringTypeSpec(items[1], wide, self._s(meta))
 
     def array_spec(self, meta, items):
-        return N.ArrayTypeSpec(tuple(items[:-1]), items[-1], self._s(meta))
+        return n.ArrayTypeSpec(tuple(items[:-1]), items[-1], self._s(meta))
 
     def bounds(self, meta, items):
         return (items[0], items[1])
@@ -243,22 +206,22 @@ class _ToNodes:
         return None
 
     def subrange_spec(self, meta, items):
-        return N.SubrangeTypeSpec(items[0][1], items[1], items[2], self._s(meta))
+        return n.SubrangeTypeSpec(items[0][1], items[1], items[2], self._s(meta))
 
     def ref_spec(self, meta, items):
-        return N.RefTypeSpec(items[-1], "REF_TO", self._s(meta))
+        return n.RefTypeSpec(items[-1], "REF_TO", self._s(meta))
 
     def pointer_spec(self, meta, items):
-        return N.RefTypeSpec(items[-1], "POINTER", self._s(meta))
+        return n.RefTypeSpec(items[-1], "POINTER", self._s(meta))
 
     def reference_spec(self, meta, items):
-        return N.RefTypeSpec(items[-1], "REFERENCE", self._s(meta))
+        return n.RefTypeSpec(items[-1], "REFERENCE", self._s(meta))
 
     def initializer(self, meta, items):
-        return N.ExprInit(items[0], self._s(meta))
+        return n.ExprInit(items[0], self._s(meta))
 
     def array_init(self, meta, items):
-        return N.ArrayInit(tuple(items), self._s(meta))
+        return n.ArrayInit(tuple(items), self._s(meta))
 
     def array_init_item(self, meta, items):
         return (1, items[0])
@@ -267,7 +230,7 @@ class _ToNodes:
         return (decode_int(str(items[0])), items[1] if len(items) > 1 else None)
 
     def struct_init(self, meta, items):
-        return N.StructInit(tuple(items), self._s(meta))
+        return n.StructInit(tuple(items), self._s(meta))
 
     def struct_init_item(self, meta, items):
         return (str(items[0]), items[1])
@@ -280,18 +243,18 @@ class _ToNodes:
         loose_tasks = tuple(x for x in items[1:] if isinstance(x, n.TaskDecl))
         loose_programs = tuple(x for x in items[1:] if isinstance(x, n.ProgramConfig))
         if loose_tasks or loose_programs:
-            resources_.insert(0, N.Resource(name, (), loose_tasks, loose_programs, self._s(meta)))
-        return N.Configuration(name, tuple(globals_), tuple(resources_), self._s(meta))
+            resources_.insert(0, n.Resource(name, (), loose_tasks, loose_programs, self._s(meta)))
+        return n.Configuration(name, tuple(globals_), tuple(resources_), self._s(meta))
 
     def resource(self, meta, items):
         name = str(items[0])
         rest = [x for x in items[1:] if not isinstance(x, Token) and x is not None]
-        return N.Resource(name, tuple(x.block for x in rest if isinstance(x, n.GlobalVars)),
+        return n.Resource(name, tuple(x.block for x in rest if isinstance(x, n.GlobalVars)),
                           tuple(x for x in rest if isinstance(x, n.TaskDecl)),
                           tuple(x for x in rest if isinstance(x, n.ProgramConfig)), self._s(meta))
 
     def task_decl(self, meta, items):
-        return N.TaskDecl(str(items[0]), tuple(items[1:]), self._s(meta))
+        return n.TaskDecl(str(items[0]), tuple(items[1:]), self._s(meta))
 
     def task_param(self, meta, items):
         return (str(items[0]).upper(), items[1])
@@ -301,32 +264,32 @@ class _ToNodes:
         task = str(items[1]) if items[1] is not None else None
         type_name = items[2].parts
         args = tuple(a for a in items[3:] if isinstance(a, n.Argument))
-        return N.ProgramConfig(instance, task, type_name, args, self._s(meta))
+        return n.ProgramConfig(instance, task, type_name, args, self._s(meta))
 
     # -- statements
     def statement_list(self, meta, items):
         return tuple(s for s in items if not isinstance(s, n.Empty))
 
     def assignment(self, meta, items):
-        return N.Assign(items[0], items[1], self._s(meta))
+        return n.Assign(items[0], items[1], self._s(meta))
 
     def ref_assignment(self, meta, items):
-        return N.RefAssign(items[0], items[2], self._s(meta))
+        return n.RefAssign(items[0], items[2], self._s(meta))
 
     def call_statement(self, meta, items):
-        return N.CallStatement(items[0], self._s(meta))
+        return n.CallStatement(items[0], self._s(meta))
 
     def exit_statement(self, meta, items):
-        return N.Exit(self._s(meta))
+        return n.Exit(self._s(meta))
 
     def continue_statement(self, meta, items):
-        return N.Continue(self._s(meta))
+        return n.Continue(self._s(meta))
 
     def return_statement(self, meta, items):
-        return N.Return(self._s(meta))
+        return n.Return(self._s(meta))
 
     def empty_statement(self, meta, items):
-        return N.Empty(self._s(meta))
+        return n.Empty(self._s(meta))
 
     def if_statement(self, meta, items):
         branches = [(items[0], items[1])]
@@ -336,7 +299,7 @@ class _ToNodes:
                 branches.append((item[1], item[2]))
             elif isinstance(item, tuple) and len(item) == 2 and item[0] == "else":
                 else_body = item[1]
-        return N.If(tuple(branches), else_body, self._s(meta))
+        return n.If(tuple(branches), else_body, self._s(meta))
 
     def elsif_clause(self, meta, items):
         return ("elsif", items[0], items[1])
@@ -353,38 +316,38 @@ class _ToNodes:
                 else_body = item[1]
             elif item is not None:
                 elements.append(item)
-        return N.Case(selector, tuple(elements), else_body, self._s(meta))
+        return n.Case(selector, tuple(elements), else_body, self._s(meta))
 
     def case_element(self, meta, items):
         return (tuple(items[:-1]), items[-1])
 
     def case_label(self, meta, items):
-        return N.CaseLabel(self._label_value(items[0], meta), None, self._s(meta))
+        return n.CaseLabel(self._label_value(items[0], meta), None, self._s(meta))
 
     def case_range(self, meta, items):
-        return N.CaseLabel(self._label_value(items[0], meta), self._label_value(items[1], meta), self._s(meta))
+        return n.CaseLabel(self._label_value(items[0], meta), self._label_value(items[1], meta), self._s(meta))
 
     def _label_value(self, value, meta):
         if isinstance(value, int):
-            return N.IntLiteral(value, self._s(meta))
+            return n.IntLiteral(value, self._s(meta))
         return value
 
     def case_name(self, meta, items):
         tok = items[0]
-        return N.Name((str(tok),), False, self._ts(tok))
+        return n.Name((str(tok),), False, self._ts(tok))
 
     def case_hash(self, meta, items):
         return self._hash(items[0])
 
     def for_statement(self, meta, items):
         var_tok, start, end, step, body = items
-        return N.For(N.Name((str(var_tok),), False, self._ts(var_tok)), start, end, step, body, self._s(meta))
+        return n.For(n.Name((str(var_tok),), False, self._ts(var_tok)), start, end, step, body, self._s(meta))
 
     def while_statement(self, meta, items):
-        return N.While(items[0], items[1], self._s(meta))
+        return n.While(items[0], items[1], self._s(meta))
 
     def repeat_statement(self, meta, items):
-        return N.Repeat(items[0], items[1], self._s(meta))
+        return n.Repeat(items[0], items[1], self._s(meta))
 
     # -- expressions
     def binary_op(self, meta, items):
@@ -404,95 +367,95 @@ class _ToNodes:
                 level = _PRECEDENCE[op.type]
                 pos += 1
                 right = climb(level + 1)   # left-associative: the right side binds tighter
-                span = N.Span(self.file, left.span.line, left.span.column, right.span.end_line, right.span.end_column)
-                left = N.Binary(str(op.type), left, right, span)
+                span = n.Span(self.file, left.span.line, left.span.column, right.span.end_line, right.span.end_column)
+                left = n.Binary(str(op.type), left, right, span)
             return left
 
         return climb(0)
 
     def unary(self, meta, items):
         op, operand = items
-        return N.Unary(str(op.type), operand, self._s(meta))
+        return n.Unary(str(op.type), operand, self._s(meta))
 
     def name(self, meta, items):
         return items[0]
 
     def qualified_name(self, meta, items):
         if len(items) == 1:                     # the common case: one IDENT
-            return N.Name((items[0].value,), False, self._s(meta))
+            return n.Name((items[0].value,), False, self._s(meta))
         rooted = bool(items) and isinstance(items[0], Token) and items[0].type == "ROOT_SEP"
         parts = tuple(str(t) for t in items if isinstance(t, Token) and t.type == "IDENT")
-        return N.Name(parts, rooted, self._s(meta))
+        return n.Name(parts, rooted, self._s(meta))
 
     def member(self, meta, items):
-        return N.Member(items[0], str(items[1]), self._s(meta))
+        return n.Member(items[0], str(items[1]), self._s(meta))
 
     def bit_access(self, meta, items):
-        return N.BitAccess(items[0], int(str(items[1]).replace("_", "")), self._s(meta))
+        return n.BitAccess(items[0], int(str(items[1]).replace("_", "")), self._s(meta))
 
     def index(self, meta, items):
-        return N.Index(items[0], tuple(items[1:]), self._s(meta))
+        return n.Index(items[0], tuple(items[1:]), self._s(meta))
 
     def call(self, meta, items):
         args = tuple(a for a in items[1:] if a is not None)
-        return N.Call(items[0], args, self._s(meta))
+        return n.Call(items[0], args, self._s(meta))
 
     def partial_access(self, meta, items):
         text = str(items[1])
         index = int(text[2:])
         letter = text[1].upper()
         if letter == "X":
-            return N.BitAccess(items[0], index, self._s(meta))
-        return N.PartialAccess(items[0], index, self._s(meta), width={"B": 8, "W": 16, "D": 32}[letter])
+            return n.BitAccess(items[0], index, self._s(meta))
+        return n.PartialAccess(items[0], index, self._s(meta), width={"B": 8, "W": 16, "D": 32}[letter])
 
     def keyword_call(self, meta, items):
         # MOD(a, b), AND(a, b, …): the operators' function forms call the stdlib's `__MOD`, `__AND`
         word = items[0]
-        callee = N.Name(("__" + str(word).upper(),), False, _tok_span(self.file, word))
-        return N.Call(callee, tuple(a for a in items[1:] if a is not None), self._s(meta))
+        callee = n.Name(("__" + str(word).upper(),), False, _tok_span(self.file, word))
+        return n.Call(callee, tuple(a for a in items[1:] if a is not None), self._s(meta))
 
     def deref(self, meta, items):
-        return N.Deref(items[0], self._s(meta))
+        return n.Deref(items[0], self._s(meta))
 
     def formal_input(self, meta, items):
-        return N.Argument("input", str(items[0]), items[1], self._s(meta))
+        return n.Argument("input", str(items[0]), items[1], self._s(meta))
 
     def formal_output(self, meta, items):
-        return N.Argument("output", str(items[0]), items[1], self._s(meta))
+        return n.Argument("output", str(items[0]), items[1], self._s(meta))
 
     def formal_output_not(self, meta, items):
-        return N.Argument("output_not", str(items[1]), items[2], self._s(meta))
+        return n.Argument("output_not", str(items[1]), items[2], self._s(meta))
 
     def positional(self, meta, items):
-        return N.Argument("positional", None, items[0], self._s(meta))
+        return n.Argument("positional", None, items[0], self._s(meta))
 
     # -- literals
     def _error(self, message: str, span: n.Span):
         self.diagnostics.append(Diagnostic.error(message, span))
 
     def int_literal(self, meta, items):
-        return N.IntLiteral(decode_int(str(items[0])), self._s(meta))
+        return n.IntLiteral(decode_int(str(items[0])), self._s(meta))
 
     def based_literal(self, meta, items):
-        return N.IntLiteral(decode_int(str(items[0])), self._s(meta))
+        return n.IntLiteral(decode_int(str(items[0])), self._s(meta))
 
     def real_literal(self, meta, items):
         text = str(items[0]).replace("_", "")
-        return N.RealLiteral(float(text), text, self._s(meta))
+        return n.RealLiteral(float(text), text, self._s(meta))
 
     def true_literal(self, meta, items):
-        return N.BoolLiteral(True, self._s(meta))
+        return n.BoolLiteral(True, self._s(meta))
 
     def false_literal(self, meta, items):
-        return N.BoolLiteral(False, self._s(meta))
+        return n.BoolLiteral(False, self._s(meta))
 
     def _literal(self, meta, items, type_name, decoder):
         text = str(items[0])
         try:
-            return N.TimeLiteral(type_name, decoder(text), self._s(meta))
+            return n.TimeLiteral(type_name, decoder(text), self._s(meta))
         except (LiteralError, ValueError) as exc:
             self._error(str(exc) if isinstance(exc, LiteralError) else f"malformed literal {text!r}", self._s(meta))
-            return N.TimeLiteral(type_name, 0, self._s(meta))
+            return n.TimeLiteral(type_name, 0, self._s(meta))
 
     def time_literal(self, meta, items):
         return self._literal(meta, items, "TIME", decode_time)
@@ -514,7 +477,7 @@ class _ToNodes:
         prefix, _, value = text.rpartition("#") if text.count("#") == 1 else (text.split("#", 1)[0], "#", text.split("#", 1)[1])
         rooted = prefix.startswith("\\\\")
         parts = tuple(p for p in prefix.lstrip("\\").split("\\") if p)
-        return N.HashLiteral(parts, rooted, value, self._ts(tok))
+        return n.HashLiteral(parts, rooted, value, self._ts(tok))
 
     def string_literal(self, meta, items):
         text = str(items[0])
@@ -531,21 +494,21 @@ class _ToNodes:
             else:
                 self.diagnostics.append(Diagnostic.warning(
                     "double-quoted string literal accepted as STRING (Sysmac `double_quote_strings`)", span))
-        return N.StringLiteral(value, double, span)
+        return n.StringLiteral(value, double, span)
 
 
 def _collect(file: str, items: list, namespace: tuple[str, ...], out: dict[str, list]) -> None:
     for item in items:
         if isinstance(item, n.POU):
-            out["pous"].append(N.POU(item.kind, item.name, namespace, item.return_type, item.var_blocks,
+            out["pous"].append(n.POU(item.kind, item.name, namespace, item.return_type, item.var_blocks,
                                      item.body, item.pragmas, item.span, item.end_span))
         elif isinstance(item, n.GlobalVars):
-            out["globals"].append(N.GlobalVars(item.block, namespace, item.span))
+            out["globals"].append(n.GlobalVars(item.block, namespace, item.span))
         elif isinstance(item, n.Configuration):
             out["configurations"].append(item)
         elif isinstance(item, tuple) and item[0] == "types":
             for decl in item[1]:
-                out["types"].append(N.TypeDecl(decl.name, namespace, decl.body, decl.span))
+                out["types"].append(n.TypeDecl(decl.name, namespace, decl.body, decl.span))
         elif isinstance(item, tuple) and item[0] == "namespace":
             _collect(file, item[2], namespace + tuple(item[1]), out)
 
@@ -595,19 +558,19 @@ def _syntax_diagnostic(file: str, exc: UnexpectedInput) -> Diagnostic:
             except Exception:  # accepts() replays the parser; never let it hide the real error
                 pass
         if tok.type == "$END":
-            span = N.Span(file, exc.line if exc.line > 0 else 1, max(exc.column, 1), exc.line, exc.column + 1)
+            span = n.Span(file, exc.line if exc.line > 0 else 1, max(exc.column, 1), exc.line, exc.column + 1)
             return Diagnostic.error("unexpected end of file" + _expected_text(expected), span, "E001")
         span = _tok_span(file, tok)
         return Diagnostic.error(f"syntax error: unexpected '{tok}'" + _expected_text(expected), span, "E001")
     if isinstance(exc, UnexpectedCharacters):
-        span = N.Span(file, exc.line, exc.column, exc.line, exc.column + 1)
+        span = n.Span(file, exc.line, exc.column, exc.line, exc.column + 1)
         char = exc.char
         if char in "'\"":
             return Diagnostic.error("unterminated or malformed string literal", span, "E002")
         return Diagnostic.error(f"syntax error: unexpected character {char!r}", span, "E001")
     if isinstance(exc, UnexpectedEOF):
-        return Diagnostic.error("unexpected end of file", N.Span(file, 1, 1, 1, 2), "E001")
-    return Diagnostic.error(f"syntax error: {exc}", N.Span(file, 1, 1, 1, 2), "E001")
+        return Diagnostic.error("unexpected end of file", n.Span(file, 1, 1, 1, 2), "E001")
+    return Diagnostic.error(f"syntax error: {exc}", n.Span(file, 1, 1, 1, 2), "E001")
 
 
 _MAX_RECOVERED_ERRORS = 20
@@ -665,6 +628,16 @@ class _FromTree(Transformer):
         return fn(self._nodes, meta, children)
 
 
+_INTS: list[int] = list(range(1024))
+
+
+def _intern_lines(text: str) -> None:
+    """Make `_INTS` cover every line number of `text` (plus one: a span may end after the last '\n')."""
+    need = text.count("\n") + 2
+    if len(_INTS) < need:
+        _INTS.extend(range(len(_INTS), need))
+
+
 @lru_cache(maxsize=None)
 def _driver(start: str) -> lalr.Driver | None:
     """The fast driver over the parser's tables, or None (then Lark parses everything) if this
@@ -680,6 +653,7 @@ def _fast(text: str, file: str, settings: SysmacSettings, start: str):
     driver = _driver(start)
     if driver is None:
         return None
+    _intern_lines(text)
     diagnostics: list[Diagnostic] = []
     nodes = _ToNodes(file, settings, diagnostics)
     # the cyclic collector off while the nodes are built: none of them is garbage yet, and its
@@ -698,7 +672,7 @@ def _fast(text: str, file: str, settings: SysmacSettings, start: str):
 def _unit(file: str, items: list, nodes: _ToNodes) -> n.CompilationUnit:
     out: dict[str, list] = {"types": [], "pous": [], "globals": [], "configurations": []}
     _collect(file, items, (), out)
-    return N.CompilationUnit(file, tuple(out["types"]), tuple(out["pous"]), tuple(out["globals"]),
+    return n.CompilationUnit(file, tuple(out["types"]), tuple(out["pous"]), tuple(out["globals"]),
                              tuple(out["configurations"]), tuple(nodes.namespace_names))
 
 
@@ -720,17 +694,17 @@ def parse_text_lark(text: str, file: str, settings: SysmacSettings = DEFAULT_SET
         tree = _parser().parse(text, start="start", on_error=_missing_semicolon_recovery(file, recovered))
     except UnexpectedInput as exc:
         diagnostics += recovered + [_syntax_diagnostic(file, exc)]
-        return N.CompilationUnit(file, (), (), (), ()), diagnostics
+        return n.CompilationUnit(file, (), (), (), ()), diagnostics
     if recovered:
-        return N.CompilationUnit(file, (), (), (), ()), recovered
+        return n.CompilationUnit(file, (), (), (), ()), recovered
     nodes = _ToNodes(file, settings, diagnostics)
     try:
         items = _FromTree(nodes).transform(tree)
     except RecursionError:
         diagnostics.append(Diagnostic.error(
             "expression or statement nesting too deep for stvm (split it into smaller parts)",
-            N.Span(file, 1, 1, 1, 2), "E003"))
-        return N.CompilationUnit(file, (), (), (), ()), diagnostics
+            n.Span(file, 1, 1, 1, 2), "E003"))
+        return n.CompilationUnit(file, (), (), (), ()), diagnostics
     return _unit(file, items, nodes), diagnostics
 
 
