@@ -181,7 +181,7 @@ class Driver:
             row = {}
             for sym, (action, arg) in states[s].items():
                 if action is Shift:
-                    if sym.isupper() or sym == "$END":
+                    if sym.isupper() and sym != "$END":   # Lark never shifts $END: no entry, Fallback
                         row[sym] = arg
                 else:
                     row[sym] = plans[id(arg)]
@@ -360,8 +360,6 @@ class Driver:
                 act = actions[state].get(ttype)
                 cls = act.__class__
                 if cls is int_:                                         # shift
-                    if ttype == "$END":
-                        raise Fallback
                     states.append(act)
                     if ttype in kept:
                         value = m.group()
