@@ -42,7 +42,7 @@ from stvm.syntax.parser import _parser, parse_text, parse_text_lark  # noqa: E40
 PROJECTS = ["st_src", "st_src/cbt_v2", "st_src/kuka", "st_src/rockwell"]   # each a project (stvm.toml)
 
 
-def cpu(fn, repeat: int = 3) -> float:
+def cpu(fn, repeat: int = 5) -> float:
     """Best CPU seconds of `repeat` calls (CPU time: the machine is shared)."""
     best = float("inf")
     for _ in range(repeat):
@@ -117,7 +117,7 @@ def main() -> None:
     ap.add_argument("--lines", type=int, default=100_000, help="lines of the large input (default 100,000)")
     args = ap.parse_args()
     print(f"machine: {platform.machine()}, {os.cpu_count()} cores, Python {platform.python_version()}, "
-          f"load {os.getloadavg()[0]:.1f}; figures are CPU time, best of 3")
+          f"load {os.getloadavg()[0]:.1f}; figures are CPU time, best of 5")
     _parser()
     stdlib_units(DEFAULT_SETTINGS)
     folder = Path(tempfile.mkdtemp(prefix="stvm-bench-parser-"))
