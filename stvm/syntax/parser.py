@@ -662,7 +662,7 @@ def _fast(text: str, file: str, settings: SysmacSettings, start: str):
     gc.disable()
     try:
         return driver.parse(text, nodes), nodes, diagnostics
-    except (lalr.Fallback, RecursionError):
+    except Exception:   # lalr.Fallback, RecursionError, or anything unforeseen: Lark's path decides
         return None
     finally:
         if was_enabled:
