@@ -81,8 +81,11 @@ class _ToNodes:
                 return n.Span(self.file, 0, 0, 0, 0)
             li = bisect_right(lines, start)
             lj = bisect_right(lines, end)
-            ints = _INTS   # one int object per line number, shared by all spans (memory)
-            return n.Span(self.file, ints[li], start - lines[li - 1] + 1, ints[lj], end - lines[lj - 1] + 1)
+            try:   # one int object per line number, shared by all spans (memory; see _intern_lines)
+                li, lj = _INTS[li], _INTS[lj]
+            except IndexError:
+                pass
+            return n.Span(self.file, li, start - lines[li - 1] + 1, lj, end - lines[lj - 1] + 1)
         return _span_of(self.file, meta)
 
     def _ts(self, tok: Token) -> n.Span:
