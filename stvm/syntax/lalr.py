@@ -182,7 +182,7 @@ class Driver:
             row = {}
             for sym, (action, arg) in states[s].items():
                 if action is Shift:
-                    if sym.isupper() or sym == "$END":
+                    if sym.isupper() and sym != "$END":   # Lark never shifts $END: no entry, Fallback
                         row[sym] = arg
                 else:
                     row[sym] = plans[id(arg)]
@@ -204,8 +204,8 @@ class Driver:
                         if type_ in user_callbacks and type_ in basic.ignore_types:
                             notify[type_] = user_callbacks[type_]
                             continue
-                        if not isinstance(cb, UnlessCallback):
-                            raise Unsupported(f"lexer callback for {type_} is not an UnlessCallback")
+                        if not isinstance(cb, UnlessCallback) or not callable(getattr(cb.scanner, "fullmatch", None)):
+                            raise Unsupported(f"lexer callback for {type_} is not an UnlessCallback with fullmatch")
                         retype[type_] = (cb.scanner, {})
                     match = mres[0].match if len(mres) == 1 else _multi_match(mres)
                     entry = (match, frozenset(basic.ignore_types), retype, notify)
@@ -214,6 +214,29 @@ class Driver:
         except AttributeError as exc:
             raise Unsupported(f"Lark's lexer internals changed: {exc!r}") from exc
         self.scanners = scanners
+        self._chains: dict[tuple, tuple] = {}
+
+    def _chain(self, key):
+        """(final state, [(callback, name)] of the one-child trees) of the run of one-child
+        reductions from `key` = (state below, top state, lookahead); memoised."""
+        below, state, ttype = key
+        steps = []
+        while True:
+            act = self.actions[state].get(ttype)
+            if act.__class__ is dict:
+                nxt = act.get(below)
+            elif act.__class__ is tuple and act[0] == _ONE:
+                nxt = act[1].get(below)
+                steps.append((act[2], act[3]))
+            else:
+                break
+            if nxt is None:
+                raise Fallback
+            state = nxt
+            if state == self.end_state:
+                break
+        chain = self._chains[key] = (state, tuple(steps))
+        return chain
 
     # ---- build time --------------------------------------------------------------------------
 
@@ -331,6 +354,8 @@ class Driver:
         max_depth = MAX_DEPTH
         int_ = int
         dict_ = dict
+        tuple_ = tuple
+        chains = self._chains
         m = None
         end = 0
         while True:
@@ -368,8 +393,6 @@ class Driver:
                 act = actions[state].get(ttype)
                 cls = act.__class__
                 if cls is int_:                                         # shift
-                    if ttype == "$END":
-                        raise Fallback
                     states.append(act)
                     if ttype in kept:
                         value = m.group()
@@ -394,35 +417,40 @@ class Driver:
                     spans.append((pos, end, 0))
                     pos = end
                     break
-                if cls is dict_:                                        # ?rule: one child passes
-                    state = act[states[-2]]
-                    states[-1] = state
+                if cls is dict_ or (cls is tuple_ and act[0] == _ONE):
+                    # a run of one-child reductions (`?rule` pass-throughs and one-child trees)
+                    # only changes the top of the stack; its course depends on the state below
+                    # and the lookahead, so it is worked out once and replayed
+                    key = (states[-2], state, ttype)
+                    chain = chains.get(key)
+                    if chain is None:
+                        chain = self._chain(key)
+                    final, steps = chain
+                    if steps:
+                        value = values[-1]
+                        sp = spans[-1]
+                        for fn, name in steps:
+                            if sp:
+                                depth = sp[2] + 1
+                                if depth >= max_depth:
+                                    raise Fallback
+                                meta = new_meta(Meta2, (sp[0], sp[1], lines))
+                                sp = (sp[0], sp[1], depth)
+                            else:
+                                meta = new_meta(Meta2, (-1, -1, lines))
+                            if fn is not None:
+                                value = fn(handler, meta, [value])
+                            else:
+                                value = Tree(name, [value], _lark_meta(meta))
+                        values[-1] = value
+                        spans[-1] = sp
+                    states[-1] = state = final
                     if state == end_state:
                         return values[-1]
                     continue
                 if act is None:
                     raise Fallback
                 kind = act[0]
-                if kind == _ONE:                                        # one child, a new tree
-                    sp = spans[-1]
-                    if sp:
-                        depth = sp[2] + 1
-                        if depth >= max_depth:
-                            raise Fallback
-                        meta = new_meta(Meta2, (sp[0], sp[1], lines))
-                        spans[-1] = (sp[0], sp[1], depth)
-                    else:
-                        meta = new_meta(Meta2, (-1, -1, lines))
-                    fn = act[2]
-                    if fn is not None:
-                        values[-1] = fn(handler, meta, [values[-1]])
-                    else:
-                        values[-1] = Tree(act[3], [values[-1]], _lark_meta(meta))
-                    state = act[1][states[-2]]
-                    states[-1] = state
-                    if state == end_state:
-                        return values[-1]
-                    continue
                 if kind == _APPEND:                                     # _rule: more children
                     _k, goto, rest, size, carry, nts = act
                     vals = values[-size:]

@@ -16,42 +16,43 @@ def _span() -> Span:
 
 
 class Node:
+    __slots__ = ()   # the node classes are slotted dataclasses: no per-node __dict__ (memory)
     span: Span
 
 
 # ---- expressions ---------------------------------------------------------------------------
 
 class Expr(Node):
-    pass
+    __slots__ = ()
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class IntLiteral(Expr):
     value: int
     span: Span = _span()
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class RealLiteral(Expr):
     value: float
     text: str
     span: Span = _span()
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class BoolLiteral(Expr):
     value: bool
     span: Span = _span()
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class StringLiteral(Expr):
     value: bytes
     double_quoted: bool = False
     span: Span = _span()
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class TimeLiteral(Expr):
     """T#…, D#…, TOD#…, DT#… as integer nanoseconds; `type_name` is TIME, DATE, TIME_OF_DAY or DATE_AND_TIME."""
 
@@ -60,7 +61,7 @@ class TimeLiteral(Expr):
     span: Span = _span()
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class HashLiteral(Expr):
     """`Prefix#value`: a typed literal (INT#5) or an enumerator (Color#Red); semantics decides."""
 
@@ -70,7 +71,7 @@ class HashLiteral(Expr):
     span: Span = _span()
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class Name(Expr):
     parts: tuple[str, ...]
     rooted: bool = False
@@ -81,21 +82,21 @@ class Name(Expr):
         return ("\\\\" if self.rooted else "") + "\\".join(self.parts)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class Member(Expr):
     base: Expr
     name: str
     span: Span = _span()
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class BitAccess(Expr):
     base: Expr
     bit: int
     span: Span = _span()
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class PartialAccess(BitAccess):
     """`d.%B1`, `l.%W0`, `l.%D1`: part `bit` (counted from the least significant) of `width` bits.
     A BitAccess, so every walk over variable paths treats it as one (`w.%X3` is a BitAccess)."""
@@ -103,20 +104,20 @@ class PartialAccess(BitAccess):
     width: int = 8
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class Index(Expr):
     base: Expr
     indices: tuple[Expr, ...]
     span: Span = _span()
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class Deref(Expr):
     base: Expr
     span: Span = _span()
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class Argument(Node):
     """One call argument. kind: 'input' (`n := e`), 'output' (`n => v`), 'output_not' (`NOT n => v`), 'positional'."""
 
@@ -126,21 +127,21 @@ class Argument(Node):
     span: Span = _span()
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class Call(Expr):
     callee: Expr
     args: tuple[Argument, ...]
     span: Span = _span()
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class Unary(Expr):
     op: str
     operand: Expr
     span: Span = _span()
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class Binary(Expr):
     op: str
     left: Expr
@@ -151,17 +152,17 @@ class Binary(Expr):
 # ---- statements ----------------------------------------------------------------------------
 
 class Statement(Node):
-    pass
+    __slots__ = ()
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class Assign(Statement):
     target: Expr
     value: Expr
     span: Span = _span()
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class RefAssign(Statement):
     """CODESYS `target REF= value`: bind the REFERENCE TO variable `target` to the variable `value`."""
 
@@ -170,20 +171,20 @@ class RefAssign(Statement):
     span: Span = _span()
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class CallStatement(Statement):
     call: Expr
     span: Span = _span()
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class If(Statement):
     branches: tuple[tuple[Expr, tuple[Statement, ...]], ...]
     else_body: tuple[Statement, ...] | None
     span: Span = _span()
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class CaseLabel(Node):
     """A case label: a value, or a range when `high` is set. Values are IntLiteral, Name or HashLiteral."""
 
@@ -192,7 +193,7 @@ class CaseLabel(Node):
     span: Span = _span()
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class Case(Statement):
     selector: Expr
     elements: tuple[tuple[tuple[CaseLabel, ...], tuple[Statement, ...]], ...]
@@ -200,7 +201,7 @@ class Case(Statement):
     span: Span = _span()
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class For(Statement):
     variable: Name
     start: Expr
@@ -210,36 +211,36 @@ class For(Statement):
     span: Span = _span()
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class While(Statement):
     condition: Expr
     body: tuple[Statement, ...]
     span: Span = _span()
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class Repeat(Statement):
     body: tuple[Statement, ...]
     condition: Expr
     span: Span = _span()
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class Exit(Statement):
     span: Span = _span()
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class Continue(Statement):
     span: Span = _span()
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class Return(Statement):
     span: Span = _span()
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class Empty(Statement):
     span: Span = _span()
 
@@ -247,10 +248,10 @@ class Empty(Statement):
 # ---- type specifications and initialisers --------------------------------------------------
 
 class TypeSpec(Node):
-    pass
+    __slots__ = ()
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class NamedTypeSpec(TypeSpec):
     parts: tuple[str, ...]
     rooted: bool = False
@@ -261,21 +262,21 @@ class NamedTypeSpec(TypeSpec):
         return "\\".join(self.parts)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class StringTypeSpec(TypeSpec):
     size: Expr
     wide: bool = False
     span: Span = _span()
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class ArrayTypeSpec(TypeSpec):
     ranges: tuple[tuple[Expr, Expr] | None, ...]  # None = `*`
     element: TypeSpec
     span: Span = _span()
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class SubrangeTypeSpec(TypeSpec):
     base: str
     low: int
@@ -283,7 +284,7 @@ class SubrangeTypeSpec(TypeSpec):
     span: Span = _span()
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class RefTypeSpec(TypeSpec):
     target: TypeSpec
     flavour: str = "REF_TO"   # REF_TO (IEC), POINTER (POINTER TO), REFERENCE (REFERENCE TO)
@@ -291,22 +292,22 @@ class RefTypeSpec(TypeSpec):
 
 
 class Initializer(Node):
-    pass
+    __slots__ = ()
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class ExprInit(Initializer):
     expr: Expr
     span: Span = _span()
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class ArrayInit(Initializer):
     items: tuple[tuple[int, Initializer | None], ...]  # (repeat count, value) ; `3()` has value None
     span: Span = _span()
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class StructInit(Initializer):
     items: tuple[tuple[str, Initializer], ...]
     span: Span = _span()
@@ -314,7 +315,7 @@ class StructInit(Initializer):
 
 # ---- declarations --------------------------------------------------------------------------
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class VarDecl(Node):
     names: tuple[tuple[str, Span], ...]
     type_spec: TypeSpec
@@ -322,7 +323,7 @@ class VarDecl(Node):
     span: Span = _span()
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class VarBlock(Node):
     kind: str  # VAR, VAR_INPUT, VAR_OUTPUT, VAR_IN_OUT, VAR_TEMP, VAR_GLOBAL, VAR_EXTERNAL, VAR_STAT
     qualifiers: tuple[str, ...]
@@ -334,13 +335,13 @@ class VarBlock(Node):
         return "CONSTANT" in self.qualifiers
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class StructDecl(Node):
     fields: tuple[VarDecl, ...]
     span: Span = _span()
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class EnumDecl(Node):
     members: tuple[tuple[str, int | None, Span], ...]
     base: str | None
@@ -348,14 +349,14 @@ class EnumDecl(Node):
     span: Span = _span()
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class AliasDecl(Node):
     type_spec: TypeSpec
     init: Initializer | None
     span: Span = _span()
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class TypeDecl(Node):
     name: str
     namespace: tuple[str, ...]
@@ -404,7 +405,7 @@ class Property(Node):
     name_span: Span = _span()
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class POU(Node):
     kind: str  # FUNCTION, FUNCTION_BLOCK, PROGRAM, INTERFACE
     name: str
@@ -423,7 +424,7 @@ class POU(Node):
     name_span: Span = _span()
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class GlobalVars(Node):
     block: VarBlock
     namespace: tuple[str, ...]
@@ -432,14 +433,14 @@ class GlobalVars(Node):
     gvl: str = ""                   # the name of its global variable list (TwinCAT/CODESYS GVL)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class TaskDecl(Node):
     name: str
     params: tuple[tuple[str, Expr], ...]
     span: Span = _span()
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class ProgramConfig(Node):
     instance: str
     task: str | None
@@ -448,7 +449,7 @@ class ProgramConfig(Node):
     span: Span = _span()
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class Resource(Node):
     name: str
     globals: tuple[VarBlock, ...]
@@ -457,7 +458,7 @@ class Resource(Node):
     span: Span = _span()
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class Configuration(Node):
     name: str
     globals: tuple[VarBlock, ...]
@@ -465,7 +466,7 @@ class Configuration(Node):
     span: Span = _span()
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class CompilationUnit:
     path: str
     types: tuple[TypeDecl, ...]

@@ -7,6 +7,7 @@ stages only see values.
 
 from __future__ import annotations
 
+import gc
 import threading
 from bisect import bisect_right
 from dataclasses import replace
@@ -109,6 +110,10 @@ class _ToNodes:
                 return n.Span(self.file, 0, 0, 0, 0)
             li = bisect_right(lines, start)
             lj = bisect_right(lines, end)
+            try:   # one int object per line number, shared by all spans (memory; see _intern_lines)
+                li, lj = _INTS[li], _INTS[lj]
+            except IndexError:
+                pass
             return n.Span(self.file, li, start - lines[li - 1] + 1, lj, end - lines[lj - 1] + 1)
         return _span_of(self.file, meta)
 
@@ -723,6 +728,16 @@ class _FromTree(Transformer):
         return fn(self._nodes, meta, children)
 
 
+_INTS: list[int] = list(range(1024))
+
+
+def _intern_lines(text: str) -> None:
+    """Make `_INTS` cover every line number of `text` (plus one: a span may end after the last '\n')."""
+    need = text.count("\n") + 2
+    if len(_INTS) < need:
+        _INTS.extend(range(len(_INTS), need))
+
+
 @lru_cache(maxsize=None)
 def _driver(start: str) -> lalr.Driver | None:
     """The fast driver over the parser's tables, or None (then Lark parses everything) if this
@@ -738,12 +753,20 @@ def _fast(text: str, file: str, settings: SysmacSettings, start: str):
     driver = _driver(start)
     if driver is None:
         return None
+    _intern_lines(text)
     diagnostics: list[Diagnostic] = []
     nodes = _ToNodes(file, settings, diagnostics)
+    # the cyclic collector off while the nodes are built: none of them is garbage yet, and its
+    # passes over the growing heap cost a third of the parse (as in project._collector_paused)
+    was_enabled = gc.isenabled()
+    gc.disable()
     try:
         return driver.parse(text, nodes), nodes, diagnostics
-    except (lalr.Fallback, RecursionError):
+    except Exception:   # lalr.Fallback, RecursionError, or anything unforeseen: Lark's path decides
         return None
+    finally:
+        if was_enabled:
+            gc.enable()
 
 
 def _unit(file: str, items: list, nodes: _ToNodes) -> n.CompilationUnit:

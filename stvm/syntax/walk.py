@@ -58,7 +58,15 @@ def root_name(expr) -> str | None:
 
 
 _WALK_FIELDS: dict[type, tuple[str, ...]] = {}
-_WALK_KIND: dict[type, int] = {}   # 0: skip, 1: tuple (splice), 2: node (visit)
+_WALK_KIND: dict[type, int] = {}   # 0: skip (no Call can be inside), 1: tuple (splice), 2: node (visit)
+
+
+def _walk_kind(cls) -> int:
+    if issubclass(cls, tuple):
+        return 1
+    if hasattr(cls, "__dataclass_fields__") and (issubclass(cls, n.Call) or _walk_fields(cls)):
+        return 2
+    return 0
 
 
 _SCALARS = {"str", "int", "bool", "float", "bytes", "None", "Span", "n.Span"}
@@ -92,7 +100,7 @@ def calls_in(body) -> list[n.Call]:
         cls = node.__class__
         kind = kind_of.get(cls)
         if kind is None:
-            kind = kind_of[cls] = 1 if issubclass(cls, tuple) else 2 if hasattr(cls, "__dataclass_fields__") else 0
+            kind = kind_of[cls] = _walk_kind(cls)
         if kind == 1:
             extend(node)
             continue
@@ -108,7 +116,7 @@ def calls_in(body) -> list[n.Call]:
             vcls = value.__class__
             vkind = kind_of.get(vcls)
             if vkind is None:
-                vkind = kind_of[vcls] = 1 if issubclass(vcls, tuple) else 2 if hasattr(vcls, "__dataclass_fields__") else 0
+                vkind = kind_of[vcls] = _walk_kind(vcls)
             if vkind:
                 push(value)
     return out
