@@ -13,13 +13,14 @@ from __future__ import annotations
 
 import sys
 import tempfile
-import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / "bench"))
 
 import stvm  # noqa: E402
+from bench_core import best_of  # noqa: E402
 
 DECLS = """
 INTERFACE I_Calc
@@ -69,16 +70,6 @@ def body_of(source: str, folder: Path, name: str):
     vm.run(cycles=1)
     assert vm["Main.s"] == 10100, vm["Main.s"]   # the three bodies compute the same
     return next(iter(vm.instances.values()))[1]
-
-
-def best_of(fn, repeat: int, number: int) -> float:
-    times = []
-    for _ in range(repeat):
-        start = time.perf_counter()
-        for _ in range(number):
-            fn()
-        times.append((time.perf_counter() - start) / number)
-    return min(times)
 
 
 def main() -> None:

@@ -781,31 +781,30 @@ def parse_text(text: str, file: str, settings: SysmacSettings = DEFAULT_SETTINGS
     """Parse one ST file. On a syntax error the unit is empty and the error is a diagnostic."""
     if type(text) is not str and hasattr(text, "remap"):   # a vendor XML file (syntax/vendor_xml.py)
         return text.remap(*parse_text(str(text), file, settings))
-    # the lexer hands the `{…}` pragmas it drops to `_pragma_seen` (both parsers); the ones before
-    # a POU, type or global block are attached to it (syntax/pragmas.py)
-    _PRAGMAS.tokens = pragma_tokens = []
-    try:
-        fast = _fast(text, file, settings, "start")
-        if fast is not None:
-            items, nodes, diagnostics = fast
-            unit = _unit(file, items, nodes)
-        else:
-            del pragma_tokens[:]    # the fast driver gave up part-way: Lark lexes it all again
-            unit, diagnostics = _parse_text_lark(text, file, settings)
-    finally:
-        _PRAGMAS.tokens = None
-    if pragma_tokens:
-        from stvm.syntax.pragmas import attach   # lazy: start-up (only files with pragmas)
-        unit = attach(unit, pragma_tokens)
-    return unit, diagnostics
+    return _with_pragmas(_parse_fast_or_lark, text, file, settings)
+
+
+def _parse_fast_or_lark(text: str, file: str, settings: SysmacSettings, pragma_tokens: list):
+    fast = _fast(text, file, settings, "start")
+    if fast is not None:
+        items, nodes, diagnostics = fast
+        return _unit(file, items, nodes), diagnostics
+    del pragma_tokens[:]    # the fast driver gave up part-way: Lark lexes it all again
+    return _parse_text_lark(text, file, settings)
 
 
 def parse_text_lark(text: str, file: str, settings: SysmacSettings = DEFAULT_SETTINGS) -> tuple[n.CompilationUnit, list[Diagnostic]]:
     """`parse_text` by Lark's own parser and tree (the fallback path, and the reference the
     fast driver is tested against): syntax errors, recovery of missing ';', deep nesting."""
+    return _with_pragmas(lambda text, file, settings, _: _parse_text_lark(text, file, settings), text, file, settings)
+
+
+def _with_pragmas(parse, text: str, file: str, settings: SysmacSettings):
+    """Run `parse` collecting the `{…}` pragmas the lexer drops (`_pragma_seen`, either parser),
+    then attach the ones before a POU, type or global block to it (syntax/pragmas.py)."""
     _PRAGMAS.tokens = pragma_tokens = []
     try:
-        unit, diagnostics = _parse_text_lark(text, file, settings)
+        unit, diagnostics = parse(text, file, settings, pragma_tokens)
     finally:
         _PRAGMAS.tokens = None
     if pragma_tokens:
