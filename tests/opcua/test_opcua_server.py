@@ -317,11 +317,17 @@ def test_sampling_interval_slower_than_a_scan(tmp_path):
                 every_scan = await client.create_subscription(10, Into(fast))
                 every_10ms = await client.create_subscription(10, Into(slow))
                 counter = node(client, ns, "Main.n")
-                await every_scan.subscribe_data_change(counter, sampling_interval=0)
+                # a queue per monitored item: a publishing cycle the (loaded) machine delays must
+                # not let one sample overwrite the last (the default queue holds one)
+                await every_scan.subscribe_data_change(counter, sampling_interval=0, queuesize=64)
                 await every_10ms.subscribe_data_change(counter, sampling_interval=10)
                 for _ in range(6):
                     await scan(client, ns, 5)     # VM time 5 ms per call
                     await asyncio.sleep(0.05)     # one publishing interval at least
+                for _ in range(100):              # the last publishing cycle, however late
+                    if 30 in fast and 21 in slow:
+                        break
+                    await asyncio.sleep(0.05)
                 return fast, slow
         fast, slow = run_async(body())
     finally:
