@@ -608,6 +608,10 @@ class OpcUaServer:
             return ua.StatusCode(ua.StatusCodes.BadTypeMismatch)
         if not 1 <= scans <= MAX_SCAN_STEP:
             return ua.StatusCode(ua.StatusCodes.BadOutOfRange)
+        if self._rebuild_pending:
+            # items monitored before this call are sampled in its scans, however soon it follows
+            # (their watches would otherwise wait for the deferred rebuild)
+            self._rebuild_watches()
         try:
             done = await asyncio.wrap_future(self.control.step(scans))
         except RuntimeError:
