@@ -212,7 +212,9 @@ def run_real(project, port: int, moves: list[tuple[str, dict]], inst: str, versi
             for key, value in params[1].items():
                 vm.set(f"T.{inst}Param.{key}", value)
             vm.set(f"T.{inst}Execute", True)
-            r.run_until(lambda s: s["Done"] or s["Error"], 20000, "move end", timeout_s=10)
+            # bounded by wall time, not by scans: the robot sends the real notification 1.5 s
+            # (wall) later, and a fast VM runs 20,000 virtual 1 ms scans in less than that
+            r.run_until(lambda s: s["Done"] or s["Error"], 10_000_000, "move end", timeout_s=10)
             assert r.trace[-1]["Done"], r.trace[-1].values
             early.append(not real_sent.is_set())
             vm.set(f"T.{inst}Execute", False)
@@ -283,7 +285,7 @@ def drop_run(project, inst: str, params: dict, version: int) -> dict:
             for key, value in params.items():
                 vm.set(f"T.{inst}Param.{key}", value)
             vm.set(f"T.{inst}Execute", True)
-            r.run_until(lambda s: s["Error"], 20000, "error", timeout_s=10)
+            r.run_until(lambda s: s["Error"], 10_000_000, "error", timeout_s=10)   # wall-time bound (the robot waits 0.2 s)
             r.run_for(3000)
             return {"WaitingReturn": vm.get("T.Cobot.WaitingReturn"), "Connected": vm.get("T.Cobot.Connected"),
                     "MoveErrorID": vm.get(f"T.{inst}.ErrorID"), "ConnErrorID": vm.get("T.Conn.ErrorID")}
