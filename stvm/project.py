@@ -51,7 +51,7 @@ class LoadError(Exception):
 class Project:
     model: "ProjectModel"
     lowered: "LoweredProject"
-    code: object
+    code: tuple          # the generated module's code objects, run in order (lower.product.compile_module)
     sources: dict[str, str]
     settings: SysmacSettings
     warnings: list[Diagnostic] = field(default_factory=list)
@@ -467,11 +467,12 @@ def _lower_and_compile_unpaused(analysis, settings, texts, sources):
     """Generate and compile the Python module; Python's own limits become diagnostics."""
     from stvm.lower import lower_project   # lazy: start-up
     from stvm.runtime.vm import GENERATED_FILENAME   # lazy: start-up
+    from stvm.lower.product import compile_module   # lazy: start-up
     fallback = Span(texts[-1][0] if texts else "<input>", 1, 1, 1, 2)
     lowered = None
     try:
         lowered = lower_project(analysis, settings)
-        code = compile(lowered.source, GENERATED_FILENAME, "exec")
+        code = compile_module(lowered.source, GENERATED_FILENAME)
     except RecursionError:
         raise LoadError([_too_deep(fallback.file)], sources) from None
     except SyntaxError as exc:

@@ -23,6 +23,7 @@ from typing import Sequence
 from stvm.diagnostics import has_errors, sort_key
 from stvm.lower.codegen import Lowerer
 from stvm.lower.names import method_attr
+from stvm.lower.product import compile_module
 from stvm.project import LoadError, Project, read_files, stdlib_units, expand_paths, source_encoding
 from stvm.runtime.vm import GENERATED_FILENAME
 from stvm.semantics.checker import Analysis, Checker
@@ -171,7 +172,7 @@ def load_debug(paths: Sequence[str | os.PathLike], settings: SysmacSettings = DE
     if checker is None or has_errors(diags):
         raise LoadError(diags, sources)
     lowered = Lowerer(analysis, DebugLowering(settings)).lower()
-    code = compile(lowered.source, GENERATED_FILENAME, "exec")
+    code = compile_module(lowered.source, GENERATED_FILENAME)
     warnings = [d for d in diags if not d.is_error]
     project = Project(analysis.model, lowered, code, sources, settings, warnings, False, manifest, root)
     unit_pous = {lowered.classes[key]: pou for key, pou in analysis.model.pous.items() if key in lowered.classes}

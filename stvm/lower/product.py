@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import bisect
 from dataclasses import dataclass, field
+from types import CodeType
 
 from stvm.semantics import types as t
 from stvm.source import Span
@@ -50,3 +51,29 @@ class LoweredProject:
     types: list[t.Type]                # `_T[i]` constants
     sites: list[Span]                # spans of `_fun_error(e, i)` and `_oob_skipped(e, i)` calls
     globals_class: str = "G_globals"
+
+
+CHUNK_LINES = 4000
+"""About how many generated lines `compile_module` compiles at once."""
+
+
+def compile_module(source: str, filename: str) -> tuple[CodeType, ...]:
+    """The generated module compiled in pieces of about CHUNK_LINES lines, cut before a top-level
+    `class`/`def` (the generator writes nothing else at column 0 that a cut could split), each
+    keeping its own line numbers (the LineMap's). Python's compiler holds the whole syntax tree of
+    what it compiles: one 10 MB module costs ~850 MB at its peak, pieces a small fraction. The VM
+    runs the pieces in order in one namespace, which is the module run at once."""
+    lines = source.splitlines(keepends=True)
+    if len(lines) <= CHUNK_LINES:
+        return (compile(source, filename, "exec"),)
+    codes = []
+    start = 0
+    while start < len(lines):
+        end = min(start + CHUNK_LINES, len(lines))
+        while end < len(lines) and not lines[end].startswith(("class ", "def ")):
+            end += 1
+        # blank lines in front give the piece its place in the module: line numbers of faults,
+        # breakpoints and the LineMap stay those of the whole module
+        codes.append(compile("\n" * start + "".join(lines[start:end]), filename, "exec"))
+        start = end
+    return tuple(codes)

@@ -130,7 +130,8 @@ class VM:
         ns["_str_overflow"] = self._string_overflow
         ns["_oob_skipped"] = self._index_skipped
         ns["__stvm_unit__"] = lowered
-        exec(project.code, ns)
+        for piece in project.code:   # the generated module, compiled in pieces (lower.product)
+            exec(piece, ns)
         self.namespace = ns
         self.globals = ns["G_globals"]()
         ns["_G"] = self.globals
