@@ -548,15 +548,20 @@ class _Reader:
                 self.emit_content(obj.find("Declaration"))
             # other TwinCAT objects (tasks, visualisations, text lists …) hold no ST
 
-    def tc_body(self, el: _El, what: str) -> None:
-        impl = el.find("Implementation")
-        if impl is None:
+    def st_body(self, el: _El, container: str, what: str) -> None:
+        """The ST text of `el`'s body element (`Implementation` in TwinCAT, `body` in PLCopen);
+        a body in another language (SFC, LD, FBD, IL) is an error at that element."""
+        body = el.find(container)
+        if body is None:
             return
-        st = impl.find("ST")
+        st = body.find("ST")
         if st is None:
-            lang = impl.children[0].tag if impl.children else "no"
-            raise self.error(f"{what} has a {lang} body; stvm reads Structured Text (<ST>) bodies only", impl)
+            lang = body.children[0].tag if body.children else "no"
+            raise self.error(f"{what} has a {lang} body; stvm reads Structured Text (<ST>) bodies only", body)
         self.emit_content(st)
+
+    def tc_body(self, el: _El, what: str) -> None:
+        self.st_body(el, "Implementation", what)
 
     def tc_pou(self, pou: _El) -> None:
         name = pou.attrib.get("Name", "?")
@@ -792,14 +797,7 @@ class _Reader:
                 self.var_list(child, keyword)
 
     def plc_body(self, el: _El, what: str) -> None:
-        body = el.find("body")
-        if body is None:
-            return
-        st = body.find("ST")
-        if st is None:
-            lang = body.children[0].tag if body.children else "no"
-            raise self.error(f"{what} has a {lang} body; stvm reads Structured Text (<ST>) bodies only", body)
-        self.emit_content(st)
+        self.st_body(el, "body", what)
 
     _POU_TYPES = {"function": "FUNCTION", "functionblock": "FUNCTION_BLOCK", "program": "PROGRAM"}
 
