@@ -799,6 +799,18 @@ class _Reader:
     def plc_body(self, el: _El, what: str) -> None:
         self.st_body(el, "body", what)
 
+    def plc_callable(self, el: _El, what: str) -> None:
+        """A PLCopen pou or CODESYS method after its keyword: name, `: return type`, the var
+        lists of its <interface>, its ST body."""
+        self.name(el)
+        iface = el.find("interface")
+        ret = iface.find("returnType") if iface is not None else None
+        if ret is not None and ret.children:
+            self.out.glue(":", ret.start)
+            self.type_spec(ret.children[0])
+        self.interface(iface)
+        self.plc_body(el, what)
+
     _POU_TYPES = {"function": "FUNCTION", "functionblock": "FUNCTION_BLOCK", "program": "PROGRAM"}
 
     def plc_pou(self, pou: _El) -> None:
@@ -808,25 +820,11 @@ class _Reader:
             raise self.error(f"pou '{name}' has pouType {pou.attrib.get('pouType')!r}; expected function, "
                              f"functionBlock or program", pou)
         self.out.glue(kind, pou.start + 1)
-        self.name(pou)
-        iface = pou.find("interface")
-        ret = iface.find("returnType") if iface is not None else None
-        if ret is not None and ret.children:
-            self.out.glue(":", ret.start)
-            self.type_spec(ret.children[0])
-        self.interface(iface)
-        self.plc_body(pou, f"pou '{name}'")
+        self.plc_callable(pou, f"pou '{name}'")
         for method in self._add_data(pou, "method", "Method"):
             mname = method.attrib.get("name", "?")
             self.out.glue("METHOD", method.start + 1)
-            self.name(method)
-            miface = method.find("interface")
-            mret = miface.find("returnType") if miface is not None else None
-            if mret is not None and mret.children:
-                self.out.glue(":", mret.start)
-                self.type_spec(mret.children[0])
-            self.interface(miface)
-            self.plc_body(method, f"method '{mname}'")
+            self.plc_callable(method, f"method '{mname}'")
             self.out.glue("END_METHOD", method.end)
         for prop in self._add_data(pou, "property", "Property"):
             pname = prop.attrib.get("name", "?")
