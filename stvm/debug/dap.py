@@ -27,6 +27,7 @@ from stvm.debug.engine import (BREAKPOINT, CONTINUE, ENTRY, FAULT, FAULTED, FINI
                                SCAN, SCANNED, STEP, STEPPED, Engine, StopEvent)
 from stvm.debug.scope import DebugError, is_scalar_ref
 from stvm.diagnostics import printable
+from stvm.lower.layout import VarSlot
 from stvm.semantics import types as t
 from stvm.semantics.model import EXTERNAL, IN_OUT, INPUT, OUTPUT
 from stvm.project import LoadError
@@ -466,12 +467,12 @@ class DapServer:
             scope, pou = frame.scope, frame.pou
             holder = scope.frame if pou.kind in ("FUNCTION", "METHOD") else scope.instance
             wanted = (INPUT, OUTPUT, IN_OUT) if node.kind == "io" else None
-            for var in pou.variables.values():
-                if var.section in (EXTERNAL, "VAR_INST"):   # (a method's VAR_INST shows under THIS)
+            for slot in vm.layouts.pous[pou.key]:
+                if slot.section in (EXTERNAL, "VAR_INST"):   # (a method's VAR_INST shows under THIS)
                     continue
-                if (wanted is None) == (var.section in (INPUT, OUTPUT, IN_OUT)):
+                if (wanted is None) == (slot.section in (INPUT, OUTPUT, IN_OUT)):
                     continue
-                out.append((var.name, _read(holder, var), var.type, var.name, ()))
+                out.append((slot.name, _read(holder, slot), slot.type, slot.name, ()))
             if node.kind == "locals" and pou.kind in ("FUNCTION", "METHOD") and pou.return_type is not None:
                 out.append((pou.name, scope.result, pou.return_type, None, ()))
             owner = engine.model.pous.get(pou.owner) if pou.kind == "METHOD" else None
@@ -480,8 +481,8 @@ class DapServer:
                 out.append(("THIS", scope.instance, t.FBType(owner.name, owner.qualname, owner.kind == "PROGRAM"),
                             "THIS^", ()))
         elif node.kind == "globals":
-            for var in engine.model.globals.values():
-                out.append((var.name, getattr(vm.globals, "v_" + var.key), var.type, var.name, ()))
+            for slot in vm.layouts.globals:
+                out.append((slot.name, getattr(vm.globals, slot.storage), slot.type, slot.name, ()))
         elif node.kind == "programs":
             for name, inst, qual in vm.instances.values():
                 out.append((name, inst, t.FBType(qual.split("\\")[-1], qual, True), name, ()))
@@ -634,12 +635,12 @@ class DapServer:
         self.event("stopped", body)
 
 
-def _read(holder: Any, var) -> Any:
+def _read(holder: Any, slot: VarSlot) -> Any:
     """The value of a POU variable on its instance/frame (through the reference of a scalar in-out)."""
     if holder is None:
         return None
-    value = getattr(holder, "v_" + var.key, None)
-    if is_scalar_ref(var):
+    value = getattr(holder, slot.storage, None)
+    if is_scalar_ref(slot):
         return value.get() if value is not None else None
     return value
 
@@ -661,14 +662,12 @@ def _array_length(value: Any, ty: t.ArrayType) -> int:
 def _value_children(engine: Engine, node: _Node) -> list[tuple[str, Any, t.Type, str | None, tuple]]:
     ty, value, path = node.type, node.value, node.path
     out: list[tuple[str, Any, t.Type, str | None, tuple]] = []
-    if isinstance(ty, t.StructType):
-        for name, fty in ty.fields:
-            out.append((name, getattr(value, "v_" + name.lower()), fty, f"{path}.{name}" if path else None, ()))
-    elif isinstance(ty, t.FBType):
-        pou = engine.model.pous.get(ty.qualname.lower())
-        for var in (pou.variables.values() if pou is not None else ()):
-            if var.section != EXTERNAL:
-                out.append((var.name, _read(value, var), var.type, f"{path}.{var.name}" if path else None, ()))
+    if isinstance(ty, (t.StructType, t.FBType)):
+        layout = engine.vm.layouts.of(ty)
+        for slot in (layout if layout is not None else ()):
+            if slot.section != EXTERNAL:
+                out.append((slot.name, _read(value, slot), slot.type,
+                            f"{path}.{slot.name}" if path else None, ()))
     elif isinstance(ty, t.ArrayType):
         if ty.dims is None:
             for i in range(len(value)):

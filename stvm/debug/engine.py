@@ -39,11 +39,12 @@ from typing import Any, Callable
 
 from stvm.debug.build import DebugBuild
 from stvm.debug.scope import Compiled, CompiledStore, DebugError, Scope, ScopeCompiler
+from stvm.lower.layout import PouLayout
 from stvm.runtime.format import format_time, format_value
 from stvm.runtime.helpers import copy_value
 from stvm.runtime.vm import GENERATED_FILENAME, RuntimeFault
 from stvm.semantics import types as t
-from stvm.semantics.model import EXTERNAL, IN_OUT, POUInfo
+from stvm.semantics.model import POUInfo
 from stvm.syntax import nodes as n
 
 # execution modes (what the worker is doing until the next stop)
@@ -342,7 +343,7 @@ class Engine:
         return self.compiler.evaluate(self.vm, scope, compiled), compiled.type
 
     def format(self, value: Any, ty: t.Type) -> str:
-        return format_value(value, ty, self.model.pous)
+        return format_value(value, ty, self.vm.layouts)
 
     def evaluate_text(self, text: str, frame_index: int = 0) -> str:
         value, ty = self.evaluate(text, frame_index)
@@ -662,25 +663,24 @@ class Engine:
     def _instance_paths(self) -> dict[int, str]:
         """id of every ST FB instance → its path from a program instance."""
         paths: dict[int, str] = {}
-        pous = self.model.pous
+        layouts = self.vm.layouts
 
         def visit_value(value: Any, ty: t.Type, path: str) -> None:
             if isinstance(ty, t.FBType):
-                pou = pous.get(ty.qualname.lower())
-                if pou is not None and value is not None:
-                    visit(value, pou, path)
+                layout = layouts.of(ty)
+                if layout is not None and value is not None:
+                    visit(value, layout, path)
             elif isinstance(ty, t.ArrayType) and ty.dims and isinstance(ty.element, t.FBType):
                 for index, item in _array_items(value, ty.dims):
                     visit_value(item, ty.element, f"{path}[{index}]")
 
-        def visit(obj: Any, pou: POUInfo, path: str) -> None:
+        def visit(obj: Any, layout: PouLayout, path: str) -> None:
             paths[id(obj)] = path
-            for var in pou.variables.values():
-                if var.section not in (EXTERNAL, IN_OUT):
-                    visit_value(getattr(obj, "v_" + var.key, None), var.type, f"{path}.{var.name}")
+            for slot in layout.owned():
+                visit_value(getattr(obj, slot.storage, None), slot.type, f"{path}.{slot.name}")
 
         for name, inst, qual in self.vm.instances.values():
-            visit(inst, pous[qual.lower()], name)
+            visit(inst, layouts.pous[qual.lower()], name)
         return paths
 
     # ---- forcing

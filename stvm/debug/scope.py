@@ -23,6 +23,7 @@ from types import CodeType, SimpleNamespace
 from typing import Any
 
 from stvm.lower.codegen import Lowerer
+from stvm.lower.layout import VarSlot
 from stvm.lower.names import var_attr
 from stvm.semantics import types as t
 from stvm.semantics.body import BodyChecker
@@ -40,7 +41,7 @@ class DebugError(Exception):
     """A debugger command that cannot be done; the message is for the user."""
 
 
-def is_scalar_ref(var: Variable) -> bool:
+def is_scalar_ref(var: Variable | VarSlot) -> bool:
     """A scalar VAR_IN_OUT: the instance holds a reference object (`get()`/`set()`)."""
     return var.section == IN_OUT and not isinstance(var.type, (t.StructType, t.ArrayType, t.FBType))
 

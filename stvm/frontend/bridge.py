@@ -197,7 +197,7 @@ class VariableBridge:
 
     def format(self, path: str, value: Any) -> str:
         """`value` of `path` as the IEC literal `--print` shows (safe from any thread)."""
-        return format_value(value, self.type_of(path), self.vm.model.pous)
+        return format_value(value, self.type_of(path), self.vm.layouts)
 
     def sample(self, paths: Iterable[str]) -> Future:
         """One snapshot of `paths`, taken by the VM thread at the next point between two scans.

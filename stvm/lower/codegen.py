@@ -19,6 +19,7 @@ from stvm.semantics import types as t
 from stvm.semantics.checker import Analysis
 from stvm.semantics.facts import CallInfo
 from stvm.semantics.model import EXTERNAL, GLOBAL, IN_OUT, INPUT, OUTPUT, TEMP, POUInfo, Variable
+from stvm.lower.layout import build_layout
 from stvm.lower.names import method_attr, unit_name, var_attr
 from stvm.syntax import nodes as n
 from stvm.syntax.walk import calls_in, name_uses, root_name, walk
@@ -214,8 +215,10 @@ class Lowerer:
                     self.function(pou, node)
             elif pou.kind != "INTERFACE":
                 self.fb_class(pou, node)
+        # the layout (lower/layout.py) is computed from the model with the same `names` the
+        # generator used, not collected while emitting: readers need neither the generator nor facts
         return LoweredProject("\n".join(w.lines) + "\n", w.line_map, self.classes, self.natives,
-                              self.native_fbs, self.types, self.sites)
+                              self.native_fbs, self.types, self.sites, layouts=build_layout(self.model))
 
     def class_order(self) -> list[tuple[str, POUInfo]]:
         """POUs in key order, except that a base FB comes before the FBs extending it."""

@@ -22,6 +22,15 @@ def var_attr(st_name: str) -> str:
     return "v_" + _checked(st_name)
 
 
+_VAR_ATTR = re.compile(r"v_[a-z_][a-z0-9_]*")
+
+
+def is_var_attr(attr: str) -> bool:
+    """Whether `attr` is a name `var_attr` makes (for code that writes storage names it was handed
+    into generated text, e.g. the trace sampler: anything else is a bug, never ST text)."""
+    return _VAR_ATTR.fullmatch(attr) is not None
+
+
 def st_name_of_attr(attr: str) -> str:
     """Reverse of `var_attr` (lower-case ST name), for the debugger and tracer."""
     return attr[2:] if attr.startswith("v_") else attr

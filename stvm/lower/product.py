@@ -8,6 +8,7 @@ import bisect
 from dataclasses import dataclass, field
 from types import CodeType
 
+from stvm.lower.layout import ProjectLayout
 from stvm.semantics import types as t
 from stvm.source import Span
 
@@ -51,6 +52,9 @@ class LoweredProject:
     types: list[t.Type]                # `_T[i]` constants
     sites: list[Span]                # spans of `_fun_error(e, i)` and `_oob_skipped(e, i)` calls
     globals_class: str = "G_globals"
+    # where each ST variable is stored (stvm/lower/layout.py): what the VM, trace, debugger and
+    # the front ends read variables through; set by `lower_project`
+    layouts: ProjectLayout | None = None
 
 
 CHUNK_LINES = 4000

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 
+from stvm.lower.layout import ProjectLayout, struct_layout
 from stvm.numeric import f32
 from stvm.semantics import types as t
 
@@ -126,8 +127,9 @@ def _shortest_real32(value: float) -> str:
     return f"{mantissa}E{'+' if exp >= 0 else '-'}{abs(exp):02d}"
 
 
-def format_value(value: object, ty: t.Type, pous: dict | None = None) -> str:
-    """`value` (runtime representation) of type `ty` as an IEC literal."""
+def format_value(value: object, ty: t.Type, layouts: ProjectLayout | None = None) -> str:
+    """`value` (runtime representation) of type `ty` as an IEC literal. Members are read through
+    the lowering's layout (`layouts`; a struct formats without one, an FB instance shows `(…)`)."""
     if isinstance(ty, t.BoolType):
         return "TRUE" if value else "FALSE"
     if isinstance(ty, t.IntType):
@@ -145,21 +147,20 @@ def format_value(value: object, ty: t.Type, pous: dict | None = None) -> str:
         name = ty.name_of(int(value))  # type: ignore[arg-type]
         return f"{ty.name}#{name}" if name is not None else str(value)
     if isinstance(ty, t.StructType):
-        parts = [f"{name} := {format_value(getattr(value, 'v_' + name.lower()), fty, pous)}" for name, fty in ty.fields]
+        layout = layouts.of(ty) if layouts is not None else struct_layout(ty)
+        parts = [f"{slot.name} := {format_value(getattr(value, slot.storage), slot.type, layouts)}"
+                 for slot in layout]  # type: ignore[union-attr]
         return "(" + ", ".join(parts) + ")"
     if isinstance(ty, t.ArrayType):
         if ty.dims is None:
-            return "[" + ", ".join(format_value(v, ty.element, pous) for v in value.data[value.start:]) + "]"  # type: ignore[attr-defined]
-        return _format_array(value, ty, len(ty.dims), pous)  # type: ignore[arg-type]
-    if isinstance(ty, t.FBType) and pous is not None:
-        pou = pous.get(ty.qualname.lower())
-        if pou is None:
+            return "[" + ", ".join(format_value(v, ty.element, layouts) for v in value.data[value.start:]) + "]"  # type: ignore[attr-defined]
+        return _format_array(value, ty, len(ty.dims), layouts)  # type: ignore[arg-type]
+    if isinstance(ty, t.FBType) and layouts is not None:
+        layout = layouts.of(ty)
+        if layout is None:
             return "(…)"
-        parts = []
-        for var in pou.variables.values():
-            if var.section in ("VAR_IN_OUT", "VAR_EXTERNAL"):
-                continue
-            parts.append(f"{var.name} := {format_value(getattr(value, 'v_' + var.key), var.type, pous)}")
+        parts = [f"{slot.name} := {format_value(getattr(value, slot.storage), slot.type, layouts)}"
+                 for slot in layout.owned()]
         return "(" + ", ".join(parts) + ")"
     if isinstance(ty, t.InterfaceType):
         # an interface variable: NULL, or `-> FB_Type` of the instance it holds
@@ -171,14 +172,14 @@ def format_value(value: object, ty: t.Type, pous: dict | None = None) -> str:
             return "NULL"
         if ty.target is None or t.is_aggregate(ty.target):
             return f"-> {ty.target.name if ty.target is not None else '?'}"
-        return f"-> {format_value(value.get(), ty.target, pous)}"  # type: ignore[attr-defined]
+        return f"-> {format_value(value.get(), ty.target, layouts)}"  # type: ignore[attr-defined]
     return repr(value)
 
 
-def _format_array(value: list, ty: t.ArrayType, depth: int, pous) -> str:
+def _format_array(value: list, ty: t.ArrayType, depth: int, layouts) -> str:
     if depth == 1:
-        return "[" + ", ".join(format_value(v, ty.element, pous) for v in value) + "]"
-    return "[" + ", ".join(_format_array(v, ty, depth - 1, pous) for v in value) + "]"
+        return "[" + ", ".join(format_value(v, ty.element, layouts) for v in value) + "]"
+    return "[" + ", ".join(_format_array(v, ty, depth - 1, layouts) for v in value) + "]"
 
 
 def parse_datetime_ns(y: int, mo: int, d: int, h: int = 0, mi: int = 0, s: int = 0) -> int:

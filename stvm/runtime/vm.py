@@ -12,18 +12,18 @@ fault; `RuntimeFault` carries the ST span found by walking the traceback through
 from __future__ import annotations
 
 import math
-import re
 import time
 from dataclasses import dataclass, field
 from types import TracebackType
 from typing import Any, Callable, Mapping
 
 from stvm.numeric import f32, strfit
+from stvm.runtime.access import PathError, UnboundInOut, VariableAccess  # noqa: F401 (API: PathError, UnboundInOut)
 from stvm.runtime.context import RunContext
 from stvm.runtime.format import format_time, format_value
 from stvm.runtime.helpers import HELPERS
 from stvm.runtime.stats import TimingStats
-from stvm.runtime.values import ArrayIndexError, AttrRef, FunctionError, ItemRef, MapRef, STFault
+from stvm.runtime.values import ArrayIndexError, FunctionError, STFault
 from stvm.semantics import types as t
 from stvm.source import Span
 from stvm.settings import FunErrorPolicy, StringOverflow
@@ -77,20 +77,6 @@ class Task:
     programs: list[tuple[str, Any]] = field(default_factory=list)   # (instance name, instance)
 
 
-class PathError(KeyError):
-    """A variable path (`Main.x`, `Main.fb.Q`, `Main.arr[2]`, a global) that does not resolve."""
-
-    def __str__(self) -> str:
-        return str(self.args[0])
-
-
-class UnboundInOut(PathError):
-    """The path is well-formed but goes through a VAR_IN_OUT the FB has not been called with yet."""
-
-
-_PATH_TOKEN = re.compile(r"\s*(?:([A-Za-z_][A-Za-z0-9_]*)|\[([^\]]*)\]|(\.)|(\^))")
-
-
 class VM:
     def __init__(self, project, scan_ns: int = 10_000_000, realtime: bool = False,
                  start_dt_ns: int = 0, transport: Any = None, natives: Mapping[str, Any] | None = None,
@@ -136,6 +122,9 @@ class VM:
         self.globals = ns["G_globals"]()
         ns["_G"] = self.globals
         self.instances: dict[str, tuple[str, Any, str]] = {}   # key → (name, instance, program qualname)
+        # where each variable is stored (the lowering's layout): the only way to a variable
+        self.layouts = lowered.layouts
+        self.access = VariableAccess(self.layouts, self.globals, self.instances)
         self.tasks: list[Task] = []
         self._build_tasks(scan_ns)
         self.scan_count = 0
@@ -339,118 +328,9 @@ class VM:
 
     # ---- variable access by path
     def resolve(self, path: str) -> tuple[Any, Any, t.Type]:
-        """(container, key, type) for a path; container[key] or getattr(container, key) holds the value."""
-        tokens = []
-        pos = 0
-        while pos < len(path):
-            m = _PATH_TOKEN.match(path, pos)
-            if not m or m.end() == pos:
-                raise PathError(f"malformed variable path {path!r}")
-            pos = m.end()
-            if m.group(1):
-                tokens.append(("name", m.group(1)))
-            elif m.group(2) is not None:
-                tokens.append(("index", m.group(2)))
-            elif m.group(4):
-                tokens.append(("deref", "^"))
-        names = [tok for tok in tokens]
-        if not names or names[0][0] != "name":
-            raise PathError(f"malformed variable path {path!r}")
-        first = names[0][1].lower()
-        rest = names[1:]
-        pous = self.model.pous
-        if first in self.instances and rest and rest[0][0] == "name":
-            _, inst, qual = self.instances[first]
-            container: Any = inst
-            owner_type: t.Type = t.FBType(qual, qual, True)
-        elif first in self.model.globals:
-            var = self.model.globals[first]
-            container, key, ty = self.globals, "v_" + first, var.type
-            return self._walk(container, key, ty, rest, path)
-        elif first in self.instances:
-            raise PathError(f"{path!r} names a program instance; add a variable: {names[0][1]}.<var>")
-        else:
-            raise PathError(f"unknown variable {path!r} (programs: {', '.join(n for n, _, _ in self.instances.values())})")
-        name = rest[0][1]
-        pou = pous[owner_type.qualname.lower()]  # type: ignore[attr-defined]
-        var = pou.variables.get(name.lower())
-        if var is None:
-            raise PathError(f"{names[0][1]} has no variable {name!r}")
-        if var.section == "VAR_EXTERNAL":
-            return self._walk(self.globals, "v_" + var.key, self.model.globals[var.key].type, rest[1:], path)
-        return self._walk(container, "v_" + var.key, var.type, rest[1:], path)
-
-    def _walk(self, container: Any, key: Any, ty: t.Type, rest: list, path: str) -> tuple[Any, Any, t.Type]:
-        for kind, text in rest:
-            value = container[key] if isinstance(key, int) else getattr(container, key)
-            if kind == "deref":
-                # `r^`: through a REF_TO/POINTER TO/REFERENCE TO to the variable it refers to
-                if not isinstance(ty, t.RefType) or ty.is_null:
-                    raise PathError(f"{path!r}: '^' needs a reference, {ty.name} is not one")
-                if value is None:
-                    raise UnboundInOut(f"{path!r}: the reference is NULL")
-                if isinstance(value, AttrRef):
-                    container, key = value.obj, value.attr
-                elif isinstance(value, ItemRef):
-                    container, key = value.lst, value.index
-                # an aggregate's reference is the aggregate itself: (container, key) stays
-                ty = ty.target
-                if isinstance(ty, t.StructType):   # (a self-referencing struct's placeholder)
-                    ty = self.model.structs.get(ty.qualname.lower(), ty)
-                continue
-            if kind == "name":
-                if isinstance(ty, t.StructType):
-                    fty = ty.field_type(text)
-                    if fty is None:
-                        raise PathError(f"{path!r}: {ty.name} has no member {text!r}")
-                    container, key, ty = value, "v_" + text.lower(), fty
-                elif isinstance(ty, t.FBType):
-                    pou = self.model.pous[ty.qualname.lower()]
-                    var = pou.pin(text)
-                    if var is None:
-                        raise PathError(f"{path!r}: {ty.name} has no member {text!r}")
-                    container, key, ty = value, "v_" + var.key, var.type
-                    if var.section == "VAR_IN_OUT":
-                        container, key = self._through_reference(container, key, path)
-                else:
-                    raise PathError(f"{path!r}: {ty.name} has no members")
-            else:
-                if not isinstance(ty, t.ArrayType) or ty.dims is None:
-                    raise PathError(f"{path!r}: not an array")
-                try:
-                    indices = [int(x.strip(), 0) for x in text.split(",")]
-                except ValueError:
-                    raise PathError(f"{path!r}: array index [{text}] must be integers, e.g. [2] or [1, 3]") from None
-                dims = list(ty.dims)
-                for ix in indices:
-                    if not dims:
-                        raise PathError(f"{path!r}: too many indices")
-                    lo, hi = dims.pop(0)
-                    if not lo <= ix <= hi:
-                        raise PathError(f"{path!r}: index {ix} outside {lo}..{hi}")
-                    if isinstance(key, int):
-                        value = container[key]
-                    container, key = value, ix - lo
-                    value = container[key]
-                if dims:
-                    ty = t.ArrayType(ty.name, ty.element, tuple(dims))
-                else:
-                    ty = ty.element
-        return container, key, ty
-
-    @staticmethod
-    def _through_reference(container: Any, key: Any, path: str) -> tuple[Any, Any]:
-        """Follow a VAR_IN_OUT to the variable it refers to (what the FB was last called with)."""
-        inner = getattr(container, key)
-        if inner is None:
-            raise UnboundInOut(f"{path!r}: the in-out is not bound yet (the FB instance has not been called)")
-        while isinstance(inner, MapRef):
-            inner = inner.ref
-        if isinstance(inner, AttrRef):
-            return inner.obj, inner.attr
-        if isinstance(inner, ItemRef):
-            return inner.lst, inner.index
-        return container, key   # an aggregate in-out holds the caller's object itself
+        """(container, key, type) for a path; container[key] or getattr(container, key) holds the
+        value (`stvm.runtime.access`, through the lowering's layout)."""
+        return self.access.resolve(path)
 
     def accessor(self, path: str) -> "Accessor":
         """A reusable handle on one variable (checked now: raises `PathError` if `path` is unknown)."""
@@ -496,7 +376,7 @@ class VM:
     def format(self, path: str) -> str:
         container, key, ty = self.resolve(path)
         value = container[key] if isinstance(key, int) else getattr(container, key)
-        return format_value(value, ty, self.model.pous)
+        return format_value(value, ty, self.layouts)
 
 
 class Accessor:

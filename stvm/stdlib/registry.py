@@ -23,9 +23,11 @@ Additions (stdlib, issue 4):
 
 Function blocks: `@native_fb("TON")` on a class. The VM creates one implementation object per
 FB instance, `impl = cls()`, and on every call of the instance runs `impl.call(inst, ctx)`, where
-`inst` holds the ST-visible variables as attributes `v_<lowercase name>` (inputs already copied
-in, in-outs bound to references/objects). The implementation writes outputs into `inst` and keeps
-private state on itself.
+`inst` holds the ST-visible variables (inputs already copied in, in-outs bound to
+references/objects) under the storage names of the lowering's layout. The implementation spells
+them as ST does, `inst.Q`, and declares them with `@st_names("IN", "PT", "Q", "ET")`
+(`stvm.lower.bind`), which binds those attributes to the storage names once, when the class is
+defined; it writes outputs into `inst` and keeps private state on itself.
 """
 
 from __future__ import annotations

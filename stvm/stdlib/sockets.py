@@ -26,6 +26,7 @@ import socket
 from dataclasses import dataclass, field
 from typing import Callable, Protocol
 
+from stvm.lower.bind import st_names
 from stvm.runtime.values import FunctionError
 from stvm.stdlib.omron import as_array_ref
 from stvm.stdlib.registry import native_fb
@@ -387,6 +388,7 @@ IDLE, BUSY, HELD, SHOWN_ONCE = "idle", "busy", "held", "shown_once"
 DONE = "done"
 
 
+@st_names("Execute", "Done", "Busy", "Error", "ErrorID")
 class SocketRequestFB:
     """Execute/Done/Busy/Error across calls, exactly as sysmac.md 4 says.
 
@@ -408,7 +410,7 @@ class SocketRequestFB:
         self._last_scan: int | None = None
 
     def call(self, inst, ctx) -> None:
-        execute = bool(inst.v_execute)
+        execute = bool(inst.Execute)
         if self._phase == IDLE and (not execute or self._previous_execute):
             # idle and no rising edge: nothing changes but the memory of this call (most calls
             # of the thesis's FBs: they call their socket FBs every scan)
@@ -424,13 +426,13 @@ class SocketRequestFB:
                 and self._last_scan is not None and ctx.scan > self._last_scan + 1):
             # `skt_progress_without_call = cancel`: a request not called in some scan is dropped
             self._guarded(self._cancel, inst, ctx)
-            inst.v_busy = False
+            inst.Busy = False
             self._phase = IDLE
         self._last_scan = ctx.scan
         if self._phase == IDLE and edge:
-            inst.v_busy = True
-            inst.v_done = inst.v_error = False
-            inst.v_errorid = 0
+            inst.Busy = True
+            inst.Done = inst.Error = False
+            inst.ErrorID = 0
             self._phase = BUSY
             self._calls_since_start = 0
             self._start_error = self._guarded(self._start, inst, ctx)
@@ -453,20 +455,20 @@ class SocketRequestFB:
             return "wrong_state"
 
     def _complete(self, inst, ctx, outcome: str, execute: bool) -> None:
-        inst.v_busy = False
+        inst.Busy = False
         if outcome == DONE:
-            inst.v_done = True
+            inst.Done = True
         else:
-            inst.v_error = True
+            inst.Error = True
             # Choice: a kind missing from a user-supplied table reports 16#2003 (wrong state)
-            inst.v_errorid = ctx.settings.skt_error_codes.get(outcome, 0x2003)
+            inst.ErrorID = ctx.settings.skt_error_codes.get(outcome, 0x2003)
         self._phase = HELD if execute else SHOWN_ONCE
 
     def _clear_outputs(self, inst, settings) -> None:
-        inst.v_done = False
-        if inst.v_error and settings.skt_errorid_reset is SktErrorIdReset.START_AND_CLEAR:
-            inst.v_errorid = 0
-        inst.v_error = False
+        inst.Done = False
+        if inst.Error and settings.skt_errorid_reset is SktErrorIdReset.START_AND_CLEAR:
+            inst.ErrorID = 0
+        inst.Error = False
         self._phase = IDLE
 
     # subclass hooks
@@ -481,8 +483,9 @@ class SocketRequestFB:
         return None
 
 
+@st_names("Socket", "Handle")
 def _handle_of(inst) -> int:
-    return inst.v_socket.v_handle
+    return inst.Socket.Handle
 
 
 def _require_open(transport: Transport, handle: int, now_ns: int) -> str:
@@ -499,6 +502,7 @@ def _require_connected(transport: Transport, handle: int, now_ns: int) -> None:
 
 
 @native_fb("SktTCPConnect")
+@st_names("Socket", "Handle", "SrcTcpPort", "DstAdr", "DstTcpPort")
 class SktTCPConnect(SocketRequestFB):
     """Active open; Done when established, with the Socket output filled (sysmac.md 5)."""
 
@@ -511,9 +515,9 @@ class SktTCPConnect(SocketRequestFB):
     def call(self, inst, ctx) -> None:
         super().call(inst, ctx)
         if (ctx.settings.skt_socket_after_close is SktSocketAfterClose.ZEROED and self._published_handle
-                and inst.v_socket.v_handle == self._published_handle
+                and inst.Socket.Handle == self._published_handle
                 and self._transport_closed(ctx, self._published_handle)):
-            _write_socket(inst.v_socket, 0, ("", 0), ("", 0))
+            _write_socket(inst.Socket, 0, ("", 0), ("", 0))
             self._published_handle = 0
 
     @staticmethod
@@ -523,19 +527,19 @@ class SktTCPConnect(SocketRequestFB):
     def _start(self, inst, ctx, transport: Transport) -> None:
         self._handle = 0
         self._start_ns = ctx.now_ns
-        if inst.v_dsttcpport == 0:
+        if inst.DstTcpPort == 0:
             raise SocketError("out_of_range", "DstTcpPort 0")
-        if inst.v_srctcpport == 0 and ctx.settings.skt_connect_srcport0 is SktConnectSrcport0.ERROR:
+        if inst.SrcTcpPort == 0 and ctx.settings.skt_connect_srcport0 is SktConnectSrcport0.ERROR:
             raise SocketError("out_of_range", "SrcTcpPort 0")
-        host = inst.v_dstadr.decode("latin-1").strip()
-        self._handle = transport.open_connection(inst.v_srctcpport, host, inst.v_dsttcpport,
+        host = inst.DstAdr.decode("latin-1").strip()
+        self._handle = transport.open_connection(inst.SrcTcpPort, host, inst.DstTcpPort,
                                                  ctx.now_ns)
 
     def _progress(self, inst, ctx, transport: Transport) -> str | None:
         state = transport.poll(self._handle, ctx.now_ns)
         if state in (ESTABLISHED, PEER_CLOSED):
             local, remote = transport.addresses(self._handle)
-            _write_socket(inst.v_socket, self._handle, local, remote)
+            _write_socket(inst.Socket, self._handle, local, remote)
             self._published_handle = self._handle
             return DONE
         if state == CONNECTING and ctx.now_ns - self._start_ns < CONNECT_TIMEOUT_NS:
@@ -560,12 +564,13 @@ class SktTCPConnect(SocketRequestFB):
             self._handle = 0
 
 
+@st_names("Handle", "SrcAdr", "DstAdr", "IpAdr", "PortNo")
 def _write_socket(socket_value, handle: int, local: tuple[str, int], remote: tuple[str, int]) -> None:
-    socket_value.v_handle = handle
-    socket_value.v_srcadr.v_ipadr = local[0].encode()
-    socket_value.v_srcadr.v_portno = local[1]
-    socket_value.v_dstadr.v_ipadr = remote[0].encode()
-    socket_value.v_dstadr.v_portno = remote[1]
+    socket_value.Handle = handle
+    socket_value.SrcAdr.IpAdr = local[0].encode()
+    socket_value.SrcAdr.PortNo = local[1]
+    socket_value.DstAdr.IpAdr = remote[0].encode()
+    socket_value.DstAdr.PortNo = remote[1]
 
 
 @native_fb("SktClearBuf")
@@ -586,6 +591,7 @@ class SktClearBuf(SocketRequestFB):
 
 
 @native_fb("SktGetTCPStatus")
+@st_names("TcpStatus", "DatRcvFlag")
 class SktGetTCPStatus(SocketRequestFB):
     """TCP state and DatRcvFlag, as a snapshot at completion (sysmac.md 5)."""
 
@@ -598,30 +604,31 @@ class SktGetTCPStatus(SocketRequestFB):
             # a handle once valid, now closed (`skt_status_closed_handle`)
             if ctx.settings.skt_status_closed_handle is SktStatusClosedHandle.ERROR:
                 return "bad_handle"
-            inst.v_tcpstatus = names.get("_CLOSED", 0)
-            inst.v_datrcvflag = False
+            inst.TcpStatus = names.get("_CLOSED", 0)
+            inst.DatRcvFlag = False
             return DONE
         state = _require_open(transport, self._handle, ctx.now_ns)
         # a state missing from a user-supplied table shows as _CLOSED
-        inst.v_tcpstatus = names.get(STATE_NAMES[state], names.get("_CLOSED", 0))
-        inst.v_datrcvflag = transport.pending(self._handle) > 0
+        inst.TcpStatus = names.get(STATE_NAMES[state], names.get("_CLOSED", 0))
+        inst.DatRcvFlag = transport.pending(self._handle) > 0
         return DONE
 
 
 @native_fb("SktTCPSend")
+@st_names("Size", "SendDat")
 class SktTCPSend(SocketRequestFB):
     """Send Size bytes from SendDat; Done once they are in the send buffer (sysmac.md 5)."""
 
     def _start(self, inst, ctx, transport: Transport) -> None:
         settings = ctx.settings
         self._handle = _handle_of(inst)
-        self._size = inst.v_size
+        self._size = inst.Size
         self._data: bytes | None = None
         if self._size > settings.skt_send_max:
             raise SocketError("out_of_range", f"Size {self._size} > {settings.skt_send_max}")
         if self._size == 0 and settings.skt_send_size0 is SktSendSize0.ERROR:
             raise SocketError("out_of_range", "Size 0")
-        source = as_array_ref(inst.v_senddat)
+        source = as_array_ref(inst.SendDat)
         if self._size > len(source):
             raise SocketError("too_few_elements", f"Size {self._size} > {len(source)} elements")
         _require_connected(transport, self._handle, ctx.now_ns)
@@ -635,7 +642,7 @@ class SktTCPSend(SocketRequestFB):
 
     def _progress(self, inst, ctx, transport: Transport) -> str | None:
         if self._data is None:  # `skt_send_copy = at_service`: the bytes as they are now
-            source = as_array_ref(inst.v_senddat)
+            source = as_array_ref(inst.SendDat)
             if self._size > len(source):
                 return "too_few_elements"
             self._data = bytes(source.read(self._size))
@@ -645,17 +652,18 @@ class SktTCPSend(SocketRequestFB):
 
 
 @native_fb("SktTCPRcv")
+@st_names("TimeOut", "Size", "RcvDat", "RcvSize")
 class SktTCPRcv(SocketRequestFB):
     """Take min(available, Size, 2000) bytes once at least one is buffered (sysmac.md 5)."""
 
     def _start(self, inst, ctx, transport: Transport) -> None:
         self._handle = _handle_of(inst)
-        self._size = inst.v_size
-        self._timeout_ns = inst.v_timeout * ctx.settings.skt_rcv_timeout_unit_ns
+        self._size = inst.Size
+        self._timeout_ns = inst.TimeOut * ctx.settings.skt_rcv_timeout_unit_ns
         self._start_ns = ctx.now_ns
         if not 0 < self._size <= RECEIVE_MAX_BYTES:
             raise SocketError("out_of_range", f"Size {self._size} not in 1..{RECEIVE_MAX_BYTES}")
-        if self._size > len(as_array_ref(inst.v_rcvdat)):
+        if self._size > len(as_array_ref(inst.RcvDat)):
             raise SocketError("too_few_elements", f"Size {self._size} > elements passed")
         _require_open(transport, self._handle, ctx.now_ns)
 
@@ -665,16 +673,16 @@ class SktTCPRcv(SocketRequestFB):
         available = transport.pending(self._handle)
         if available:
             count = min(available, self._size, RECEIVE_MAX_BYTES)
-            target = as_array_ref(inst.v_rcvdat)
+            target = as_array_ref(inst.RcvDat)
             if count > len(target):
                 return "too_few_elements"
             target.write(transport.receive(self._handle, count))  # later elements untouched
-            inst.v_rcvsize = count
+            inst.RcvSize = count
             return DONE
         if state == PEER_CLOSED:
             if settings.skt_rcv_peer_closed is SktRcvPeerClosed.ERROR:
                 return "wrong_state"
-            inst.v_rcvsize = 0  # `skt_rcv_peer_closed = done_zero`
+            inst.RcvSize = 0  # `skt_rcv_peer_closed = done_zero`
             return DONE
         if state in (RESET, FAILED):
             return "wrong_state"

@@ -9,6 +9,7 @@ Pins: IN BOOL, PT TIME → Q BOOL, ET TIME (Omron spells IN as `In`; names are c
 
 from __future__ import annotations
 
+from stvm.lower.bind import st_names
 from stvm.stdlib.registry import native_fb
 from stvm.settings import TimerClock, TonNonpositivePtEt, TonPtBelowEt
 
@@ -62,6 +63,7 @@ def _elapsed_at_end(ctx, preset: int) -> int:
 
 
 @native_fb("TON")
+@st_names("IN", "PT", "Q", "ET")
 class OnDelayTimer:
     """TON: Q rises PT after IN rose; IN FALSE resets Q and ET at once (sysmac.md 7, CONFIRMED)."""
 
@@ -72,10 +74,10 @@ class OnDelayTimer:
         self.preset = _PresetTracker()
 
     def call(self, inst, ctx) -> None:
-        if not inst.v_in:
+        if not inst.IN:
             self.timing = self.reached = False
-            inst.v_q = False
-            inst.v_et = 0
+            inst.Q = False
+            inst.ET = 0
             return
         if self.reached:
             return  # latched: later PT changes alter nothing
@@ -83,19 +85,20 @@ class OnDelayTimer:
         if not self.timing:
             self.timing = True
             self.start_ns = now
-            self.preset.start(inst.v_pt)
+            self.preset.start(inst.PT)
         elapsed = now - self.start_ns
-        preset = self.preset.update(ctx, inst.v_pt, elapsed)
+        preset = self.preset.update(ctx, inst.PT, elapsed)
         if elapsed >= preset:
             self.timing, self.reached = False, True
-            inst.v_q = True
-            inst.v_et = _elapsed_at_end(ctx, preset)
+            inst.Q = True
+            inst.ET = _elapsed_at_end(ctx, preset)
         else:
-            inst.v_q = False
-            inst.v_et = elapsed
+            inst.Q = False
+            inst.ET = elapsed
 
 
 @native_fb("TOF")
+@st_names("IN", "PT", "Q", "ET")
 class OffDelayTimer:
     """TOF: Q follows IN up at once and falls PT after IN fell (sysmac.md 7)."""
 
@@ -106,33 +109,34 @@ class OffDelayTimer:
         self.preset = _PresetTracker()
 
     def call(self, inst, ctx) -> None:
-        signal = bool(inst.v_in)
+        signal = bool(inst.IN)
         falling = self.previous_in and not signal
         self.previous_in = signal
         if signal:
             self.timing = False
-            inst.v_q = True
-            inst.v_et = 0
+            inst.Q = True
+            inst.ET = 0
             return
         now = timer_now(ctx)
         if falling:
             self.timing = True
             self.start_ns = now
-            self.preset.start(inst.v_pt)
+            self.preset.start(inst.PT)
         if not self.timing:
             return  # Q FALSE, ET held (0 before IN was ever TRUE, PT after a completed delay)
         elapsed = now - self.start_ns
-        preset = self.preset.update(ctx, inst.v_pt, elapsed)
+        preset = self.preset.update(ctx, inst.PT, elapsed)
         if elapsed >= preset:
             self.timing = False
-            inst.v_q = False
-            inst.v_et = _elapsed_at_end(ctx, preset)
+            inst.Q = False
+            inst.ET = _elapsed_at_end(ctx, preset)
         else:
-            inst.v_q = True
-            inst.v_et = elapsed
+            inst.Q = True
+            inst.ET = elapsed
 
 
 @native_fb("TP")
+@st_names("IN", "PT", "Q", "ET")
 class PulseTimer:
     """TP: a rising IN with no pulse running gives Q TRUE for PT; not retriggerable; after the
     pulse ET stays PT while IN is TRUE and returns to 0 once IN is FALSE (sysmac.md 7)."""
@@ -145,26 +149,26 @@ class PulseTimer:
         self.preset = _PresetTracker()
 
     def call(self, inst, ctx) -> None:
-        signal = bool(inst.v_in)
+        signal = bool(inst.IN)
         rising = signal and not self.previous_in
         self.previous_in = signal
         now = timer_now(ctx)
         if rising and not self.pulsing and not self.ended:
             self.pulsing = True
             self.start_ns = now
-            self.preset.start(inst.v_pt)
+            self.preset.start(inst.PT)
         if self.pulsing:
             elapsed = now - self.start_ns
-            preset = self.preset.update(ctx, inst.v_pt, elapsed)
+            preset = self.preset.update(ctx, inst.PT, elapsed)
             if elapsed < preset:
-                inst.v_q = True
-                inst.v_et = elapsed
+                inst.Q = True
+                inst.ET = elapsed
                 return
             self.pulsing = False
             self.ended = True
-            inst.v_q = False
-            inst.v_et = _elapsed_at_end(ctx, preset)
+            inst.Q = False
+            inst.ET = _elapsed_at_end(ctx, preset)
         if self.ended and not signal:
             # Choice: a pulse that ends while IN is already FALSE shows ET 0 in that same call
             self.ended = False
-            inst.v_et = 0
+            inst.ET = 0

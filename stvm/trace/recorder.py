@@ -154,10 +154,10 @@ class Recorder:
         if self._row:
             self._flush(self._row)
             self._row = 0
-        pous = self.vm.model.pous
+        layouts = self.vm.layouts
         types = [s.type for s in self.signals]
         infos = [SignalInfo(s.name, type_text(s.type), s.type.kind, getattr(s.type, "bits", 0)) for s in self.signals]
-        initial = [format_value(_python(v, ty), ty, pous) if self.scans else "" for v, ty in zip(self.initial, types)]
+        initial = [format_value(_python(v, ty), ty, layouts) if self.scans else "" for v, ty in zip(self.initial, types)]
         scans_parts, index_parts, value_parts = [], [], []
         for group in self._groups:
             for scans, indices, values in group.found:
@@ -177,7 +177,7 @@ class Recorder:
                 key = (index, raw) if not isinstance(raw, float) else None
                 text = cache.get(key) if key is not None else None
                 if text is None:
-                    text = format_value(_python(raw, types[index]), types[index], pous)
+                    text = format_value(_python(raw, types[index]), types[index], layouts)
                     if key is not None:
                         cache[key] = text
                 changes.append((int(all_scans[k]), index, text))

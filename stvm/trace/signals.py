@@ -24,9 +24,9 @@ import re
 from dataclasses import dataclass
 from typing import Any, Callable, Iterator
 
+from stvm.lower.layout import is_storage_name
 from stvm.semantics import types as t
 
-_SAFE_ATTR = re.compile(r"v_[a-z_][a-z0-9_]*")
 _SKIPPED_SECTIONS = ("VAR_IN_OUT", "VAR_EXTERNAL", "VAR_TEMP")
 
 
@@ -38,7 +38,7 @@ class WatchError(ValueError):
 class Signal:
     """One recorded leaf: its path, type, and how to reach it from a root object.
 
-    `root` is a program instance or the globals object; `steps` the attribute names (`v_…`) and
+    `root` is a program instance or the globals object; `steps` the storage names (the layout's) and
     list indices that lead from it to the value. Walking the steps each scan (instead of keeping
     the final container) stays right when an array of structs is assigned as a whole (the element
     objects are replaced by copies).
@@ -89,17 +89,12 @@ def _leaves(vm, name: str, ty: t.Type, root: Any, steps: tuple, depth: int = 0) 
     yield name, ty, root, steps
     if depth > 16:
         return
-    if isinstance(ty, t.StructType):
-        for field_name, field_type in ty.fields:
-            yield from _leaves(vm, f"{name}.{field_name}", field_type, root, steps + ("v_" + field_name.lower(),), depth + 1)
-    elif isinstance(ty, t.FBType):
-        pou = vm.model.pous.get(ty.qualname.lower())
-        if pou is None:
-            return
-        for var in pou.variables.values():
-            if var.section in _SKIPPED_SECTIONS:
+    if isinstance(ty, (t.StructType, t.FBType)):
+        layout = vm.layouts.of(ty)
+        for slot in (layout if layout is not None else ()):
+            if slot.section in _SKIPPED_SECTIONS:
                 continue
-            yield from _leaves(vm, f"{name}.{var.name}", var.type, root, steps + ("v_" + var.key,), depth + 1)
+            yield from _leaves(vm, f"{name}.{slot.name}", slot.type, root, steps + (slot.storage,), depth + 1)
     elif isinstance(ty, t.ArrayType) and ty.dims:
         yield from _array_leaves(vm, name, ty, list(ty.dims), root, steps, depth)
 
@@ -116,14 +111,13 @@ def _array_leaves(vm, name, ty, dims, root, steps, depth, indices=()):
 
 def all_nodes(vm) -> Iterator[tuple[str, t.Type, Any, tuple]]:
     """Every variable node of a running VM (globals first, then the program instances)."""
-    for var in vm.model.globals.values():
-        yield from _leaves(vm, var.name, var.type, vm.globals, ("v_" + var.key,))
+    for slot in vm.layouts.globals:
+        yield from _leaves(vm, slot.name, slot.type, vm.globals, (slot.storage,))
     for inst_name, inst, qualname in vm.instances.values():
-        pou = vm.model.pous[qualname.lower()]
-        for var in pou.variables.values():
-            if var.section in _SKIPPED_SECTIONS:
+        for slot in vm.layouts.pous[qualname.lower()]:
+            if slot.section in _SKIPPED_SECTIONS:
                 continue
-            yield from _leaves(vm, f"{inst_name}.{var.name}", var.type, inst, ("v_" + var.key,))
+            yield from _leaves(vm, f"{inst_name}.{slot.name}", slot.type, inst, (slot.storage,))
 
 
 _ELEMENTARY = ("bool", "int", "real", "time", "string", "enum")
@@ -191,20 +185,19 @@ def _canonical_name(vm, path: str) -> str:
 def _iter_prefix(vm, path: str):
     compact = re.sub(r"\s+", "", path).lower()
     first = re.split(r"[.\[]", compact, maxsplit=1)[0]
-    for var in vm.model.globals.values():
-        if var.key == first:
-            for node in _leaves(vm, var.name, var.type, vm.globals, ("v_" + var.key,)):
+    for slot in vm.layouts.globals:
+        if slot.name.lower() == first:
+            for node in _leaves(vm, slot.name, slot.type, vm.globals, (slot.storage,)):
                 if node[0].lower() == compact:
                     yield node
                     return
     for inst_name, inst, qualname in vm.instances.values():
         if inst_name.lower() != first:
             continue
-        pou = vm.model.pous[qualname.lower()]
-        for var in pou.variables.values():
-            if var.section in _SKIPPED_SECTIONS:
+        for slot in vm.layouts.pous[qualname.lower()]:
+            if slot.section in _SKIPPED_SECTIONS:
                 continue
-            for node in _leaves(vm, f"{inst_name}.{var.name}", var.type, inst, ("v_" + var.key,)):
+            for node in _leaves(vm, f"{inst_name}.{slot.name}", slot.type, inst, (slot.storage,)):
                 if node[0].lower() == compact:
                     yield node
                     return
@@ -223,7 +216,7 @@ def _expression(root_name: str, steps: tuple) -> str:
     for step in steps:
         if isinstance(step, int):
             parts.append(f"[{int(step)}]")
-        elif _SAFE_ATTR.fullmatch(step):
+        elif is_storage_name(step):
             parts.append("." + step)
         else:  # resolved containers may hand us a mangled key we did not make: stvm bug if so
             raise AssertionError(f"unsafe attribute {step!r}")
@@ -235,7 +228,7 @@ def make_sampler(signals: list[Signal]) -> Callable[[], tuple]:
 
     Generated code (`p0 = r0.v_cobot; return (p0.v_connected, p0.v_socket.v_handle, …)`) costs
     one attribute or item access per step, shared prefixes once per call, and no interpretation;
-    only validated `v_` names and integer indices go into it. Every call walks from the roots
+    only validated storage names (`is_storage_name`) and integer indices go into it. Every call walks from the roots
     again, so replaced objects (an array of structs assigned as a whole) are never stale.
     """
     roots: list[Any] = []
