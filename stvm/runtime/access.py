@@ -121,7 +121,9 @@ class VariableAccess:
                 if slot is None:
                     raise PathError(f"{path!r}: {ty.name} has no member {text!r}")
                 container, key, ty = value, slot.storage, slot.type
-                if slot.section == "VAR_IN_OUT":
+                if slot.section == "VAR_EXTERNAL":   # the instance has no storage of its own for it
+                    container, key, ty = self.globals, self._global(slot.name).storage, self._global(slot.name).type
+                elif slot.section == "VAR_IN_OUT":
                     container, key = _through_reference(container, key, path)
             else:
                 if not isinstance(ty, t.ArrayType) or ty.dims is None:
