@@ -356,3 +356,28 @@ def test_the_contract_check_catches(snippet):
 ])
 def test_the_contract_check_allows(snippet):
     assert not storage_name_breaches(snippet, "stvm/example.py")
+
+
+def test_st_names_compiles_to_the_code_of_hand_written_storage_names():
+    """No per-scan cost: the bound code is the code `inst.<storage name>` would compile to."""
+    namespace: dict = {}
+    exec(f"def by_hand(inst):\n    if not inst.{var_attr('IN')}:\n        inst.{var_attr('Q')} = False\n"
+         f"    return inst.{var_attr('Q')}\n", namespace)
+
+    @st_names("IN", "Q")
+    def by_st_name(inst):
+        if not inst.IN:
+            inst.Q = False
+        return inst.Q
+
+    hand, bound = namespace["by_hand"].__code__, by_st_name.__code__
+    assert bound.co_code == hand.co_code and bound.co_names == hand.co_names
+
+
+def test_the_layout_pickles_as_its_model(vm):
+    import pickle
+    layouts = vm.layouts
+    _ = layouts.pous["main"], layouts.globals           # built ones are not pickled
+    again = pickle.loads(pickle.dumps((vm.model, layouts)))[1]
+    assert again.pous["main"] == layouts.pous["main"] and again.globals == layouts.globals
+    assert set(layouts.__getstate__()) == {"model"}
