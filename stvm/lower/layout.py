@@ -44,7 +44,7 @@ class VarSlot:
     section: str     # VAR_INPUT, VAR_OUTPUT, VAR_IN_OUT, VAR, VAR_TEMP, VAR_EXTERNAL, VAR_GLOBAL, FIELD
 
     @property
-    def aliases(self) -> bool:
+    def is_alias(self) -> bool:
         """The slot refers to storage elsewhere (a VAR_IN_OUT's reference, a VAR_EXTERNAL's global):
         walks over "every variable" skip it, an explicit path follows it."""
         return self.section in ("VAR_IN_OUT", "VAR_EXTERNAL")
@@ -70,7 +70,7 @@ class PouLayout:
 
     def owned(self) -> Iterator[VarSlot]:
         """The slots whose storage is on this object itself (not a VAR_IN_OUT / VAR_EXTERNAL alias)."""
-        return (s for s in self.slots.values() if not s.aliases)
+        return (s for s in self.slots.values() if not s.is_alias)
 
 
 class _OnDemand(Mapping[str, PouLayout]):
@@ -84,10 +84,20 @@ class _OnDemand(Mapping[str, PouLayout]):
         self._built: dict[str, PouLayout] = {}
 
     def __getitem__(self, key: str) -> PouLayout:
+        # readers on other threads (HMI, OPC UA) may build one twice: both builds are equal
         layout = self._built.get(key)
         if layout is None:
             layout = self._built[key] = self._build(self._sources[key])
         return layout
+
+    def get(self, key: str, default: Any = None) -> Any:   # (Mapping's goes through a KeyError)
+        layout = self._built.get(key)
+        if layout is not None:
+            return layout
+        return self[key] if key in self._sources else default
+
+    def __contains__(self, key: object) -> bool:
+        return key in self._sources
 
     def __iter__(self) -> Iterator[str]:
         return iter(self._sources)
@@ -134,6 +144,8 @@ class ProjectLayout:
             return self.pous.get(ty.qualname.lower())
         if isinstance(ty, t.StructType):
             known = self.structs.get(ty.qualname.lower()) if ty.qualname else None
+            if known is not None and known.type is ty:
+                return known   # the declared type itself (the usual case: no comparison)
             # a struct placeholder (self-reference) has no fields of its own: the declared one has
             if known is not None and (not ty.fields or _field_names(ty) == tuple(known.slots)):
                 return known

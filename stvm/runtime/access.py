@@ -54,11 +54,6 @@ def parse_path(path: str) -> list[tuple[str, str]]:
     return tokens
 
 
-def read_slot(obj: Any, slot: VarSlot) -> Any:
-    """The value `slot` holds on `obj` (an instance, struct or the globals object)."""
-    return getattr(obj, slot.storage)
-
-
 class VariableAccess:
     """Path resolution over one VM's globals and program instances."""
 

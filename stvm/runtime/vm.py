@@ -334,17 +334,17 @@ class VM:
 
     def accessor(self, path: str) -> "Accessor":
         """A reusable handle on one variable (checked now: raises `PathError` if `path` is unknown)."""
-        return Accessor(self, path, self.resolve(path)[2])
+        return Accessor(self, path, self.access.resolve(path)[2])
 
     def get(self, path: str) -> Any:
-        container, key, _ = self.resolve(path)
+        container, key, _ = self.access.resolve(path)
         return container[key] if isinstance(key, int) else getattr(container, key)
 
     def type_of(self, path: str) -> t.Type:
-        return self.resolve(path)[2]
+        return self.access.resolve(path)[2]
 
     def set(self, path: str, value: Any) -> None:
-        container, key, ty = self.resolve(path)
+        container, key, ty = self.access.resolve(path)
         if isinstance(ty, t.StringType):
             self._check_string_fits(path, value, ty)
         value = coerce_python_value(value, ty)
@@ -374,7 +374,7 @@ class VM:
         self.set(path, value)
 
     def format(self, path: str) -> str:
-        container, key, ty = self.resolve(path)
+        container, key, ty = self.access.resolve(path)
         value = container[key] if isinstance(key, int) else getattr(container, key)
         return format_value(value, ty, self.layouts)
 
@@ -401,7 +401,7 @@ class Accessor:
 
     def bind(self) -> Callable[[Any], None]:
         """Resolve the container now; the returned setter stores an already converted value."""
-        container, key, _ = self.vm.resolve(self.path)
+        container, key, _ = self.vm.access.resolve(self.path)
         if isinstance(key, int):
             return lambda value: container.__setitem__(key, value)
         return lambda value: setattr(container, key, value)
