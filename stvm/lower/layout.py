@@ -9,9 +9,9 @@ built in one place (`stvm.lower.names`) and a change of naming scheme touches no
 
 Why a plain data structure computed from the checked model, and not facts collected while code is
 emitted: the layout is the same for every optimisation of the generator (cached locals, hoisted
-checks), it is small enough to travel in the compile cache with the `LoweredProject`, and the
-readers (which run long after lowering, often from the cache) need neither the generator nor the
-checker behind it.
+checks), it travels in the compile cache with the `LoweredProject` as the model it is a function
+of (each `PouLayout` is built when first read), and the readers (which run long after lowering,
+often from the cache) need neither the generator nor the checker behind it.
 """
 
 from __future__ import annotations
