@@ -29,6 +29,10 @@
     faults = ["delay:5"]                   # faults active from the start
     settings = { time_scale = 0.1 }        # EmulatorSettings fields (docs/emulator.md)
 
+A TOML number or boolean is read as the IEC literal it spells and checked like `--set`: `5`
+into a TIME is an error (write "T#5ms"), `1` into a BOOL too (write true), a value out of the
+variable's range as well. Every name and value is checked before the first scan.
+
 `when` events fire once, at the end of the first scan in which the BOOL variable is TRUE.
 Events fire at the end of the scan before the one they name (`scan = 50` is visible to the ST
 code of scan 50); a fault takes effect in the emulator step that follows.
