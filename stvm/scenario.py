@@ -29,12 +29,18 @@
     faults = ["delay:5"]                   # faults active from the start
     settings = { time_scale = 0.1 }        # EmulatorSettings fields (docs/emulator.md)
 
+A TOML number or boolean is read as the IEC literal it spells and checked like `--set`: `5`
+into a TIME is an error (write "T#5ms"), `1` into a BOOL too (write true), a value out of the
+variable's range as well. Every name and value is checked before the first scan.
+
 `when` events fire once, at the end of the first scan in which the BOOL variable is TRUE.
 Events fire at the end of the scan before the one they name (`scan = 50` is visible to the ST
 code of scan 50); a fault takes effect in the emulator step that follows.
 """
 
 from __future__ import annotations
+
+import math
 
 import tomllib
 from dataclasses import dataclass, field
@@ -43,7 +49,7 @@ from typing import Any
 
 from emulator import DEFAULT_SETTINGS as EMULATOR_DEFAULTS, parse_faults
 from stvm.project import parse_duration
-from stvm.runtime.vm import PathError, UnboundInOut
+from stvm.runtime.vm import PathError, UnboundInOut, coerce_python_value
 from stvm.semantics import types as t
 from stvm.semantics.literals import literal_value
 
@@ -273,15 +279,24 @@ def _parse_emulator(scenario: Scenario, emu: Any, name: str) -> None:
 def to_st_value(raw: Any, vm, path: str) -> Any:
     """A scenario value (TOML scalar or IEC literal string) converted for variable `path`."""
     ty = vm.type_of(path)
-    if isinstance(raw, bool) or isinstance(raw, (int, float)):
-        if isinstance(ty, t.RealType):
-            return float(raw)
-        return raw
+    if isinstance(raw, (bool, int, float)):
+        # A TOML scalar is read as the IEC literal it spells, so it meets the checks `--set`
+        # applies: `5` into a TIME is refused (it would be 5 ns), a REAL out of range is an
+        # error instead of inf, `true` fits only a BOOL.
+        raw = _scalar_literal(raw)
     if isinstance(raw, str):
         if isinstance(ty, t.StringType) and not raw.startswith("'"):
             return raw  # plain TOML text for a STRING
         return literal_value(raw, ty)
     raise ScenarioError(f"{path}: unsupported value {raw!r}")
+
+
+def _scalar_literal(value: bool | int | float) -> str:
+    if isinstance(value, bool):
+        return "TRUE" if value else "FALSE"
+    if isinstance(value, float) and not math.isfinite(value):
+        raise ValueError(f"{value} is not a number a variable can hold")
+    return repr(value)
 
 
 class ScenarioDriver:
@@ -318,17 +333,18 @@ class ScenarioDriver:
                 if not isinstance(ty, t.BoolType):
                     raise ScenarioError(f"{entry}: when = {event.when!r} must name a BOOL variable "
                                         f"(it is {ty.name})")
-            for path in event.assignments:
-                self._check_path(path, f"{entry}: set")
-        for path in self.scenario.initial:
-            self._check_path(path, f"{where}: [set]")
+            for path, raw in event.assignments.items():
+                self._check_assignment(path, raw, f"{entry}: set")
+        for path, raw in self.scenario.initial.items():
+            self._check_assignment(path, raw, f"{where}: [set]")
 
-    def _check_path(self, path: str, where: str) -> None:
+    def _check_assignment(self, path: str, raw: Any, where: str) -> None:
+        """The variable exists and the value is one it can hold (converted, not stored)."""
         try:
-            self.vm.type_of(path)
+            coerce_python_value(to_st_value(raw, self.vm, path), self.vm.type_of(path))
         except UnboundInOut:
             pass
-        except (PathError, ValueError) as exc:
+        except (PathError, ValueError, TypeError) as exc:
             raise ScenarioError(f"{where}: {path}: {exc}") from exc
 
     def apply_initial(self, overrides: dict[str, Any] | None = None) -> None:

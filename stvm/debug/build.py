@@ -1,13 +1,12 @@
 """The debug build of a project, and where each ST statement starts in the generated code.
 
 A debug build is the normal pipeline (parse, check, lower, compile) with one lowering switch
-changed: `cache_locals` off. The normal build keeps a POU's variables in Python locals during a
+changed: `cache_locals` off (`DEBUG_OPTIONS`). The normal build keeps a POU's variables in Python locals during a
 call and writes them back in a `finally`; a debugger stopped in the middle of that call would read
 stale values from the instance and its writes would be lost. Without the cache every variable
 lives on its instance (FB/PROGRAM) or call frame (`_f`, FUNCTION), so what the debugger reads and
-writes is the storage the code itself uses. The switch is read by `Lowerer` as
-`getattr(settings, "cache_locals", True)`, so the debug build passes a settings view instead of
-changing the code generator; the VM still gets the user's real settings.
+writes is the storage the code itself uses. (A range-FOR needs its loop variable in a local, so
+without the cache no FOR becomes one.)
 
 The build is never written to the compile cache (its code differs from the normal build's), and
 it keeps the `Checker`, whose project index types the debugger's expressions.
@@ -23,6 +22,7 @@ from typing import Sequence
 from stvm.diagnostics import has_errors, sort_key
 from stvm.lower.codegen import Lowerer
 from stvm.lower.names import method_attr
+from stvm.lower.options import DEFAULT_OPTIONS
 from stvm.lower.product import compile_module
 from stvm.project import LoadError, Project, read_files, stdlib_units, expand_paths, source_encoding
 from stvm.runtime.vm import GENERATED_FILENAME
@@ -34,20 +34,8 @@ from stvm.syntax import nodes as n
 from stvm.syntax.parser import parse_text
 
 
-class DebugLowering:
-    """The settings the code generator sees in a debug build: the user's Sysmac settings with the
-    local-variable cache switched off (see the module docstring)."""
-
-    cache_locals = False
-
-    def __init__(self, settings: SysmacSettings) -> None:
-        self._settings = settings
-
-    def __getattr__(self, name: str):
-        return getattr(self._settings, name)
-
-    def __repr__(self) -> str:
-        return f"DebugLowering({self._settings!r})"
+# What the debugger needs: every variable in its instance or frame, never in a Python local.
+DEBUG_OPTIONS = DEFAULT_OPTIONS.without("cache_locals")
 
 
 def is_library_file(file: str) -> bool:
@@ -171,7 +159,7 @@ def load_debug(paths: Sequence[str | os.PathLike], settings: SysmacSettings = DE
     diags.sort(key=sort_key)
     if checker is None or has_errors(diags):
         raise LoadError(diags, sources)
-    lowered = Lowerer(analysis, DebugLowering(settings)).lower()
+    lowered = Lowerer(analysis, settings, DEBUG_OPTIONS).lower()
     code = compile_module(lowered.source, GENERATED_FILENAME)
     warnings = [d for d in diags if not d.is_error]
     project = Project(analysis.model, lowered, code, sources, settings, warnings, False, manifest, root)

@@ -32,7 +32,7 @@ from stvm.semantics.model import EXTERNAL, GLOBAL, IN_OUT, POUInfo, Variable
 from stvm.syntax import nodes as n
 from stvm.syntax import parse_expression
 from stvm.runtime.values import FunctionError, STFault
-from stvm.debug.build import DebugLowering
+from stvm.debug.build import DEBUG_OPTIONS
 
 EXPR_FILENAME = "<stvm-debug>"   # never GENERATED_FILENAME: the tracer must not step into these
 
@@ -216,7 +216,7 @@ class ScopeCompiler:
         self.checker.facts = facts
         checker = _ScopeChecker(self.checker, pou, node, self.programs)
         lowerer = _ScopeLowerer(SimpleNamespace(model=self.model, facts=facts, pou_nodes={}),
-                                DebugLowering(self.settings))
+                                self.settings, DEBUG_OPTIONS)
         lowerer.assign_names()
         lowerer.types = self.types
         lowerer.pou = pou

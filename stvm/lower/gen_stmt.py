@@ -1,0 +1,420 @@
+"""Generators for ST statements: assignments and stores, IF/CASE/FOR/WHILE/REPEAT, EXIT,
+CONTINUE and RETURN, FB calls, EN/ENO, and the range-FOR optimisation.
+
+A mixin of `Lowerer` (`stvm/lower/codegen.py`); one Python statement group per ST statement, each
+line tagged with the statement's span (see `CodeWriter`)."""
+
+from __future__ import annotations
+
+from stvm.semantics import types as t
+from stvm.semantics.facts import CallInfo
+from stvm.semantics.model import IN_OUT
+from stvm.lower.names import var_attr
+from stvm.lower.pycode import py_literal, wrap_int
+from stvm.syntax import nodes as n
+from stvm.syntax.walk import root_name, walk
+from stvm.settings import ArrayOob, ForEndEval
+
+
+class StatementGenerator:
+    """Statements: `statement(s)` writes the lines of one ST statement."""
+
+    def body(self, stmts: tuple[n.Statement, ...]) -> None:
+        if not stmts:
+            self.w.line("pass")
+            return
+        for s in stmts:
+            self.statement(s)
+
+    def statement(self, s: n.Statement) -> None:
+        self.w.span = s.span
+        guarded = isinstance(s, (n.Assign, n.CallStatement)) and self.has_native_call(s)
+        # array_oob=skip_statement: a statement with an array access is skipped when an index
+        # is out of range (a compound one only for its own expressions: inner statements skip
+        # themselves)
+        skippable = self.settings.array_oob is ArrayOob.SKIP_STATEMENT and self.has_index(s)
+        if guarded or skippable:
+            self.w.line("try:")
+            self.w.indent += 1
+        getattr(self, "st_" + type(s).__name__)(s)
+        if guarded or skippable:
+            self.w.indent -= 1
+            self.w.span = s.span
+        if guarded:
+            self.sites.append(s.span)
+            self.w.line(f"except _FunctionError as _e: _fun_error(_e, {len(self.sites) - 1})")
+        if skippable:
+            self.sites.append(s.span)
+            self.w.line(f"except _ArrayIndexError as _e: _oob_skipped(_e, {len(self.sites) - 1})")
+
+    def has_index(self, node: object) -> bool:
+        return any(isinstance(x, n.Index) for x in walk((node,)))
+
+    def has_native_call(self, node: object) -> bool:
+        """Does this statement call a FUNCTION (which may raise an instruction error)?"""
+        for x in walk((node,)):
+            if isinstance(x, n.Call):
+                info = self.facts.calls.get(id(x))
+                if info is not None and not info.is_fb and not info.oo:
+                    return True
+        return False
+
+    def with_en_eno(self, call: n.Expr, emit) -> bool:
+        """Emit `emit()` under the call's EN (run only when TRUE) and set its ENO: FALSE before
+        the call (an instruction error leaves it FALSE), TRUE after it, FALSE when EN is FALSE.
+        False when the call has neither."""
+        info = self.facts.calls.get(id(call)) if isinstance(call, n.Call) else None
+        if info is None or (info.en is None and info.eno is None):
+            return False
+
+        def set_eno(value: bool) -> None:
+            if info.eno is not None:
+                target, negate = info.eno
+                self.store(target, repr(value != negate), t.BOOL)
+        if info.en is not None:
+            self.w.line(f"if {self.expr_as(info.en, t.BOOL)}:")
+            self.w.indent += 1
+        set_eno(False)
+        emit()
+        set_eno(True)
+        if info.en is not None:
+            self.w.indent -= 1
+            self.w.line("else:")
+            self.w.indent += 1
+            set_eno(False)
+            if info.eno is None:
+                self.w.line("pass")
+            self.w.indent -= 1
+        return True
+
+    def st_Assign(self, s: n.Assign) -> None:
+        if self.with_en_eno(s.value, lambda: self.plain_assign(s)):
+            return
+        self.plain_assign(s)
+
+    def plain_assign(self, s: n.Assign) -> None:
+        target_type = self.facts.types.get(id(s.target))
+        if target_type is None and isinstance(s.target, n.Name):
+            target_type = self.pou.return_type  # type: ignore[union-attr]
+        value = self.expr_as(s.value, target_type)
+        self.store(s.target, value, target_type)
+
+    def st_CallStatement(self, s: n.CallStatement) -> None:
+        if self.with_en_eno(s.call, lambda: self.plain_call(s)):
+            return
+        self.plain_call(s)
+
+    def plain_call(self, s: n.CallStatement) -> None:
+        info = self.facts.calls[id(s.call)]
+        if info.oo == "super_body":
+            self.w.line(f"{self.classes[info.static_owner]}.__call__(self)")
+        elif info.is_fb:
+            self.fb_call(s.call, info)  # type: ignore[arg-type]
+        else:
+            self.w.line(self.function_call(s.call, info))  # type: ignore[arg-type]
+
+    def st_If(self, s: n.If) -> None:
+        for i, (cond, body) in enumerate(s.branches):
+            self.w.span = cond.span if i else s.span
+            self.w.line(f"{'if' if i == 0 else 'elif'} {self.expr(cond)}:")
+            self.w.indent += 1
+            self.body(body)
+            self.w.indent -= 1
+        if s.else_body is not None:
+            self.w.span = s.span
+            self.w.line("else:")
+            self.w.indent += 1
+            self.body(s.else_body)
+            self.w.indent -= 1
+
+    def st_Case(self, s: n.Case) -> None:
+        sel = self.new_tmp("case")
+        self.w.line(f"{sel} = {self.expr(s.selector)}")
+        first = True
+        for labels, body in s.elements:
+            tests = []
+            for label in labels:
+                lo = self.facts.consts.get(id(label.low))
+                if label.high is None:
+                    tests.append(f"{sel} == {py_literal(lo)}")
+                else:
+                    hi = self.facts.consts.get(id(label.high))
+                    tests.append(f"{py_literal(lo)} <= {sel} <= {py_literal(hi)}")
+            self.w.line(f"{'if' if first else 'elif'} {' or '.join(tests) or 'False'}:")
+            first = False
+            self.w.indent += 1
+            self.body(body)
+            self.w.indent -= 1
+        if s.else_body is not None:
+            if first:
+                self.w.line("if True:")
+            else:
+                self.w.line("else:")
+            self.w.indent += 1
+            self.body(s.else_body)
+            self.w.indent -= 1
+
+    def st_For(self, s: n.For) -> None:
+        var_type = self.facts.types[id(s.variable)]
+        assert isinstance(var_type, t.IntType)
+        step_const = self.facts.consts.get(id(s.step)) if s.step is not None else 1
+        if self.range_for_ok(s, step_const):
+            self.range_for(s, var_type, step_const)  # type: ignore[arg-type]
+            return
+        self.store(s.variable, self.expr_as(s.start, var_type), var_type)
+        end = self.new_tmp("end")
+        self.w.line(f"{end} = {self.expr_as(s.end, var_type)}")
+        read = self.expr(s.variable)
+        if isinstance(step_const, int):
+            step = py_literal(step_const)
+            cond = f"{read} <= {end}" if step_const > 0 else f"{read} >= {end}"
+        else:
+            step = self.new_tmp("step")
+            self.w.line(f"{step} = {self.expr_as(s.step, var_type)}")  # type: ignore[arg-type]
+            cond = f"({read} <= {end} if {step} > 0 else {read} >= {end})"
+        increment = self.store_code(s.variable, wrap_int(f"{read} + {step}", var_type), var_type)
+        if self.settings.for_end_eval is ForEndEval.EACH:
+            cond = cond.replace(end, f"({self.expr_as(s.end, var_type)})")
+        self.w.line(f"while {cond}:")
+        self.w.indent += 1
+        self.loops.append(("for", increment))
+        self.body(s.body)
+        self.loops.pop()
+        self.w.span = s.span
+        for line in increment:
+            self.w.line(line)
+        self.w.indent -= 1
+
+    def range_for_ok(self, s: n.For, step: object) -> bool:
+        """Can this FOR become a Python `for … in range()` (same semantics, much faster)?
+
+        Needs: a constant non-zero step, the end evaluated once, a loop variable held in a local
+        that the body never assigns, and no EXIT/RETURN (so a wrap-around at the type's limit
+        is a genuinely endless loop, reported as a fault instead of hanging)."""
+        if not self.options.range_for:
+            return False
+        if not isinstance(step, int) or isinstance(step, bool) or step == 0:
+            return False
+        if self.settings.for_end_eval is not ForEndEval.ONCE:
+            return False
+        ref = self.facts.names.get(id(s.variable))
+        if ref is None or ref.kind != "var" or ref.variable is None or ref.variable.key not in self.cached:
+            return False
+        key = ref.variable.key
+        for node in walk(s.body):
+            if isinstance(node, (n.Exit, n.Return)):
+                return False
+            if isinstance(node, n.Assign) and root_name(node.target) == key:
+                return False
+            if isinstance(node, n.For) and node.variable.parts[0].lower() == key:
+                return False
+            if isinstance(node, n.Argument) and node.kind != "input" and node.kind != "positional" \
+                    and root_name(node.value) == key:
+                return False
+        return True
+
+    def range_for(self, s: n.For, var_type: t.IntType, step: int) -> None:
+        var = self.expr(s.variable)
+        key = s.variable.parts[0].lower()
+        start = self.new_tmp("start")
+        end = self.new_tmp("end")
+        self.w.line(f"{start} = {self.expr_as(s.start, var_type)}")
+        self.w.line(f"{end} = {self.expr_as(s.end, var_type)}")
+        limit = var_type.hi - step if step > 0 else var_type.lo - step
+        # the loop variable would wrap before passing `end`: an endless loop on the controller
+        guard = f"{end} > {limit}" if step > 0 else f"{end} < {limit}"
+        self.w.line(f"if {guard}: _endless_for({end}, {step}, {var_type.name!r})")
+        stop = f"{end} + 1" if step > 0 else f"{end} - 1"
+        rng = self.new_tmp("range")
+        self.w.line(f"{rng} = range({start}, {stop}, {step})")
+        self.assigned.add(key)
+        start_const = self.facts.consts.get(id(s.start))
+        accesses = self.hoistable_accesses(s.body, key) if self.options.hoist_bounds else set()
+        if accesses:
+            # Bounds checks hoisted out of the loop: if every `a[i + c]` stays inside its array
+            # for the whole range, run a copy of the loop without per-access checks; otherwise
+            # the checked copy faults at exactly the iteration the controller would.
+            first, last = (start, end) if step > 0 else (end, start)
+            conds = [f"{first} + {c} >= {lo} and {last} + {c} <= {hi}" for c, lo, hi in sorted(accesses)]
+            self.w.line(f"if {' and '.join(conds)}:")
+            self.w.indent += 1
+            self.unchecked.add(key)
+            self.range_loop(s, var, key, rng, start, step, start_const, var_type)
+            self.unchecked.discard(key)
+            self.w.indent -= 1
+            self.w.line("else:")
+            self.w.indent += 1
+            self.range_loop(s, var, key, rng, start, step, start_const, var_type)
+            self.w.indent -= 1
+        else:
+            self.range_loop(s, var, key, rng, start, step, start_const, var_type)
+
+    def range_loop(self, s: n.For, var: str, key: str, rng: str, start: str, step: int,
+                   start_const: object, var_type: t.IntType) -> None:
+        self.w.span = s.span
+        self.w.line(f"for {var} in {rng}:")
+        self.w.indent += 1
+        self.range_vars[key] = (step, start_const if isinstance(start_const, int) else None, var_type)
+        self.loops.append(("range", []))
+        self.body(s.body)
+        self.loops.pop()
+        del self.range_vars[key]
+        self.w.indent -= 1
+        self.w.span = s.span
+        self.w.line("else:")
+        self.w.indent += 1
+        # IEC: after the loop the variable holds the first value past `end`
+        self.w.line(f"{var} = {start} + {step} * len({rng})")
+        self.w.indent -= 1
+
+    def loop_offset(self, ix: n.Expr, key: str) -> int | None:
+        """c when `ix` is `key`, `key + c` or `key - c` (constant c), else None."""
+        if isinstance(ix, n.Name) and len(ix.parts) == 1 and ix.parts[0].lower() == key:
+            return 0
+        if isinstance(ix, n.Binary) and ix.op in ("PLUS", "MINUS") and isinstance(ix.left, n.Name) \
+                and len(ix.left.parts) == 1 and ix.left.parts[0].lower() == key:
+            c = self.facts.consts.get(id(ix.right))
+            if isinstance(c, int) and not isinstance(c, bool) and id(ix.right) in self.facts.untyped:
+                return c if ix.op == "PLUS" else -c
+        return None
+
+    def hoistable_accesses(self, body, key: str) -> set[tuple[int, int, int]]:
+        """(offset, lo, hi) of every 1-D array access indexed by the loop variable (+/- const)."""
+        found: set[tuple[int, int, int]] = set()
+        for node in walk(body):
+            if isinstance(node, n.Index) and len(node.indices) == 1:
+                base_type = self.facts.types.get(id(node.base))
+                if isinstance(base_type, t.ArrayType) and base_type.dims and len(base_type.dims) == 1:
+                    c = self.loop_offset(node.indices[0], key)
+                    if c is not None:
+                        lo, hi = base_type.dims[0]
+                        found.add((c, lo, hi))
+        return found
+
+    def st_While(self, s: n.While) -> None:
+        self.w.line(f"while {self.expr(s.condition)}:")
+        self.w.indent += 1
+        self.loops.append(("while", []))
+        self.body(s.body)
+        self.loops.pop()
+        self.w.indent -= 1
+
+    def st_Repeat(self, s: n.Repeat) -> None:
+        self.w.line("while True:")
+        self.w.indent += 1
+        cond = self.expr(s.condition)
+        self.loops.append(("repeat", [f"if {cond}: break"]))
+        self.body(s.body)
+        self.loops.pop()
+        self.w.span = s.condition.span
+        self.w.line(f"if {cond}: break")
+        self.w.indent -= 1
+
+    def st_Exit(self, s: n.Exit) -> None:
+        self.w.line("break")
+
+    def st_Continue(self, s: n.Continue) -> None:
+        kind, code = self.loops[-1]
+        for line in code:
+            self.w.line(line)
+        self.w.line("continue")
+
+    def st_Return(self, s: n.Return) -> None:
+        self.w.line("return _r" if self.pou and self.pou.kind in ("FUNCTION", "METHOD") else "return")
+
+    def st_Empty(self, s: n.Empty) -> None:
+        self.w.line("pass")
+
+    def st_RefAssign(self, s: n.RefAssign) -> None:
+        place = self.raw_place(s.target)
+        if isinstance(s.target, n.Name) and s.target.parts[0].lower() in self.cached:
+            self.assigned.add(s.target.parts[0].lower())
+        self.w.line(f"{place} = {self.reference_code(s.value)}")
+
+    def store(self, target: n.Expr, value: str, ty: t.Type | None) -> None:
+        for line in self.store_code(target, value, ty):
+            self.w.line(line)
+
+    def store_code(self, target: n.Expr, value: str, ty: t.Type | None) -> list[str]:
+        """Python statements that store `value` (already converted to `ty`) into `target`."""
+        aggregate = isinstance(ty, (t.StructType, t.ArrayType))
+        if self.facts.props and id(target) in self.facts.props:
+            return [f"{self.property_target(target, 'SET')}({value})"]
+        if isinstance(target, n.Name):
+            ref = self.facts.names[id(target)]
+            if ref.kind == "result":
+                return [f"_r = {value}" if not aggregate else f"_r = _copy_value({value})"]
+            var = ref.variable
+            assert var is not None
+            place = self.name_place(ref)
+            if id(target) in self.facts.auto_deref:
+                return self.store_through(place, value, ty)
+            if var.key in self.cached and ref.kind not in ("global", "field"):
+                self.assigned.add(var.key)
+            if var.section == IN_OUT and not aggregate:
+                return [f"{place}.set({value})"]
+            return [self.assign_into(place, value, ty)]
+        if isinstance(target, n.Deref):
+            return self.store_through(self.expr(target.base), value, ty)
+        if isinstance(target, n.Member):
+            base = self.expr(target.base)
+            base_type = self.facts.types[id(target.base)]
+            attr = var_attr(self.member_name(base_type, target.name))
+            if id(target) in self.facts.auto_deref:
+                return self.store_through(f"{base}.{attr}", value, ty)
+            return [self.assign_into(f"{base}.{attr}", value, ty)]
+        if isinstance(target, n.Index):
+            place = self.index_code(target)
+            return [self.assign_into(place, value, ty)]
+        if isinstance(target, n.PartialAccess):
+            current = self.expr(target.base)
+            base_type = self.facts.types[id(target.base)]
+            shift, mask = target.bit * target.width, (1 << target.width) - 1
+            merged = f"(({current}) & {~(mask << shift) & ((1 << base_type.bits) - 1)}) | (({value}) << {shift})"  # type: ignore[attr-defined]
+            if base_type.signed:  # type: ignore[attr-defined]
+                merged = wrap_int(merged, base_type)  # type: ignore[arg-type]
+            return self.store_code(target.base, merged, base_type)
+        if isinstance(target, n.BitAccess):
+            current = self.expr(target.base)
+            base_type = self.facts.types[id(target.base)]
+            return self.store_code(target.base, f"_setbit({current}, {target.bit}, {value})", base_type)
+        raise AssertionError("checked: not an lvalue")
+
+    def store_through(self, ref: str, value: str, ty: t.Type | None) -> list[str]:
+        """Store through a reference (`r^ := v`, a REFERENCE TO variable); NULL faults."""
+        if ty is not None and t.is_aggregate(ty):
+            return [self.assign_into(f"({ref} or _null_ref())", value, ty)]
+        return [f"({ref} or _null_ref()).set({value})"]
+
+    def assign_into(self, place: str, value: str, ty: t.Type | None) -> str:
+        if isinstance(ty, t.StructType):
+            return f"{place}._assign({value})"
+        if isinstance(ty, t.ArrayType):
+            return f"_assign_array({place}, {value})"
+        return f"{place} = {value}"
+
+    def fb_call(self, e: n.Call, info: CallInfo) -> None:
+        assert info.instance is not None
+        inst = self.expr(info.instance)
+        if not inst.replace(".", "").replace("_", "").isalnum():
+            tmp = self.new_tmp("fb")
+            self.w.line(f"{tmp} = {inst}")
+            inst = tmp
+        for var, value in info.inputs:
+            attr = var_attr(var.name)
+            code = self.arg_code(var, value)
+            if var.section != IN_OUT and isinstance(var.type, t.StructType):
+                self.w.line(f"{inst}.{attr}._assign({self.expr(value)})")
+            elif var.section != IN_OUT and isinstance(var.type, t.ArrayType) and var.type.dims is not None:
+                self.w.line(f"_assign_array({inst}.{attr}, {self.expr(value)})")
+            else:
+                self.w.line(f"{inst}.{attr} = {code}")
+        self.w.line(f"{inst}()")
+        for var, target, negate in info.outputs:
+            target_type = self.facts.types.get(id(target))
+            value = f"{inst}.{var_attr(var.name)}"
+            if negate:
+                value = f"(not {value})"
+            elif target_type is not None:
+                value = self.coerce(value, var.type, target_type, target.span)
+            self.store(target, value, target_type)
