@@ -440,12 +440,10 @@ class StatementGenerator:
     def direct_native_call(self, inst: str, info: CallInfo) -> str | None:
         """`direct_native_calls`: a native FB (TON, SktTCPSend, ...) called straight through its
         implementation, `inst._impl.call(inst, _ctx)`, instead of through the class's `__call__`
-        that does only that (one Python frame less per call). Not when a POU extends the native
-        FB: an instance reached through a reference could then be the derived one."""
+        that does only that (one Python frame less per call). The instance is of exactly that
+        class: the checker lets no POU extend a native FB."""
         pou = info.pou
         if not self.options.direct_native_calls or not pou.native or info.oo:
-            return None
-        if any(other.base == pou.key for other in self.model.pous.values()):
             return None
         return f"{inst}._impl.call({inst}, _ctx)"
 

@@ -44,8 +44,8 @@ class LowerOptions:
     inline_input_copy: bool = True
     # A native FB's call site calls its implementation (`fb._impl.call(fb, _ctx)`) instead of the
     # generated `__call__` that only forwards to it: one Python frame less per call (the thesis
-    # makes ~30 socket and timer FB calls a scan). Safe: the same call; not used when a POU
-    # EXTENDS the native FB (a reference could then reach a derived instance with its own body).
+    # makes ~30 socket and timer FB calls a scan). Safe: the same call, and the instance is of
+    # exactly that class (the checker lets no POU EXTEND a native FB).
     direct_native_calls: bool = True
     # A fixed array passed to an FB's ARRAY[*] parameter (`SendDat := Data[0]`) reuses the
     # `ArrayRef` the instance holds from the previous call when it names the same list and element
