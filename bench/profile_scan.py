@@ -18,6 +18,7 @@ import bisect
 import cProfile
 import pstats
 import re
+import statistics
 import sys
 import time
 from pathlib import Path
@@ -27,6 +28,7 @@ sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "bench"))
 
 from stvm.project import load  # noqa: E402
+from stvm.runtime.stats import TimingStats  # noqa: E402
 from stvm.runtime.vm import GENERATED_FILENAME, timing_us  # noqa: E402
 
 THESIS = ROOT / "st_src" / "PnP_Example.st"
@@ -79,15 +81,21 @@ def main() -> None:
     project = load([str(THESIS)], use_cache=False)
     vm = thesis_vm(project)
     vm.run(cycles=2000)                        # connected and moving before anything is timed
-    started = time.perf_counter()
-    vm.run(cycles=args.scans)
-    loop_us = (time.perf_counter() - started) / args.scans * 1e6
+    vm.scan_durations_ns = TimingStats()
+    loop, clock, scan = [], time.perf_counter_ns, vm.scan
+    for _ in range(args.scans):
+        started = clock()
+        scan()
+        loop.append(clock() - started)
+    loop_us = statistics.median(loop) / 1000
+    loop_mean = sum(loop) / len(loop) / 1000
     st_us = timing_us(vm.scan_durations_ns)[1]
     hand = yardstick_us()
     print(f"thesis PnP in lockstep, {args.scans} scans: median ST time {st_us:.1f} µs per scan, whole loop "
-          f"(with the emulator) {loop_us:.1f} µs per scan")
+          f"(with the emulator) median {loop_us:.1f} µs per scan (mean {loop_mean:.1f} µs: the scans that "
+          f"build a command and the robot's motion planning)")
     print(f"yardstick: hand-written Python FOR-100 loop {hand:.1f} µs; ST scan / yardstick = {st_us / hand:.2f}× "
-          f"(issue 16 target: ≤ 15 µs, ≤ 2.3×)")
+          f"(issue 16 target: ≤ 15 µs, ≤ 2.3×); whole loop / yardstick = {loop_us / hand:.2f}× (target ≤ 20 µs)")
 
     profiled = max(args.scans // 2, 1)
     profile = cProfile.Profile()
