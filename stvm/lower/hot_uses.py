@@ -14,7 +14,7 @@ never changes what the program computes, only how fast it runs.
 from __future__ import annotations
 
 from stvm.syntax import nodes as n
-from stvm.syntax.walk import LOOP_WEIGHT
+from stvm.syntax.walk import LOOP_WEIGHT, walk
 
 
 def hot_uses(body) -> dict[str, float]:
@@ -68,20 +68,5 @@ def hot_uses(body) -> dict[str, float]:
 def for_variables(body) -> set[str]:
     """Lower-case names of the FOR loop variables in a body (a range-FOR needs its variable in a
     Python local, so the hot-path rule always caches them)."""
-    out: set[str] = set()
-
-    def visit(node) -> None:
-        if isinstance(node, tuple):
-            for item in node:
-                visit(item)
-            return
-        if isinstance(node, n.For) and len(node.variable.parts) == 1:
-            out.add(node.variable.parts[0].lower())
-        for name in getattr(node, "__dataclass_fields__", ()):
-            if name != "span":
-                value = getattr(node, name)
-                if isinstance(value, tuple) or hasattr(value, "__dataclass_fields__"):
-                    visit(value)
-
-    visit(tuple(body))
-    return out
+    return {node.variable.parts[0].lower() for node in walk(tuple(body))
+            if isinstance(node, n.For) and len(node.variable.parts) == 1}
