@@ -6,15 +6,22 @@
    overhead is the recorder's time per scan relative to the scan time without it (target ≤ 20 %).
    Measured two ways: the sampling hook's own time (perf_counter around it), and the whole
    loop with and without the recorder (best of `--repeat`, interleaved, as the machine is shared).
+3. Scan time (issue 16): the median ST time per scan (the VM's own `scan_durations_ns`) and the
+   median of the whole lockstep loop per scan (`vm.scan()` with its hooks: scenario, emulator),
+   each next to the yardstick measured in the same run, the hand-written Python FOR-100 loop of
+   bench/bench_core.py (targets: ST ≤ 15 µs and ≤ 2.3× the yardstick, loop ≤ 20 µs).
 
     python bench/bench_trace.py                 # 100 runs + overhead
     python bench/bench_trace.py --runs 10 --repeat 3
+    python bench/bench_trace.py --scan-only      # 3. alone
+    python bench/bench_trace.py --sockets        # 3. with real sockets: `stvm run` of the demo
 """
 
 from __future__ import annotations
 
 import argparse
 import hashlib
+import statistics
 import sys
 import tempfile
 import time
@@ -22,6 +29,7 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / "bench"))
 
 from stvm.project import load  # noqa: E402
 from stvm.trace import Recorder, TraceSpec, run_trace, select_signals, write_trace  # noqa: E402
@@ -135,18 +143,84 @@ def overhead(project, repeat: int, cycles: int) -> None:
     print(f"  one sample, a value changed  {change:8.2f} us = {100 * change / per_scan_base:5.1f} %")
 
 
+def scan_time(project, repeat: int, cycles: int, warm: int = 1000) -> None:
+    """Median ST time and median whole-loop time per scan, best of `repeat` runs, each run
+    between two yardstick measurements (the machine is shared: the ratio is the figure)."""
+    from bench_core import HandForSum, best_of
+    from stvm.runtime.stats import TimingStats
+    from stvm.runtime.vm import timing_us
+    rows = []
+    for _ in range(repeat):
+        prepared = Prepared(TraceSpec(FILES, scenario=SCENARIO, cycles=cycles + warm), project)
+        prepared.wire()
+        vm = prepared.vm
+        vm.run(cycles=warm)               # connected and commanding before anything is timed
+        vm.scan_durations_ns = TimingStats()
+        before = best_of(HandForSum(), repeat=3, number=1000) * 1e6
+        loop, clock, scan = [], time.perf_counter_ns, vm.scan
+        for _ in range(cycles):
+            started = clock()
+            scan()
+            loop.append(clock() - started)
+        after = best_of(HandForSum(), repeat=3, number=1000) * 1e6
+        st = timing_us(vm.scan_durations_ns)
+        vm.close()
+        rows.append((st[1], statistics.median(loop) / 1000, min(before, after), st[0], sum(loop) / len(loop) / 1000))
+    st_p50, loop_p50, hand, st_mean, loop_mean = min(rows)
+    print(f"scan time over {cycles} scans after {warm} (best of {repeat}; ST median with its run's loop and yardstick):")
+    print(f"  yardstick: hand-written Python FOR-100 loop {hand:6.2f} us (bench/bench_core.py)")
+    print(f"  ST per scan, median          {st_p50:8.1f} us = {st_p50 / hand:4.2f}x the yardstick "
+          f"(target <= 15 us, <= 2.3x); mean {st_mean:.1f} us")
+    print(f"  whole lockstep loop, median  {loop_p50:8.1f} us = {loop_p50 / hand:4.2f}x "
+          f"(target <= 20 us); mean {loop_mean:.1f} us")
+    spread = ", ".join(f"{r[0]:.1f}/{r[1]:.1f}/{r[2]:.1f}" for r in rows)
+    print(f"  every run (ST / loop / yardstick us): {spread}")
+
+
+def socket_scan_time(cycles: int = 10000) -> None:
+    """The thesis demo over real loopback sockets to the bundled emulator (`stvm run … --stats`,
+    a fresh process), on the real-time clock (the demo's default) and on the virtual clock; the
+    VM's median ST time per scan, between two yardstick measurements."""
+    import re
+    import subprocess
+    from bench_core import HandForSum, best_of
+    for label, extra in (("real-time clock (the demo's default)", []), ("virtual clock", ["--virtual-clock"])):
+        before = best_of(HandForSum(), repeat=3, number=1000) * 1e6
+        done = subprocess.run([sys.executable, "-m", "stvm", "run", str(FILES[0]), "--scan", "1ms", "--stats",
+                               "--cycles", str(cycles), *extra], capture_output=True, text=True, cwd=ROOT,
+                              timeout=300)
+        after = best_of(HandForSum(), repeat=3, number=1000) * 1e6
+        hand = min(before, after)
+        found = re.search(r"scan time us: mean ([\d.]+)\s+p50 ([\d.]+)\s+p99 ([\d.]+)", done.stdout + done.stderr)
+        if found is None:
+            print(f"  real sockets, {label}: no statistics (exit {done.returncode})")
+            continue
+        mean, p50, p99 = (float(x) for x in found.groups())
+        print(f"  real sockets, {label}, {cycles} scans: ST median {p50:.1f} us = {p50 / hand:.2f}x the yardstick "
+              f"({hand:.2f} us; target <= 20 us), mean {mean:.1f}, p99 {p99:.1f} us")
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--runs", type=int, default=100, help="consecutive PnP runs to compare (default 100)")
     parser.add_argument("--repeat", type=int, default=5, help="overhead measurements to take the best of")
     parser.add_argument("--cycles", type=int, default=9200, help="scans per overhead run (default: the scenario's)")
+    parser.add_argument("--scan-only", action="store_true", help="only the scan-time figures (3.)")
+    parser.add_argument("--sockets", action="store_true", help="only the scan time over real sockets (3.)")
     args = parser.parse_args(argv)
+    if args.sockets:
+        socket_scan_time()
+        return 0
     project = load(FILES)
+    if args.scan_only:
+        scan_time(project, args.repeat, 8000)
+        return 0
     print(f"determinism: {args.runs} consecutive runs of {SCENARIO.name}")
     distinct, seconds = determinism(args.runs, project)
     verdict = "identical" if distinct == 1 else f"NOT identical ({distinct} variants)"
     print(f"  {args.runs} runs in {seconds:.1f} s ({seconds / max(args.runs, 1):.2f} s/run): trace files {verdict}")
     overhead(project, args.repeat, args.cycles)
+    scan_time(project, args.repeat, 8000)
     return 0 if distinct == 1 else 1
 
 

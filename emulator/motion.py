@@ -406,10 +406,14 @@ class MotionExecutor:
         """Motion time of the next state change (a queue item starting or the motion ending)."""
         if self.stalled:
             return None
-        times = [t for t in (self._head_start_ns(),
-                             self.active[-1].start_ns + self.active[-1].total_ns if self.active else None)
-                 if t is not None]
-        return min(times) if times else None
+        # the earlier of the queue head's start and the running motion's end (no list: this runs
+        # several times a VM scan in lockstep)
+        head = self._head_start_ns()
+        if not self.active:
+            return head
+        last = self.active[-1]
+        end = last.start_ns + last.total_ns
+        return end if head is None or end < head else head
 
     def current_tcp(self) -> np.ndarray:
         if not self.active:

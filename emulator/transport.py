@@ -449,10 +449,13 @@ class InProcessLink:
         for _ in range(10_000_000):
             t_event = self._events[0][0] if self._events else None
             t_core = self.core.next_deadline_ns()
-            candidates = [t for t in (t_event, t_core) if t is not None and t <= target]
-            if not candidates:
+            # the earlier of the two that are due by `target` (no list: this runs every VM scan)
+            due = t_event if t_event is not None and t_event <= target else None
+            if t_core is not None and t_core <= target and (due is None or t_core < due):
+                due = t_core
+            if due is None:
                 break
-            t = max(min(candidates), self.now_ns)
+            t = due if due > self.now_ns else self.now_ns
             self.now_ns = t
             if t_event is not None and t_event <= t:
                 _, _, kind, ep, payload, gen = heapq.heappop(self._events)

@@ -34,8 +34,9 @@ from stvm.syntax import nodes as n
 from stvm.syntax.parser import parse_text
 
 
-# What the debugger needs: every variable in its instance or frame, never in a Python local.
-DEBUG_OPTIONS = DEFAULT_OPTIONS.without("cache_locals")
+# What the debugger needs: every variable in its instance or frame, never in a Python local;
+# every FB body in its own call (a stack frame per ST call, breakpoints in the FB's body).
+DEBUG_OPTIONS = DEFAULT_OPTIONS.without("cache_locals", "inline_small_fbs")
 
 
 def is_library_file(file: str) -> bool:

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from stvm.semantics import types as t
 from stvm.semantics.model import EXTERNAL, GLOBAL, IN_OUT, INPUT, OUTPUT, TEMP, POUInfo, Variable
+from stvm.lower.hot_uses import for_variables, hot_uses
 from stvm.lower.names import method_attr, var_attr
 from stvm.lower.pycode import CodeWriter, py_literal
 from stvm.syntax import nodes as n
@@ -311,17 +312,37 @@ class PouGenerator:
         # a variable whose reference is taken (REF/ADR/REF=) may be read or written through it
         referenced |= {var for owner, var in self.facts.addressed if owner == pou.key}
         uses = name_uses(node.body)
+        hot = self.hot_path_uses(node) if self.options.hot_path_cache and min_uses < 0 else None
         out = {}
         for var in pou.variables.values():
             if var.section in (EXTERNAL, GLOBAL, "VAR_INST") or var.key in referenced:
                 continue
             if var.section == IN_OUT and not isinstance(var.type, (t.StructType, t.ArrayType, t.FBType)):
                 continue  # a scalar in-out is a reference object; keep it on the instance
+            if hot is not None and var.section != TEMP:
+                if not self.hot_enough(var, hot):
+                    continue
             # a local costs a load on entry (and a store on exit): worth it from a few uses on
-            if uses.get(var.key, 0) < (_CACHE_MIN_USES if min_uses < 0 else min_uses):
+            elif uses.get(var.key, 0) < (_CACHE_MIN_USES if min_uses < 0 else min_uses):
                 continue
             out[var.key] = var
         return out
+
+    def hot_path_uses(self, node: n.POU) -> tuple[dict[str, float], set[str]]:
+        """`hot_uses` of a body (loops already weigh their uses) and its FOR variables."""
+        return hot_uses(node.body), for_variables(node.body)
+
+    def hot_enough(self, var: Variable, hot: tuple[dict[str, float], set[str]]) -> bool:
+        """`hot_path_cache`: is a local worth its load on entry (and store on exit) on a typical
+        call? Yes for a FOR variable (a range-FOR needs it in a local), or when the uses one call
+        is expected to make (branches weighted, loops multiplied by `hot_uses`) reach the
+        threshold; an aggregate is only aliased (no write-back), so it pays off sooner. A
+        temporary keeps the plain rule: uncached, it is reset on the instance every call anyway."""
+        counts, for_vars = hot
+        if var.key in for_vars:
+            return True
+        aggregate = isinstance(var.type, (t.StructType, t.ArrayType, t.FBType))
+        return counts.get(var.key, 0.0) >= (_HOT_MIN_USES_AGGREGATE if aggregate else _HOT_MIN_USES)
 
     def has_members(self, pou: POUInfo) -> bool:
         cur: POUInfo | None = pou
@@ -381,3 +402,7 @@ class PouGenerator:
 
 
 _CACHE_MIN_USES = 3          # uses of a variable in a body (a use inside a loop counts as many)
+# `hot_path_cache`: expected uses per call (see stvm/lower/hot_uses.py) from which a local pays:
+# a cached scalar costs ~6 bytecodes (load on entry, store back on exit) and saves ~1.5 per use
+_HOT_MIN_USES = 3.0
+_HOT_MIN_USES_AGGREGATE = 2.0

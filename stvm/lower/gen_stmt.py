@@ -8,12 +8,12 @@ from __future__ import annotations
 
 from stvm.semantics import types as t
 from stvm.semantics.facts import CallInfo
-from stvm.semantics.model import IN_OUT
+from stvm.semantics.model import IN_OUT, INPUT, LOCAL, OUTPUT, Variable
 from stvm.lower.names import var_attr
 from stvm.lower.pycode import py_literal, wrap_int
 from stvm.syntax import nodes as n
 from stvm.syntax.walk import root_name, walk
-from stvm.settings import ArrayOob, ForEndEval
+from stvm.settings import ArrayOob, ForEndEval, OpenArrayBounds
 
 
 class StatementGenerator:
@@ -396,7 +396,8 @@ class StatementGenerator:
     def fb_call(self, e: n.Call, info: CallInfo) -> None:
         assert info.instance is not None
         inst = self.expr(info.instance)
-        if not inst.replace(".", "").replace("_", "").isalnum():
+        inlined = self.inlinable_fb(info)
+        if not inst.replace(".", "").replace("_", "").isalnum() or (inlined is not None and "." in inst):
             tmp = self.new_tmp("fb")
             self.w.line(f"{tmp} = {inst}")
             inst = tmp
@@ -404,12 +405,16 @@ class StatementGenerator:
             attr = var_attr(var.name)
             code = self.arg_code(var, value)
             if var.section != IN_OUT and isinstance(var.type, t.StructType):
-                self.w.line(f"{inst}.{attr}._assign({self.expr(value)})")
+                if not self.inline_input_copy(f"{inst}.{attr}", self.expr(value), var.type):
+                    self.w.line(f"{inst}.{attr}._assign({self.expr(value)})")
             elif var.section != IN_OUT and isinstance(var.type, t.ArrayType) and var.type.dims is not None:
                 self.w.line(f"_assign_array({inst}.{attr}, {self.expr(value)})")
-            else:
+            elif not self.reused_array_ref(f"{inst}.{attr}", var, value):
                 self.w.line(f"{inst}.{attr} = {code}")
-        self.w.line(f"{inst}()")
+        if inlined is not None:
+            self.inline_fb_body(inst, info.pou, inlined)
+        else:
+            self.w.line(self.direct_native_call(inst, info) or f"{inst}()")
         for var, target, negate in info.outputs:
             target_type = self.facts.types.get(id(target))
             value = f"{inst}.{var_attr(var.name)}"
@@ -418,3 +423,131 @@ class StatementGenerator:
             elif target_type is not None:
                 value = self.coerce(value, var.type, target_type, target.span)
             self.store(target, value, target_type)
+
+    def inline_input_copy(self, dst: str, src: str, st: t.StructType) -> bool:
+        """`inline_input_copy`: a STRUCT input of an FB call copied field by field in place, no
+        `_assign` call (the thesis copies its `_sSOCKET` into three socket FBs per CBT FB and
+        its parameter structs into every CBT FB, every scan). Only for structs of at most
+        `_INLINE_COPY_LEAVES` leaf fields (code size). False when not applied."""
+        if not self.options.inline_input_copy or struct_leaves(st) > _INLINE_COPY_LEAVES:
+            return False
+        # `_assign`'s `src is self` shortcut is not needed: copying a struct onto itself field
+        # by field changes nothing
+        self.w.line(f"_sd = {dst}; _ss = {src}")
+        self.struct_assign_body("_sd", "_ss", st, 0)
+        return True
+
+    def direct_native_call(self, inst: str, info: CallInfo) -> str | None:
+        """`direct_native_calls`: a native FB (TON, SktTCPSend, ...) called straight through its
+        implementation, `inst._impl.call(inst, _ctx)`, instead of through the class's `__call__`
+        that does only that (one Python frame less per call). The instance is of exactly that
+        class: the checker lets no POU extend a native FB."""
+        pou = info.pou
+        if not self.options.direct_native_calls or not pou.native or info.oo:
+            return None
+        return f"{inst}._impl.call({inst}, _ctx)"
+
+    def reused_array_ref(self, place: str, var: Variable, value: n.Expr) -> bool:
+        """`reuse_array_refs`: an ARRAY[*] argument of an FB call that is a fixed array of the
+        caller (`SendDat := Data[0]`, `Buf := Data`) keeps the `ArrayRef` the instance already
+        holds when it names the same list from the same element on, instead of building a new
+        one every call (the thesis passes two a scan per CBT FB). An `ArrayRef` is never changed
+        after it is made, and a fixed array's list is never replaced (assignments copy into it),
+        so the kept one is equal in every respect. A constant element index is checked here, at
+        compile time. False when not applied (the plain `arg_code` path)."""
+        if not self.options.reuse_array_refs or not isinstance(var.type, t.ArrayType) or var.type.dims is not None:
+            return False
+        vtype = self.facts.types.get(id(value))
+        lo = 0
+        if id(value) in self.facts.array_from_element:
+            assert isinstance(value, n.Index)
+            base_type = self.facts.types[id(value.base)]
+            if not isinstance(base_type, t.ArrayType) or base_type.dims is None or len(value.indices) != 1:
+                return False
+            first, last = base_type.dims[0]
+            const = self.facts.consts.get(id(value.indices[0]))
+            if not isinstance(const, int) or isinstance(const, bool) or not first <= const <= last:
+                return False
+            base, start = self.expr(value.base), const - first
+        elif isinstance(vtype, t.ArrayType) and vtype.dims is not None:
+            base, start = self.expr(value), 0
+            if self.settings.open_array_bounds is OpenArrayBounds.ACTUAL:
+                lo = vtype.dims[0][0]
+        else:
+            return False
+        if not base.replace(".", "").replace("_", "").isalnum():
+            return False   # only a plain variable path is evaluated twice
+        actual = self.settings.open_array_bounds is OpenArrayBounds.ACTUAL
+        # under `open_array_bounds=actual` the kept one may come from a call site passing `lo`
+        same = f"_ar.data is not {base} or _ar.start != {start}" + (f" or _ar.lo != {lo}" if actual else "")
+        made = f"_ArrayRef({base}, {start}, {lo})" if lo else f"_ArrayRef({base}, {start})"
+        self.w.line(f"if (_ar := {place}) is None or {same}: {place} = {made}")
+        return True
+
+    def inlinable_fb(self, info: CallInfo) -> n.POU | None:
+        """`inline_small_fbs`: the body of a tiny FB (R_TRIG, F_TRIG, SR, RS: at most
+        `_INLINE_FB_STATEMENTS` assignments of its own variables from expressions of its own
+        variables and literals) is lowered into the caller, with the instance as the owner of its
+        variables: the same stores in the same order, one Python call less. None when not applied.
+        Not for native FBs, FBs with methods, properties, a base, temporaries, in-outs or
+        externals, nor when a POU extends the FB (a reference could reach a derived instance)."""
+        pou = info.pou
+        if not self.options.inline_small_fbs or pou.native or info.oo or pou.kind != "FUNCTION_BLOCK":
+            return None
+        if pou.methods or pou.properties or pou.base is not None or pou.interfaces:
+            return None
+        if any(v.section not in (INPUT, OUTPUT, LOCAL) for v in pou.variables.values()):
+            return None
+        node = self.a.pou_nodes.get(pou.key)
+        if node is None or not 0 < len(node.body) <= _INLINE_FB_STATEMENTS:
+            return None
+        if any(other.base == pou.key for other in self.model.pous.values()):
+            return None
+        for stmt in node.body:
+            if not isinstance(stmt, n.Assign) or not self.own_simple(stmt.target, pou, target=True) \
+                    or not self.own_simple(stmt.value, pou):
+                return None
+        return node
+
+    def own_simple(self, e: n.Expr, pou, target: bool = False) -> bool:
+        """A plain variable of `pou` (its own instance's), or for a value also a literal or
+        NOT/AND/OR/XOR of such: code that cannot call, index, fault or reach another object."""
+        if isinstance(e, n.Name):
+            ref = self.facts.names.get(id(e))
+            return ref is not None and ref.kind == "var" and ref.variable is not None \
+                and ref.variable.key in pou.variables and id(e) not in self.facts.auto_deref \
+                and isinstance(ref.variable.type, t.BoolType)
+        if target:
+            return False
+        if isinstance(e, n.BoolLiteral):
+            return True
+        if isinstance(e, n.Unary):
+            return e.op == "NOT" and self.own_simple(e.operand, pou)
+        if isinstance(e, n.Binary):
+            return e.op in ("AND", "AMP", "OR", "XOR") and self.own_simple(e.left, pou) \
+                and self.own_simple(e.right, pou)
+        return False
+
+    def inline_fb_body(self, inst: str, pou, node: n.POU) -> None:
+        """Lower `node`'s body here with `inst` (a plain name) as the owner of its variables."""
+        saved = (self.pou, self.owner, self.cached, self.used, self.assigned, self.range_vars, self.unchecked)
+        span = self.w.span
+        self.pou, self.owner = pou, inst
+        self.cached, self.used, self.assigned, self.range_vars, self.unchecked = {}, set(), set(), {}, set()
+        try:
+            self.body(node.body)
+        finally:
+            self.pou, self.owner, self.cached, self.used, self.assigned, self.range_vars, self.unchecked = saved
+            self.w.span = span
+
+
+def struct_leaves(st: t.StructType) -> int:
+    """Stores a field-by-field copy of `st` makes (an array field is one `_assign_array`)."""
+    count = 0
+    for _, fty in st.fields:
+        count += struct_leaves(fty) if isinstance(fty, t.StructType) else 1
+    return count
+
+
+_INLINE_COPY_LEAVES = 32
+_INLINE_FB_STATEMENTS = 4

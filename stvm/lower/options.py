@@ -30,8 +30,34 @@ class LowerOptions:
     no_wrap_in_range: bool = True
     # A chain of + - * in one integer type wraps once at its end (arithmetic modulo 2^n).
     ring_chain: bool = True
+    # Which variables a call caches is decided by the uses one call is expected to make (a use in
+    # one of the n ways of an IF or CASE counts 1/n, a use in a loop ten times; FOR variables always
+    # qualify, a range-FOR needs them) instead of all uses in the body: a CASE step machine's FB, idle on most calls, no longer loads and stores
+    # back every step's variables on every call. Safe: only chooses among the variables
+    # `cache_locals` may cache. Needs `cache_locals`.
+    hot_path_cache: bool = True
     # A STRUCT assignment copies nested STRUCT fields inline (one Python call per assignment).
     inline_struct_assign: bool = True
+    # A STRUCT input of an FB call (`fb(Socket := x)`) is copied field by field at the call site
+    # instead of through the struct's `_assign` (one Python call less per input and call). Safe:
+    # the same stores in the same order; a struct of more than 32 leaf fields keeps the call.
+    inline_input_copy: bool = True
+    # A native FB's call site calls its implementation (`fb._impl.call(fb, _ctx)`) instead of the
+    # generated `__call__` that only forwards to it: one Python frame less per call (the thesis
+    # makes ~30 socket and timer FB calls a scan). Safe: the same call, and the instance is of
+    # exactly that class (the checker lets no POU EXTEND a native FB).
+    direct_native_calls: bool = True
+    # A fixed array passed to an FB's ARRAY[*] parameter (`SendDat := Data[0]`) reuses the
+    # `ArrayRef` the instance holds from the previous call when it names the same list and element
+    # (no object built per call). Safe: an `ArrayRef` is immutable and a fixed array's list is never
+    # replaced, so the kept one is indistinguishable from a new one.
+    reuse_array_refs: bool = True
+    # The body of a tiny BOOL FB (R_TRIG, F_TRIG, SR, RS: at most four assignments among its own
+    # BOOL variables) is written into the caller, on the instance, instead of called (the thesis
+    # calls ten edge detectors a scan). Safe: the same stores in the same order on the same
+    # instance; not for FBs with methods, a base, temporaries or in-outs, nor FBs some POU extends.
+    # The debug build switches it off (breakpoints in the FB's body must hit).
+    inline_small_fbs: bool = True
 
     @classmethod
     def none(cls) -> "LowerOptions":

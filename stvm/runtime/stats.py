@@ -56,45 +56,71 @@ def _bucket_value(index: int) -> float:
 class TimingStats:
     """Durations in integer nanoseconds, in bounded memory (see the module docstring)."""
 
-    __slots__ = ("window", "_ring", "_pos", "_pending", "_histogram", "count", "total", "minimum",
-                 "maximum")
+    __slots__ = ("window", "_ring", "_pos", "_histogram", "_count", "_total", "_min", "_max")
 
     def __init__(self, window: int = 4096) -> None:
         if window <= 0:
             raise ValueError("window must be positive")
         self.window = window
         self._ring = array("q", bytes(8 * window))
-        self._pos = 0            # next slot of the ring
-        self._pending = 0        # ring values not yet in the histogram
+        self._pos = 0            # next slot of the ring = ring values not yet in the histogram
         self._histogram: "np.ndarray | None" = None
-        self.count = 0
-        self.total = 0
-        self.minimum: int | None = None
-        self.maximum: int | None = None
+        # count, sum, min and max of the values folded so far (the ring's pending part is added
+        # when read: `add`, once per scan, only stores)
+        self._count = 0
+        self._total = 0
+        self._min: int | None = None
+        self._max: int | None = None
 
     def add(self, value_ns: int) -> None:
         pos = self._pos
         self._ring[pos] = value_ns
         pos += 1
-        self._pos = 0 if pos == self.window else pos
-        self._pending += 1
-        self.count += 1
-        self.total += value_ns
-        if self.maximum is None or value_ns > self.maximum:
-            self.maximum = value_ns
-        if self.minimum is None or value_ns < self.minimum:
-            self.minimum = value_ns
-        if self._pending == self.window:
+        if pos == self.window:
             self._fold()
+            pos = 0
+        self._pos = pos
+
+    @property
+    def _pending(self) -> int:
+        return self._pos
+
+    @property
+    def count(self) -> int:
+        return self._count + self._pos
+
+    @property
+    def total(self) -> int:
+        return self._total + sum(self._ring[:self._pos])
+
+    @property
+    def minimum(self) -> int | None:
+        if not self._pos:
+            return self._min
+        low = min(self._ring[:self._pos])
+        return low if self._min is None or low < self._min else self._min
+
+    @property
+    def maximum(self) -> int | None:
+        if not self._pos:
+            return self._max
+        high = max(self._ring[:self._pos])
+        return high if self._max is None or high > self._max else self._max
 
     def _fold(self) -> None:
+        """The whole ring (all pending) into the histogram and the folded aggregates."""
         import numpy as np
+        ring = self._ring
+        self._count += self.window
+        self._total += sum(ring)
+        low, high = min(ring), max(ring)
+        self._min = low if self._min is None or low < self._min else self._min
+        self._max = high if self._max is None or high > self._max else self._max
         histogram = self._histogram
         if histogram is None:
             histogram = self._histogram = np.zeros(_BUCKETS, dtype=np.int64)
         histogram += np.bincount(_bucket_indices(np.frombuffer(self._ring, dtype=np.int64)),
                                  minlength=_BUCKETS)
-        self._pending = 0
 
     def __len__(self) -> int:
         return self.count

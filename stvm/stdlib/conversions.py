@@ -146,8 +146,16 @@ _HEX_TEXT = re.compile(r" *(?:16#)?([0-9A-Fa-f_]*[0-9A-Fa-f][0-9A-Fa-f_]*)")
 def text_to_integer(ctx, text: bytes, target: IntType, what: str) -> int:
     """STRING_TO_UINT and its siblings (W502 2-271, sysmac.md 6): leading blanks, a sign, digits
     with leading zeros and `_`; the value must fit the target."""
+    hexadecimal = target.bitstring and ctx.settings.byte_to_string_format is not ByteToStringFormat.DECIMAL
+    if not hexadecimal and type(text) is bytes and text.isdigit():
+        # only ASCII digits (the thesis converts its command id every scan while it waits for
+        # the robot): what the pattern below gives, without it
+        value = int(text)
+        if not target.lo <= value <= target.hi:
+            raise FunctionError(f"{what}: {value} is outside {target.lo}..{target.hi}")
+        return value
     chars = text.decode("latin-1")
-    if target.bitstring and ctx.settings.byte_to_string_format is not ByteToStringFormat.DECIMAL:
+    if hexadecimal:
         match = _HEX_TEXT.match(chars)
         if match is None:
             raise FunctionError(f"{what}: {text!r} is not a hexadecimal number")

@@ -410,7 +410,7 @@ class SocketRequestFB:
         self._last_scan: int | None = None
 
     def call(self, inst, ctx) -> None:
-        execute = bool(inst.Execute)
+        execute = True if inst.Execute else False   # bool() without a call: ~30 calls a scan
         if self._phase == IDLE and (not execute or self._previous_execute):
             # idle and no rising edge: nothing changes but the memory of this call (most calls
             # of the thesis's FBs: they call their socket FBs every scan)

@@ -71,6 +71,18 @@ def test_string_to_uint(text, result):
     assert call("STRING_TO_UINT", make_ctx(), text) == result
 
 
+@given(st.text(alphabet="0123456789", min_size=1, max_size=8))
+def test_string_to_uint_plain_digits(digits):
+    """Digits only (the fast path of text_to_integer): the number, or out of range."""
+    text = digits.encode()
+    if int(digits) <= 65535:
+        assert call("STRING_TO_UINT", make_ctx(), text) == int(digits)
+        assert call("STRING_TO_UINT", make_ctx(), b" " + text) == int(digits)   # the pattern path
+    else:
+        with pytest.raises(FunctionError, match="outside"):
+            call("STRING_TO_UINT", make_ctx(), text)
+
+
 @pytest.mark.parametrize("text", [b"", b" ", b"abc", b"12a", b"12 ", b"-1", b"65536", b"1.5",
                                   b"_", b"- 1", b"16#10"])
 def test_string_to_uint_errors(text):
