@@ -26,6 +26,9 @@ ContextualLexer: `lexers` per state, each BasicLexer with `scanner._mres`, `call
 
 from __future__ import annotations
 
+import re
+import re._constants as sre_c   # the regex parser's opcodes (what `_may_start_with` inspects)
+import re._parser as sre_parse
 from bisect import bisect_right
 from itertools import accumulate
 from operator import itemgetter
@@ -94,11 +97,58 @@ class Meta2(tuple):
         return self[1] - lines[bisect_right(lines, self[1]) - 1] + 1
 
 
+class LazyToken(Token):
+    """A kept terminal as the driver makes it: a Lark Token whose line and column are worked
+    out from its offsets when asked (most tokens are only read as text: names, numbers,
+    operators). `_lines` is the parse's line_starts list, shared by all its tokens."""
+
+    __slots__ = ("_lines",)
+
+    @property
+    def line(self):
+        return bisect_right(self._lines, self.start_pos)
+
+    @property
+    def column(self):
+        lines = self._lines
+        return self.start_pos - lines[bisect_right(lines, self.start_pos) - 1] + 1
+
+    @property
+    def end_line(self):
+        return bisect_right(self._lines, self.end_pos)
+
+    @property
+    def end_column(self):
+        lines = self._lines
+        return self.end_pos - lines[bisect_right(lines, self.end_pos) - 1] + 1
+
+    def eager(self) -> Token:
+        """The same token as a plain Lark Token (what pickling and copying make of it)."""
+        return Token(self.type, self.value, self.start_pos, self.line, self.column, self.end_line,
+                     self.end_column, self.end_pos)
+
+    def __reduce__(self):
+        return self.eager().__reduce__()
+
+    def __deepcopy__(self, memo):
+        return self.eager()
+
+
 def line_starts(text: str) -> list[int]:
     """Offsets where each line starts (index 0 is line 1)."""
     starts = [0]
     starts += accumulate(len(line) + 1 for line in text.split("\n"))
     return starts
+
+
+def passes_child(fn):
+    """Mark a one-child callback that returns its child unchanged (`return items[0]`): the
+    driver then skips the call and its meta, keeping the tree depth it stands for."""
+    fn.passes_child = True
+    return fn
+
+
+_PASS = object()   # a step of a one-child chain whose callback `passes_child`
 
 
 # kinds of reduction plan (see Driver._plan)
@@ -125,6 +175,89 @@ def _multi_match(mres):
                 return m
         return None
     return match
+
+
+def _space_class(pattern: str) -> frozenset[str] | None:
+    """The characters of a whitespace-run terminal (`[ \\t\\f\\r\\n]+`, common.WS), else None."""
+    try:
+        parsed = list(sre_parse.parse(pattern))
+    except re.error:
+        return None
+    while len(parsed) == 1 and parsed[0][0] is sre_c.SUBPATTERN:
+        parsed = list(parsed[0][1][3])
+    if len(parsed) != 1 or parsed[0][0] is not sre_c.MAX_REPEAT or parsed[0][1][0] < 1:
+        return None
+    body = list(parsed[0][1][2])
+    if len(body) != 1 or body[0][0] is not sre_c.IN:
+        return None
+    chars = set()
+    for op, av in body[0][1]:
+        if op is not sre_c.LITERAL:
+            return None
+        chars.add(chr(av))
+    return frozenset(chars) if chars and all(c.isspace() for c in chars) else None
+
+
+def _may_start_with(items, chars: frozenset[str]) -> bool:
+    """Can a match of the parsed pattern `items` start with one of `chars`? True when unsure."""
+    for op, av in items:
+        if op is sre_c.LITERAL:
+            return chr(av) in chars
+        if op is sre_c.IN:
+            for kind, value in av:
+                if kind is sre_c.LITERAL:
+                    if chr(value) in chars:
+                        return True
+                elif kind is sre_c.RANGE:
+                    if any(value[0] <= ord(c) <= value[1] for c in chars):
+                        return True
+                elif not (kind is sre_c.CATEGORY and value in (sre_c.CATEGORY_DIGIT, sre_c.CATEGORY_WORD)):
+                    return True
+            return False
+        if op is sre_c.SUBPATTERN:
+            return _may_start_with(av[3], chars)
+        if op is sre_c.BRANCH:
+            return any(_may_start_with(branch, chars) for branch in av[1])
+        if op in (sre_c.MAX_REPEAT, sre_c.MIN_REPEAT, sre_c.POSSESSIVE_REPEAT):
+            if _may_start_with(av[2], chars):
+                return True
+            if av[0] == 0:
+                continue    # may match nothing: what follows may come first
+            return False
+        if op in (sre_c.AT, sre_c.ASSERT, sre_c.ASSERT_NOT):
+            continue        # zero width
+        return True
+    return True             # may match the empty string
+
+
+def _skipping_space(basic) -> Any:
+    """The scanner of `basic` (a Lark BasicLexer) with the runs of its ignored whitespace
+    terminal skipped in the same match (`[ \\t…]*+(?:terminals)`), or None when that could change
+    what it matches: no such terminal, or a terminal that may start with one of its characters.
+    Half the matches of a scan are whitespace; this saves a match and a loop turn for each."""
+    scanner = basic.scanner
+    space = None
+    for term in scanner.terminals:
+        if term.name in basic.ignore_types:
+            chars = _space_class(term.pattern.to_regexp())
+            if chars is not None:
+                space = chars
+                break
+    if space is None:
+        return None
+    for term in scanner.terminals:
+        chars = _space_class(term.pattern.to_regexp())
+        if chars is not None and term.name in basic.ignore_types:
+            continue
+        try:
+            parsed = sre_parse.parse(term.pattern.to_regexp(), scanner.g_regex_flags)
+        except re.error:
+            return None
+        if _may_start_with(parsed, space):
+            return None
+    prefix = "[" + "".join(re.escape(c) for c in sorted(space)) + "]*+"
+    mres = [re.compile(f"{prefix}(?:{mre.pattern})", mre.flags) for mre in scanner._mres]
+    return mres[0].match if len(mres) == 1 else _multi_match(mres)
 
 
 class Driver:
@@ -208,7 +341,8 @@ class Driver:
                             raise Unsupported(f"lexer callback for {type_} is not an UnlessCallback with fullmatch")
                         retype[type_] = (cb.scanner, {})
                     match = mres[0].match if len(mres) == 1 else _multi_match(mres)
-                    entry = (match, frozenset(basic.ignore_types), retype, notify)
+                    fast = _skipping_space(basic)
+                    entry = (fast or match, match, frozenset(basic.ignore_types), retype, notify)
                     by_lexer[id(basic)] = entry
                 scanners.append(entry)
         except AttributeError as exc:
@@ -227,7 +361,8 @@ class Driver:
                 nxt = act.get(below)
             elif act.__class__ is tuple and act[0] == _ONE:
                 nxt = act[1].get(below)
-                steps.append((act[2], act[3]))
+                fn = act[2]
+                steps.append((_PASS if getattr(fn, "passes_child", False) else fn, act[3]))
             else:
                 break
             if nxt is None:
@@ -350,37 +485,43 @@ class Driver:
         new_str = _new_str
         new_meta = tuple.__new__
         token_cls = Token
+        lazy_cls = LazyToken
         bisect = bisect_right
         max_depth = MAX_DEPTH
         int_ = int
         dict_ = dict
         tuple_ = tuple
         chains = self._chains
+        pass_ = _PASS
         m = None
         end = 0
         while True:
             state = states[-1]
             # ---- next token, with the scanner of the current state
-            match, ignore, retype, notify = scanners[state]
+            match, plain_match, ignore, retype, notify = scanners[state]
             while True:
                 if pos >= n:
                     ttype = "$END"
                     break
                 m = match(text, pos)
                 if m is None:
-                    raise Fallback
+                    # the space-skipping scanner found no token after the spaces: the end of the
+                    # text (or an error) — the plain scanner takes the spaces as a token
+                    m = plain_match(text, pos)
+                    if m is None:
+                        raise Fallback
                 ttype = m.lastgroup
-                end = m.end()
+                pos, end = m.span(ttype)
                 if ttype in ignore:
                     if notify and ttype in notify:   # what Lark's lexer does for an ignored token
                         line = bisect(lines, pos)
-                        notify[ttype](token_cls(ttype, m.group(), pos, line, pos - lines[line - 1] + 1))
+                        notify[ttype](token_cls(ttype, text[pos:end], pos, line, pos - lines[line - 1] + 1))
                     pos = end
                     continue
                 if retype:
                     rt = retype.get(ttype)
                     if rt is not None:
-                        value = m.group()
+                        value = text[pos:end]
                         memo = rt[1]
                         new = memo.get(value, 0)
                         if new == 0:
@@ -395,22 +536,13 @@ class Driver:
                 if cls is int_:                                         # shift
                     states.append(act)
                     if ttype in kept:
-                        value = m.group()
-                        tok = new_str(token_cls, value)
+                        value = text[pos:end]
+                        tok = new_str(lazy_cls, value)
                         tok.type = ttype
                         tok.value = value
                         tok.start_pos = pos
                         tok.end_pos = end
-                        li = bisect(lines, pos)
-                        tok.line = li
-                        tok.column = col = pos - lines[li - 1] + 1
-                        if "\n" in value:
-                            lj = bisect(lines, end)
-                            tok.end_line = lj
-                            tok.end_column = end - lines[lj - 1] + 1
-                        else:
-                            tok.end_line = li
-                            tok.end_column = col + end - pos
+                        tok._lines = lines
                         values.append(tok)
                     else:
                         values.append(None)
@@ -434,8 +566,13 @@ class Driver:
                                 depth = sp[2] + 1
                                 if depth >= max_depth:
                                     raise Fallback
+                                if fn is pass_:
+                                    sp = (sp[0], sp[1], depth)
+                                    continue
                                 meta = new_meta(Meta2, (sp[0], sp[1], lines))
                                 sp = (sp[0], sp[1], depth)
+                            elif fn is pass_:
+                                continue
                             else:
                                 meta = new_meta(Meta2, (-1, -1, lines))
                             if fn is not None:
