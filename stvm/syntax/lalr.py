@@ -26,9 +26,6 @@ ContextualLexer: `lexers` per state, each BasicLexer with `scanner._mres`, `call
 
 from __future__ import annotations
 
-import re
-import re._constants as sre_c   # the regex parser's opcodes (what `_may_start_with` inspects)
-import re._parser as sre_parse
 from bisect import bisect_right
 from itertools import accumulate
 from operator import itemgetter
@@ -177,89 +174,6 @@ def _multi_match(mres):
     return match
 
 
-def _space_class(pattern: str) -> frozenset[str] | None:
-    """The characters of a whitespace-run terminal (`[ \\t\\f\\r\\n]+`, common.WS), else None."""
-    try:
-        parsed = list(sre_parse.parse(pattern))
-    except re.error:
-        return None
-    while len(parsed) == 1 and parsed[0][0] is sre_c.SUBPATTERN:
-        parsed = list(parsed[0][1][3])
-    if len(parsed) != 1 or parsed[0][0] is not sre_c.MAX_REPEAT or parsed[0][1][0] < 1:
-        return None
-    body = list(parsed[0][1][2])
-    if len(body) != 1 or body[0][0] is not sre_c.IN:
-        return None
-    chars = set()
-    for op, av in body[0][1]:
-        if op is not sre_c.LITERAL:
-            return None
-        chars.add(chr(av))
-    return frozenset(chars) if chars and all(c.isspace() for c in chars) else None
-
-
-def _may_start_with(items, chars: frozenset[str]) -> bool:
-    """Can a match of the parsed pattern `items` start with one of `chars`? True when unsure."""
-    for op, av in items:
-        if op is sre_c.LITERAL:
-            return chr(av) in chars
-        if op is sre_c.IN:
-            for kind, value in av:
-                if kind is sre_c.LITERAL:
-                    if chr(value) in chars:
-                        return True
-                elif kind is sre_c.RANGE:
-                    if any(value[0] <= ord(c) <= value[1] for c in chars):
-                        return True
-                elif not (kind is sre_c.CATEGORY and value in (sre_c.CATEGORY_DIGIT, sre_c.CATEGORY_WORD)):
-                    return True
-            return False
-        if op is sre_c.SUBPATTERN:
-            return _may_start_with(av[3], chars)
-        if op is sre_c.BRANCH:
-            return any(_may_start_with(branch, chars) for branch in av[1])
-        if op in (sre_c.MAX_REPEAT, sre_c.MIN_REPEAT, sre_c.POSSESSIVE_REPEAT):
-            if _may_start_with(av[2], chars):
-                return True
-            if av[0] == 0:
-                continue    # may match nothing: what follows may come first
-            return False
-        if op in (sre_c.AT, sre_c.ASSERT, sre_c.ASSERT_NOT):
-            continue        # zero width
-        return True
-    return True             # may match the empty string
-
-
-def _skipping_space(basic) -> Any:
-    """The scanner of `basic` (a Lark BasicLexer) with the runs of its ignored whitespace
-    terminal skipped in the same match (`[ \\t…]*+(?:terminals)`), or None when that could change
-    what it matches: no such terminal, or a terminal that may start with one of its characters.
-    Half the matches of a scan are whitespace; this saves a match and a loop turn for each."""
-    scanner = basic.scanner
-    space = None
-    for term in scanner.terminals:
-        if term.name in basic.ignore_types:
-            chars = _space_class(term.pattern.to_regexp())
-            if chars is not None:
-                space = chars
-                break
-    if space is None:
-        return None
-    for term in scanner.terminals:
-        chars = _space_class(term.pattern.to_regexp())
-        if chars is not None and term.name in basic.ignore_types:
-            continue
-        try:
-            parsed = sre_parse.parse(term.pattern.to_regexp(), scanner.g_regex_flags)
-        except re.error:
-            return None
-        if _may_start_with(parsed, space):
-            return None
-    prefix = "[" + "".join(re.escape(c) for c in sorted(space)) + "]*+"
-    mres = [re.compile(f"{prefix}(?:{mre.pattern})", mre.flags) for mre in scanner._mres]
-    return mres[0].match if len(mres) == 1 else _multi_match(mres)
-
-
 class Driver:
     """Built once per Lark object, start symbol and callback class; `parse(text, handler)`
     runs it. `handler_type` has one function per rule name (or alias) taking
@@ -341,8 +255,7 @@ class Driver:
                             raise Unsupported(f"lexer callback for {type_} is not an UnlessCallback with fullmatch")
                         retype[type_] = (cb.scanner, {})
                     match = mres[0].match if len(mres) == 1 else _multi_match(mres)
-                    fast = _skipping_space(basic)
-                    entry = (fast or match, match, frozenset(basic.ignore_types), retype, notify)
+                    entry = (match, frozenset(basic.ignore_types), retype, notify)
                     by_lexer[id(basic)] = entry
                 scanners.append(entry)
         except AttributeError as exc:
@@ -498,30 +411,26 @@ class Driver:
         while True:
             state = states[-1]
             # ---- next token, with the scanner of the current state
-            match, plain_match, ignore, retype, notify = scanners[state]
+            match, ignore, retype, notify = scanners[state]
             while True:
                 if pos >= n:
                     ttype = "$END"
                     break
                 m = match(text, pos)
                 if m is None:
-                    # the space-skipping scanner found no token after the spaces: the end of the
-                    # text (or an error) — the plain scanner takes the spaces as a token
-                    m = plain_match(text, pos)
-                    if m is None:
-                        raise Fallback
+                    raise Fallback
                 ttype = m.lastgroup
-                pos, end = m.span(ttype)
+                end = m.end()
                 if ttype in ignore:
                     if notify and ttype in notify:   # what Lark's lexer does for an ignored token
                         line = bisect(lines, pos)
-                        notify[ttype](token_cls(ttype, text[pos:end], pos, line, pos - lines[line - 1] + 1))
+                        notify[ttype](token_cls(ttype, m.group(), pos, line, pos - lines[line - 1] + 1))
                     pos = end
                     continue
                 if retype:
                     rt = retype.get(ttype)
                     if rt is not None:
-                        value = text[pos:end]
+                        value = m.group()
                         memo = rt[1]
                         new = memo.get(value, 0)
                         if new == 0:
@@ -536,7 +445,7 @@ class Driver:
                 if cls is int_:                                         # shift
                     states.append(act)
                     if ttype in kept:
-                        value = text[pos:end]
+                        value = m.group()
                         tok = new_str(lazy_cls, value)
                         tok.type = ttype
                         tok.value = value
