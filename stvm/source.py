@@ -66,6 +66,11 @@ class Span:
     def __str__(self) -> str:
         return f"{self.file}:{self.line}:{self.column}"
 
+    def __reduce__(self):
+        # the fields as constructor arguments: pickled and unpickled as fast as the unslotted
+        # class was (a slotted dataclass's own state methods run per field in Python)
+        return (Span, (self.file, self.line, self.column, self.end_line, self.end_column))
+
 
 NO_SPAN = Span("<builtin>", 0, 0, 0, 0)   # a declaration stvm itself made (builtins, defaults)
 
