@@ -94,11 +94,58 @@ class Meta2(tuple):
         return self[1] - lines[bisect_right(lines, self[1]) - 1] + 1
 
 
+class LazyToken(Token):
+    """A kept terminal as the driver makes it: a Lark Token whose line and column are worked
+    out from its offsets when asked (most tokens are only read as text: names, numbers,
+    operators). `_lines` is the parse's line_starts list, shared by all its tokens."""
+
+    __slots__ = ("_lines",)
+
+    @property
+    def line(self):
+        return bisect_right(self._lines, self.start_pos)
+
+    @property
+    def column(self):
+        lines = self._lines
+        return self.start_pos - lines[bisect_right(lines, self.start_pos) - 1] + 1
+
+    @property
+    def end_line(self):
+        return bisect_right(self._lines, self.end_pos)
+
+    @property
+    def end_column(self):
+        lines = self._lines
+        return self.end_pos - lines[bisect_right(lines, self.end_pos) - 1] + 1
+
+    def eager(self) -> Token:
+        """The same token as a plain Lark Token (what pickling and copying make of it)."""
+        return Token(self.type, self.value, self.start_pos, self.line, self.column, self.end_line,
+                     self.end_column, self.end_pos)
+
+    def __reduce__(self):
+        return self.eager().__reduce__()
+
+    def __deepcopy__(self, memo):
+        return self.eager()
+
+
 def line_starts(text: str) -> list[int]:
     """Offsets where each line starts (index 0 is line 1)."""
     starts = [0]
     starts += accumulate(len(line) + 1 for line in text.split("\n"))
     return starts
+
+
+def passes_child(fn):
+    """Mark a one-child callback that returns its child unchanged (`return items[0]`): the
+    driver then skips the call and its meta, keeping the tree depth it stands for."""
+    fn.passes_child = True
+    return fn
+
+
+_PASS = object()   # a step of a one-child chain whose callback `passes_child`
 
 
 # kinds of reduction plan (see Driver._plan)
@@ -227,7 +274,8 @@ class Driver:
                 nxt = act.get(below)
             elif act.__class__ is tuple and act[0] == _ONE:
                 nxt = act[1].get(below)
-                steps.append((act[2], act[3]))
+                fn = act[2]
+                steps.append((_PASS if getattr(fn, "passes_child", False) else fn, act[3]))
             else:
                 break
             if nxt is None:
@@ -350,12 +398,14 @@ class Driver:
         new_str = _new_str
         new_meta = tuple.__new__
         token_cls = Token
+        lazy_cls = LazyToken
         bisect = bisect_right
         max_depth = MAX_DEPTH
         int_ = int
         dict_ = dict
         tuple_ = tuple
         chains = self._chains
+        pass_ = _PASS
         m = None
         end = 0
         while True:
@@ -396,21 +446,12 @@ class Driver:
                     states.append(act)
                     if ttype in kept:
                         value = m.group()
-                        tok = new_str(token_cls, value)
+                        tok = new_str(lazy_cls, value)
                         tok.type = ttype
                         tok.value = value
                         tok.start_pos = pos
                         tok.end_pos = end
-                        li = bisect(lines, pos)
-                        tok.line = li
-                        tok.column = col = pos - lines[li - 1] + 1
-                        if "\n" in value:
-                            lj = bisect(lines, end)
-                            tok.end_line = lj
-                            tok.end_column = end - lines[lj - 1] + 1
-                        else:
-                            tok.end_line = li
-                            tok.end_column = col + end - pos
+                        tok._lines = lines
                         values.append(tok)
                     else:
                         values.append(None)
@@ -434,8 +475,13 @@ class Driver:
                                 depth = sp[2] + 1
                                 if depth >= max_depth:
                                     raise Fallback
+                                if fn is pass_:
+                                    sp = (sp[0], sp[1], depth)
+                                    continue
                                 meta = new_meta(Meta2, (sp[0], sp[1], lines))
                                 sp = (sp[0], sp[1], depth)
+                            elif fn is pass_:
+                                continue
                             else:
                                 meta = new_meta(Meta2, (-1, -1, lines))
                             if fn is not None:

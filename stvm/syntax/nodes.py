@@ -6,9 +6,10 @@ means reformatted source gives equal trees.
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 
-from stvm.source import NO_SPAN, Span  # every node carries one (`n.Span`)
+from stvm.source import NO_SPAN, Span, fast_frozen_init  # every node carries one (`n.Span`)
 
 
 def _span() -> Span:
@@ -475,3 +476,10 @@ class CompilationUnit:
     configurations: tuple[Configuration, ...]
     namespace_names: tuple[tuple[str, Span], ...] = ()   # every NAMESPACE name as written
     member_bases: frozenset[str] = frozenset()   # lower-cased X of every `X.y` (semantics/qualified.py)
+
+
+for _cls in list(globals().values()):
+    if isinstance(_cls, type) and dataclasses.is_dataclass(_cls) and _cls.__module__ == __name__ \
+            and _cls.__dataclass_params__.frozen:
+        fast_frozen_init(_cls)
+del _cls

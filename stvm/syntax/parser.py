@@ -118,6 +118,12 @@ class _ToNodes:
         return _span_of(self.file, meta)
 
     def _ts(self, tok: Token) -> n.Span:
+        if tok.__class__ is lalr.LazyToken:   # the fast driver's: offsets, lines found here
+            lines = tok._lines
+            start, end = tok.start_pos, tok.end_pos
+            li = bisect_right(lines, start)
+            lj = bisect_right(lines, end)
+            return n.Span(self.file, li, start - lines[li - 1] + 1, lj, end - lines[lj - 1] + 1)
         return _tok_span(self.file, tok)
 
     # -- top level
@@ -203,6 +209,7 @@ class _ToNodes:
     def pou_kind(self, meta, items):
         return str(items[0].type)
 
+    @lalr.passes_child
     def return_type(self, meta, items):
         return items[0]
 
@@ -446,6 +453,7 @@ class _ToNodes:
         return n.Repeat(items[0], items[1], self._s(meta))
 
     # -- expressions
+    @lalr.passes_child
     def binary_op(self, meta, items):
         return items[0]
 
@@ -473,6 +481,7 @@ class _ToNodes:
         op, operand = items
         return n.Unary(str(op.type), operand, self._s(meta))
 
+    @lalr.passes_child
     def name(self, meta, items):
         return items[0]
 

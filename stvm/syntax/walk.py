@@ -14,40 +14,53 @@ LOOP_WEIGHT = 10
 def name_uses(body) -> dict[str, int]:
     """How often each single-part name is used in a statement list, loops weighted."""
     counts: dict[str, int] = {}
-
-    def visit(node, weight: int) -> None:
-        if isinstance(node, tuple):
+    get = counts.get
+    stack: list = [(node, 1) for node in body]
+    pop, push = stack.pop, stack.append
+    fields_of, kind_of = _FIELDS, _KIND
+    name_cls, loops = n.Name, _LOOPS
+    while stack:
+        node, weight = pop()
+        cls = node.__class__
+        kind = kind_of.get(cls)
+        if kind is None:
+            kind = _kind(cls)
+        if kind == 1:
             for item in node:
-                visit(item, weight)
-            return
-        if isinstance(node, n.Name) and len(node.parts) == 1:
+                push((item, weight))
+            continue
+        if kind == 0:
+            continue
+        if cls is name_cls and len(node.parts) == 1:
             key = node.parts[0].lower()
-            counts[key] = counts.get(key, 0) + weight
-        inner = weight * LOOP_WEIGHT if isinstance(node, (n.For, n.While, n.Repeat)) else weight
-        for name in getattr(node, "__dataclass_fields__", ()):
-            if name != "span":
-                value = getattr(node, name)
-                if isinstance(value, tuple) or hasattr(value, "__dataclass_fields__"):
-                    visit(value, inner)
-
-    visit(tuple(body), 1)
+            counts[key] = get(key, 0) + weight
+        if cls in loops:
+            weight *= LOOP_WEIGHT
+        for name in fields_of[cls]:
+            push((getattr(node, name), weight))
     return counts
 
 
 def walk(body):
-    """Every node under a statement list (statements, expressions, arguments)."""
+    """Every node under a statement list (statements, expressions, arguments), each before the
+    nodes inside it (a stack: the last child first)."""
     stack: list = list(body)
+    pop, push, extend = stack.pop, stack.append, stack.extend
+    fields_of, kind_of = _FIELDS, _KIND
     while stack:
-        node = stack.pop()
-        if isinstance(node, tuple):
-            stack.extend(node)
+        node = pop()
+        cls = node.__class__
+        kind = kind_of.get(cls)
+        if kind is None:
+            kind = _kind(cls)
+        if kind == 1:
+            extend(node)
+            continue
+        if kind == 0:
             continue
         yield node
-        for name in getattr(node, "__dataclass_fields__", ()):
-            if name != "span":
-                value = getattr(node, name)
-                if isinstance(value, tuple) or hasattr(value, "__dataclass_fields__"):
-                    stack.append(value)
+        for name in fields_of[cls]:
+            push(getattr(node, name))
 
 
 def root_name(expr) -> str | None:
@@ -55,6 +68,23 @@ def root_name(expr) -> str | None:
     while isinstance(expr, (n.Member, n.Index, n.BitAccess)):
         expr = expr.base
     return expr.parts[0].lower() if isinstance(expr, n.Name) and len(expr.parts) == 1 else None
+
+
+_FIELDS: dict[type, tuple[str, ...]] = {}   # per node class: the fields that can hold nodes
+_KIND: dict[type, int] = {}                 # 0: not a node, 1: tuple (splice), 2: node
+_LOOPS = (n.For, n.While, n.Repeat)
+
+
+def _kind(cls) -> int:
+    if issubclass(cls, tuple):
+        kind = 1
+    elif hasattr(cls, "__dataclass_fields__"):
+        kind = 2
+        _FIELDS[cls] = _walk_fields(cls)
+    else:
+        kind = 0
+    _KIND[cls] = kind
+    return kind
 
 
 _WALK_FIELDS: dict[type, tuple[str, ...]] = {}
