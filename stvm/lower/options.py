@@ -31,10 +31,11 @@ class LowerOptions:
     # A chain of + - * in one integer type wraps once at its end (arithmetic modulo 2^n).
     ring_chain: bool = True
     # Which variables a call caches is decided by the uses one call is expected to make (a use in
-    # one of the n ways of an IF or CASE counts 1/n, a use in a loop ten times; FOR variables always
-    # qualify, a range-FOR needs them) instead of all uses in the body: a CASE step machine's FB, idle on most calls, no longer loads and stores
-    # back every step's variables on every call. Safe: only chooses among the variables
-    # `cache_locals` may cache. Needs `cache_locals`.
+    # one of the n ways of an IF or CASE counts 1/n, a use in a loop ten times; FOR variables
+    # always qualify, a range-FOR needs them) instead of all uses in the body: a CASE step
+    # machine's FB, idle on most calls, no longer loads and stores back every step's variables
+    # on every call. Safe: only chooses among the variables `cache_locals` may cache. Needs
+    # `cache_locals`.
     hot_path_cache: bool = True
     # A STRUCT assignment copies nested STRUCT fields inline (one Python call per assignment).
     inline_struct_assign: bool = True
