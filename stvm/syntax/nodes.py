@@ -7,6 +7,7 @@ means reformatted source gives equal trees.
 from __future__ import annotations
 
 import dataclasses
+import itertools
 from dataclasses import dataclass, field
 
 from stvm.source import NO_SPAN, Span, fast_frozen_init  # every node carries one (`n.Span`)
@@ -16,9 +17,29 @@ def _span() -> Span:
     return field(default=NO_SPAN, repr=False, compare=False)
 
 
+_next_node_id = itertools.count(1).__next__
+
+
 class Node:
-    __slots__ = ()   # the node classes are slotted dataclasses: no per-node __dict__ (memory)
+    # The node classes are slotted dataclasses: no per-node __dict__ (memory). `_nid` is the
+    # node's identity for the facts later stages keep about it (see `nid`).
+    __slots__ = ("_nid",)
     span: Span
+
+    @property
+    def nid(self) -> int:
+        """This node's stable identity: a number drawn on first use and kept for the node's life.
+
+        Nodes compare by value (two `x := 1;` are equal), so facts about one node cannot be keyed
+        by the node itself; `id(node)` is reused once a node is freed, which forced holders of
+        such maps to keep the nodes alive. The number is not pickled: a node read back from a
+        cache is a new node and draws a new one."""
+        try:
+            return self._nid
+        except AttributeError:
+            nid = _next_node_id()
+            object.__setattr__(self, "_nid", nid)
+            return nid
 
 
 # ---- expressions ---------------------------------------------------------------------------
