@@ -12,6 +12,7 @@ come only from the layout's slots; nothing here knows how lowering spells them.
 
 from __future__ import annotations
 
+import functools
 import re
 from typing import Any, Mapping
 
@@ -34,8 +35,12 @@ class UnboundInOut(PathError):
 _PATH_TOKEN = re.compile(r"\s*(?:([A-Za-z_][A-Za-z0-9_]*)|\[([^\]]*)\]|(\.)|(\^))")
 
 
-def parse_path(path: str) -> list[tuple[str, str]]:
-    """(kind, text) tokens of a path: ("name", "Q"), ("index", "1, 2"), ("deref", "^")."""
+@functools.lru_cache(maxsize=4096)
+def parse_path(path: str) -> tuple[tuple[str, str], ...]:
+    """(kind, text) tokens of a path: ("name", "Q"), ("index", "1, 2"), ("deref", "^").
+
+    Memoised (bounded): scenarios, the demo, the HMI and OPC UA read the same few paths every
+    scan, and parsing one costs about as much as the rest of a `vm.get`."""
     tokens = []
     pos = 0
     while pos < len(path):
@@ -51,7 +56,7 @@ def parse_path(path: str) -> list[tuple[str, str]]:
             tokens.append(("deref", "^"))
     if not tokens or tokens[0][0] != "name":
         raise PathError(f"malformed variable path {path!r}")
-    return tokens
+    return tuple(tokens)
 
 
 class VariableAccess:
