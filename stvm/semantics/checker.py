@@ -116,6 +116,7 @@ class Checker:
         self.type_inits: dict[str, dict[str, object]] = {}
         self.pous: dict[str, POUInfo] = {}
         self.globals: dict[str, Variable] = {}
+        self.any_static = False    # a VAR_STAT was hoisted to a global (hoist_static_variables)
         self.global_nodes: dict[str, n.VarDecl] = {}
         self.enumerators: dict[str, list[tuple[t.EnumType, int]]] = {}
         self.structs: dict[str, t.Type] = {}
@@ -349,6 +350,8 @@ class Checker:
             order = [name.lower() for block in pou.var_blocks for decl in block.decls for name, _ in decl.names]
             rank = {key: i for i, key in reversed(list(enumerate(order)))}
             info.variables = dict(sorted(info.variables.items(), key=lambda kv: rank.get(kv[0], len(order))))
+        if any(block.kind == "VAR_STAT" for block in pou.var_blocks):
+            self.hoist_static_variables(pou, info)
 
     def declare_members(self, pou: n.POU, info: POUInfo) -> None:
         """The METHODs and PROPERTYs of an FB, PROGRAM or INTERFACE (signatures; bodies are
@@ -403,6 +406,24 @@ class Checker:
             self.error(f"a {what} cannot be both ABSTRACT and FINAL", span, "E060")
         return (access[0] if access else "PUBLIC"), abstract, final
 
+    def hoist_static_variables(self, pou, info: POUInfo) -> None:
+        """CODESYS VAR_STAT (of a FUNCTION, FB, PROGRAM or METHOD): one variable for the POU,
+        kept across calls and shared by every instance of an FB, i.e. a global under a name no
+        ST declaration takes (`FB_Axis__Move__calls`); the POU's name resolves to it
+        (`stat_vars`, body.py `static_variable`). A VAR_STAT CONSTANT stays a local constant."""
+        static = [name.lower() for block in pou.var_blocks if block.kind == "VAR_STAT" and not block.constant
+                  for decl in block.decls for name, _ in decl.names]
+        for key in static:
+            var = info.variables.get(key)
+            if var is None or var.section != LOCAL:
+                continue    # a duplicate, already reported
+            hidden = Variable(f"{info.qualname.replace('.', '__')}__{var.name}", GLOBAL, var.type, False, var.span)
+            hidden.init = var.init
+            self.globals[hidden.key] = hidden
+            del info.variables[key]
+            info.stat_vars[key] = hidden.key
+            self.any_static = True
+
     def declare_method(self, m: n.Method, owner: POUInfo, pou: n.POU, accessor: str = "",
                        prop_type: t.Type | None = None) -> POUInfo:
         qual = owner.qualname + "." + (f"__{accessor.lower()}_" if accessor else "") + m.name
@@ -422,9 +443,9 @@ class Checker:
         self.declare_variables(m, info, pou.namespace)
         self.declaring = outer
         for block in m.var_blocks:
-            if block.kind == "VAR_STAT":
-                self.error("VAR_STAT is not supported in a method (use VAR_INST: kept in the instance)",
-                           block.span, "E012")
+            if block.kind == "VAR_STAT" and pou.kind == "INTERFACE":
+                self.error("an interface method declares only inputs, outputs and in-outs, not VAR_STAT",
+                           block.span, "E063")
             elif block.kind == "VAR_INST" and pou.kind not in ("FUNCTION_BLOCK", "PROGRAM"):
                 self.error("VAR_INST is only allowed in a method of a FUNCTION_BLOCK or PROGRAM", block.span, "E012")
         for key, var in list(info.variables.items()):

@@ -593,3 +593,55 @@ f.B.3 := TRUE;             (* GET, set bit 3, SET *)
 END_PROGRAM
 """
     assert run_st(src, cycles=1, prints=["Main.k", "Main.f.w"]) == {"Main.k": 7, "Main.f.w": 8}
+
+
+VAR_STAT_SOURCE = """
+FUNCTION Counter : INT
+VAR_STAT calls : INT := 100; END_VAR
+VAR fresh : INT; END_VAR
+calls := calls + 1;
+fresh := fresh + 1;
+Counter := calls * 10 + fresh;
+END_FUNCTION
+
+FUNCTION_BLOCK FB_Base
+VAR_STAT made : INT; END_VAR
+made := made + 1;
+END_FUNCTION_BLOCK
+
+FUNCTION_BLOCK FB_A EXTENDS FB_Base
+VAR_STAT shared : INT; END_VAR
+VAR own : INT; END_VAR
+SUPER^();
+shared := shared + 1;
+own := own + 1;
+
+METHOD Bump : INT
+VAR_STAT n : INT; END_VAR
+VAR fresh : INT; END_VAR
+n := n + 1;
+fresh := fresh + 1;
+shared := shared + 10;
+Bump := n * 100 + fresh + made * 1000;
+END_METHOD
+END_FUNCTION_BLOCK
+
+PROGRAM Main
+VAR a, b : FB_A; r1, r2, c : INT; END_VAR
+c := Counter();
+c := Counter();
+a(); b();
+r1 := a.Bump();
+r2 := b.Bump();
+END_PROGRAM
+"""
+
+
+def test_var_stat_is_kept_across_calls_and_shared_by_every_instance():
+    values = run_st(VAR_STAT_SOURCE, cycles=2, prints=["Main.c", "Main.r1", "Main.r2", "Main.a.own",
+                                                      "FB_A__shared", "FB_A__Bump__n", "Counter__calls"])
+    # Counter: 4 calls (its VAR starts fresh); shared: per scan +1 from each body, +10 from each Bump;
+    # the method's VAR_STAT n counts the calls of every instance; the base's VAR_STAT is seen by the method
+    assert values == {"Main.c": 1041, "Main.r1": 4301, "Main.r2": 4401, "Main.a.own": 2,
+                      "FB_A__shared": 44, "FB_A__Bump__n": 4, "Counter__calls": 104}
+    assert run_st(VAR_STAT_SOURCE, cycles=1, fmt=True, prints=["Main.a"]) == {"Main.a": "(own := 1)"}

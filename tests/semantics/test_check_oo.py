@@ -170,3 +170,31 @@ k := f.S.x;
 END_PROGRAM
 """)
     assert found == [(11, "cannot assign into property 'S': its GET returns a copy; assign the whole property")]
+
+
+@pytest.mark.parametrize("source, line, message", [
+    # VAR_STAT is the POU's own: not an input or output of an instance
+    ("FUNCTION_BLOCK F\nVAR_STAT s : INT; END_VAR\nEND_FUNCTION_BLOCK\n"
+     "PROGRAM Main\nVAR f : F; x : INT; END_VAR\nx := f.s;\nEND_PROGRAM\n", 6, "function block F has no member 's'"),
+    # one name in VAR and VAR_STAT
+    ("FUNCTION_BLOCK F\nVAR s : INT; END_VAR\nVAR_STAT s : INT; END_VAR\nEND_FUNCTION_BLOCK\n",
+     3, "duplicate declaration of 's' in F"),
+    # in a method: one name in VAR and VAR_STAT, and VAR_STAT in an interface's method
+    ("FUNCTION_BLOCK F\nMETHOD M\nVAR s : INT; END_VAR\nVAR_STAT s : INT; END_VAR\nEND_METHOD\nEND_FUNCTION_BLOCK\n",
+     4, "duplicate declaration of 's' in M"),
+    ("INTERFACE I\nMETHOD M\nVAR_STAT s : INT; END_VAR\nEND_METHOD\nEND_INTERFACE\n",
+     3, "an interface method declares only inputs, outputs and in-outs, not VAR_STAT"),
+    # a VAR_STAT CONSTANT stays a constant
+    ("FUNCTION F : INT\nVAR_STAT CONSTANT k : INT := 3; END_VAR\nk := 4;\nF := k;\nEND_FUNCTION\n",
+     3, "constant"),
+])
+def test_var_stat_errors(source, line, message):
+    found = errors(source)
+    assert any(l == line and message in m for l, m in found), found
+
+
+def test_var_stat_in_functions_methods_and_fbs_checks():
+    assert errors("FUNCTION F : INT\nVAR_STAT n : INT := 1; END_VAR\nn := n + 1;\nF := n;\nEND_FUNCTION\n"
+                  "FUNCTION_BLOCK B\nVAR_STAT k : INT; END_VAR\nk := k + 1;\n"
+                  "METHOD M : INT\nVAR_STAT c : INT; END_VAR\nc := c + k;\nM := c;\nEND_METHOD\n"
+                  "END_FUNCTION_BLOCK\n") == []
