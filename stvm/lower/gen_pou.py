@@ -48,6 +48,8 @@ class PouGenerator:
                 return f"_with({cls}(), {parts})"
             return f"{cls}()"
         if isinstance(ty, t.FBType):
+            if isinstance(init, dict) and init:   # `fb : F := (x := 1)` (checker.fb_instance_init)
+                return self.fb_instance_expr(ty, init)
             return f"{self.classes[ty.qualname.lower()]}()"
         if isinstance(ty, t.ArrayType):
             if ty.dims is None:
@@ -55,6 +57,12 @@ class PouGenerator:
             values = init if isinstance(init, list) else []
             return self.array_expr(ty, list(ty.dims), values)
         return "None"
+
+    def fb_instance_expr(self, ty: t.FBType, init: dict) -> str:
+        variables = self.model.pous[ty.qualname.lower()].variables
+        parts = ", ".join(f"{var_attr(variables[k].name)}={self.default_expr(variables[k].type, v)}"
+                          for k, v in init.items() if k in variables)
+        return f"_with({self.classes[ty.qualname.lower()]}(), {parts})"
 
     def array_expr(self, ty: t.ArrayType, dims: list[tuple[int, int]], flat: list) -> str:
         lo, hi = dims[0]

@@ -117,6 +117,7 @@ class Checker:
         self.pous: dict[str, POUInfo] = {}
         self.globals: dict[str, Variable] = {}
         self.any_static = False    # a VAR_STAT was hoisted to a global (hoist_static_variables)
+        self.fb_instance_inits: list = []   # `fb : F := (x := 1)` waiting for F's variables (fb_instance_init)
         self.global_nodes: dict[str, n.VarDecl] = {}
         self.enumerators: dict[str, list[tuple[t.EnumType, int]]] = {}
         self.structs: dict[str, t.Type] = {}
@@ -187,6 +188,7 @@ class Checker:
         for key, pou in self.index.pou_nodes.items():
             self.pous[key] = self.declare_pou(pou)
         self.link_oo()
+        self.resolve_fb_instance_inits()
 
     def check_identifier(self, name: str, span: n.Span) -> None:
         if name.lower() in _RESERVED:
@@ -1113,6 +1115,8 @@ class Checker:
                 self.error(f"{len(values)} initial values for an array of {ty.length} elements", init.span, "E023")
                 values = values[: ty.length]
             return values
+        if isinstance(init, n.StructInit) and isinstance(ty, t.FBType):
+            return self.fb_instance_init(init, ty, namespace, pou)
         if isinstance(init, n.StructInit):
             if not isinstance(ty, t.StructType):
                 self.error(f"a structure initialiser cannot initialise {ty.name}", init.span, "E023")
@@ -1126,6 +1130,38 @@ class Checker:
                 out[fname.lower()] = self.initial_value(finit, ftype, namespace, pou)
             return out
         return None
+
+    def fb_instance_init(self, init: n.StructInit, ty: t.FBType, namespace: tuple[str, ...],
+                         pou: POUInfo | None) -> dict:
+        """`fb : F := (x := 1, y := 2)` (IEC 61131-3 ed. 3 6.5.2.2, CODESYS): the instance's inputs,
+        outputs and internal variables set at its creation, as {variable key: value}. The FB's
+        variables (and its base's) may not be declared yet when a global or an earlier POU is:
+        the dict is filled in place once every POU is (`resolve_fb_instance_inits`)."""
+        out: dict = {}
+        self.fb_instance_inits.append((out, init, ty, namespace, pou))
+        return out
+
+    def resolve_fb_instance_inits(self) -> None:
+        while self.fb_instance_inits:
+            out, init, ty, namespace, pou = self.fb_instance_inits.pop(0)
+            info = self.pous.get(ty.qualname.lower())
+            if info is None:
+                continue
+            for fname, finit in init.items:
+                var = info.variables.get(fname.lower())
+                if var is None or var.section == EXTERNAL:
+                    self.error(f"function block {info.name} has no variable '{fname}' to initialise", finit.span, "E024")
+                    continue
+                if var.section in (IN_OUT, "VAR_TEMP") or var.constant:
+                    what = {IN_OUT: "an in-out (a reference, bound at each call)",
+                            "VAR_TEMP": "a VAR_TEMP (fresh at each call)"}.get(var.section, "a constant")
+                    self.error(f"'{var.name}' of {info.name} is {what}: an instance initialiser cannot set it",
+                               finit.span, "E024")
+                    continue
+                if fname.lower() in out:
+                    self.error(f"'{var.name}' is initialised twice", finit.span, "E024")
+                    continue
+                out[var.key] = self.initial_value(finit, var.type, namespace, pou)
 
     def convert_constant(self, value: object, ty: t.Type, span: n.Span, expr: n.Expr | None = None) -> object:
         if isinstance(ty, t.BoolType):

@@ -645,3 +645,30 @@ def test_var_stat_is_kept_across_calls_and_shared_by_every_instance():
     assert values == {"Main.c": 1041, "Main.r1": 4301, "Main.r2": 4401, "Main.a.own": 2,
                       "FB_A__shared": 44, "FB_A__Bump__n": 4, "Counter__calls": 104}
     assert run_st(VAR_STAT_SOURCE, cycles=1, fmt=True, prints=["Main.a"]) == {"Main.a": "(own := 1)"}
+
+
+def test_an_fb_instance_takes_initial_values_at_its_creation():
+    src = """
+FUNCTION_BLOCK B
+VAR_INPUT base_in : INT; END_VAR
+END_FUNCTION_BLOCK
+FUNCTION_BLOCK F EXTENDS B
+VAR_INPUT x : INT; END_VAR
+VAR y : INT := 5; t : TON := (PT := T#2s); END_VAR
+VAR_OUTPUT q : INT; END_VAR
+q := x + y + base_in;
+END_FUNCTION_BLOCK
+VAR_GLOBAL gf : F := (x := 100, base_in := 1000); END_VAR
+PROGRAM Main
+VAR f : F := (x := 1, y := 2); g : F; r : INT; arr : ARRAY[1..2] OF F := [(x := 7), (y := 8)]; END_VAR
+f();
+g();
+gf();
+arr[1](); arr[2]();
+r := f.q;
+END_PROGRAM
+"""
+    # inputs, internal variables, an inherited input, a nested FB (TON's PT), globals and array elements
+    values = run_st(src, prints=["Main.r", "Main.g.q", "gf.q", "Main.arr[1].q", "Main.arr[2].q"])
+    assert values == {"Main.r": 3, "Main.g.q": 5, "gf.q": 1105, "Main.arr[1].q": 12, "Main.arr[2].q": 8}
+    assert run_st(src, fmt=True, prints=["Main.f.t.PT"]) == {"Main.f.t.PT": "T#2s"}

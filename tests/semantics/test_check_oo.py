@@ -198,3 +198,21 @@ def test_var_stat_in_functions_methods_and_fbs_checks():
                   "FUNCTION_BLOCK B\nVAR_STAT k : INT; END_VAR\nk := k + 1;\n"
                   "METHOD M : INT\nVAR_STAT c : INT; END_VAR\nc := c + k;\nM := c;\nEND_METHOD\n"
                   "END_FUNCTION_BLOCK\n") == []
+
+
+FB_FOR_INIT = ("FUNCTION_BLOCK F\nVAR_INPUT x : INT; END_VAR\nVAR_IN_OUT io : INT; END_VAR\n"
+               "VAR_TEMP tmp : INT; END_VAR\nVAR CONSTANT k : INT := 1; END_VAR\nEND_FUNCTION_BLOCK\n")
+
+
+@pytest.mark.parametrize("decl, message", [
+    ("a : F := (nope := 1);", "function block F has no variable 'nope' to initialise"),
+    ("b : F := (io := 1);", "'io' of F is an in-out (a reference, bound at each call): an instance initialiser"),
+    ("c : F := (tmp := 1);", "'tmp' of F is a VAR_TEMP (fresh at each call)"),
+    ("d : F := (k := 2);", "'k' of F is a constant: an instance initialiser cannot set it"),
+    ("e : F := (x := 70000);", "70000 is out of range for INT"),
+    ("h : F := (x := 1, x := 2);", "'x' is initialised twice"),
+    ("i : F := 3;", "initial value"),
+])
+def test_fb_instance_initialiser_errors(decl, message):
+    found = errors(FB_FOR_INIT + f"PROGRAM Main\nVAR {decl} END_VAR\nEND_PROGRAM\n")
+    assert any(l == 8 and message in m for l, m in found), found
