@@ -426,6 +426,22 @@ class Checker:
             info.stat_vars[key] = hidden.key
             self.any_static = True
 
+    def check_lifecycle_method(self, m: n.Method, info: POUInfo) -> None:
+        """CODESYS/TwinCAT FB_init(bInitRetains, bInCopyCode : BOOL) and FB_exit(bInCopyCode : BOOL)
+        (compiler error C0119 where they lack them). stvm calls FB_init itself with the other
+        inputs' initial values, so it takes inputs only."""
+        needed = ("bInitRetains", "bInCopyCode") if m.name.lower() == "fb_init" else ("bInCopyCode",)
+        for name in needed:
+            var = info.variables.get(name.lower())
+            if var is None or var.section != INPUT or not isinstance(var.type, t.BoolType):
+                self.error(f"{m.name} needs the input{'s' if len(needed) > 1 else ''} {' and '.join(needed)} "
+                           f"of type BOOL", m.name_span, "E063")
+                return
+        extra = next((v for v in info.variables.values() if v.section in (OUTPUT, IN_OUT)), None)
+        if extra is not None:
+            self.error(f"{m.name} takes inputs only (stvm calls it at instance creation), not "
+                       f"{extra.section} '{extra.name}'", extra.span, "E063")
+
     def declare_method(self, m: n.Method, owner: POUInfo, pou: n.POU, accessor: str = "",
                        prop_type: t.Type | None = None) -> POUInfo:
         qual = owner.qualname + "." + (f"__{accessor.lower()}_" if accessor else "") + m.name
@@ -457,6 +473,8 @@ class Checker:
                 hidden.init = var.init
                 owner.variables[hidden.key] = hidden
                 info.inst_vars[key] = hidden.key
+        if not accessor and m.name.lower() in ("fb_init", "fb_exit") and pou.kind == "FUNCTION_BLOCK":
+            self.check_lifecycle_method(m, info)
         if pou.kind == "INTERFACE":
             if m.body:
                 self.error(f"method '{m.name}' of interface {pou.name} cannot have statements", m.body[0].span, "E063")

@@ -672,3 +672,69 @@ END_PROGRAM
     values = run_st(src, prints=["Main.r", "Main.g.q", "gf.q", "Main.arr[1].q", "Main.arr[2].q"])
     assert values == {"Main.r": 3, "Main.g.q": 5, "gf.q": 1105, "Main.arr[1].q": 12, "Main.arr[2].q": 8}
     assert run_st(src, fmt=True, prints=["Main.f.t.PT"]) == {"Main.f.t.PT": "T#2s"}
+
+
+FB_INIT_SOURCE = """FUNCTION_BLOCK Inner
+VAR order : INT; END_VAR
+METHOD FB_init : BOOL
+VAR_INPUT bInitRetains : BOOL; bInCopyCode : BOOL; END_VAR
+gSeq := gSeq + 1;
+order := gSeq;
+END_METHOD
+END_FUNCTION_BLOCK
+FUNCTION_BLOCK B
+VAR_INPUT x : INT; END_VAR
+VAR inner : Inner; baseOrder : INT; retains : BOOL; copy : BOOL := TRUE; END_VAR
+METHOD FB_init : BOOL
+VAR_INPUT bInitRetains : BOOL; bInCopyCode : BOOL; END_VAR
+gSeq := gSeq + 1;
+baseOrder := gSeq;
+retains := bInitRetains;
+copy := bInCopyCode;
+END_METHOD
+END_FUNCTION_BLOCK
+FUNCTION_BLOCK D EXTENDS B
+VAR derivedOrder : INT; seenX : INT; END_VAR
+METHOD FB_init : BOOL
+VAR_INPUT bInitRetains : BOOL; bInCopyCode : BOOL; END_VAR
+gSeq := gSeq + 1;
+derivedOrder := gSeq;
+seenX := x;
+END_METHOD
+END_FUNCTION_BLOCK
+VAR_GLOBAL gSeq : INT; END_VAR
+PROGRAM Main
+VAR d : D := (x := 5); END_VAR
+END_PROGRAM
+"""
+
+
+def test_fb_init_runs_at_instance_creation_inner_and_base_first():
+    values = run_st(FB_INIT_SOURCE, cycles=1, fmt=True, prints=[
+        "Main.d.inner.order", "Main.d.baseOrder", "Main.d.derivedOrder", "Main.d.seenX", "Main.d.retains",
+        "Main.d.copy", "gSeq"])
+    # the inner instance's FB_init, then the base's, then the derived FB's, after the instance's
+    # initial values (x := 5); as at a first download: bInitRetains TRUE, bInCopyCode FALSE
+    assert values == {"Main.d.inner.order": "1", "Main.d.baseOrder": "2", "Main.d.derivedOrder": "3",
+                      "Main.d.seenX": "5", "Main.d.retains": "TRUE", "Main.d.copy": "FALSE", "gSeq": "3"}
+    vm = start_st(FB_INIT_SOURCE)
+    assert vm["gSeq"] == 3        # before the first scan, and once only
+    vm.run(cycles=3)
+    assert vm["gSeq"] == 3
+
+
+def test_a_fault_in_fb_init_stops_the_run_at_its_line():
+    rc, out, err = cli(["run", write_st("""FUNCTION_BLOCK F
+VAR n : INT; z : INT; END_VAR
+METHOD FB_init : BOOL
+VAR_INPUT bInitRetains : BOOL; bInCopyCode : BOOL; END_VAR
+n := 10 / z;
+END_METHOD
+END_FUNCTION_BLOCK
+VAR_GLOBAL gf : F; END_VAR
+PROGRAM Main
+VAR c : INT; END_VAR
+c := c + 1;
+END_PROGRAM
+"""), "--cycles", "1"])
+    assert rc == 3 and ":5:1: fault: integer division by zero (task FB_init, scan 0" in err, err

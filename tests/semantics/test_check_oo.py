@@ -216,3 +216,17 @@ FB_FOR_INIT = ("FUNCTION_BLOCK F\nVAR_INPUT x : INT; END_VAR\nVAR_IN_OUT io : IN
 def test_fb_instance_initialiser_errors(decl, message):
     found = errors(FB_FOR_INIT + f"PROGRAM Main\nVAR {decl} END_VAR\nEND_PROGRAM\n")
     assert any(l == 8 and message in m for l, m in found), found
+
+
+@pytest.mark.parametrize("source, line, message", [
+    ("FUNCTION_BLOCK F\nMETHOD FB_init : BOOL\nVAR_INPUT bInitRetains : BOOL; END_VAR\nEND_METHOD\n"
+     "END_FUNCTION_BLOCK\n", 2, "FB_init needs the inputs bInitRetains and bInCopyCode of type BOOL"),
+    ("FUNCTION_BLOCK F\nMETHOD FB_init : BOOL\nVAR_INPUT bInitRetains : BOOL; bInCopyCode : BOOL; END_VAR\n"
+     "VAR_OUTPUT q : INT; END_VAR\nEND_METHOD\nEND_FUNCTION_BLOCK\n",
+     4, "FB_init takes inputs only (stvm calls it at instance creation), not VAR_OUTPUT 'q'"),
+    ("FUNCTION_BLOCK F\nMETHOD FB_exit : BOOL\nVAR_INPUT bInCopyCode : INT; END_VAR\nEND_METHOD\n"
+     "END_FUNCTION_BLOCK\n", 2, "FB_exit needs the input bInCopyCode of type BOOL"),
+])
+def test_fb_init_and_fb_exit_signatures(source, line, message):
+    found = errors(source)
+    assert any(l == line and message in m for l, m in found), found
