@@ -1237,6 +1237,7 @@ class Checker:
         if self.check_nesting_depth():
             self.check_containment()
             self.check_recursion()
+            self.check_method_recursion()
         tasks, defaults = self.check_configuration()
         model = ProjectModel(self.pous, self.globals, tasks, defaults, self.structs, self.enums)
         return Analysis(model, self.facts, self.units, dict(self.index.pou_nodes), self.diags, self.type_inits,
@@ -1406,6 +1407,52 @@ class Checker:
                 names = " -> ".join(self.pous[k].name for k in chain[start:] + [key])
                 node = self.index.pou_nodes[key]
                 self.error(f"recursive call {names}: IEC 61131-3 does not allow recursion", node.span, "E027")
+                return
+            state[key] = "open"
+            for callee in sorted(graph.get(key, ())):
+                visit(callee, chain + [key])
+            state[key] = "done"
+
+        for key in graph:
+            visit(key, [])
+
+    def check_method_recursion(self) -> None:
+        """A METHOD (or property accessor) calling itself, directly or through other methods, by
+        static resolution (`M()`, `THIS^.M()`, `fb.M()`, `SUPER^.M()`; a call through an interface
+        is not followed). IEC 61131-3 forbids recursion (as for functions, check_recursion): an
+        error under iec and sysmac. CODESYS and TwinCAT allow recursive methods (linked lists):
+        a warning there, since a deep enough recursion ends in a stack-overflow fault."""
+        graph: dict[str, set[str]] = {}
+        for info in list(self.pous.values()):
+            if info.kind not in ("FUNCTION_BLOCK", "PROGRAM") or info.native:
+                continue
+            for method in self.members_of(info):
+                node = self.method_nodes.get(method.key)
+                if node is None:
+                    continue
+                graph[method.key] = {call.pou.key for call in map(self.facts.calls.get, map(id, self._calls_of(
+                    method.key, node))) if call is not None and call.pou.kind == "METHOD" and call.oo != "itf"}
+        if not any(graph.values()):
+            return
+        methods = {m.key: m for info in self.pous.values() for m in self.members_of(info)}
+        allowed = self.settings.dialect in (Dialect.CODESYS, Dialect.TWINCAT)
+        state: dict[str, str] = {}
+
+        def name(key: str) -> str:
+            m = methods[key]
+            return f"{self.pous[m.owner].name}.{m.name}" if m.owner in self.pous else m.name
+
+        def visit(key: str, chain: list[str]) -> None:
+            if state.get(key) == "done":
+                return
+            if state.get(key) == "open":
+                names = " -> ".join(name(k) for k in chain[chain.index(key):] + [key])
+                span = self.method_nodes[key].name_span
+                if allowed:
+                    self.warning(f"recursive method call {names}: allowed in {self.settings.dialect.value}, "
+                                 f"but a recursion too deep ends the run in a stack-overflow fault", span)
+                else:
+                    self.error(f"recursive method call {names}: IEC 61131-3 does not allow recursion", span, "E027")
                 return
             state[key] = "open"
             for callee in sorted(graph.get(key, ())):

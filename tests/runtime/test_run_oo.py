@@ -738,3 +738,19 @@ c := c + 1;
 END_PROGRAM
 """), "--cycles", "1"])
     assert rc == 3 and ":5:1: fault: integer division by zero (task FB_init, scan 0" in err, err
+
+
+def test_a_recursive_method_runs_under_codesys():
+    src = """FUNCTION_BLOCK F
+METHOD Down : INT
+VAR_INPUT k : INT; END_VAR
+IF k > 0 THEN Down := THIS^.Down(k - 1) + 1; END_IF
+END_METHOD
+END_FUNCTION_BLOCK
+PROGRAM Main
+VAR f : F; r : INT; END_VAR
+r := f.Down(5);
+END_PROGRAM
+"""
+    rc, out, err = cli(["run", write_st(src), "--dialect", "codesys", "--cycles", "1", "--print", "Main.r"])
+    assert (rc, out) == (0, "Main.r = 5\n") and "warning: recursive method call F.Down -> F.Down" in err

@@ -8,7 +8,7 @@ import re
 
 import pytest
 
-from core_helpers import check_text
+from core_helpers import check_text, cli, write_st
 
 HEAD = re.compile(r"^(?:.*/)?case\.st:(\d+):(\d+): error: (.+)$", re.M)
 
@@ -230,3 +230,45 @@ def test_fb_instance_initialiser_errors(decl, message):
 def test_fb_init_and_fb_exit_signatures(source, line, message):
     found = errors(source)
     assert any(l == line and message in m for l, m in found), found
+
+
+RECURSIVE_METHODS = """FUNCTION_BLOCK F
+METHOD Down : INT
+VAR_INPUT k : INT; END_VAR
+IF k > 0 THEN Down := THIS^.Down(k - 1) + 1; END_IF
+END_METHOD
+METHOD A
+B();
+END_METHOD
+METHOD B
+THIS^.A();
+END_METHOD
+METHOD Ok
+Down(1);
+A();
+END_METHOD
+END_FUNCTION_BLOCK
+FUNCTION_BLOCK G
+VAR f : F; END_VAR
+METHOD Outer
+f.Ok();
+END_METHOD
+END_FUNCTION_BLOCK
+"""
+
+
+def test_a_recursive_method_is_an_error_under_iec_as_a_recursive_function_is():
+    rc, _, err = cli(["check", write_st(RECURSIVE_METHODS), "--dialect", "iec"])
+    found = [(int(m[1]), m[3]) for m in re.finditer(r":(\d+):(\d+): error: (.+)", err)]
+    # the cycles are reported once each, at a method on them; callers of a cycle (Ok, G.Outer) are not
+    assert rc == 1 and found == [
+        (2, "recursive method call F.Down -> F.Down: IEC 61131-3 does not allow recursion"),
+        (6, "recursive method call F.A -> F.B -> F.A: IEC 61131-3 does not allow recursion")], err
+
+
+@pytest.mark.parametrize("dialect", ["codesys", "twincat"])
+def test_a_recursive_method_is_a_warning_where_the_vendor_allows_it(dialect):
+    rc, _, err = cli(["check", write_st(RECURSIVE_METHODS), "--dialect", dialect])
+    assert rc == 0 and err.count(": warning: recursive method call") == 2, err
+    assert f"F.Down -> F.Down: allowed in {dialect}, but a recursion too deep ends the run in a " \
+           "stack-overflow fault" in err
