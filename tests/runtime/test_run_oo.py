@@ -754,3 +754,92 @@ END_PROGRAM
 """
     rc, out, err = cli(["run", write_st(src), "--dialect", "codesys", "--cycles", "1", "--print", "Main.r"])
     assert (rc, out) == (0, "Main.r = 5\n") and "warning: recursive method call F.Down -> F.Down" in err
+
+
+REF_TO_INTERFACE = """INTERFACE I
+METHOD Get : INT
+END_METHOD
+END_INTERFACE
+FUNCTION_BLOCK F IMPLEMENTS I
+VAR v : INT := 7; END_VAR
+METHOD Get : INT
+Get := v;
+END_METHOD
+END_FUNCTION_BLOCK
+FUNCTION_BLOCK G IMPLEMENTS I
+METHOD Get : INT
+Get := 9;
+END_METHOD
+END_FUNCTION_BLOCK
+PROGRAM Main
+VAR f : F; g : G; i : I; r : REF_TO I; x, y : INT; empty, isset : BOOL; j : I; END_VAR
+r := REF(i);
+empty := r^ = 0;
+r^ := f;
+x := i.Get();
+r^ := g;
+y := r^.Get();
+isset := r^ <> 0 AND r <> NULL;
+j := r^;
+END_PROGRAM
+"""
+
+REF_TO_INTERFACE_IN_STRUCT = """INTERFACE I
+METHOD Get : INT
+END_METHOD
+END_INTERFACE
+FUNCTION_BLOCK F IMPLEMENTS I
+METHOD Get : INT
+Get := 7;
+END_METHOD
+END_FUNCTION_BLOCK
+TYPE S : STRUCT p : REF_TO I; END_STRUCT END_TYPE
+FUNCTION Use : INT
+VAR_INPUT p : REF_TO I; END_VAR
+Use := p^.Get() * 2;
+END_FUNCTION
+PROGRAM Main
+VAR f : F; i : I; s : S; x : INT; y : INT; n : INT; END_VAR
+i := f;
+s.p := REF(i);
+x := Use(s.p);
+n := n + 1;
+IF n = 2 THEN s.p := NULL; END_IF
+y := s.p^.Get();
+END_PROGRAM
+"""
+
+REFERENCE_AND_POINTER_TO_INTERFACE = """INTERFACE I
+METHOD Get : INT
+END_METHOD
+END_INTERFACE
+FUNCTION_BLOCK F IMPLEMENTS I
+METHOD Get : INT
+Get := 7;
+END_METHOD
+END_FUNCTION_BLOCK
+PROGRAM Main
+VAR f : F; i : I; rr : REFERENCE TO I; p : POINTER TO I; x, y : INT; END_VAR
+i := f;
+rr REF= i;
+x := rr.Get();
+p := ADR(i);
+y := p^.Get();
+END_PROGRAM
+"""
+
+
+def test_ref_to_an_interface_reads_writes_and_calls_through_it():
+    values = run_st(REF_TO_INTERFACE, fmt=True, prints=["Main.x", "Main.y", "Main.empty", "Main.isset", "Main.j", "Main.r^"])
+    assert values == {"Main.x": "7", "Main.y": "9", "Main.empty": "TRUE", "Main.isset": "TRUE", "Main.j": "-> G",
+                      "Main.r^": "-> G"}
+    assert run_st(REFERENCE_AND_POINTER_TO_INTERFACE, prints=["Main.x", "Main.y"]) == {"Main.x": 7, "Main.y": 7}
+
+
+def test_ref_to_an_interface_in_a_struct_and_as_an_input_and_its_faults():
+    assert run_st(REF_TO_INTERFACE_IN_STRUCT, prints=["Main.x", "Main.y"]) == {"Main.x": 14, "Main.y": 7}
+    path = write_st(REF_TO_INTERFACE_IN_STRUCT)
+    rc, _, err = cli(["run", path, "--cycles", "3"])
+    assert rc == 3 and ":22:1: fault: dereference of a NULL reference" in err, err
+    rc, _, err = cli(["run", write_st(REF_TO_INTERFACE_IN_STRUCT.replace("s.p := NULL;", "i := 0;")), "--cycles", "3"])
+    assert rc == 3 and ":22:1: fault: call through an interface that holds no instance (NULL)" in err, err

@@ -272,3 +272,13 @@ def test_a_recursive_method_is_a_warning_where_the_vendor_allows_it(dialect):
     assert rc == 0 and err.count(": warning: recursive method call") == 2, err
     assert f"F.Down -> F.Down: allowed in {dialect}, but a recursion too deep ends the run in a " \
            "stack-overflow fault" in err
+
+
+def test_ref_to_an_interface_takes_only_references_to_that_interface():
+    found = errors("INTERFACE I\nEND_INTERFACE\nFUNCTION_BLOCK F IMPLEMENTS I\nEND_FUNCTION_BLOCK\n"
+                   "PROGRAM Main\nVAR f : F; r : REF_TO I; n : INT; END_VAR\nr := REF(f);\nr := REF(n);\n"
+                   "r^ := n;\nEND_PROGRAM\n")
+    # a REF_TO I holds the address of an interface variable, not of an instance (assign `r^ := f`)
+    assert found == [(7, "type mismatch: cannot assign REF_TO F to REF_TO I"),
+                     (8, "type mismatch: cannot assign REF_TO INT to REF_TO I"),
+                     (9, "type mismatch: cannot assign INT to interface I")]
