@@ -56,11 +56,14 @@ def build_parser() -> argparse.ArgumentParser:
     sysmac_help = "override a Sysmac UNCERTAIN setting, NAME=VALUE (see README)"
     dialects = ["iec", "sysmac", "codesys", "twincat"]
     dialect_help = "vendor dialect: name rules and vendor types (default: stvm.toml's, else sysmac)"
+    define_help = ("define NAME for conditional compilation ({IF defined(NAME)}, {IF hasvalue(NAME, 'VALUE')}), "
+                   "beside stvm.toml's [project] defines")
 
     check = sub.add_parser("check", help="check ST files and print diagnostics")
     check.add_argument("files", nargs="+")
     check.add_argument("--sysmac", action="append", metavar="NAME=VALUE", help=sysmac_help)
     check.add_argument("--dialect", choices=dialects, help=dialect_help)
+    check.add_argument("--define", action="append", metavar="NAME[=VALUE]", help=define_help)
     check.set_defaults(func=cmd_check)
 
     run = sub.add_parser("run", help="run ST programs on the VM")
@@ -94,6 +97,7 @@ def build_parser() -> argparse.ArgumentParser:
                           "host 127.0.0.1 unless given, any other host needs the token printed at start-up")
     run.add_argument("--sysmac", action="append", metavar="NAME=VALUE", help=sysmac_help)
     run.add_argument("--dialect", choices=dialects, help=dialect_help)
+    run.add_argument("--define", action="append", metavar="NAME[=VALUE]", help=define_help)
     run.set_defaults(func=cmd_run)
     _register_extensions(sub)
     return parser

@@ -4,6 +4,7 @@
     files = ["Types.st", "Main.st"]     # the project's sources, in this folder (default: every *.st)
     encoding = "utf-8"                  # how the sources are encoded (default UTF-8)
     dialect = "sysmac"                  # iec, sysmac (default), codesys or twincat (README)
+    defines = ["SIMULATION"]            # conditional compilation: {IF defined(SIMULATION)} (README)
 
     [sysmac]                            # Sysmac UNCERTAIN settings of the project (README)
     int_div_zero = "zero"
@@ -54,6 +55,8 @@ _SCHEMA: dict[str, dict[str, tuple[Any, str]] | None] = {
         "encoding": (lambda v: isinstance(v, str), "an encoding name, e.g. encoding = \"cp1252\""),
         "dialect": (lambda v: isinstance(v, str), "a dialect name, e.g. dialect = \"twincat\" (iec, sysmac, "
                                                   "codesys, twincat)"),
+        "defines": (_string_list, "a list of defines for conditional compilation, e.g. defines = [\"SIMULATION\", "
+                                  "\"AXES=2\"] (NAME or NAME=VALUE)"),
         "name": (lambda v: isinstance(v, str), "a string"),
         "description": (lambda v: isinstance(v, str), "a string"),
     },

@@ -14,7 +14,7 @@ import hashlib
 import marshal
 import pickle
 import re
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Sequence
 
@@ -202,6 +202,9 @@ def project_settings(paths: Sequence[str | Path], overrides: Sequence[str] = ())
         if not isinstance(table, dict):
             raise ManifestError(f"{where} must be a table of NAME = VALUE")
         settings = settings.with_table(table, where)
+    defines = manifest.get("project", {}).get("defines")
+    if defines:
+        settings = settings.with_defines(defines, f"{Path(root or '.') / MANIFEST}: [project] defines")
     return settings.with_overrides(list(overrides))
 
 
@@ -356,6 +359,8 @@ def stdlib_units(settings: SysmacSettings) -> tuple[list, list[Diagnostic], dict
     """The parsed stdlib: memoised in-process, shipped prebuilt for the default settings
     (stvm/stdlib/prebuilt.py), else pickled in the cache dir (it never changes between runs of
     one stvm version, and parsing it is most of a cold start)."""
+    if settings.defines:    # the stdlib has no conditional code: parsed (and prebuilt) without them
+        settings = replace(settings, defines=())
     texts = _stdlib(settings)
     key = _cache_key([], settings, "stdlib-units")
     sources = dict(texts)

@@ -33,11 +33,12 @@ def print_diagnostics(diags, sources) -> None:
 
 def run_settings(args):
     """The Sysmac settings of the run: the manifest's `[sysmac]`, then `--sysmac`, then
-    `--dialect` (usage errors)."""
+    `--dialect`, and the manifest's defines with `--define`'s (usage errors)."""
     from stvm.project import project_settings   # lazy: start-up
     try:
         dialect = [f"dialect={vars(args)['dialect']}"] if vars(args).get("dialect") else []
-        return project_settings(args.files, (getattr(args, "sysmac", None) or []) + dialect)
+        settings = project_settings(args.files, (getattr(args, "sysmac", None) or []) + dialect)
+        return settings.with_defines(vars(args).get("define") or [])
     except ValueError as exc:
         raise UsageError(str(exc)) from exc
 

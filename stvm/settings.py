@@ -16,6 +16,7 @@ whose message lists the allowed values; the CLI turns it into a usage error, exi
 from __future__ import annotations
 
 import difflib
+import re
 from dataclasses import MISSING, dataclass, field, fields, replace
 from enum import Enum
 from typing import Any, Callable, Mapping
@@ -441,12 +442,29 @@ class SysmacSettings:
     string_fn_range: StringFnRange = setting(StringFnRange.ERROR, "7")
     concat_arity: ConcatArity = setting(ConcatArity.ONE_WARNS, "7")
     find_empty: FindEmpty = setting(FindEmpty.ZERO, "7")
+    # not an UNCERTAIN setting: the conditional-compilation defines, (NAME, VALUE) pairs from
+    # `stvm.toml` `[project] defines` and `--define` (stvm/syntax/conditional.py); carried here so
+    # that every parse and every cache key sees them
+    defines: tuple = field(default=(), metadata={"not_a_setting": True})
 
     def __post_init__(self) -> None:
         # every value is checked (and a spelling turned into its Enum member) at construction,
         # so no code ever sees a value the declaration does not allow
         for name, declared in _declarations().items():
             object.__setattr__(self, name, declared.coerce(getattr(self, name)))
+        object.__setattr__(self, "defines", _checked_defines(self.defines))
+
+    def with_defines(self, items: list[str] | tuple[str, ...], where: str = "--define") -> "SysmacSettings":
+        """Return a copy with `NAME` / `NAME=VALUE` defines added (a later one replaces an
+        earlier one of the same name)."""
+        merged = dict(self.defines)
+        for item in items:
+            try:
+                name, value = parse_define(item)
+            except SettingError as exc:
+                raise SettingError(f"{where}: {exc}") from None
+            merged[name] = value
+        return replace(self, defines=tuple(sorted(merged.items())))
 
     def with_overrides(self, assignments: list[str] | tuple[str, ...]) -> "SysmacSettings":
         """Return a copy with `name=value` strings applied (from `--sysmac name=value`)."""
@@ -545,12 +563,40 @@ class Declaration:
         return self.coerce(number)
 
 
+_DEFINE_NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
+
+
+def parse_define(text: object) -> tuple[str, str]:
+    """`NAME` or `NAME=VALUE` → (NAME, VALUE); a value may be quoted ('1' or "1")."""
+    if not isinstance(text, str):
+        raise SettingError(f"a define is a string NAME or NAME=VALUE, got {text!r}")
+    name, sep, value = text.partition("=")
+    name, value = name.strip(), value.strip()
+    if not _DEFINE_NAME.fullmatch(name):
+        raise SettingError(f"a define is NAME or NAME=VALUE with NAME an identifier, got {text!r}")
+    if len(value) >= 2 and value[0] == value[-1] and value[0] in "'\"":
+        value = value[1:-1]
+    return name, value
+
+
+def _checked_defines(defines: object) -> tuple:
+    if not isinstance(defines, tuple) or not all(
+            isinstance(d, tuple) and len(d) == 2 and all(isinstance(x, str) for x in d) for d in defines):
+        raise SettingError(f"defines must be (NAME, VALUE) pairs, got {defines!r}")
+    for name, _ in defines:
+        if not _DEFINE_NAME.fullmatch(name):
+            raise SettingError(f"a define's NAME must be an identifier, got {name!r}")
+    return tuple(sorted(dict(defines).items()))
+
+
 _DECLARATIONS: dict[str, Declaration] = {}
 
 
 def _declarations() -> dict[str, Declaration]:
     if not _DECLARATIONS:
         for f in fields(SysmacSettings):
+            if f.metadata.get("not_a_setting"):
+                continue
             default = f.default_factory() if f.default_factory is not MISSING else f.default
             # the kind is the default's type (an Enum class, int or dict): the same as the
             # annotation, without evaluating 50 annotation strings at every start-up

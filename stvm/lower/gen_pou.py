@@ -48,13 +48,43 @@ class PouGenerator:
                 return f"_with({cls}(), {parts})"
             return f"{cls}()"
         if isinstance(ty, t.FBType):
-            return f"{self.classes[ty.qualname.lower()]}()"
+            if isinstance(init, dict) and init:   # `fb : F := (x := 1)` (checker.fb_instance_init)
+                made = self.fb_instance_expr(ty, init)
+            else:
+                made = f"{self.classes[ty.qualname.lower()]}()"
+            return self.with_fb_init(ty, made)
         if isinstance(ty, t.ArrayType):
             if ty.dims is None:
                 return "None"
             values = init if isinstance(init, list) else []
             return self.array_expr(ty, list(ty.dims), values)
         return "None"
+
+    def with_fb_init(self, ty: t.FBType, made: str) -> str:
+        """CODESYS FB_init: the instance `made` queued for its FB_init methods (the base's first,
+        TwinCAT/CODESYS order), which the VM runs once every instance exists, the inner ones
+        first (runtime/vm.py `run_fb_inits`); the bare expression when no FB_init is declared."""
+        chain = []
+        pou = self.model.pous.get(ty.qualname.lower())
+        while pou is not None:
+            method = pou.methods.get("fb_init")
+            if method is not None:
+                chain.append((self.classes[pou.key], method))
+            pou = self.model.pous.get(pou.base) if pou.base else None
+        if not chain:
+            return made
+        calls = []
+        for cls, method in reversed(chain):
+            args = ["True" if v.key == "binitretains" else "False" if v.key == "bincopycode"
+                    else self.default_expr(v.type, v.init) for v in method.params()]
+            calls.append(f"({cls}.{method_attr(method.name)}, ({''.join(a + ', ' for a in args)}))")
+        return f"_fb_init_later(_fb_pending, {made}, ({''.join(c + ', ' for c in calls)}))"
+
+    def fb_instance_expr(self, ty: t.FBType, init: dict) -> str:
+        variables = self.model.pous[ty.qualname.lower()].variables
+        parts = ", ".join(f"{var_attr(variables[k].name)}={self.default_expr(variables[k].type, v)}"
+                          for k, v in init.items() if k in variables)
+        return f"_with({self.classes[ty.qualname.lower()]}(), {parts})"
 
     def array_expr(self, ty: t.ArrayType, dims: list[tuple[int, int]], flat: list) -> str:
         lo, hi = dims[0]

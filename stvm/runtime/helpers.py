@@ -158,6 +158,12 @@ def _with(obj, **fields):
     return obj
 
 
+def _fb_init_later(pending: list, obj, calls: tuple):
+    """Queue `obj`'s FB_init calls (CODESYS), run by the VM once every instance exists."""
+    pending.append((obj, calls))
+    return obj
+
+
 class _Frame:
     """Variables of one function call (attributes `v_<name>`), so in-outs can reference them."""
 
@@ -168,6 +174,7 @@ HELPERS = {
     "_f32": f32, "_idiv": _idiv, "_idiv0": _idiv0, "_imod": _imod, "_imod0": _imod0, "_fdiv": _fdiv,
     "_tdiv": _tdiv, "_tdiv0": _tdiv0, "_expt": _expt, "_oob": _oob, "_subrange": _subrange, "_endless_for": _endless_for, "_strfit": strfit, "_copy_value": copy_value,
     "_assign_array": _assign_array, "_setbit": _setbit, "_with": _with, "_Frame": _Frame,
+    "_fb_init_later": _fb_init_later,
     "_AttrRef": AttrRef, "_MapRef": MapRef, "_ItemRef": ItemRef, "_ArrayRef": ArrayRef, "_FunctionError": FunctionError,
     "_STFault": STFault, "_null_ref": _null_ref, "_null_itf": _null_itf, "_query_itf": _query_itf, "_same_ref": _same_ref, "_ArrayIndexError": ArrayIndexError,
 }

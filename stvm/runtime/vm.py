@@ -116,6 +116,7 @@ class VM:
         ns["_str_overflow"] = self._string_overflow
         ns["_oob_skipped"] = self._index_skipped
         ns["__stvm_unit__"] = lowered
+        ns["_fb_pending"] = self._fb_pending = []   # instances with FB_init (run_fb_inits)
         for piece in project.code:   # the generated module, compiled in pieces (lower.product)
             exec(piece, ns)
         self.namespace = ns
@@ -146,6 +147,8 @@ class VM:
         # called by a loop that holds the VM between two scans (a paused run control, a debugger
         # stopped after a scan): front ends answer reads and apply writes from there
         self.on_idle: list[Callable[["VM"], None]] = []
+        if self._fb_pending:
+            self.run_fb_inits()
 
     # ---- setup
     def _instance(self, name: str, qualname: str) -> Any:
@@ -153,6 +156,31 @@ class VM:
         inst = cls()
         self.instances[name.lower()] = (name, inst, qualname)
         return inst
+
+    def run_fb_inits(self) -> None:
+        """CODESYS FB_init(bInitRetains := TRUE, bInCopyCode := FALSE) of every instance that
+        declares one, as at a first download: after all instances and their initial values
+        exist, inner instances before the ones holding them, a base's FB_init before its
+        derived FB's. A fault in one stops the run before the first scan, at its ST line."""
+        pending, self._fb_pending[:] = list(self._fb_pending), []
+        ctx = self.ctx
+        ctx.task = "FB_init"
+        try:
+            for obj, calls in pending:
+                for method, args in calls:
+                    method(obj, *args)
+        except RecursionError as exc:
+            self._fault_at_init(f"stack overflow ({exc})", exc)
+        except STFault as exc:
+            self._fault_at_init(str(exc) if str(exc) else type(exc).__doc__ or type(exc).__name__, exc)
+        except FunctionError as exc:
+            self._fault_at_init(f"instruction error: {exc}", exc)
+
+    def _fault_at_init(self, message: str, exc: BaseException) -> None:
+        try:
+            self._raise_fault(message, exc.__traceback__, "FB_init")
+        except RuntimeFault:
+            pass   # kept in self.fault: the first scan raises it
 
     def _build_tasks(self, scan_ns: int) -> None:
         if self.model.tasks:

@@ -290,6 +290,10 @@ class BodyChecker:
         """Resolve a Name: a NameRef for variables/enumerators/result, or None (diagnosed)."""
         if len(name.parts) == 1 and not name.rooted:
             key = name.parts[0].lower()
+            if self.c.any_static:
+                static = self.static_variable(key)
+                if static is not None:
+                    return NameRef("global", static)
             var = self.pou.variables.get(key)
             if var is not None:
                 if var.section == "VAR_INST" and self.fb is not None and key in self.pou.inst_vars:
@@ -319,6 +323,17 @@ class BodyChecker:
             if enum is not None:
                 return NameRef("enum", value=enum[1], pou=None, variable=Variable(name.parts[0], "ENUM", enum[0]))
         return None
+
+    def static_variable(self, key: str) -> Variable | None:
+        """The hidden global of VAR_STAT `key`: this POU's, else (unless a variable of this POU
+        has the name) its FB's or a base's (checker.hoist_static_variables)."""
+        hidden = self.pou.stat_vars.get(key)
+        if hidden is None and key not in self.pou.variables:
+            fb = self.fb
+            while hidden is None and fb is not None and key not in fb.variables:
+                hidden = fb.stat_vars.get(key)
+                fb = self.c.pous.get(fb.base) if fb.base else None
+        return self.c.globals.get(hidden) if hidden else None
 
     def lookup_callable(self, name: n.Name) -> POUInfo | None:
         key = self.c.lookup_pou_key(name.parts, self.pou_namespace)

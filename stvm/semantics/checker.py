@@ -116,6 +116,8 @@ class Checker:
         self.type_inits: dict[str, dict[str, object]] = {}
         self.pous: dict[str, POUInfo] = {}
         self.globals: dict[str, Variable] = {}
+        self.any_static = False    # a VAR_STAT was hoisted to a global (hoist_static_variables)
+        self.fb_instance_inits: list = []   # `fb : F := (x := 1)` waiting for F's variables (fb_instance_init)
         self.global_nodes: dict[str, n.VarDecl] = {}
         self.enumerators: dict[str, list[tuple[t.EnumType, int]]] = {}
         self.structs: dict[str, t.Type] = {}
@@ -186,6 +188,7 @@ class Checker:
         for key, pou in self.index.pou_nodes.items():
             self.pous[key] = self.declare_pou(pou)
         self.link_oo()
+        self.resolve_fb_instance_inits()
 
     def check_identifier(self, name: str, span: n.Span) -> None:
         if name.lower() in _RESERVED:
@@ -349,6 +352,8 @@ class Checker:
             order = [name.lower() for block in pou.var_blocks for decl in block.decls for name, _ in decl.names]
             rank = {key: i for i, key in reversed(list(enumerate(order)))}
             info.variables = dict(sorted(info.variables.items(), key=lambda kv: rank.get(kv[0], len(order))))
+        if any(block.kind == "VAR_STAT" for block in pou.var_blocks):
+            self.hoist_static_variables(pou, info)
 
     def declare_members(self, pou: n.POU, info: POUInfo) -> None:
         """The METHODs and PROPERTYs of an FB, PROGRAM or INTERFACE (signatures; bodies are
@@ -403,6 +408,40 @@ class Checker:
             self.error(f"a {what} cannot be both ABSTRACT and FINAL", span, "E060")
         return (access[0] if access else "PUBLIC"), abstract, final
 
+    def hoist_static_variables(self, pou, info: POUInfo) -> None:
+        """CODESYS VAR_STAT (of a FUNCTION, FB, PROGRAM or METHOD): one variable for the POU,
+        kept across calls and shared by every instance of an FB, i.e. a global under a name no
+        ST declaration takes (`FB_Axis__Move__calls`); the POU's name resolves to it
+        (`stat_vars`, body.py `static_variable`). A VAR_STAT CONSTANT stays a local constant."""
+        static = [name.lower() for block in pou.var_blocks if block.kind == "VAR_STAT" and not block.constant
+                  for decl in block.decls for name, _ in decl.names]
+        for key in static:
+            var = info.variables.get(key)
+            if var is None or var.section != LOCAL:
+                continue    # a duplicate, already reported
+            hidden = Variable(f"{info.qualname.replace('.', '__')}__{var.name}", GLOBAL, var.type, False, var.span)
+            hidden.init = var.init
+            self.globals[hidden.key] = hidden
+            del info.variables[key]
+            info.stat_vars[key] = hidden.key
+            self.any_static = True
+
+    def check_lifecycle_method(self, m: n.Method, info: POUInfo) -> None:
+        """CODESYS/TwinCAT FB_init(bInitRetains, bInCopyCode : BOOL) and FB_exit(bInCopyCode : BOOL)
+        (compiler error C0119 where they lack them). stvm calls FB_init itself with the other
+        inputs' initial values, so it takes inputs only."""
+        needed = ("bInitRetains", "bInCopyCode") if m.name.lower() == "fb_init" else ("bInCopyCode",)
+        for name in needed:
+            var = info.variables.get(name.lower())
+            if var is None or var.section != INPUT or not isinstance(var.type, t.BoolType):
+                self.error(f"{m.name} needs the input{'s' if len(needed) > 1 else ''} {' and '.join(needed)} "
+                           f"of type BOOL", m.name_span, "E063")
+                return
+        extra = next((v for v in info.variables.values() if v.section in (OUTPUT, IN_OUT)), None)
+        if extra is not None:
+            self.error(f"{m.name} takes inputs only (stvm calls it at instance creation), not "
+                       f"{extra.section} '{extra.name}'", extra.span, "E063")
+
     def declare_method(self, m: n.Method, owner: POUInfo, pou: n.POU, accessor: str = "",
                        prop_type: t.Type | None = None) -> POUInfo:
         qual = owner.qualname + "." + (f"__{accessor.lower()}_" if accessor else "") + m.name
@@ -422,9 +461,9 @@ class Checker:
         self.declare_variables(m, info, pou.namespace)
         self.declaring = outer
         for block in m.var_blocks:
-            if block.kind == "VAR_STAT":
-                self.error("VAR_STAT is not supported in a method (use VAR_INST: kept in the instance)",
-                           block.span, "E012")
+            if block.kind == "VAR_STAT" and pou.kind == "INTERFACE":
+                self.error("an interface method declares only inputs, outputs and in-outs, not VAR_STAT",
+                           block.span, "E063")
             elif block.kind == "VAR_INST" and pou.kind not in ("FUNCTION_BLOCK", "PROGRAM"):
                 self.error("VAR_INST is only allowed in a method of a FUNCTION_BLOCK or PROGRAM", block.span, "E012")
         for key, var in list(info.variables.items()):
@@ -434,6 +473,8 @@ class Checker:
                 hidden.init = var.init
                 owner.variables[hidden.key] = hidden
                 info.inst_vars[key] = hidden.key
+        if not accessor and m.name.lower() in ("fb_init", "fb_exit") and pou.kind == "FUNCTION_BLOCK":
+            self.check_lifecycle_method(m, info)
         if pou.kind == "INTERFACE":
             if m.body:
                 self.error(f"method '{m.name}' of interface {pou.name} cannot have statements", m.body[0].span, "E063")
@@ -1092,6 +1133,8 @@ class Checker:
                 self.error(f"{len(values)} initial values for an array of {ty.length} elements", init.span, "E023")
                 values = values[: ty.length]
             return values
+        if isinstance(init, n.StructInit) and isinstance(ty, t.FBType):
+            return self.fb_instance_init(init, ty, namespace, pou)
         if isinstance(init, n.StructInit):
             if not isinstance(ty, t.StructType):
                 self.error(f"a structure initialiser cannot initialise {ty.name}", init.span, "E023")
@@ -1105,6 +1148,38 @@ class Checker:
                 out[fname.lower()] = self.initial_value(finit, ftype, namespace, pou)
             return out
         return None
+
+    def fb_instance_init(self, init: n.StructInit, ty: t.FBType, namespace: tuple[str, ...],
+                         pou: POUInfo | None) -> dict:
+        """`fb : F := (x := 1, y := 2)` (IEC 61131-3 ed. 3 6.5.2.2, CODESYS): the instance's inputs,
+        outputs and internal variables set at its creation, as {variable key: value}. The FB's
+        variables (and its base's) may not be declared yet when a global or an earlier POU is:
+        the dict is filled in place once every POU is (`resolve_fb_instance_inits`)."""
+        out: dict = {}
+        self.fb_instance_inits.append((out, init, ty, namespace, pou))
+        return out
+
+    def resolve_fb_instance_inits(self) -> None:
+        while self.fb_instance_inits:
+            out, init, ty, namespace, pou = self.fb_instance_inits.pop(0)
+            info = self.pous.get(ty.qualname.lower())
+            if info is None:
+                continue
+            for fname, finit in init.items:
+                var = info.variables.get(fname.lower())
+                if var is None or var.section == EXTERNAL:
+                    self.error(f"function block {info.name} has no variable '{fname}' to initialise", finit.span, "E024")
+                    continue
+                if var.section in (IN_OUT, "VAR_TEMP") or var.constant:
+                    what = {IN_OUT: "an in-out (a reference, bound at each call)",
+                            "VAR_TEMP": "a VAR_TEMP (fresh at each call)"}.get(var.section, "a constant")
+                    self.error(f"'{var.name}' of {info.name} is {what}: an instance initialiser cannot set it",
+                               finit.span, "E024")
+                    continue
+                if fname.lower() in out:
+                    self.error(f"'{var.name}' is initialised twice", finit.span, "E024")
+                    continue
+                out[var.key] = self.initial_value(finit, var.type, namespace, pou)
 
     def convert_constant(self, value: object, ty: t.Type, span: n.Span, expr: n.Expr | None = None) -> object:
         if isinstance(ty, t.BoolType):
@@ -1162,6 +1237,7 @@ class Checker:
         if self.check_nesting_depth():
             self.check_containment()
             self.check_recursion()
+            self.check_method_recursion()
         tasks, defaults = self.check_configuration()
         model = ProjectModel(self.pous, self.globals, tasks, defaults, self.structs, self.enums)
         return Analysis(model, self.facts, self.units, dict(self.index.pou_nodes), self.diags, self.type_inits,
@@ -1331,6 +1407,52 @@ class Checker:
                 names = " -> ".join(self.pous[k].name for k in chain[start:] + [key])
                 node = self.index.pou_nodes[key]
                 self.error(f"recursive call {names}: IEC 61131-3 does not allow recursion", node.span, "E027")
+                return
+            state[key] = "open"
+            for callee in sorted(graph.get(key, ())):
+                visit(callee, chain + [key])
+            state[key] = "done"
+
+        for key in graph:
+            visit(key, [])
+
+    def check_method_recursion(self) -> None:
+        """A METHOD (or property accessor) calling itself, directly or through other methods, by
+        static resolution (`M()`, `THIS^.M()`, `fb.M()`, `SUPER^.M()`; a call through an interface
+        is not followed). IEC 61131-3 forbids recursion (as for functions, check_recursion): an
+        error under iec and sysmac. CODESYS and TwinCAT allow recursive methods (linked lists):
+        a warning there, since a deep enough recursion ends in a stack-overflow fault."""
+        graph: dict[str, set[str]] = {}
+        for info in list(self.pous.values()):
+            if info.kind not in ("FUNCTION_BLOCK", "PROGRAM") or info.native:
+                continue
+            for method in self.members_of(info):
+                node = self.method_nodes.get(method.key)
+                if node is None:
+                    continue
+                graph[method.key] = {call.pou.key for call in map(self.facts.calls.get, map(id, self._calls_of(
+                    method.key, node))) if call is not None and call.pou.kind == "METHOD" and call.oo != "itf"}
+        if not any(graph.values()):
+            return
+        methods = {m.key: m for info in self.pous.values() for m in self.members_of(info)}
+        allowed = self.settings.dialect in (Dialect.CODESYS, Dialect.TWINCAT)
+        state: dict[str, str] = {}
+
+        def name(key: str) -> str:
+            m = methods[key]
+            return f"{self.pous[m.owner].name}.{m.name}" if m.owner in self.pous else m.name
+
+        def visit(key: str, chain: list[str]) -> None:
+            if state.get(key) == "done":
+                return
+            if state.get(key) == "open":
+                names = " -> ".join(name(k) for k in chain[chain.index(key):] + [key])
+                span = self.method_nodes[key].name_span
+                if allowed:
+                    self.warning(f"recursive method call {names}: allowed in {self.settings.dialect.value}, "
+                                 f"but a recursion too deep ends the run in a stack-overflow fault", span)
+                else:
+                    self.error(f"recursive method call {names}: IEC 61131-3 does not allow recursion", span, "E027")
                 return
             state[key] = "open"
             for callee in sorted(graph.get(key, ())):

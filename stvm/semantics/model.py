@@ -56,6 +56,7 @@ class POUInfo:
     final: bool = False
     inherited: int = 0                # FB: how many of `variables` (the first ones) come from the base
     inst_vars: dict[str, str] = field(default_factory=dict)  # METHOD: VAR_INST key → the instance variable's key
+    stat_vars: dict[str, str] = field(default_factory=dict)  # VAR_STAT key → its hidden global's key
 
     @property
     def key(self) -> str:

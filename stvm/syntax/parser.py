@@ -809,8 +809,15 @@ def parse_text_lark(text: str, file: str, settings: SysmacSettings = DEFAULT_SET
 
 
 def _with_pragmas(parse, text: str, file: str, settings: SysmacSettings):
-    """Run `parse` collecting the `{…}` pragmas the lexer drops (`_pragma_seen`, either parser),
-    then attach the ones before a POU, type or global block to it (syntax/pragmas.py)."""
+    """Run `parse` on the text with the branches of conditional compilation not taken blanked
+    out (syntax/conditional.py), collecting the `{…}` pragmas the lexer drops (`_pragma_seen`,
+    either parser), then attach the ones before a POU, type or global block to it (syntax/pragmas.py)."""
+    directive_diagnostics: list[Diagnostic] = []
+    if "{" in text:
+        from stvm.syntax.conditional import preprocess   # lazy: start-up (only files with pragmas)
+        text, directive_diagnostics = preprocess(text, file, settings.defines)
+        if directive_diagnostics:   # the branches are not known: what the parser would say is noise
+            return n.CompilationUnit(file, (), (), (), ()), directive_diagnostics
     _PRAGMAS.tokens = pragma_tokens = []
     try:
         unit, diagnostics = parse(text, file, settings, pragma_tokens)

@@ -593,3 +593,253 @@ f.B.3 := TRUE;             (* GET, set bit 3, SET *)
 END_PROGRAM
 """
     assert run_st(src, cycles=1, prints=["Main.k", "Main.f.w"]) == {"Main.k": 7, "Main.f.w": 8}
+
+
+VAR_STAT_SOURCE = """
+FUNCTION Counter : INT
+VAR_STAT calls : INT := 100; END_VAR
+VAR fresh : INT; END_VAR
+calls := calls + 1;
+fresh := fresh + 1;
+Counter := calls * 10 + fresh;
+END_FUNCTION
+
+FUNCTION_BLOCK FB_Base
+VAR_STAT made : INT; END_VAR
+made := made + 1;
+END_FUNCTION_BLOCK
+
+FUNCTION_BLOCK FB_A EXTENDS FB_Base
+VAR_STAT shared : INT; END_VAR
+VAR own : INT; END_VAR
+SUPER^();
+shared := shared + 1;
+own := own + 1;
+
+METHOD Bump : INT
+VAR_STAT n : INT; END_VAR
+VAR fresh : INT; END_VAR
+n := n + 1;
+fresh := fresh + 1;
+shared := shared + 10;
+Bump := n * 100 + fresh + made * 1000;
+END_METHOD
+END_FUNCTION_BLOCK
+
+PROGRAM Main
+VAR a, b : FB_A; r1, r2, c : INT; END_VAR
+c := Counter();
+c := Counter();
+a(); b();
+r1 := a.Bump();
+r2 := b.Bump();
+END_PROGRAM
+"""
+
+
+def test_var_stat_is_kept_across_calls_and_shared_by_every_instance():
+    values = run_st(VAR_STAT_SOURCE, cycles=2, prints=["Main.c", "Main.r1", "Main.r2", "Main.a.own",
+                                                      "FB_A__shared", "FB_A__Bump__n", "Counter__calls"])
+    # Counter: 4 calls (its VAR starts fresh); shared: per scan +1 from each body, +10 from each Bump;
+    # the method's VAR_STAT n counts the calls of every instance; the base's VAR_STAT is seen by the method
+    assert values == {"Main.c": 1041, "Main.r1": 4301, "Main.r2": 4401, "Main.a.own": 2,
+                      "FB_A__shared": 44, "FB_A__Bump__n": 4, "Counter__calls": 104}
+    assert run_st(VAR_STAT_SOURCE, cycles=1, fmt=True, prints=["Main.a"]) == {"Main.a": "(own := 1)"}
+
+
+def test_an_fb_instance_takes_initial_values_at_its_creation():
+    src = """
+FUNCTION_BLOCK B
+VAR_INPUT base_in : INT; END_VAR
+END_FUNCTION_BLOCK
+FUNCTION_BLOCK F EXTENDS B
+VAR_INPUT x : INT; END_VAR
+VAR y : INT := 5; t : TON := (PT := T#2s); END_VAR
+VAR_OUTPUT q : INT; END_VAR
+q := x + y + base_in;
+END_FUNCTION_BLOCK
+VAR_GLOBAL gf : F := (x := 100, base_in := 1000); END_VAR
+PROGRAM Main
+VAR f : F := (x := 1, y := 2); g : F; r : INT; arr : ARRAY[1..2] OF F := [(x := 7), (y := 8)]; END_VAR
+f();
+g();
+gf();
+arr[1](); arr[2]();
+r := f.q;
+END_PROGRAM
+"""
+    # inputs, internal variables, an inherited input, a nested FB (TON's PT), globals and array elements
+    values = run_st(src, prints=["Main.r", "Main.g.q", "gf.q", "Main.arr[1].q", "Main.arr[2].q"])
+    assert values == {"Main.r": 3, "Main.g.q": 5, "gf.q": 1105, "Main.arr[1].q": 12, "Main.arr[2].q": 8}
+    assert run_st(src, fmt=True, prints=["Main.f.t.PT"]) == {"Main.f.t.PT": "T#2s"}
+
+
+FB_INIT_SOURCE = """FUNCTION_BLOCK Inner
+VAR order : INT; END_VAR
+METHOD FB_init : BOOL
+VAR_INPUT bInitRetains : BOOL; bInCopyCode : BOOL; END_VAR
+gSeq := gSeq + 1;
+order := gSeq;
+END_METHOD
+END_FUNCTION_BLOCK
+FUNCTION_BLOCK B
+VAR_INPUT x : INT; END_VAR
+VAR inner : Inner; baseOrder : INT; retains : BOOL; copy : BOOL := TRUE; END_VAR
+METHOD FB_init : BOOL
+VAR_INPUT bInitRetains : BOOL; bInCopyCode : BOOL; END_VAR
+gSeq := gSeq + 1;
+baseOrder := gSeq;
+retains := bInitRetains;
+copy := bInCopyCode;
+END_METHOD
+END_FUNCTION_BLOCK
+FUNCTION_BLOCK D EXTENDS B
+VAR derivedOrder : INT; seenX : INT; END_VAR
+METHOD FB_init : BOOL
+VAR_INPUT bInitRetains : BOOL; bInCopyCode : BOOL; END_VAR
+gSeq := gSeq + 1;
+derivedOrder := gSeq;
+seenX := x;
+END_METHOD
+END_FUNCTION_BLOCK
+VAR_GLOBAL gSeq : INT; END_VAR
+PROGRAM Main
+VAR d : D := (x := 5); END_VAR
+END_PROGRAM
+"""
+
+
+def test_fb_init_runs_at_instance_creation_inner_and_base_first():
+    values = run_st(FB_INIT_SOURCE, cycles=1, fmt=True, prints=[
+        "Main.d.inner.order", "Main.d.baseOrder", "Main.d.derivedOrder", "Main.d.seenX", "Main.d.retains",
+        "Main.d.copy", "gSeq"])
+    # the inner instance's FB_init, then the base's, then the derived FB's, after the instance's
+    # initial values (x := 5); as at a first download: bInitRetains TRUE, bInCopyCode FALSE
+    assert values == {"Main.d.inner.order": "1", "Main.d.baseOrder": "2", "Main.d.derivedOrder": "3",
+                      "Main.d.seenX": "5", "Main.d.retains": "TRUE", "Main.d.copy": "FALSE", "gSeq": "3"}
+    vm = start_st(FB_INIT_SOURCE)
+    assert vm["gSeq"] == 3        # before the first scan, and once only
+    vm.run(cycles=3)
+    assert vm["gSeq"] == 3
+
+
+def test_a_fault_in_fb_init_stops_the_run_at_its_line():
+    rc, out, err = cli(["run", write_st("""FUNCTION_BLOCK F
+VAR n : INT; z : INT; END_VAR
+METHOD FB_init : BOOL
+VAR_INPUT bInitRetains : BOOL; bInCopyCode : BOOL; END_VAR
+n := 10 / z;
+END_METHOD
+END_FUNCTION_BLOCK
+VAR_GLOBAL gf : F; END_VAR
+PROGRAM Main
+VAR c : INT; END_VAR
+c := c + 1;
+END_PROGRAM
+"""), "--cycles", "1"])
+    assert rc == 3 and ":5:1: fault: integer division by zero (task FB_init, scan 0" in err, err
+
+
+def test_a_recursive_method_runs_under_codesys():
+    src = """FUNCTION_BLOCK F
+METHOD Down : INT
+VAR_INPUT k : INT; END_VAR
+IF k > 0 THEN Down := THIS^.Down(k - 1) + 1; END_IF
+END_METHOD
+END_FUNCTION_BLOCK
+PROGRAM Main
+VAR f : F; r : INT; END_VAR
+r := f.Down(5);
+END_PROGRAM
+"""
+    rc, out, err = cli(["run", write_st(src), "--dialect", "codesys", "--cycles", "1", "--print", "Main.r"])
+    assert (rc, out) == (0, "Main.r = 5\n") and "warning: recursive method call F.Down -> F.Down" in err
+
+
+REF_TO_INTERFACE = """INTERFACE I
+METHOD Get : INT
+END_METHOD
+END_INTERFACE
+FUNCTION_BLOCK F IMPLEMENTS I
+VAR v : INT := 7; END_VAR
+METHOD Get : INT
+Get := v;
+END_METHOD
+END_FUNCTION_BLOCK
+FUNCTION_BLOCK G IMPLEMENTS I
+METHOD Get : INT
+Get := 9;
+END_METHOD
+END_FUNCTION_BLOCK
+PROGRAM Main
+VAR f : F; g : G; i : I; r : REF_TO I; x, y : INT; empty, isset : BOOL; j : I; END_VAR
+r := REF(i);
+empty := r^ = 0;
+r^ := f;
+x := i.Get();
+r^ := g;
+y := r^.Get();
+isset := r^ <> 0 AND r <> NULL;
+j := r^;
+END_PROGRAM
+"""
+
+REF_TO_INTERFACE_IN_STRUCT = """INTERFACE I
+METHOD Get : INT
+END_METHOD
+END_INTERFACE
+FUNCTION_BLOCK F IMPLEMENTS I
+METHOD Get : INT
+Get := 7;
+END_METHOD
+END_FUNCTION_BLOCK
+TYPE S : STRUCT p : REF_TO I; END_STRUCT END_TYPE
+FUNCTION Use : INT
+VAR_INPUT p : REF_TO I; END_VAR
+Use := p^.Get() * 2;
+END_FUNCTION
+PROGRAM Main
+VAR f : F; i : I; s : S; x : INT; y : INT; n : INT; END_VAR
+i := f;
+s.p := REF(i);
+x := Use(s.p);
+n := n + 1;
+IF n = 2 THEN s.p := NULL; END_IF
+y := s.p^.Get();
+END_PROGRAM
+"""
+
+REFERENCE_AND_POINTER_TO_INTERFACE = """INTERFACE I
+METHOD Get : INT
+END_METHOD
+END_INTERFACE
+FUNCTION_BLOCK F IMPLEMENTS I
+METHOD Get : INT
+Get := 7;
+END_METHOD
+END_FUNCTION_BLOCK
+PROGRAM Main
+VAR f : F; i : I; rr : REFERENCE TO I; p : POINTER TO I; x, y : INT; END_VAR
+i := f;
+rr REF= i;
+x := rr.Get();
+p := ADR(i);
+y := p^.Get();
+END_PROGRAM
+"""
+
+
+def test_ref_to_an_interface_reads_writes_and_calls_through_it():
+    values = run_st(REF_TO_INTERFACE, fmt=True, prints=["Main.x", "Main.y", "Main.empty", "Main.isset", "Main.j", "Main.r^"])
+    assert values == {"Main.x": "7", "Main.y": "9", "Main.empty": "TRUE", "Main.isset": "TRUE", "Main.j": "-> G",
+                      "Main.r^": "-> G"}
+    assert run_st(REFERENCE_AND_POINTER_TO_INTERFACE, prints=["Main.x", "Main.y"]) == {"Main.x": 7, "Main.y": 7}
+
+
+def test_ref_to_an_interface_in_a_struct_and_as_an_input_and_its_faults():
+    assert run_st(REF_TO_INTERFACE_IN_STRUCT, prints=["Main.x", "Main.y"]) == {"Main.x": 14, "Main.y": 7}
+    path = write_st(REF_TO_INTERFACE_IN_STRUCT)
+    rc, _, err = cli(["run", path, "--cycles", "3"])
+    assert rc == 3 and ":22:1: fault: dereference of a NULL reference" in err, err
+    rc, _, err = cli(["run", write_st(REF_TO_INTERFACE_IN_STRUCT.replace("s.p := NULL;", "i := 0;")), "--cycles", "3"])
+    assert rc == 3 and ":22:1: fault: call through an interface that holds no instance (NULL)" in err, err

@@ -8,7 +8,7 @@ import re
 
 import pytest
 
-from core_helpers import check_text
+from core_helpers import check_text, cli, write_st
 
 HEAD = re.compile(r"^(?:.*/)?case\.st:(\d+):(\d+): error: (.+)$", re.M)
 
@@ -170,3 +170,115 @@ k := f.S.x;
 END_PROGRAM
 """)
     assert found == [(11, "cannot assign into property 'S': its GET returns a copy; assign the whole property")]
+
+
+@pytest.mark.parametrize("source, line, message", [
+    # VAR_STAT is the POU's own: not an input or output of an instance
+    ("FUNCTION_BLOCK F\nVAR_STAT s : INT; END_VAR\nEND_FUNCTION_BLOCK\n"
+     "PROGRAM Main\nVAR f : F; x : INT; END_VAR\nx := f.s;\nEND_PROGRAM\n", 6, "function block F has no member 's'"),
+    # one name in VAR and VAR_STAT
+    ("FUNCTION_BLOCK F\nVAR s : INT; END_VAR\nVAR_STAT s : INT; END_VAR\nEND_FUNCTION_BLOCK\n",
+     3, "duplicate declaration of 's' in F"),
+    # in a method: one name in VAR and VAR_STAT, and VAR_STAT in an interface's method
+    ("FUNCTION_BLOCK F\nMETHOD M\nVAR s : INT; END_VAR\nVAR_STAT s : INT; END_VAR\nEND_METHOD\nEND_FUNCTION_BLOCK\n",
+     4, "duplicate declaration of 's' in M"),
+    ("INTERFACE I\nMETHOD M\nVAR_STAT s : INT; END_VAR\nEND_METHOD\nEND_INTERFACE\n",
+     3, "an interface method declares only inputs, outputs and in-outs, not VAR_STAT"),
+    # a VAR_STAT CONSTANT stays a constant
+    ("FUNCTION F : INT\nVAR_STAT CONSTANT k : INT := 3; END_VAR\nk := 4;\nF := k;\nEND_FUNCTION\n",
+     3, "constant"),
+])
+def test_var_stat_errors(source, line, message):
+    found = errors(source)
+    assert any(l == line and message in m for l, m in found), found
+
+
+def test_var_stat_in_functions_methods_and_fbs_checks():
+    assert errors("FUNCTION F : INT\nVAR_STAT n : INT := 1; END_VAR\nn := n + 1;\nF := n;\nEND_FUNCTION\n"
+                  "FUNCTION_BLOCK B\nVAR_STAT k : INT; END_VAR\nk := k + 1;\n"
+                  "METHOD M : INT\nVAR_STAT c : INT; END_VAR\nc := c + k;\nM := c;\nEND_METHOD\n"
+                  "END_FUNCTION_BLOCK\n") == []
+
+
+FB_FOR_INIT = ("FUNCTION_BLOCK F\nVAR_INPUT x : INT; END_VAR\nVAR_IN_OUT io : INT; END_VAR\n"
+               "VAR_TEMP tmp : INT; END_VAR\nVAR CONSTANT k : INT := 1; END_VAR\nEND_FUNCTION_BLOCK\n")
+
+
+@pytest.mark.parametrize("decl, message", [
+    ("a : F := (nope := 1);", "function block F has no variable 'nope' to initialise"),
+    ("b : F := (io := 1);", "'io' of F is an in-out (a reference, bound at each call): an instance initialiser"),
+    ("c : F := (tmp := 1);", "'tmp' of F is a VAR_TEMP (fresh at each call)"),
+    ("d : F := (k := 2);", "'k' of F is a constant: an instance initialiser cannot set it"),
+    ("e : F := (x := 70000);", "70000 is out of range for INT"),
+    ("h : F := (x := 1, x := 2);", "'x' is initialised twice"),
+    ("i : F := 3;", "initial value"),
+])
+def test_fb_instance_initialiser_errors(decl, message):
+    found = errors(FB_FOR_INIT + f"PROGRAM Main\nVAR {decl} END_VAR\nEND_PROGRAM\n")
+    assert any(l == 8 and message in m for l, m in found), found
+
+
+@pytest.mark.parametrize("source, line, message", [
+    ("FUNCTION_BLOCK F\nMETHOD FB_init : BOOL\nVAR_INPUT bInitRetains : BOOL; END_VAR\nEND_METHOD\n"
+     "END_FUNCTION_BLOCK\n", 2, "FB_init needs the inputs bInitRetains and bInCopyCode of type BOOL"),
+    ("FUNCTION_BLOCK F\nMETHOD FB_init : BOOL\nVAR_INPUT bInitRetains : BOOL; bInCopyCode : BOOL; END_VAR\n"
+     "VAR_OUTPUT q : INT; END_VAR\nEND_METHOD\nEND_FUNCTION_BLOCK\n",
+     4, "FB_init takes inputs only (stvm calls it at instance creation), not VAR_OUTPUT 'q'"),
+    ("FUNCTION_BLOCK F\nMETHOD FB_exit : BOOL\nVAR_INPUT bInCopyCode : INT; END_VAR\nEND_METHOD\n"
+     "END_FUNCTION_BLOCK\n", 2, "FB_exit needs the input bInCopyCode of type BOOL"),
+])
+def test_fb_init_and_fb_exit_signatures(source, line, message):
+    found = errors(source)
+    assert any(l == line and message in m for l, m in found), found
+
+
+RECURSIVE_METHODS = """FUNCTION_BLOCK F
+METHOD Down : INT
+VAR_INPUT k : INT; END_VAR
+IF k > 0 THEN Down := THIS^.Down(k - 1) + 1; END_IF
+END_METHOD
+METHOD A
+B();
+END_METHOD
+METHOD B
+THIS^.A();
+END_METHOD
+METHOD Ok
+Down(1);
+A();
+END_METHOD
+END_FUNCTION_BLOCK
+FUNCTION_BLOCK G
+VAR f : F; END_VAR
+METHOD Outer
+f.Ok();
+END_METHOD
+END_FUNCTION_BLOCK
+"""
+
+
+def test_a_recursive_method_is_an_error_under_iec_as_a_recursive_function_is():
+    rc, _, err = cli(["check", write_st(RECURSIVE_METHODS), "--dialect", "iec"])
+    found = [(int(m[1]), m[3]) for m in re.finditer(r":(\d+):(\d+): error: (.+)", err)]
+    # the cycles are reported once each, at a method on them; callers of a cycle (Ok, G.Outer) are not
+    assert rc == 1 and found == [
+        (2, "recursive method call F.Down -> F.Down: IEC 61131-3 does not allow recursion"),
+        (6, "recursive method call F.A -> F.B -> F.A: IEC 61131-3 does not allow recursion")], err
+
+
+@pytest.mark.parametrize("dialect", ["codesys", "twincat"])
+def test_a_recursive_method_is_a_warning_where_the_vendor_allows_it(dialect):
+    rc, _, err = cli(["check", write_st(RECURSIVE_METHODS), "--dialect", dialect])
+    assert rc == 0 and err.count(": warning: recursive method call") == 2, err
+    assert f"F.Down -> F.Down: allowed in {dialect}, but a recursion too deep ends the run in a " \
+           "stack-overflow fault" in err
+
+
+def test_ref_to_an_interface_takes_only_references_to_that_interface():
+    found = errors("INTERFACE I\nEND_INTERFACE\nFUNCTION_BLOCK F IMPLEMENTS I\nEND_FUNCTION_BLOCK\n"
+                   "PROGRAM Main\nVAR f : F; r : REF_TO I; n : INT; END_VAR\nr := REF(f);\nr := REF(n);\n"
+                   "r^ := n;\nEND_PROGRAM\n")
+    # a REF_TO I holds the address of an interface variable, not of an instance (assign `r^ := f`)
+    assert found == [(7, "type mismatch: cannot assign REF_TO F to REF_TO I"),
+                     (8, "type mismatch: cannot assign REF_TO INT to REF_TO I"),
+                     (9, "type mismatch: cannot assign INT to interface I")]

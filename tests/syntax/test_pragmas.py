@@ -40,7 +40,7 @@ PROGRAM Main
 VAR
   {attribute 'hide'}
   x : INT; {attribute 'instance-path'}
-  {IF defined (variable: x)}
+  {IF NOT defined (NO_Y)}
   y : INT := 5;
   {END_IF}
   light : E_Light;
@@ -67,8 +67,9 @@ END_PROGRAM
 def test_pragmas_anywhere_are_ignored_and_the_program_runs():
     values = run_st(EVERYWHERE, cycles=2, prints=["Main.x", "Main.y", "Main.light", "Main.pair.a", "Main.pair.b",
                                                   "gCount"], fmt=True)
-    # both branches of the {IF} stand: stvm does not evaluate conditional-compilation pragmas
-    assert values == {"Main.x": "2", "Main.y": "11", "Main.light": "E_Light#Green", "Main.pair.a": "1",
+    # conditional compilation is evaluated (tests/syntax/test_conditional.py): SIMULATION is not
+    # defined, so the {ELSE} branch runs
+    assert values == {"Main.x": "2", "Main.y": "9", "Main.light": "E_Light#Green", "Main.pair.a": "1",
                       "Main.pair.b": "2", "gCount": "2"}
 
 
