@@ -19,18 +19,20 @@ what this pass adds is keyed by `node.nid`.
 
 from __future__ import annotations
 
+import re
+
 from dataclasses import dataclass, field
 from types import MappingProxyType
 from typing import Mapping
 
-from stvm.lower.hot_uses import for_variables, hot_uses
+from stvm.lower.hot_uses import hot_uses
 from stvm.lower.options import LowerOptions
 from stvm.semantics import types as t
 from stvm.semantics.facts import CallInfo
 from stvm.semantics.model import EXTERNAL, GLOBAL, IN_OUT, INPUT, LOCAL, OUTPUT, TEMP, POUInfo, Variable
 from stvm.settings import ArrayOob, ForEndEval, OpenArrayBounds
 from stvm.syntax import nodes as n
-from stvm.syntax.walk import calls_in, name_uses, root_name, walk
+from stvm.syntax.walk import LOOP_WEIGHT, root_name, walk
 
 
 @dataclass(frozen=True)
@@ -124,17 +126,16 @@ class _Planner:
     # ---- one body
     def plan_body(self, pou: POUInfo, node, method: bool) -> None:
         body = node.body
-        uses = name_uses(body)
-        by_reference = self.by_reference(pou, node)
+        uses, calls, fors, call_statements, assigned = self.scan_body(body)
+        by_reference = self.by_reference(pou, calls)
         frameless = False
         cached: dict[str, Variable] | None = None
         if method and self.options.frameless_methods:
-            every = self.cached_vars(pou, node, uses, by_reference, min_uses=0, outputs_local=True)
+            every = self.cached_vars(pou, node, uses, by_reference, fors, min_uses=0, outputs_local=True)
             if all(v.key in every for v in pou.variables.values() if v.section != "VAR_INST"):
                 cached, frameless = every, True
         if cached is None:
-            cached = self.cached_vars(pou, node, uses, by_reference)
-        fors, call_statements, assigned = self.scan_body(body)
+            cached = self.cached_vars(pou, node, uses, by_reference, fors)
         self.pous[pou.key] = PouPlan(pou.key, MappingProxyType(uses), frozenset(assigned),
                                      frozenset(by_reference), MappingProxyType(cached), frameless)
         for s in fors:
@@ -146,12 +147,12 @@ class _Planner:
             if info is not None and info.is_fb and info.oo != "super_body":
                 self.fb_call(s.call, info)
 
-    def by_reference(self, pou: POUInfo, node) -> set[str]:
+    def by_reference(self, pou: POUInfo, calls: list[n.Call]) -> set[str]:
         """Variables of the POU that code other than the body's own may read or write during a
         call: scalar in-out arguments and FUNCTION outputs (written through references), a
         FUNCTION's or METHOD's outputs, an FB's variables its methods reach, REF/ADR targets."""
         referenced: set[str] = set()
-        for call in calls_in(node.body):
+        for call in calls:
             info = self.facts.calls.get(id(call))
             if info is None:
                 continue
@@ -183,7 +184,7 @@ class _Planner:
 
     # ---- cache_locals, hot_path_cache, frameless_methods
     def cached_vars(self, pou: POUInfo, node, uses: Mapping[str, int], by_reference: set[str],
-                    min_uses: int = -1, outputs_local: bool = False) -> dict[str, Variable]:
+                    fors: list[n.For], min_uses: int = -1, outputs_local: bool = False) -> dict[str, Variable]:
         """`cache_locals`: variables a call may keep in Python locals (LOAD_FAST instead of
         attribute access).
 
@@ -199,7 +200,7 @@ class _Planner:
         referenced = set(by_reference)
         if pou.kind in ("FUNCTION", "METHOD") and not outputs_local:
             referenced |= {v.key for v in pou.variables.values() if v.section == OUTPUT}
-        hot = self.hot_path_uses(node) if self.options.hot_path_cache and min_uses < 0 else None
+        hot = self.hot_path_uses(node, fors) if self.options.hot_path_cache and min_uses < 0 else None
         out = {}
         for var in pou.variables.values():
             if var.section in (EXTERNAL, GLOBAL, "VAR_INST") or var.key in referenced:
@@ -215,78 +216,94 @@ class _Planner:
             out[var.key] = var
         return out
 
-    def hot_path_uses(self, node) -> tuple[dict[str, float], set[str]]:
+    def hot_path_uses(self, node, fors: list[n.For]) -> tuple[dict[str, float], set[str]]:
         """`hot_path_cache`: `hot_uses` of a body (loops already weigh their uses) and its FOR
-        variables."""
-        return hot_uses(node.body), for_variables(node.body)
+        variables (as `hot_uses.for_variables`)."""
+        return hot_uses(node.body), {s.variable.parts[0].lower() for s in fors if len(s.variable.parts) == 1}
 
-    # ---- statements: FUNCTION errors and array_oob=skip_statement, and what the body assigns
-    def scan_body(self, body) -> tuple[list[n.For], list[n.CallStatement], set[str]]:
-        """One walk over a body: mark every Assign and call statement containing a FUNCTION call
-        (its instruction errors are caught at the statement) and, under
-        `array_oob=skip_statement`, every statement containing an array access. A hit marks its
-        enclosing statements innermost first and stops at one already marked (its own enclosing
-        ones are too): linear in the body's size, where asking each statement for its subtree
-        was quadratic in the nesting depth. Returns the body's FOR loops and call statements
-        and the root names it assigns (assignment and REF= targets, FOR variables, `=>`
-        outputs and in-out arguments)."""
+    # ---- one walk over a body: uses, calls, loops, assignments, statements that catch errors
+    def scan_body(self, body) -> tuple[dict[str, int], list[n.Call], list[n.For], list[n.CallStatement], set[str]]:
+        """One walk over a body. Returns how often each single-part name is used (loops weighted,
+        as `name_uses`), its calls (as `calls_in`), FOR loops and call statements, and the root
+        names it assigns (assignment and REF= targets, FOR variables, `=>` outputs and in-out
+        arguments).
+
+        On the way it marks every Assign and call statement containing a FUNCTION call (its
+        instruction errors are caught at the statement) and, under `array_oob=skip_statement`,
+        every statement containing an array access. A hit marks its enclosing statements
+        innermost first and stops at one already marked (its own enclosing ones are too): linear
+        in the body's size, where asking each statement for its subtree was quadratic in the
+        nesting depth."""
+        uses: dict[str, int] = {}
+        calls: list[n.Call] = []
         fors: list[n.For] = []
         call_statements: list[n.CallStatement] = []
         assigned: set[str] = set()
-        calls = self.facts.calls
+        facts_calls = self.facts.calls
         skip = self.settings.array_oob is ArrayOob.SKIP_STATEMENT
-        native: set[int] = set()     # every statement with a FUNCTION call inside
-        guardable: set[int] = set()  # the Assign and call statements among them catch its errors
+        native: dict[int, type] = {}   # statements with a FUNCTION call inside → their class
         indexed = self.indexed
-        open_statements: list[n.Statement] = []
-        leave = _LEAVE
+        open_statements: list = []
+        weight = 1                     # LOOP_WEIGHT ** the loops open around the node
+        leave, unknown, fields_of = _LEAVE, _UNKNOWN, _CHILD_FIELDS
+        name_cls, call_cls, index_cls, argument_cls = n.Name, n.Call, n.Index, n.Argument
+        assign_classes, loops, statements = (n.Assign, n.RefAssign), _LOOPS, _STATEMENTS
+        get = uses.get
         stack: list = list(body)
         pop, push = stack.pop, stack.append
         while stack:
             node = pop()
             if node is leave:
-                open_statements.pop()
+                if open_statements.pop().__class__ in loops:
+                    weight //= LOOP_WEIGHT
                 continue
             cls = node.__class__
-            names = _CHILD_FIELDS.get(cls, _UNKNOWN)
-            if names is _UNKNOWN:
+            names = fields_of.get(cls, unknown)
+            if names is unknown:
                 names = _child_fields(cls)
             if names is None:
                 if isinstance(node, tuple):
                     stack.extend(node)
                 continue
-            if isinstance(node, n.Statement):
+            if cls is name_cls:
+                if len(node.parts) == 1:
+                    key = node.parts[0].lower()
+                    uses[key] = get(key, 0) + weight
+                continue   # a Name holds no nodes
+            if cls is call_cls:
+                calls.append(node)
+                info = facts_calls.get(id(node))
+                if info is not None and not info.is_fb and not info.oo:
+                    _mark(open_statements, native)
+            elif cls is index_cls:
+                if skip:
+                    _mark(open_statements, indexed)
+            elif cls is argument_cls:
+                if node.kind != "input" and node.kind != "positional":
+                    target = root_name(node.value)
+                    if target is not None:
+                        assigned.add(target)
+            elif cls in statements:
                 open_statements.append(node)
                 push(leave)
-                if cls is n.Assign or cls is n.CallStatement:
-                    guardable.add(node.nid)
-                if cls is n.Assign or cls is n.RefAssign:
+                if cls in assign_classes:
                     target = root_name(node.target)
                     if target is not None:
                         assigned.add(target)
-                if cls is n.CallStatement:
+                elif cls is n.CallStatement:
                     call_statements.append(node)
                 elif cls is n.For:
                     fors.append(node)
                     target = root_name(node.variable)
                     if target is not None:
                         assigned.add(target)
-            elif cls is n.Argument:
-                if node.kind != "input" and node.kind != "positional":
-                    target = root_name(node.value)
-                    if target is not None:
-                        assigned.add(target)
-            elif cls is n.Index:
-                if skip:
-                    _mark(open_statements, indexed)
-            elif cls is n.Call:
-                info = calls.get(id(node))
-                if info is not None and not info.is_fb and not info.oo:
-                    _mark(open_statements, native)
+                if cls in loops:
+                    weight *= LOOP_WEIGHT
             for name in names:
                 push(getattr(node, name))
-        self.function_errors.update(nid for nid in native if nid in guardable)
-        return fors, call_statements, assigned
+        guarded = (n.Assign, n.CallStatement)
+        self.function_errors.update(nid for nid, cls in native.items() if cls in guarded)
+        return uses, calls, fors, call_statements, assigned
 
     # ---- range_for, hoist_bounds
     def range_for(self, s: n.For, cached: Mapping[str, Variable]) -> RangeFor | None:
@@ -464,12 +481,17 @@ def loop_offset(facts, ix: n.Expr, key: str) -> int | None:
     return None
 
 
-def _mark(open_statements: list, marked: set[int]) -> None:
+def _mark(open_statements: list, marked) -> None:
+    """Mark the open statements (a set of nids, or a dict nid → class), innermost first."""
+    add = marked.add if isinstance(marked, set) else None
     for s in reversed(open_statements):
         nid = s.nid
         if nid in marked:
             return
-        marked.add(nid)
+        if add is not None:
+            add(nid)
+        else:
+            marked[nid] = s.__class__
 
 
 _LEAVE = object()            # on the walk's stack: the statement opened last is left
@@ -477,12 +499,26 @@ _UNKNOWN = object()
 _CHILD_FIELDS: dict[type, tuple[str, ...] | None] = {}
 
 
+_LOOPS = frozenset({n.For, n.While, n.Repeat})
+_STATEMENTS = frozenset(cls for cls in vars(n).values() if isinstance(cls, type) and issubclass(cls, n.Statement))
+_SCALARS = {"str", "int", "bool", "float", "bytes", "None", "Span", "n.Span"}
+
+
 def _child_fields(cls) -> tuple[str, ...] | None:
-    """The fields of a node class that may hold nodes (every dataclass field but `span`), or
-    None for tuples and scalars."""
+    """The fields of a node class that may hold nodes: not `span`, and not declared as only
+    scalars (str, int, tuples of str, …), as `stvm.syntax.walk` reads them; None for tuples and
+    scalars."""
     fields_ = getattr(cls, "__dataclass_fields__", None)
-    names = None if fields_ is None or not issubclass(cls, n.Node) else \
-        tuple(name for name in fields_ if name != "span")
+    if fields_ is None:
+        names = None
+    else:
+        out = []
+        for name, f in fields_.items():
+            kind = f.type if isinstance(f.type, str) else getattr(f.type, "__name__", "?")
+            atoms = set(re.findall(r"[A-Za-z_][A-Za-z0-9_.]*", kind)) - {"tuple"}
+            if name != "span" and not (atoms and atoms <= _SCALARS):
+                out.append(name)
+        names = tuple(out)
     _CHILD_FIELDS[cls] = names
     return names
 
