@@ -2,17 +2,17 @@
 METHODs and property accessors, initial values, and the local-variable cache of a call body.
 
 A mixin of `Lowerer` (`stvm/lower/codegen.py`): it writes through `self.w` and reads the checked
-facts of `self.facts`; statements and expressions come from the sibling generators."""
+facts of `self.facts` and the analysis pass's plan of each body (`self.plan`, stvm/lower/analysis.py:
+which variables are cached, whether a METHOD runs frameless); statements and expressions come from
+the sibling generators."""
 
 from __future__ import annotations
 
 from stvm.semantics import types as t
 from stvm.semantics.model import EXTERNAL, GLOBAL, IN_OUT, INPUT, OUTPUT, TEMP, POUInfo, Variable
-from stvm.lower.hot_uses import for_variables, hot_uses
 from stvm.lower.names import method_attr, var_attr
 from stvm.lower.pycode import CodeWriter, py_literal
 from stvm.syntax import nodes as n
-from stvm.syntax.walk import calls_in, name_uses
 from stvm.settings import EnumDefault
 
 
@@ -230,7 +230,7 @@ class PouGenerator:
             w.line("self._impl.call(self, _ctx)")
         else:
             assert node is not None
-            cached = self.cached_vars(pou, node)
+            cached = dict(self.plan.pous[pou.key].cached)
             temps_reset = [f"self.{var_attr(v.name)} = {self.var_default(v)}" for v in pou.variables.values()
                            if v.section == TEMP and v.key not in cached]
             self.cached_body(pou, node, cached, temps_reset, [])
@@ -274,22 +274,22 @@ class PouGenerator:
         self.pou = pou
         self.owner = "_f"
         assert node is not None and (pou.return_type is not None or method)
-        if method and self.options.frameless_methods:
+        plan = self.plan.pous[pou.key]
+        if method and plan.frameless:
             # a METHOD none of whose variables is passed by reference keeps them all in Python
             # locals (the inputs are the arguments, the outputs are written back at the end): no
             # frame object
-            every = self.cached_vars(pou, node, min_uses=0, outputs_local=True)
-            if all(v.key in every for v in pou.variables.values() if v.section != "VAR_INST"):
-                prologue = [f"{var_attr(v.name)} = {self.var_default(v)}" for v in pou.variables.values()
-                            if v.section not in (INPUT, IN_OUT, "VAR_INST")]
-                prologue.append(f"_r = {self.default_expr(pou.return_type)}" if pou.return_type is not None else "_r = None")
-                epilogue = [f"if o_{var_attr(o.name)} is not None: o_{var_attr(o.name)}.set({var_attr(o.name)})"
-                            for o in outputs]
-                self.cached_body(pou, node, every, prologue, epilogue, frameless=True)
-                w.blank_span()
-                w.line("return _r")
-                w.indent -= 1
-                return
+            every = dict(plan.cached)
+            prologue = [f"{var_attr(v.name)} = {self.var_default(v)}" for v in pou.variables.values()
+                        if v.section not in (INPUT, IN_OUT, "VAR_INST")]
+            prologue.append(f"_r = {self.default_expr(pou.return_type)}" if pou.return_type is not None else "_r = None")
+            epilogue = [f"if o_{var_attr(o.name)} is not None: o_{var_attr(o.name)}.set({var_attr(o.name)})"
+                        for o in outputs]
+            self.cached_body(pou, node, every, prologue, epilogue, frameless=True)
+            w.blank_span()
+            w.line("return _r")
+            w.indent -= 1
+            return
         # every variable lives on the frame `_f` (so in-outs can reference it); the often used
         # ones are copied into Python locals by cached_body
         prologue = ["_f = _Frame()"] if pou.variables or not method else []
@@ -302,89 +302,14 @@ class PouGenerator:
         # VAR_OUTPUT of a function: written through the caller's references when it returns
         epilogue = [f"if o_{var_attr(o.name)} is not None: o_{var_attr(o.name)}.set(_f.{var_attr(o.name)})"
                     for o in outputs]
-        self.cached_body(pou, node, self.cached_vars(pou, node), prologue, epilogue)
+        self.cached_body(pou, node, dict(plan.cached), prologue, epilogue)
         w.blank_span()
         w.line("return _r")
         w.indent -= 1
 
-    def cached_vars(self, pou: POUInfo, node: n.POU, min_uses: int = -1,
-                    outputs_local: bool = False) -> dict[str, Variable]:
-        """Variables a call may keep in Python locals (LOAD_FAST instead of attribute access).
-
-        Safe for every variable of the POU's own instance/frame that is never passed by reference
-        (as a scalar in-out argument): nothing else can observe it during the call. Aggregates
-        (arrays, structs, FB instances) are never rebound, so a local alias is always safe; scalars
-        are written back in a `finally`, so values survive RETURN and faults.
-        """
-        if not self.options.cache_locals:
-            return {}
-        referenced: set[str] = set()
-        for call in calls_in(node.body):
-            info = self.facts.calls.get(id(call))
-            if info is None:
-                continue
-            for var, value in info.inputs:
-                if var.section == IN_OUT and isinstance(value, n.Name):
-                    referenced.add(value.parts[0].lower())
-            if not info.is_fb:
-                # a function writes its outputs through references at its end
-                for var, target, _ in info.outputs:
-                    if isinstance(target, n.Name):
-                        referenced.add(target.parts[0].lower())
-        if pou.kind in ("FUNCTION", "METHOD") and not outputs_local:
-            referenced |= {v.key for v in pou.variables.values() if v.section == OUTPUT}
-        if pou.kind != "METHOD" and self.has_members(pou):
-            # its methods and properties read and write the instance's variables while the body
-            # runs (own calls, calls back through interfaces): only temporaries and aggregates
-            # may stay in Python locals
-            referenced |= {v.key for v in pou.variables.values() if v.section != TEMP
-                           and not isinstance(v.type, (t.StructType, t.ArrayType, t.FBType))}
-        # a variable whose reference is taken (REF/ADR/REF=) may be read or written through it
-        referenced |= {var for owner, var in self.facts.addressed if owner == pou.key}
-        uses = name_uses(node.body)
-        hot = self.hot_path_uses(node) if self.options.hot_path_cache and min_uses < 0 else None
-        out = {}
-        for var in pou.variables.values():
-            if var.section in (EXTERNAL, GLOBAL, "VAR_INST") or var.key in referenced:
-                continue
-            if var.section == IN_OUT and not isinstance(var.type, (t.StructType, t.ArrayType, t.FBType)):
-                continue  # a scalar in-out is a reference object; keep it on the instance
-            if hot is not None and var.section != TEMP:
-                if not self.hot_enough(var, hot):
-                    continue
-            # a local costs a load on entry (and a store on exit): worth it from a few uses on
-            elif uses.get(var.key, 0) < (_CACHE_MIN_USES if min_uses < 0 else min_uses):
-                continue
-            out[var.key] = var
-        return out
-
-    def hot_path_uses(self, node: n.POU) -> tuple[dict[str, float], set[str]]:
-        """`hot_uses` of a body (loops already weigh their uses) and its FOR variables."""
-        return hot_uses(node.body), for_variables(node.body)
-
-    def hot_enough(self, var: Variable, hot: tuple[dict[str, float], set[str]]) -> bool:
-        """`hot_path_cache`: is a local worth its load on entry (and store on exit) on a typical
-        call? Yes for a FOR variable (a range-FOR needs it in a local), or when the uses one call
-        is expected to make (branches weighted, loops multiplied by `hot_uses`) reach the
-        threshold; an aggregate is only aliased (no write-back), so it pays off sooner. A
-        temporary keeps the plain rule: uncached, it is reset on the instance every call anyway."""
-        counts, for_vars = hot
-        if var.key in for_vars:
-            return True
-        aggregate = isinstance(var.type, (t.StructType, t.ArrayType, t.FBType))
-        return counts.get(var.key, 0.0) >= (_HOT_MIN_USES_AGGREGATE if aggregate else _HOT_MIN_USES)
-
-    def has_members(self, pou: POUInfo) -> bool:
-        cur: POUInfo | None = pou
-        while cur is not None:
-            if cur.methods or cur.properties:
-                return True
-            cur = self.model.pous.get(cur.base) if cur.base else None
-        return False
-
     def cached_body(self, pou: POUInfo, node: n.POU, cached: dict[str, Variable], prologue_extra: list[str],
                     epilogue_extra: list[str], frameless: bool = False) -> None:
-        """Emit the body of a call with `cached` (from `cached_vars`) in Python locals: prologue,
+        """Emit the body of a call with `cached` (the plan's `cached`) in Python locals: prologue,
         try/body/finally write-back. `frameless`: every variable is a local already set by the
         prologue (nothing to load or write back)."""
         outer = self.w
@@ -430,9 +355,3 @@ class PouGenerator:
                 outer.line(line)
         self.cached, self.used, self.assigned = {}, set(), set()
 
-
-_CACHE_MIN_USES = 3          # uses of a variable in a body (a use inside a loop counts as many)
-# `hot_path_cache`: expected uses per call (see stvm/lower/hot_uses.py) from which a local pays:
-# a cached scalar costs ~6 bytecodes (load on entry, store back on exit) and saves ~1.5 per use
-_HOT_MIN_USES = 3.0
-_HOT_MIN_USES_AGGREGATE = 2.0

@@ -2,18 +2,20 @@
 CONTINUE and RETURN, FB calls, EN/ENO, and the range-FOR optimisation.
 
 A mixin of `Lowerer` (`stvm/lower/codegen.py`); one Python statement group per ST statement, each
-line tagged with the statement's span (see `CodeWriter`)."""
+line tagged with the statement's span (see `CodeWriter`). What is decided about a statement before
+it is written (caught errors, range-FORs, inlined and direct FB calls, kept array references) is
+read from the analysis pass's plan, `self.plan` (stvm/lower/analysis.py)."""
 
 from __future__ import annotations
 
 from stvm.semantics import types as t
 from stvm.semantics.facts import CallInfo
-from stvm.semantics.model import IN_OUT, INPUT, LOCAL, OUTPUT, Variable
+from stvm.semantics.model import IN_OUT, Variable
+from stvm.lower.analysis import loop_offset
 from stvm.lower.names import var_attr
 from stvm.lower.pycode import py_literal, wrap_int
 from stvm.syntax import nodes as n
-from stvm.syntax.walk import root_name, walk
-from stvm.settings import ArrayOob, ForEndEval, OpenArrayBounds
+from stvm.settings import ForEndEval, OpenArrayBounds
 
 
 class StatementGenerator:
@@ -28,11 +30,12 @@ class StatementGenerator:
 
     def statement(self, s: n.Statement) -> None:
         self.w.span = s.span
-        guarded = isinstance(s, (n.Assign, n.CallStatement)) and self.has_native_call(s)
-        # array_oob=skip_statement: a statement with an array access is skipped when an index
+        # a statement calling a FUNCTION catches its instruction errors; under
+        # array_oob=skip_statement, a statement with an array access is skipped when an index
         # is out of range (a compound one only for its own expressions: inner statements skip
         # themselves)
-        skippable = self.settings.array_oob is ArrayOob.SKIP_STATEMENT and self.has_index(s)
+        guarded = s.nid in self.plan.catches_function_errors
+        skippable = s.nid in self.plan.skips_on_bad_index
         if guarded or skippable:
             self.w.line("try:")
             self.w.indent += 1
@@ -46,18 +49,6 @@ class StatementGenerator:
         if skippable:
             self.sites.append(s.span)
             self.w.line(f"except _ArrayIndexError as _e: _oob_skipped(_e, {len(self.sites) - 1})")
-
-    def has_index(self, node: object) -> bool:
-        return any(isinstance(x, n.Index) for x in walk((node,)))
-
-    def has_native_call(self, node: object) -> bool:
-        """Does this statement call a FUNCTION (which may raise an instruction error)?"""
-        for x in walk((node,)):
-            if isinstance(x, n.Call):
-                info = self.facts.calls.get(id(x))
-                if info is not None and not info.is_fb and not info.oo:
-                    return True
-        return False
 
     def with_en_eno(self, call: n.Expr, emit) -> bool:
         """Emit `emit()` under the call's EN (run only when TRUE) and set its ENO: FALSE before
@@ -158,7 +149,7 @@ class StatementGenerator:
         var_type = self.facts.types[id(s.variable)]
         assert isinstance(var_type, t.IntType)
         step_const = self.facts.consts.get(id(s.step)) if s.step is not None else 1
-        if self.range_for_ok(s, step_const):
+        if s.nid in self.plan.range_fors:
             self.range_for(s, var_type, step_const)  # type: ignore[arg-type]
             return
         self.store(s.variable, self.expr_as(s.start, var_type), var_type)
@@ -185,34 +176,6 @@ class StatementGenerator:
             self.w.line(line)
         self.w.indent -= 1
 
-    def range_for_ok(self, s: n.For, step: object) -> bool:
-        """Can this FOR become a Python `for … in range()` (same semantics, much faster)?
-
-        Needs: a constant non-zero step, the end evaluated once, a loop variable held in a local
-        that the body never assigns, and no EXIT/RETURN (so a wrap-around at the type's limit
-        is a genuinely endless loop, reported as a fault instead of hanging)."""
-        if not self.options.range_for:
-            return False
-        if not isinstance(step, int) or isinstance(step, bool) or step == 0:
-            return False
-        if self.settings.for_end_eval is not ForEndEval.ONCE:
-            return False
-        ref = self.facts.names.get(id(s.variable))
-        if ref is None or ref.kind != "var" or ref.variable is None or ref.variable.key not in self.cached:
-            return False
-        key = ref.variable.key
-        for node in walk(s.body):
-            if isinstance(node, (n.Exit, n.Return)):
-                return False
-            if isinstance(node, n.Assign) and root_name(node.target) == key:
-                return False
-            if isinstance(node, n.For) and node.variable.parts[0].lower() == key:
-                return False
-            if isinstance(node, n.Argument) and node.kind != "input" and node.kind != "positional" \
-                    and root_name(node.value) == key:
-                return False
-        return True
-
     def range_for(self, s: n.For, var_type: t.IntType, step: int) -> None:
         var = self.expr(s.variable)
         key = s.variable.parts[0].lower()
@@ -228,14 +191,15 @@ class StatementGenerator:
         rng = self.new_tmp("range")
         self.w.line(f"{rng} = range({start}, {stop}, {step})")
         self.assigned.add(key)
-        start_const = self.facts.consts.get(id(s.start))
-        accesses = self.hoistable_accesses(s.body, key) if self.options.hoist_bounds else set()
+        plan = self.plan.range_fors[s.nid]
+        start_const = plan.start
+        accesses = plan.hoisted
         if accesses:
             # Bounds checks hoisted out of the loop: if every `a[i + c]` stays inside its array
             # for the whole range, run a copy of the loop without per-access checks; otherwise
             # the checked copy faults at exactly the iteration the controller would.
             first, last = (start, end) if step > 0 else (end, start)
-            conds = [f"{first} + {c} >= {lo} and {last} + {c} <= {hi}" for c, lo, hi in sorted(accesses)]
+            conds = [f"{first} + {c} >= {lo} and {last} + {c} <= {hi}" for c, lo, hi in accesses]
             self.w.line(f"if {' and '.join(conds)}:")
             self.w.indent += 1
             self.unchecked.add(key)
@@ -269,27 +233,7 @@ class StatementGenerator:
 
     def loop_offset(self, ix: n.Expr, key: str) -> int | None:
         """c when `ix` is `key`, `key + c` or `key - c` (constant c), else None."""
-        if isinstance(ix, n.Name) and len(ix.parts) == 1 and ix.parts[0].lower() == key:
-            return 0
-        if isinstance(ix, n.Binary) and ix.op in ("PLUS", "MINUS") and isinstance(ix.left, n.Name) \
-                and len(ix.left.parts) == 1 and ix.left.parts[0].lower() == key:
-            c = self.facts.consts.get(id(ix.right))
-            if isinstance(c, int) and not isinstance(c, bool) and id(ix.right) in self.facts.untyped:
-                return c if ix.op == "PLUS" else -c
-        return None
-
-    def hoistable_accesses(self, body, key: str) -> set[tuple[int, int, int]]:
-        """(offset, lo, hi) of every 1-D array access indexed by the loop variable (+/- const)."""
-        found: set[tuple[int, int, int]] = set()
-        for node in walk(body):
-            if isinstance(node, n.Index) and len(node.indices) == 1:
-                base_type = self.facts.types.get(id(node.base))
-                if isinstance(base_type, t.ArrayType) and base_type.dims and len(base_type.dims) == 1:
-                    c = self.loop_offset(node.indices[0], key)
-                    if c is not None:
-                        lo, hi = base_type.dims[0]
-                        found.add((c, lo, hi))
-        return found
+        return loop_offset(self.facts, ix, key)
 
     def st_While(self, s: n.While) -> None:
         self.w.line(f"while {self.expr(s.condition)}:")
@@ -396,7 +340,7 @@ class StatementGenerator:
     def fb_call(self, e: n.Call, info: CallInfo) -> None:
         assert info.instance is not None
         inst = self.expr(info.instance)
-        inlined = self.inlinable_fb(info)
+        inlined = self.plan.inlined_fbs.get(e.nid)
         if not inst.replace(".", "").replace("_", "").isalnum() or (inlined is not None and "." in inst):
             tmp = self.new_tmp("fb")
             self.w.line(f"{tmp} = {inst}")
@@ -414,7 +358,7 @@ class StatementGenerator:
         if inlined is not None:
             self.inline_fb_body(inst, info.pou, inlined)
         else:
-            self.w.line(self.direct_native_call(inst, info) or f"{inst}()")
+            self.w.line(self.direct_native_call(inst, e) or f"{inst}()")
         for var, target, negate in info.outputs:
             target_type = self.facts.types.get(id(target))
             value = f"{inst}.{var_attr(var.name)}"
@@ -437,44 +381,21 @@ class StatementGenerator:
         self.struct_assign_body("_sd", "_ss", st, 0)
         return True
 
-    def direct_native_call(self, inst: str, info: CallInfo) -> str | None:
-        """`direct_native_calls`: a native FB (TON, SktTCPSend, ...) called straight through its
-        implementation, `inst._impl.call(inst, _ctx)`, instead of through the class's `__call__`
-        that does only that (one Python frame less per call). The instance is of exactly that
-        class: the checker lets no POU extend a native FB."""
-        pou = info.pou
-        if not self.options.direct_native_calls or not pou.native or info.oo:
+    def direct_native_call(self, inst: str, call: n.Call) -> str | None:
+        """`direct_native_calls` (decided by the analysis): a native FB called straight through
+        its implementation, `inst._impl.call(inst, _ctx)`."""
+        if call.nid not in self.plan.direct_native:
             return None
         return f"{inst}._impl.call({inst}, _ctx)"
 
     def reused_array_ref(self, place: str, var: Variable, value: n.Expr) -> bool:
-        """`reuse_array_refs`: an ARRAY[*] argument of an FB call that is a fixed array of the
-        caller (`SendDat := Data[0]`, `Buf := Data`) keeps the `ArrayRef` the instance already
-        holds when it names the same list from the same element on, instead of building a new
-        one every call (the thesis passes two a scan per CBT FB). An `ArrayRef` is never changed
-        after it is made, and a fixed array's list is never replaced (assignments copy into it),
-        so the kept one is equal in every respect. A constant element index is checked here, at
-        compile time. False when not applied (the plain `arg_code` path)."""
-        if not self.options.reuse_array_refs or not isinstance(var.type, t.ArrayType) or var.type.dims is not None:
+        """`reuse_array_refs` (decided by the analysis, `ArrayRefReuse`): keep the `ArrayRef` the
+        instance already holds when it names the same list from the same element on. False when
+        not applied (the plain `arg_code` path)."""
+        reuse = self.plan.array_refs.get(value.nid)
+        if reuse is None:
             return False
-        vtype = self.facts.types.get(id(value))
-        lo = 0
-        if id(value) in self.facts.array_from_element:
-            assert isinstance(value, n.Index)
-            base_type = self.facts.types[id(value.base)]
-            if not isinstance(base_type, t.ArrayType) or base_type.dims is None or len(value.indices) != 1:
-                return False
-            first, last = base_type.dims[0]
-            const = self.facts.consts.get(id(value.indices[0]))
-            if not isinstance(const, int) or isinstance(const, bool) or not first <= const <= last:
-                return False
-            base, start = self.expr(value.base), const - first
-        elif isinstance(vtype, t.ArrayType) and vtype.dims is not None:
-            base, start = self.expr(value), 0
-            if self.settings.open_array_bounds is OpenArrayBounds.ACTUAL:
-                lo = vtype.dims[0][0]
-        else:
-            return False
+        base, start, lo = self.expr(reuse.base), reuse.start, reuse.lo
         if not base.replace(".", "").replace("_", "").isalnum():
             return False   # only a plain variable path is evaluated twice
         actual = self.settings.open_array_bounds is OpenArrayBounds.ACTUAL
@@ -483,50 +404,6 @@ class StatementGenerator:
         made = f"_ArrayRef({base}, {start}, {lo})" if lo else f"_ArrayRef({base}, {start})"
         self.w.line(f"if (_ar := {place}) is None or {same}: {place} = {made}")
         return True
-
-    def inlinable_fb(self, info: CallInfo) -> n.POU | None:
-        """`inline_small_fbs`: the body of a tiny FB (R_TRIG, F_TRIG, SR, RS: at most
-        `_INLINE_FB_STATEMENTS` assignments of its own variables from expressions of its own
-        variables and literals) is lowered into the caller, with the instance as the owner of its
-        variables: the same stores in the same order, one Python call less. None when not applied.
-        Not for native FBs, FBs with methods, properties, a base, temporaries, in-outs or
-        externals, nor when a POU extends the FB (a reference could reach a derived instance)."""
-        pou = info.pou
-        if not self.options.inline_small_fbs or pou.native or info.oo or pou.kind != "FUNCTION_BLOCK":
-            return None
-        if pou.methods or pou.properties or pou.base is not None or pou.interfaces:
-            return None
-        if any(v.section not in (INPUT, OUTPUT, LOCAL) for v in pou.variables.values()):
-            return None
-        node = self.a.pou_nodes.get(pou.key)
-        if node is None or not 0 < len(node.body) <= _INLINE_FB_STATEMENTS:
-            return None
-        if any(other.base == pou.key for other in self.model.pous.values()):
-            return None
-        for stmt in node.body:
-            if not isinstance(stmt, n.Assign) or not self.own_simple(stmt.target, pou, target=True) \
-                    or not self.own_simple(stmt.value, pou):
-                return None
-        return node
-
-    def own_simple(self, e: n.Expr, pou, target: bool = False) -> bool:
-        """A plain variable of `pou` (its own instance's), or for a value also a literal or
-        NOT/AND/OR/XOR of such: code that cannot call, index, fault or reach another object."""
-        if isinstance(e, n.Name):
-            ref = self.facts.names.get(id(e))
-            return ref is not None and ref.kind == "var" and ref.variable is not None \
-                and ref.variable.key in pou.variables and id(e) not in self.facts.auto_deref \
-                and isinstance(ref.variable.type, t.BoolType)
-        if target:
-            return False
-        if isinstance(e, n.BoolLiteral):
-            return True
-        if isinstance(e, n.Unary):
-            return e.op == "NOT" and self.own_simple(e.operand, pou)
-        if isinstance(e, n.Binary):
-            return e.op in ("AND", "AMP", "OR", "XOR") and self.own_simple(e.left, pou) \
-                and self.own_simple(e.right, pou)
-        return False
 
     def inline_fb_body(self, inst: str, pou, node: n.POU) -> None:
         """Lower `node`'s body here with `inst` (a plain name) as the owner of its variables."""
@@ -550,4 +427,3 @@ def struct_leaves(st: t.StructType) -> int:
 
 
 _INLINE_COPY_LEAVES = 32
-_INLINE_FB_STATEMENTS = 4

@@ -1,7 +1,13 @@
 """The lowering's optimisations, each a named switch.
 
-Every optimisation keeps the ST semantics exactly (the differential test lowers the core and thesis
-suites with all of them off and compares); they only change how fast the generated code runs. The
+Every optimisation keeps the ST semantics exactly (tests/lower/test_lower_options_differential.py
+runs the core and thesis suites with all of them off, and with each alone off, and compares); they
+only change how fast the generated code runs. Whether one applies is decided by a named function of
+the analysis pass (stvm/lower/analysis.py: `cached_vars`, `range_for_ok`, `hoistable_accesses`,
+`inlinable_fb`, `direct_native_call`, `reused_array_ref`, frameless METHODs in `plan_body`); the
+ones that only change how an expression is written are read by their generator (`ring_chain`,
+`no_wrap_in_range` in gen_expr.py, `inline_struct_assign` in gen_pou.py, `inline_input_copy` in
+gen_stmt.py). The
 debug build switches `cache_locals` off, because a debugger stopped inside a call must read and
 write the storage the code itself uses (see `stvm/debug/build.py`).
 """

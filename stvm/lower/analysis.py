@@ -1,0 +1,531 @@
+"""The lowering's analysis pass: what each POU's code will need, decided before any code is written.
+
+As CPython's symtable runs before its compiler, `plan_project` reads the checked project once and
+returns a `ProjectPlan`: per POU (and METHOD / property accessor) a `PouPlan` with the variables it
+uses and assigns, the ones passed by reference, and the ones a call keeps in Python locals; for the
+whole project, keyed by stable node ids (`Node.nid`), the statements whose FUNCTION errors or
+array-index errors are caught, the FOR loops that become a Python `range` (with their step, start,
+type and hoisted bounds checks), the FB calls written into the caller or called straight through
+their native implementation, and the ARRAY[*] arguments that keep their `ArrayRef`.
+
+The generators (`gen_pou`, `gen_stmt`, `gen_expr`) only read the plan. Each optimisation that
+decides *whether* something is done is a named function here that consults its `LowerOptions`
+switch; the ones that only change *how* an expression is written (`ring_chain`,
+`no_wrap_in_range`, `inline_struct_assign`, `inline_input_copy`) stay with their generator.
+
+Semantic facts of the checker (`Analysis.facts`) are still keyed by `id(node)` and read that way;
+what this pass adds is keyed by `node.nid`.
+"""
+
+from __future__ import annotations
+
+import re
+
+from dataclasses import dataclass, field
+from types import MappingProxyType
+from typing import Mapping
+
+from stvm.lower.hot_uses import hot_uses
+from stvm.lower.options import LowerOptions
+from stvm.semantics import types as t
+from stvm.semantics.facts import CallInfo
+from stvm.semantics.model import EXTERNAL, GLOBAL, IN_OUT, INPUT, LOCAL, OUTPUT, TEMP, POUInfo, Variable
+from stvm.settings import ArrayOob, ForEndEval, OpenArrayBounds
+from stvm.syntax import nodes as n
+from stvm.syntax.walk import LOOP_WEIGHT, root_name, walk
+
+
+@dataclass(frozen=True)
+class RangeFor:
+    """A FOR written as `for … in range()`: `range_for_ok` holds for it."""
+    key: str                                   # the loop variable (lower case)
+    step: int
+    start: int | None                          # the start, when a constant
+    var_type: t.IntType
+    hoisted: tuple[tuple[int, int, int], ...]  # (offset, lo, hi) of the accesses checked once
+
+
+@dataclass(frozen=True)
+class ArrayRefReuse:
+    """`reuse_array_refs`: an ARRAY[*] argument that is a fixed array of the caller (`base`), from
+    element `start` on, seen with lower bound `lo`. The generator still requires the code of `base`
+    to be a plain variable path (it is evaluated twice)."""
+    base: n.Expr
+    start: int
+    lo: int
+
+
+@dataclass(frozen=True)
+class PouPlan:
+    """What the code of one call body (FB/PROGRAM `__call__`, FUNCTION, METHOD, accessor) needs."""
+    key: str
+    uses: Mapping[str, int]            # single-part names → uses in the body (loops weighted)
+    assigned: frozenset[str]           # variables the body assigns (root names of targets)
+    by_reference: frozenset[str]       # variables something may read or write through a reference
+    cached: Mapping[str, Variable]     # variables a call keeps in Python locals
+    frameless: bool = False            # a METHOD whose variables are all Python locals
+
+
+@dataclass(frozen=True)
+class ProjectPlan:
+    pous: Mapping[str, PouPlan] = field(default_factory=dict)
+    catches_function_errors: frozenset[int] = frozenset()   # statement nids (Assign, CallStatement)
+    skips_on_bad_index: frozenset[int] = frozenset()        # statement nids (array_oob=skip_statement)
+    range_fors: Mapping[int, RangeFor] = field(default_factory=dict)       # For nid → how it is written
+    inlined_fbs: Mapping[int, n.POU] = field(default_factory=dict)         # Call nid → the FB inlined
+    direct_native: frozenset[int] = frozenset()             # Call nids of native FBs called directly
+    array_refs: Mapping[int, ArrayRefReuse] = field(default_factory=dict)  # argument value nid → kept ArrayRef
+
+
+EMPTY_PLAN = ProjectPlan()
+"""The plan of code lowered without a project body (the debugger's expressions)."""
+
+
+def plan_project(analysis, settings, options: LowerOptions) -> ProjectPlan:
+    """Every fact the generators need about the checked project `analysis`."""
+    return _Planner(analysis, settings, options).plan()
+
+
+@dataclass
+class _Planner:
+    a: object
+    settings: object
+    options: LowerOptions
+    pous: dict[str, PouPlan] = field(default_factory=dict)
+    function_errors: set[int] = field(default_factory=set)
+    indexed: set[int] = field(default_factory=set)
+    range_fors: dict[int, RangeFor] = field(default_factory=dict)
+    inlined: dict[int, n.POU] = field(default_factory=dict)
+    direct: set[int] = field(default_factory=set)
+    array_refs: dict[int, ArrayRefReuse] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        self.model = self.a.model   # type: ignore[attr-defined]
+        self.facts = self.a.facts   # type: ignore[attr-defined]
+
+    def plan(self) -> ProjectPlan:
+        for key in sorted(self.model.pous):
+            pou = self.model.pous[key]
+            if pou.kind == "INTERFACE" or pou.native:
+                continue
+            node = self.a.pou_nodes.get(key)   # type: ignore[attr-defined]
+            if node is not None:
+                self.plan_body(pou, node, method=False)
+            for method in pou.methods.values():
+                if not method.abstract:
+                    self.plan_body(method, self.a.method_nodes[method.key], method=True)  # type: ignore[attr-defined]
+            for prop in pou.properties.values():
+                for accessor in (prop.getter, prop.setter):
+                    if accessor is not None and not accessor.abstract:
+                        self.plan_body(accessor, self.a.method_nodes[accessor.key], method=True)  # type: ignore[attr-defined]
+        return ProjectPlan(MappingProxyType(self.pous), frozenset(self.function_errors),
+                           frozenset(self.indexed), MappingProxyType(self.range_fors),
+                           MappingProxyType(self.inlined), frozenset(self.direct),
+                           MappingProxyType(self.array_refs))
+
+    # ---- one body
+    def plan_body(self, pou: POUInfo, node, method: bool) -> None:
+        body = node.body
+        uses, calls, fors, call_statements, assigned = self.scan_body(body)
+        by_reference = self.by_reference(pou, calls)
+        frameless = False
+        cached: dict[str, Variable] | None = None
+        if method and self.options.frameless_methods:
+            every = self.cached_vars(pou, node, uses, by_reference, fors, min_uses=0, outputs_local=True)
+            if all(v.key in every for v in pou.variables.values() if v.section != "VAR_INST"):
+                cached, frameless = every, True
+        if cached is None:
+            cached = self.cached_vars(pou, node, uses, by_reference, fors)
+        self.pous[pou.key] = PouPlan(pou.key, MappingProxyType(uses), frozenset(assigned),
+                                     frozenset(by_reference), MappingProxyType(cached), frameless)
+        for s in fors:
+            decision = self.range_for(s, cached)
+            if decision is not None:
+                self.range_fors[s.nid] = decision
+        for s in call_statements:
+            info = self.facts.calls.get(id(s.call))
+            if info is not None and info.is_fb and info.oo != "super_body":
+                self.fb_call(s.call, info)
+
+    def by_reference(self, pou: POUInfo, calls: list[n.Call]) -> set[str]:
+        """Variables of the POU that code other than the body's own may read or write during a
+        call: scalar in-out arguments and FUNCTION outputs (written through references), a
+        FUNCTION's or METHOD's outputs, an FB's variables its methods reach, REF/ADR targets."""
+        referenced: set[str] = set()
+        for call in calls:
+            info = self.facts.calls.get(id(call))
+            if info is None:
+                continue
+            for var, value in info.inputs:
+                if var.section == IN_OUT and isinstance(value, n.Name):
+                    referenced.add(value.parts[0].lower())
+            if not info.is_fb:
+                # a function writes its outputs through references at its end
+                for var, target, _ in info.outputs:
+                    if isinstance(target, n.Name):
+                        referenced.add(target.parts[0].lower())
+        if pou.kind != "METHOD" and self.has_members(pou):
+            # its methods and properties read and write the instance's variables while the body
+            # runs (own calls, calls back through interfaces): only temporaries and aggregates
+            # may stay in Python locals
+            referenced |= {v.key for v in pou.variables.values() if v.section != TEMP
+                           and not isinstance(v.type, (t.StructType, t.ArrayType, t.FBType))}
+        # a variable whose reference is taken (REF/ADR/REF=) may be read or written through it
+        referenced |= {var for owner, var in self.facts.addressed if owner == pou.key}
+        return referenced
+
+    def has_members(self, pou: POUInfo) -> bool:
+        cur: POUInfo | None = pou
+        while cur is not None:
+            if cur.methods or cur.properties:
+                return True
+            cur = self.model.pous.get(cur.base) if cur.base else None
+        return False
+
+    # ---- cache_locals, hot_path_cache, frameless_methods
+    def cached_vars(self, pou: POUInfo, node, uses: Mapping[str, int], by_reference: set[str],
+                    fors: list[n.For], min_uses: int = -1, outputs_local: bool = False) -> dict[str, Variable]:
+        """`cache_locals`: variables a call may keep in Python locals (LOAD_FAST instead of
+        attribute access).
+
+        Safe for every variable of the POU's own instance/frame that is never passed by reference
+        (as a scalar in-out argument): nothing else can observe it during the call. Aggregates
+        (arrays, structs, FB instances) are never rebound, so a local alias is always safe; scalars
+        are written back in a `finally`, so values survive RETURN and faults. `min_uses=0,
+        outputs_local=True`: the candidates of a frameless METHOD (its outputs written back to the
+        caller's references at its end).
+        """
+        if not self.options.cache_locals:
+            return {}
+        referenced = set(by_reference)
+        if pou.kind in ("FUNCTION", "METHOD") and not outputs_local:
+            referenced |= {v.key for v in pou.variables.values() if v.section == OUTPUT}
+        hot = self.hot_path_uses(node, fors) if self.options.hot_path_cache and min_uses < 0 else None
+        out = {}
+        for var in pou.variables.values():
+            if var.section in (EXTERNAL, GLOBAL, "VAR_INST") or var.key in referenced:
+                continue
+            if var.section == IN_OUT and not isinstance(var.type, (t.StructType, t.ArrayType, t.FBType)):
+                continue  # a scalar in-out is a reference object; keep it on the instance
+            if hot is not None and var.section != TEMP:
+                if not hot_enough(var, hot):
+                    continue
+            # a local costs a load on entry (and a store on exit): worth it from a few uses on
+            elif uses.get(var.key, 0) < (_CACHE_MIN_USES if min_uses < 0 else min_uses):
+                continue
+            out[var.key] = var
+        return out
+
+    def hot_path_uses(self, node, fors: list[n.For]) -> tuple[dict[str, float], set[str]]:
+        """`hot_path_cache`: `hot_uses` of a body (loops already weigh their uses) and its FOR
+        variables (as `hot_uses.for_variables`)."""
+        return hot_uses(node.body), {s.variable.parts[0].lower() for s in fors if len(s.variable.parts) == 1}
+
+    # ---- one walk over a body: uses, calls, loops, assignments, statements that catch errors
+    def scan_body(self, body) -> tuple[dict[str, int], list[n.Call], list[n.For], list[n.CallStatement], set[str]]:
+        """One walk over a body. Returns how often each single-part name is used (loops weighted,
+        as `name_uses`), its calls (as `calls_in`), FOR loops and call statements, and the root
+        names it assigns (assignment and REF= targets, FOR variables, `=>` outputs and in-out
+        arguments).
+
+        On the way it marks every Assign and call statement containing a FUNCTION call (its
+        instruction errors are caught at the statement) and, under `array_oob=skip_statement`,
+        every statement containing an array access. A hit marks its enclosing statements
+        innermost first and stops at one already marked (its own enclosing ones are too): linear
+        in the body's size, where asking each statement for its subtree was quadratic in the
+        nesting depth."""
+        uses: dict[str, int] = {}
+        calls: list[n.Call] = []
+        fors: list[n.For] = []
+        call_statements: list[n.CallStatement] = []
+        assigned: set[str] = set()
+        facts_calls = self.facts.calls
+        skip = self.settings.array_oob is ArrayOob.SKIP_STATEMENT
+        native: dict[int, type] = {}   # statements with a FUNCTION call inside → their class
+        indexed = self.indexed
+        open_statements: list = []
+        weight = 1                     # LOOP_WEIGHT ** the loops open around the node
+        leave, unknown, fields_of = _LEAVE, _UNKNOWN, _CHILD_FIELDS
+        name_cls, call_cls, index_cls, argument_cls = n.Name, n.Call, n.Index, n.Argument
+        assign_classes, loops, statements = (n.Assign, n.RefAssign), _LOOPS, _STATEMENTS
+        get = uses.get
+        stack: list = list(body)
+        pop, push = stack.pop, stack.append
+        while stack:
+            node = pop()
+            if node is leave:
+                if open_statements.pop().__class__ in loops:
+                    weight //= LOOP_WEIGHT
+                continue
+            cls = node.__class__
+            names = fields_of.get(cls, unknown)
+            if names is unknown:
+                names = _child_fields(cls)
+            if names is None:
+                if isinstance(node, tuple):
+                    stack.extend(node)
+                continue
+            if cls is name_cls:
+                if len(node.parts) == 1:
+                    key = node.parts[0].lower()
+                    uses[key] = get(key, 0) + weight
+                continue   # a Name holds no nodes
+            if cls is call_cls:
+                calls.append(node)
+                info = facts_calls.get(id(node))
+                if info is not None and not info.is_fb and not info.oo:
+                    _mark(open_statements, native)
+            elif cls is index_cls:
+                if skip:
+                    _mark(open_statements, indexed)
+            elif cls is argument_cls:
+                if node.kind != "input" and node.kind != "positional":
+                    target = root_name(node.value)
+                    if target is not None:
+                        assigned.add(target)
+            elif cls in statements:
+                open_statements.append(node)
+                push(leave)
+                if cls in assign_classes:
+                    target = root_name(node.target)
+                    if target is not None:
+                        assigned.add(target)
+                elif cls is n.CallStatement:
+                    call_statements.append(node)
+                elif cls is n.For:
+                    fors.append(node)
+                    target = root_name(node.variable)
+                    if target is not None:
+                        assigned.add(target)
+                if cls in loops:
+                    weight *= LOOP_WEIGHT
+            for name in names:
+                push(getattr(node, name))
+        guarded = (n.Assign, n.CallStatement)
+        self.function_errors.update(nid for nid, cls in native.items() if cls in guarded)
+        return uses, calls, fors, call_statements, assigned
+
+    # ---- range_for, hoist_bounds
+    def range_for(self, s: n.For, cached: Mapping[str, Variable]) -> RangeFor | None:
+        var_type = self.facts.types[id(s.variable)]
+        step = self.facts.consts.get(id(s.step)) if s.step is not None else 1
+        if not self.range_for_ok(s, step, cached):
+            return None
+        assert isinstance(var_type, t.IntType) and isinstance(step, int)
+        key = s.variable.parts[0].lower()
+        start = self.facts.consts.get(id(s.start))
+        hoisted = tuple(sorted(self.hoistable_accesses(s.body, key))) if self.options.hoist_bounds else ()
+        return RangeFor(key, step, start if isinstance(start, int) else None, var_type, hoisted)
+
+    def range_for_ok(self, s: n.For, step: object, cached: Mapping[str, Variable]) -> bool:
+        """`range_for`: can this FOR become a Python `for … in range()` (same semantics, much
+        faster)?
+
+        Needs: a constant non-zero step, the end evaluated once, a loop variable held in a local
+        that the body never assigns, and no EXIT/RETURN (so a wrap-around at the type's limit
+        is a genuinely endless loop, reported as a fault instead of hanging)."""
+        if not self.options.range_for:
+            return False
+        if not isinstance(step, int) or isinstance(step, bool) or step == 0:
+            return False
+        if self.settings.for_end_eval is not ForEndEval.ONCE:
+            return False
+        ref = self.facts.names.get(id(s.variable))
+        if ref is None or ref.kind != "var" or ref.variable is None or ref.variable.key not in cached:
+            return False
+        key = ref.variable.key
+        for node in walk(s.body):
+            if isinstance(node, (n.Exit, n.Return)):
+                return False
+            if isinstance(node, n.Assign) and root_name(node.target) == key:
+                return False
+            if isinstance(node, n.For) and node.variable.parts[0].lower() == key:
+                return False
+            if isinstance(node, n.Argument) and node.kind != "input" and node.kind != "positional" \
+                    and root_name(node.value) == key:
+                return False
+        return True
+
+    def hoistable_accesses(self, body, key: str) -> set[tuple[int, int, int]]:
+        """`hoist_bounds`: (offset, lo, hi) of every 1-D array access indexed by the loop variable
+        (+/- const)."""
+        found: set[tuple[int, int, int]] = set()
+        for node in walk(body):
+            if isinstance(node, n.Index) and len(node.indices) == 1:
+                base_type = self.facts.types.get(id(node.base))
+                if isinstance(base_type, t.ArrayType) and base_type.dims and len(base_type.dims) == 1:
+                    c = loop_offset(self.facts, node.indices[0], key)
+                    if c is not None:
+                        lo, hi = base_type.dims[0]
+                        found.add((c, lo, hi))
+        return found
+
+    # ---- FB calls: inline_small_fbs, direct_native_calls, reuse_array_refs
+    def fb_call(self, call: n.Call, info: CallInfo) -> None:
+        inlined = self.inlinable_fb(info)
+        if inlined is not None:
+            self.inlined[call.nid] = inlined
+        elif self.direct_native_call(info):
+            self.direct.add(call.nid)
+        for var, value in info.inputs:
+            if var.section != IN_OUT and isinstance(var.type, t.StructType):
+                continue
+            if var.section != IN_OUT and isinstance(var.type, t.ArrayType) and var.type.dims is not None:
+                continue
+            reuse = self.reused_array_ref(var, value)
+            if reuse is not None:
+                self.array_refs[value.nid] = reuse
+
+    def inlinable_fb(self, info: CallInfo) -> n.POU | None:
+        """`inline_small_fbs`: the body of a tiny FB (R_TRIG, F_TRIG, SR, RS: at most
+        `_INLINE_FB_STATEMENTS` assignments of its own variables from expressions of its own
+        variables and literals) is lowered into the caller, with the instance as the owner of its
+        variables: the same stores in the same order, one Python call less. None when not applied.
+        Not for native FBs, FBs with methods, properties, a base, temporaries, in-outs or
+        externals, nor when a POU extends the FB (a reference could reach a derived instance)."""
+        pou = info.pou
+        if not self.options.inline_small_fbs or pou.native or info.oo or pou.kind != "FUNCTION_BLOCK":
+            return None
+        if pou.methods or pou.properties or pou.base is not None or pou.interfaces:
+            return None
+        if any(v.section not in (INPUT, OUTPUT, LOCAL) for v in pou.variables.values()):
+            return None
+        node = self.a.pou_nodes.get(pou.key)   # type: ignore[attr-defined]
+        if node is None or not 0 < len(node.body) <= _INLINE_FB_STATEMENTS:
+            return None
+        if any(other.base == pou.key for other in self.model.pous.values()):
+            return None
+        for stmt in node.body:
+            if not isinstance(stmt, n.Assign) or not self.own_simple(stmt.target, pou, target=True) \
+                    or not self.own_simple(stmt.value, pou):
+                return None
+        return node
+
+    def own_simple(self, e: n.Expr, pou, target: bool = False) -> bool:
+        """A plain variable of `pou` (its own instance's), or for a value also a literal or
+        NOT/AND/OR/XOR of such: code that cannot call, index, fault or reach another object."""
+        if isinstance(e, n.Name):
+            ref = self.facts.names.get(id(e))
+            return ref is not None and ref.kind == "var" and ref.variable is not None \
+                and ref.variable.key in pou.variables and id(e) not in self.facts.auto_deref \
+                and isinstance(ref.variable.type, t.BoolType)
+        if target:
+            return False
+        if isinstance(e, n.BoolLiteral):
+            return True
+        if isinstance(e, n.Unary):
+            return e.op == "NOT" and self.own_simple(e.operand, pou)
+        if isinstance(e, n.Binary):
+            return e.op in ("AND", "AMP", "OR", "XOR") and self.own_simple(e.left, pou) \
+                and self.own_simple(e.right, pou)
+        return False
+
+    def direct_native_call(self, info: CallInfo) -> bool:
+        """`direct_native_calls`: a native FB (TON, SktTCPSend, ...) called straight through its
+        implementation, `inst._impl.call(inst, _ctx)`, instead of through the class's `__call__`
+        that does only that (one Python frame less per call). The instance is of exactly that
+        class: the checker lets no POU extend a native FB."""
+        return self.options.direct_native_calls and info.pou.native and not info.oo
+
+    def reused_array_ref(self, var: Variable, value: n.Expr) -> ArrayRefReuse | None:
+        """`reuse_array_refs`: an ARRAY[*] argument of an FB call that is a fixed array of the
+        caller (`SendDat := Data[0]`, `Buf := Data`) keeps the `ArrayRef` the instance already
+        holds when it names the same list from the same element on, instead of building a new
+        one every call (the thesis passes two a scan per CBT FB). An `ArrayRef` is never changed
+        after it is made, and a fixed array's list is never replaced (assignments copy into it),
+        so the kept one is equal in every respect. A constant element index is checked here, at
+        compile time. None when not applied (the plain `arg_code` path)."""
+        if not self.options.reuse_array_refs or not isinstance(var.type, t.ArrayType) or var.type.dims is not None:
+            return None
+        vtype = self.facts.types.get(id(value))
+        lo = 0
+        if id(value) in self.facts.array_from_element:
+            assert isinstance(value, n.Index)
+            base_type = self.facts.types[id(value.base)]
+            if not isinstance(base_type, t.ArrayType) or base_type.dims is None or len(value.indices) != 1:
+                return None
+            first, last = base_type.dims[0]
+            const = self.facts.consts.get(id(value.indices[0]))
+            if not isinstance(const, int) or isinstance(const, bool) or not first <= const <= last:
+                return None
+            return ArrayRefReuse(value.base, const - first, lo)
+        if isinstance(vtype, t.ArrayType) and vtype.dims is not None:
+            if self.settings.open_array_bounds is OpenArrayBounds.ACTUAL:
+                lo = vtype.dims[0][0]
+            return ArrayRefReuse(value, 0, lo)
+        return None
+
+
+def hot_enough(var: Variable, hot: tuple[dict[str, float], set[str]]) -> bool:
+    """`hot_path_cache`: is a local worth its load on entry (and store on exit) on a typical
+    call? Yes for a FOR variable (a range-FOR needs it in a local), or when the uses one call
+    is expected to make (branches weighted, loops multiplied by `hot_uses`) reach the
+    threshold; an aggregate is only aliased (no write-back), so it pays off sooner. A
+    temporary keeps the plain rule: uncached, it is reset on the instance every call anyway."""
+    counts, for_vars = hot
+    if var.key in for_vars:
+        return True
+    aggregate = isinstance(var.type, (t.StructType, t.ArrayType, t.FBType))
+    return counts.get(var.key, 0.0) >= (_HOT_MIN_USES_AGGREGATE if aggregate else _HOT_MIN_USES)
+
+
+def loop_offset(facts, ix: n.Expr, key: str) -> int | None:
+    """c when `ix` is `key`, `key + c` or `key - c` (constant c), else None."""
+    if isinstance(ix, n.Name) and len(ix.parts) == 1 and ix.parts[0].lower() == key:
+        return 0
+    if isinstance(ix, n.Binary) and ix.op in ("PLUS", "MINUS") and isinstance(ix.left, n.Name) \
+            and len(ix.left.parts) == 1 and ix.left.parts[0].lower() == key:
+        c = facts.consts.get(id(ix.right))
+        if isinstance(c, int) and not isinstance(c, bool) and id(ix.right) in facts.untyped:
+            return c if ix.op == "PLUS" else -c
+    return None
+
+
+def _mark(open_statements: list, marked) -> None:
+    """Mark the open statements (a set of nids, or a dict nid → class), innermost first."""
+    add = marked.add if isinstance(marked, set) else None
+    for s in reversed(open_statements):
+        nid = s.nid
+        if nid in marked:
+            return
+        if add is not None:
+            add(nid)
+        else:
+            marked[nid] = s.__class__
+
+
+_LEAVE = object()            # on the walk's stack: the statement opened last is left
+_UNKNOWN = object()
+_CHILD_FIELDS: dict[type, tuple[str, ...] | None] = {}
+
+
+_LOOPS = frozenset({n.For, n.While, n.Repeat})
+_STATEMENTS = frozenset(cls for cls in vars(n).values() if isinstance(cls, type) and issubclass(cls, n.Statement))
+_SCALARS = {"str", "int", "bool", "float", "bytes", "None", "Span", "n.Span"}
+
+
+def _child_fields(cls) -> tuple[str, ...] | None:
+    """The fields of a node class that may hold nodes: not `span`, and not declared as only
+    scalars (str, int, tuples of str, …), as `stvm.syntax.walk` reads them; None for tuples and
+    scalars."""
+    fields_ = getattr(cls, "__dataclass_fields__", None)
+    if fields_ is None:
+        names = None
+    else:
+        out = []
+        for name, f in fields_.items():
+            kind = f.type if isinstance(f.type, str) else getattr(f.type, "__name__", "?")
+            atoms = set(re.findall(r"[A-Za-z_][A-Za-z0-9_.]*", kind)) - {"tuple"}
+            if name != "span" and not (atoms and atoms <= _SCALARS):
+                out.append(name)
+        names = tuple(out)
+    _CHILD_FIELDS[cls] = names
+    return names
+
+
+_CACHE_MIN_USES = 3          # uses of a variable in a body (a use inside a loop counts as many)
+# `hot_path_cache`: expected uses per call (see stvm/lower/hot_uses.py) from which a local pays:
+# a cached scalar costs ~6 bytecodes (load on entry, store back on exit) and saves ~1.5 per use
+_HOT_MIN_USES = 3.0
+_HOT_MIN_USES_AGGREGATE = 2.0
+_INLINE_FB_STATEMENTS = 4
