@@ -58,7 +58,7 @@ class ExpressionGenerator:
             return f32(float(value)) if ty.bits == 32 else float(value)
         if isinstance(ty, t.IntType) and isinstance(value, int) and not isinstance(value, bool):
             return ty.wrap(value)
-        if isinstance(ty, t.StringType) and isinstance(value, bytes):
+        if isinstance(ty, t.StringType) and isinstance(value, bytes if not t.is_wide(ty) else str):
             return strfit(value, ty.max_bytes)
         if isinstance(ty, t.BoolType) and isinstance(value, int):
             return bool(value)   # IEC: 0 and 1 are BOOL literals

@@ -37,7 +37,7 @@ class PouGenerator:
         if isinstance(ty, t.TimeType):
             return py_literal(init if init is not None else 0)
         if isinstance(ty, t.StringType):
-            return py_literal(init if init is not None else b"")
+            return py_literal(init if init is not None else "" if t.is_wide(ty) else b"")
         if isinstance(ty, t.EnumType):
             return py_literal(init if init is not None else self.enum_default(ty))
         if isinstance(ty, t.StructType):

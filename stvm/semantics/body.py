@@ -15,6 +15,7 @@ from dataclasses import replace
 from typing import Any
 
 from stvm.semantics import types as t
+from stvm.numeric import utf16_units
 from stvm.semantics.facts import NOT_CONST, CallInfo, NameRef
 from stvm.semantics.model import EXTERNAL, IN_OUT, INPUT, OUTPUT, POUInfo, Variable
 from stvm.syntax import nodes as n
@@ -62,7 +63,7 @@ def implicit_ok(src: t.Type, dst: t.Type) -> bool:
     if src == dst:
         return True
     if isinstance(src, t.StringType) and isinstance(dst, t.StringType):
-        return True
+        return t.is_wide(src) == t.is_wide(dst)   # STRING <-> WSTRING needs a conversion function
     if isinstance(src, t.IntType) and isinstance(dst, t.IntType):
         if src.bits == dst.bits:
             return True
@@ -80,7 +81,8 @@ def implicit_ok(src: t.Type, dst: t.Type) -> bool:
             return implicit_ok(src.element, dst.element) and src.element.kind == dst.element.kind
         return (src.dims is not None and len(src.dims) == len(dst.dims)
                 and all(h1 - l1 == h2 - l2 for (l1, h1), (l2, h2) in zip(src.dims, dst.dims))
-                and (src.element == dst.element or (isinstance(src.element, t.StringType) and isinstance(dst.element, t.StringType))
+                and (src.element == dst.element or (isinstance(src.element, t.StringType) and isinstance(dst.element, t.StringType)
+                                                   and t.is_wide(src.element) == t.is_wide(dst.element))
                      or (getattr(src.element, "qualname", None) or "x").lower() == (getattr(dst.element, "qualname", None) or "y").lower()))
     if isinstance(src, t.TimeType) and isinstance(dst, t.TimeType):
         # IEC ed. 3 (implicit conversions): TIME -> LTIME, DATE -> LDATE, TOD -> LTOD, DT -> LDT
@@ -511,7 +513,7 @@ class BodyChecker:
         the code generator cuts it at build time, so the check-time diagnostic is its only
         report (a warning, or an error under `string_overflow=error`)."""
         value = self.facts.consts.get(id(expr))
-        if isinstance(value, bytes) and len(value) > dst.max_bytes:
+        if isinstance(value, (bytes, str)) and len(value) > dst.max_bytes:
             self.c.string_overflow(len(value), dst, span)
 
     # ---- expressions
@@ -537,8 +539,17 @@ class BodyChecker:
         return t.BOOL
 
     def expr_StringLiteral(self, e: n.StringLiteral, expected) -> t.Type:
+        if isinstance(e.value, str) or t.is_wide(expected):
+            return self.wstring_literal(e)
         self.facts.consts[id(e)] = e.value
         return t.string_type(max(len(e.value) + 1, 1))
+
+    def wstring_literal(self, e: n.StringLiteral) -> t.Type:
+        """A WSTRING literal ("…"), or a STRING literal where a WSTRING is expected (CODESYS takes
+        `ws := 'abc'`): its value is the `str` of its UTF-16 code units."""
+        value = e.value if isinstance(e.value, str) else utf16_units(e.value.decode("utf-8", "replace"))
+        self.facts.consts[id(e)] = value
+        return t.wstring_type(max(len(value), 1))
 
     def expr_TimeLiteral(self, e: n.TimeLiteral, expected) -> t.Type:
         self.facts.consts[id(e)] = e.value_ns
@@ -1153,7 +1164,7 @@ class BodyChecker:
         if isinstance(lt, (t.IntType, t.RealType)) and isinstance(rt, (t.IntType, t.RealType)):
             return True
         if isinstance(lt, t.StringType) and isinstance(rt, t.StringType):
-            return True
+            return t.is_wide(lt) == t.is_wide(rt)
         if isinstance(lt, t.EnumType) and isinstance(rt, t.EnumType):
             return lt.qualname.lower() == rt.qualname.lower()
         if isinstance(lt, t.BoolType) and isinstance(rt, t.BoolType):
@@ -1453,8 +1464,9 @@ class BodyChecker:
                 continue
             if isinstance(result, t.IntType) and isinstance(ty, t.IntType):
                 result = common_int(result, ty)
-            elif isinstance(result, t.StringType) and isinstance(ty, t.StringType):
-                result = t.STRING
+            elif isinstance(result, t.StringType) and isinstance(ty, t.StringType) \
+                    and t.is_wide(result) == t.is_wide(ty):
+                result = t.WSTRING if t.is_wide(ty) else t.STRING
             elif isinstance(result, (t.IntType, t.RealType)) and isinstance(ty, (t.IntType, t.RealType)):
                 result = t.LREAL if t.LREAL in (result, ty) or any(isinstance(x, t.IntType) and x.bits > 16 for x in (result, ty)) else t.REAL
             else:
@@ -1499,7 +1511,8 @@ class BodyChecker:
             elif isinstance(ty, t.FBType) and isinstance(ptype, t.FBType) \
                     and self.c.is_derived(ty.qualname.lower(), ptype.qualname.lower()):
                 pass   # an instance of a derived FB is an instance of its base
-            elif not (ty == ptype or (isinstance(ty, t.StringType) and isinstance(ptype, t.StringType))
+            elif not (ty == ptype or (isinstance(ty, t.StringType) and isinstance(ptype, t.StringType)
+                                      and t.is_wide(ty) == t.is_wide(ptype))
                       or (isinstance(ty, (t.StructType, t.EnumType)) and implicit_ok(ty, ptype))
                       or (isinstance(ty, t.ArrayType) and implicit_ok(ty, ptype))
                       or (isinstance(ty, t.IntType) and isinstance(ptype, t.IntType) and ty.bits == ptype.bits)):
