@@ -9,6 +9,7 @@ import math
 
 from stvm.numeric import f32, strfit
 from stvm.runtime.values import ArrayIndexError, ArrayRef, AttrRef, FunctionError, ItemRef, MapRef, STFault
+from stvm.runtime.unions import UNION_HELPERS
 
 
 def _idiv(a: int, b: int) -> int:
@@ -171,3 +172,4 @@ HELPERS = {
     "_AttrRef": AttrRef, "_MapRef": MapRef, "_ItemRef": ItemRef, "_ArrayRef": ArrayRef, "_FunctionError": FunctionError,
     "_STFault": STFault, "_null_ref": _null_ref, "_null_itf": _null_itf, "_query_itf": _query_itf, "_same_ref": _same_ref, "_ArrayIndexError": ArrayIndexError,
 }
+HELPERS.update(UNION_HELPERS)   # the base class and member descriptor of generated UNION classes

@@ -812,6 +812,8 @@ class Checker:
             for name, value in members:
                 self.enumerators.setdefault(name.lower(), []).append((result, value))
             self.enums[key] = result
+        elif isinstance(body, n.UnionDecl):
+            result = self.union_type(key, decl, body, qual)
         elif isinstance(body, n.StructDecl):
             fields: list[tuple[str, t.Type]] = []
             inits: dict[str, object] = {}
@@ -840,6 +842,35 @@ class Checker:
                 self.type_inits[key] = {"": self.initial_value(body.init, result, decl.namespace, None)}
         self.resolving.discard(key)
         self.resolved_types[key] = result
+        return result
+
+    def union_type(self, key: str, decl: n.TypeDecl, body: n.UnionDecl, qual: str) -> t.UnionType:
+        """`TYPE U : UNION … END_UNION`: members of types with a byte image (elementary types,
+        enumerations, STRING/WSTRING, arrays and structs of them), without initial values (the
+        members share their bytes, which start as zeros)."""
+        fields: list[tuple[str, t.Type]] = []
+        self.resolved_types[key] = t.UnionType(decl.name, qual, ())
+        for fdecl in body.fields:
+            ftype = self.resolve_type_spec(fdecl.type_spec, decl.namespace)
+            if fdecl.init is not None:
+                self.error(f"a member of UNION {decl.name} has no initial value (the members share "
+                           "their bytes)", fdecl.init.span, "E023")
+            if ftype is not None and t.byte_size(ftype) is None:
+                self.error(f"UNION member of type {ftype.name} has no byte image to overlay (allowed: "
+                           "elementary types, enumerations, strings, arrays and structs of them)",
+                           fdecl.type_spec.span, "E018")
+                ftype = None
+            for fname, fspan in fdecl.names:
+                self.check_identifier(fname, fspan)
+                if any(f[0].lower() == fname.lower() for f in fields):
+                    self.error(f"duplicate member '{fname}' in {decl.name}", fspan, "E010")
+                    continue
+                fields.append((fname, ftype or t.DINT))
+        if not fields:
+            self.error(f"UNION {decl.name} has no members", body.span, "E018")
+        result = t.UnionType(decl.name, qual, tuple(fields))
+        self.type_inits[key] = {}
+        self.structs[key] = result
         return result
 
     def wstring_spec(self, spec: n.StringTypeSpec, namespace: tuple[str, ...]) -> t.Type:

@@ -210,6 +210,14 @@ class StructType(Type):
 
 
 @dataclass(frozen=True)
+class UnionType(StructType):
+    """CODESYS UNION: the members overlay the same bytes, each at offset 0 (little-endian, as on
+    an x86 CODESYS target); its size is the largest member's, padded to the largest alignment.
+    A StructType, so member access, initialisers and copies follow the struct rules; the value
+    keeps the union's bytes (`stvm.runtime.unions`)."""
+
+
+@dataclass(frozen=True)
 class ArrayType(Type):
     element: Type = None  # type: ignore[assignment]
     # (lo, hi) per dimension; None for an `ARRAY[*]` parameter (any bounds)
@@ -426,6 +434,12 @@ def byte_size(ty: Type) -> int | None:
     if isinstance(ty, ArrayType):
         element = byte_size(ty.element)
         return None if element is None or ty.dims is None else element * ty.length
+    if isinstance(ty, UnionType):
+        sizes = [byte_size(f) for _, f in ty.fields]
+        align = _alignment(ty)
+        if None in sizes or align is None:
+            return None
+        return -(-max(sizes, default=0) // align) * align  # type: ignore[type-var]
     if isinstance(ty, StructType):
         offset, largest = 0, 1
         for _, field_type in ty.fields:
@@ -444,6 +458,13 @@ def _alignment(ty: Type) -> int | None:
     if isinstance(ty, StructType):
         aligns = [_alignment(f) for _, f in ty.fields]
         return None if None in aligns else max(aligns, default=1)  # type: ignore[type-var]
+    if isinstance(ty, WStringType):
+        return 2
     if isinstance(ty, StringType):
         return 1
     return byte_size(ty)
+
+
+def alignment(ty: Type) -> int | None:
+    """The alignment in bytes a member of `ty` gets in a STRUCT (see `byte_size`)."""
+    return _alignment(ty)

@@ -254,6 +254,9 @@ class _ToNodes:
     def struct_spec(self, meta, items):
         return n.StructDecl(tuple(items), self._s(meta))
 
+    def union_spec(self, meta, items):
+        return n.UnionDecl(tuple(items), self._s(meta))
+
     def field_decl(self, meta, items):
         return n.VarDecl(items[0], items[1], items[2], self._s(meta))
 
