@@ -181,6 +181,8 @@ def format_value(value: object, ty: t.Type, layouts: ProjectLayout | None = None
                  for slot in layout]  # type: ignore[union-attr]
         return "(" + ", ".join(parts) + ")"
     if isinstance(ty, t.ArrayType):
+        if ty.dims is None and ty.rank > 1:   # an ARRAY[*, *] parameter: the lists passed
+            return _format_array(value.data, ty, ty.rank, layouts)  # type: ignore[attr-defined]
         if ty.dims is None:
             return "[" + ", ".join(format_value(v, ty.element, layouts) for v in value.data[value.start:]) + "]"  # type: ignore[attr-defined]
         return _format_array(value, ty, len(ty.dims), layouts)  # type: ignore[arg-type]

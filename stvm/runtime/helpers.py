@@ -8,7 +8,7 @@ from __future__ import annotations
 import math
 
 from stvm.numeric import f32, strfit
-from stvm.runtime.values import ArrayIndexError, ArrayRef, AttrRef, FunctionError, ItemRef, MapRef, STFault
+from stvm.runtime.values import ArrayIndexError, ArrayRef, AttrRef, FunctionError, ItemRef, MapRef, OpenArray, STFault
 from stvm.runtime.unions import UNION_HELPERS
 
 
@@ -173,3 +173,4 @@ HELPERS = {
     "_STFault": STFault, "_null_ref": _null_ref, "_null_itf": _null_itf, "_query_itf": _query_itf, "_same_ref": _same_ref, "_ArrayIndexError": ArrayIndexError,
 }
 HELPERS.update(UNION_HELPERS)   # the base class and member descriptor of generated UNION classes
+HELPERS["_OpenArray"] = OpenArray   # ARRAY[*, *] arguments

@@ -78,7 +78,8 @@ def implicit_ok(src: t.Type, dst: t.Type) -> bool:
         return src.qualname.lower() == dst.qualname.lower()
     if isinstance(src, t.ArrayType) and isinstance(dst, t.ArrayType):
         if dst.dims is None:
-            return implicit_ok(src.element, dst.element) and src.element.kind == dst.element.kind
+            return implicit_ok(src.element, dst.element) and src.element.kind == dst.element.kind \
+                and open_rank_ok(src, dst)
         return (src.dims is not None and len(src.dims) == len(dst.dims)
                 and all(h1 - l1 == h2 - l2 for (l1, h1), (l2, h2) in zip(src.dims, dst.dims))
                 and (src.element == dst.element or (isinstance(src.element, t.StringType) and isinstance(dst.element, t.StringType)
@@ -88,6 +89,14 @@ def implicit_ok(src: t.Type, dst: t.Type) -> bool:
         # IEC ed. 3 (implicit conversions): TIME -> LTIME, DATE -> LDATE, TOD -> LTOD, DT -> LDT
         return src.family == dst.family and (dst.long or not src.long)
     return False
+
+
+def open_rank_ok(src: t.ArrayType, dst: t.ArrayType) -> bool:
+    """An array passed to an open array of several dimensions (ARRAY[*, *]) has that many
+    (ARRAY[*] takes any array, as before: Sysmac passes a whole array's elements in order)."""
+    if dst.rank == 1:
+        return src.dims is not None or src.rank == 1
+    return len(src.dims) == dst.rank if src.dims is not None else src.rank == dst.rank
 
 
 def conversion_hint(src: t.Type, dst: t.Type) -> str:
@@ -836,8 +845,9 @@ class BodyChecker:
             self.error(f"'{self.describe(e.base)}' is {base.name}, not an array", e.span, "E036")
             return None
         if base.dims is None:
-            if len(e.indices) != 1:
-                self.error("an ARRAY[*] parameter takes one index", e.span, "E036")
+            if len(e.indices) != base.rank:
+                self.error(f"an {base.name.split(' OF ')[0]} parameter takes {base.rank} index(es), got "
+                           f"{len(e.indices)}", e.span, "E036")
             return base.element
         if len(e.indices) != len(base.dims):
             self.error(f"{base.name} needs {len(base.dims)} index(es), got {len(e.indices)}", e.span, "E036")
@@ -973,14 +983,15 @@ class BodyChecker:
             self.error(f"{word}() needs an array; '{self.describe(arr)}' is {ty.name}", arr.span, "E070")
             return None
         dim = self.c.const_value(dim_expr, self.pou_namespace, self.pou)
-        ndims = 1 if ty.dims is None else len(ty.dims)
+        ndims = ty.rank if ty.dims is None else len(ty.dims)
         if isinstance(dim, bool) or not isinstance(dim, int) or not 1 <= dim <= ndims:
             self.error(f"the dimension of {word}() must be a constant 1..{ndims}", dim_expr.span, "E070")
             return None
         if ty.dims is not None:
             lo, hi = ty.dims[dim - 1]
             return self.constant_type_query(e, lo if word == "LOWER_BOUND" else hi)
-        self.facts.type_queries[id(e)] = (word, arr)
+        # ARRAY[*, *]: the dimension goes with the operand (ARRAY[*] keeps the plain operand)
+        self.facts.type_queries[id(e)] = (word, arr if ty.rank == 1 else (arr, dim))
         return t.DINT
 
     def stmt_RefAssign(self, s: n.RefAssign) -> None:
@@ -1479,7 +1490,7 @@ class BodyChecker:
         ptype = var.type
         if var.section == IN_OUT:
             # an in-out is passed by reference: it must be a variable
-            if isinstance(ptype, t.ArrayType) and isinstance(arg.value, n.Index):
+            if isinstance(ptype, t.ArrayType) and ptype.rank == 1 and isinstance(arg.value, n.Index):
                 # Sysmac: an element where an array is expected = the array from that element on
                 aty = self.expr(arg.value)
                 base_ty = self.facts.types.get(id(arg.value.base))
@@ -1506,7 +1517,7 @@ class BodyChecker:
                     self.error(f"'{var.name}' of {self.display(pou)} needs {ptype.name}, got {ty.name}", arg.value.span, "E052")
                 generic_types.append((ty, False))
             elif isinstance(ptype, t.ArrayType) and isinstance(ty, t.ArrayType) and ptype.dims is None:
-                if not self.element_ok(ty.element, ptype.element):
+                if not self.element_ok(ty.element, ptype.element) or not open_rank_ok(ty, ptype):
                     self.error(f"'{var.name}' of {self.display(pou)} needs {ptype.name}, got {ty.name}", arg.value.span, "E052")
             elif isinstance(ty, t.FBType) and isinstance(ptype, t.FBType) \
                     and self.c.is_derived(ty.qualname.lower(), ptype.qualname.lower()):
@@ -1519,7 +1530,7 @@ class BodyChecker:
                 self.error(f"in-out '{var.name}' of {self.display(pou)} is {ptype.name}; got {ty.name}", arg.value.span, "E052")
             info.inputs.append((var, arg.value))
             return
-        if isinstance(ptype, t.ArrayType) and ptype.dims is None and isinstance(arg.value, n.Index):
+        if isinstance(ptype, t.ArrayType) and ptype.dims is None and ptype.rank == 1 and isinstance(arg.value, n.Index):
             aty = self.expr(arg.value)
             base_ty = self.facts.types.get(id(arg.value.base))
             if aty is not None and isinstance(base_ty, t.ArrayType) and self.element_ok(aty, ptype.element):
@@ -1536,7 +1547,8 @@ class BodyChecker:
                 # untyped literals only decide the type when no typed argument does
                 generic_types.append((ty, id(arg.value) in self.facts.untyped))
         elif isinstance(ptype, t.ArrayType) and ptype.dims is None:
-            if not (isinstance(ty, t.ArrayType) and self.element_ok(ty.element, ptype.element)):
+            if not (isinstance(ty, t.ArrayType) and self.element_ok(ty.element, ptype.element)
+                    and open_rank_ok(ty, ptype)):
                 self.error(f"'{var.name}' of {self.display(pou)} needs {ptype.name}, got {ty.name}", arg.value.span, "E052")
         else:
             self.require_assignable(arg.value, ty, ptype, arg.value.span)

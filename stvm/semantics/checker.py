@@ -873,6 +873,14 @@ class Checker:
         self.structs[key] = result
         return result
 
+    def open_array_of_rank(self, spec: n.ArrayTypeSpec, element: t.Type) -> t.ArrayType | None:
+        """ARRAY[*, *] (IEC ed. 3 6.5.3.2): an open array of several dimensions, each `*`."""
+        if any(r is not None for r in spec.ranges):
+            self.error("an open array has '*' for every dimension: ARRAY[*, *]", spec.span, "E019")
+            return None
+        rank = len(spec.ranges)
+        return t.ArrayType(f"ARRAY[{', '.join('*' * rank)}] OF {element.name}", element, None, rank)
+
     def wstring_spec(self, spec: n.StringTypeSpec, namespace: tuple[str, ...]) -> t.Type:
         """WSTRING[n]: n UTF-16 code units (IEC; no NUL counted, unlike Sysmac's STRING[n])."""
         units = self.const_int(spec.size, namespace)
@@ -926,6 +934,8 @@ class Checker:
             if any(r is None for r in spec.ranges):
                 if not allow_open_array:
                     self.error("ARRAY[*] is only allowed for VAR_IN_OUT and inputs of library POUs", spec.span, "E019")
+                if len(spec.ranges) > 1:
+                    return self.open_array_of_rank(spec, element)
                 return t.ArrayType(f"ARRAY[*] OF {element.name}", element, None)
             dims = []
             for lo_expr, hi_expr in spec.ranges:  # type: ignore[misc]

@@ -222,6 +222,8 @@ class ArrayType(Type):
     element: Type = None  # type: ignore[assignment]
     # (lo, hi) per dimension; None for an `ARRAY[*]` parameter (any bounds)
     dims: tuple[tuple[int, int], ...] | None = ()
+    # the dimensions of an open array (`dims` None): 1 for ARRAY[*], 2 for ARRAY[*, *], …
+    rank: int = 1
 
     @property
     def kind(self) -> str:
