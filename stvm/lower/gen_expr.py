@@ -421,7 +421,19 @@ class ExpressionGenerator:
             if what == "valid":
                 return f"({self.expr(e.args[0].value)} is not None)"
             return f"_query_itf({self.expr(e.args[0].value)}, {key!r}, {self.ref_code(e.args[1].value)})"
-        return self.function_call(e, self.facts.calls[id(e)])
+        info = self.facts.calls[id(e)]
+        if info.nested_en:
+            return self.nested_en_call(e, info)
+        return self.function_call(e, info)
+
+    def nested_en_call(self, e: n.Call, info: CallInfo) -> str:
+        """A call with EN/ENO inside a larger expression: `_en_call` runs it only when EN is TRUE
+        (else the result type's initial value) and sets ENO around it, where the call stands."""
+        enabled = self.expr_as(info.en, t.BOOL) if info.en is not None else "True"
+        result = info.generic_type if isinstance(info.pou.return_type, t.GenericType) else info.pou.return_type
+        default = self.default_expr(result) if result is not None else "None"
+        eno, negate = (self.ref_code(info.eno[0]), info.eno[1]) if info.eno is not None else ("None", False)
+        return f"_en_call({enabled}, lambda: {self.function_call(e, info)}, lambda: {default}, {eno}, {negate})"
 
     def arg_code(self, var: Variable, value: n.Expr) -> str:
         """Code for one argument bound to parameter `var` (by value, or a reference for in-outs)."""

@@ -159,6 +159,20 @@ def _with(obj, **fields):
     return obj
 
 
+def _en_call(enabled, call, default, eno, negate: bool):
+    """A call with EN/ENO inside an expression: run `call()` only when `enabled`, else the
+    result type's initial value (`default()`); ENO (a reference, or None) is FALSE before the
+    call (an instruction error leaves it so) and when EN is FALSE, TRUE after it."""
+    if eno is not None:
+        eno.set(negate)
+    if not enabled:
+        return default()
+    value = call()
+    if eno is not None:
+        eno.set(not negate)
+    return value
+
+
 class _Frame:
     """Variables of one function call (attributes `v_<name>`), so in-outs can reference them."""
 
@@ -174,3 +188,4 @@ HELPERS = {
 }
 HELPERS.update(UNION_HELPERS)   # the base class and member descriptor of generated UNION classes
 HELPERS["_OpenArray"] = OpenArray   # ARRAY[*, *] arguments
+HELPERS["_en_call"] = _en_call      # EN/ENO inside an expression

@@ -1456,9 +1456,26 @@ class BodyChecker:
         else:
             return False
         if getattr(self, "en_call", None) is not call:
-            self.error("EN/ENO need a call that is a statement or the whole right side of an assignment",
-                       arg.span, "E047")
+            self.nested_en_eno(info, arg)
         return True
+
+    def nested_en_eno(self, info, arg: n.Argument) -> None:
+        """EN/ENO on a call inside a larger expression (`b := 1 + F(EN := c, …)`, a condition):
+        lowered in place (`_en_call`); EN FALSE gives the result type's initial value. A method
+        call or a function only: an FB call is a statement."""
+        if info.is_fb:
+            self.error("EN/ENO on a function block call need the call to be a statement", arg.span, "E047")
+            return
+        info.nested_en = True
+        if info.eno is not None:
+            # ENO is written through a reference while the expression runs: keep its variable
+            # out of Python locals (like a variable whose REF() is taken)
+            root = info.eno[0]
+            while isinstance(root, (n.Member, n.Index)):
+                root = root.base
+            ref = self.facts.names.get(id(root)) if isinstance(root, n.Name) else None
+            if ref is not None and getattr(ref, "kind", None) == "var":
+                self.facts.addressed.add((self.pou.key, ref.variable.key))  # type: ignore[union-attr]
 
     def variadic_pin(self, pou: POUInfo, name: str) -> Variable | None:
         params = pou.params()
