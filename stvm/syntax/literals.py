@@ -46,6 +46,10 @@ def decode_string(token_text: str, settings: SysmacSettings) -> tuple[bytes, lis
             i += 2
         elif re.fullmatch(r"[0-9A-Fa-f]{%d}" % hex_digits, body[i + 1:i + 1 + hex_digits] or "x"):
             code = int(body[i + 1:i + 1 + hex_digits], 16)
+            if hex_digits == 4 and 0xD800 <= code < 0xE000:
+                # a STRING is UTF-8 text: half of a UTF-16 pair has no UTF-8 form
+                raise LiteralError(f"'${body[i + 1:i + 5]}' is half of a UTF-16 surrogate pair, which a "
+                                   "STRING cannot hold (write the character itself)")
             out += bytes([code]) if hex_digits == 2 else chr(code).encode("utf-8")
             i += 1 + hex_digits
         else:
