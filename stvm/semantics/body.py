@@ -1391,6 +1391,8 @@ class BodyChecker:
             exprs = [given.get(p.key) for p in params
                      if not (pou.variadic and p is params[-1] and info.extra and p.key not in given)]
             exprs += list(info.extra)
+            if any(p.type == t.GENERICS["ANY_STRING"] for p in params):
+                info.arg_types = self.widen_string_literals(info.arg_types, exprs)
             try:
                 info.generic_type = rule(self.literal_context_types(pou, info.arg_types, exprs))
                 expected = getattr(self, "call_expected", None)
@@ -1402,6 +1404,21 @@ class BodyChecker:
         elif generic_types:
             typed = [ty for ty, untyped in generic_types if not untyped]
             info.generic_type = self.common_generic(typed or [ty for ty, _ in generic_types], e)
+
+    def widen_string_literals(self, arg_types: tuple, exprs: list) -> tuple:
+        """A '…' literal among WSTRING inputs of a string function is a WSTRING literal, as where
+        a WSTRING is expected (`FIND(ws, '€')`, `CONCAT(ws, '!')`; also under sysmac, whose "…"
+        is a STRING)."""
+        if not any(t.is_wide(ty) for ty, ex in zip(arg_types, exprs)
+                   if ex is not None and not isinstance(ex, n.StringLiteral)):
+            return arg_types
+        out = []
+        for ty, ex in zip(arg_types, exprs):
+            if isinstance(ex, n.StringLiteral) and isinstance(ex.value, bytes):
+                ty = self.wstring_literal(ex)
+                self.facts.types[id(ex)] = ty
+            out.append(ty)
+        return tuple(out)
 
     def display(self, pou: POUInfo) -> str:
         """A callee's name in diagnostics: `FB.Method` for a METHOD, the POU's name otherwise."""

@@ -75,6 +75,15 @@ w2 := 'ok'; END_PROGRAM""", prints=["Main.ws", "Main.w2"], settings=IEC)
     assert values == {"Main.ws": "init", "Main.w2": "ok"}
 
 
+@pytest.mark.parametrize("dialect", ["sysmac", "iec"])
+def test_single_quoted_literals_among_wstring_inputs_are_wstrings(dialect):
+    values = run_st("""PROGRAM Main VAR ws : WSTRING := 'Grüße'; n : UINT; w2 : WSTRING; s : STRING; END_VAR
+n := FIND(ws, 'ü'); w2 := CONCAT(ws, '!'); s := CONCAT('a', 'b'); END_PROGRAM""",
+                    prints=["Main.n", "Main.w2", "Main.s"],
+                    settings=SysmacSettings().with_table({"dialect": dialect}, "test"))
+    assert values == {"Main.n": 3, "Main.w2": "Grüße!", "Main.s": b"ab"}
+
+
 def test_set_from_outside_and_sizeof():
     values = run_st("""PROGRAM Main VAR ws : WSTRING[4]; n : UINT; size : DINT; END_VAR
 n := LEN(ws); size := SIZEOF(ws); END_PROGRAM""", prints=["Main.ws", "Main.n", "Main.size"],
