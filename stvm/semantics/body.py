@@ -131,6 +131,9 @@ def native_result_rule(pou: POUInfo, natives):
 
 class BodyChecker:
     # `checker`: the Checker that runs this body check (stvm.semantics.checker imports this module)
+    # calls whose result rule rejected the arguments (reported once: no "cannot infer" after it)
+    rejected_calls: frozenset[int] = frozenset()
+
     def __init__(self, checker: Any, pou: POUInfo, node, fb: POUInfo | None = None,
                  fb_node: n.POU | None = None) -> None:
         self.c = checker
@@ -1301,7 +1304,8 @@ class BodyChecker:
         if isinstance(ret, t.GenericType):
             ret = info.generic_type
             if ret is None:
-                self.error(f"cannot infer the result type of {pou.name}", e.span, "E046")
+                if id(e) not in self.rejected_calls:
+                    self.error(f"cannot infer the result type of {pou.name}", e.span, "E046")
                 return None
         return ret
 
@@ -1401,6 +1405,7 @@ class BodyChecker:
                     info.generic_type = expected   # IEC: TRUNC is ANY_REAL -> ANY_INT
             except Exception as exc:  # a rule rejecting its arguments is a type error in the user's call
                 self.error(f"{self.display(pou)}: {exc}", e.span, "E046")
+                self.rejected_calls = self.rejected_calls | {id(e)}
         elif generic_types:
             typed = [ty for ty, untyped in generic_types if not untyped]
             info.generic_type = self.common_generic(typed or [ty for ty, _ in generic_types], e)

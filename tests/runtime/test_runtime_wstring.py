@@ -110,6 +110,7 @@ END_PROGRAM
     rc, _, err = cli(["check", path, "--dialect", "iec"])
     assert rc == 1 and "Traceback" not in err
     assert f"{path.name}:3:" in err and message in err, err
+    assert "cannot infer" not in err and err.count("error:") == 1, err   # one error, not a cascade
 
 
 def test_declaration_errors():
