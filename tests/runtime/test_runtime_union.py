@@ -89,3 +89,24 @@ def test_byte_size_of_union_types():
 def test_union_errors(source, message):
     rc, err = check_text(source + "\n")
     assert rc == 1 and message in err, err
+
+
+def test_copies_keep_the_bytes_after_a_bool_member_was_read():
+    # a member-by-member copy would write the BOOL back as 1: copies take the union's bytes
+    values = run_st("""
+TYPE U : UNION a : DINT; flag : BOOL; END_UNION END_TYPE
+TYPE S : STRUCT u : U; END_STRUCT END_TYPE
+FUNCTION_BLOCK Take
+VAR_INPUT inp : U; s : S; END_VAR
+VAR_OUTPUT got, got2 : DINT; END_VAR
+got := inp.a; got2 := s.u.a;
+END_FUNCTION_BLOCK
+PROGRAM Main
+VAR u : U; s, s2 : S; f : Take; b : BOOL; END_VAR
+u.a := 2; b := u.flag;
+s.u.a := 2; b := s.u.flag;
+f(inp := u, s := s);
+s2 := s;
+END_PROGRAM
+""", prints=["Main.f.got", "Main.f.got2", "Main.s2.u.a", "Main.b"])
+    assert values == {"Main.f.got": 2, "Main.f.got2": 2, "Main.s2.u.a": 2, "Main.b": True}
