@@ -396,7 +396,7 @@ def cmd_run(args) -> int:
     for name in args.print or []:
         try:
             print(f"{name} = {vm.format(name)}")
-        except UnboundInOut as exc:
+        except PathError as exc:   # also UnboundInOut: a path through an in-out is checked only now
             print(f"stvm: {exc}", file=sys.stderr)
             status = status or EXIT_USAGE
     if args.stats:

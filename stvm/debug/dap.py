@@ -652,7 +652,15 @@ def _summary(ty: t.Type) -> str:
     return ty.name
 
 
+def _open_as_fixed(ty: t.Type, value: Any) -> tuple[t.Type, Any]:
+    """An ARRAY[*, *] parameter (an `OpenArray`) shown as the fixed array it was passed as."""
+    if isinstance(ty, t.ArrayType) and ty.dims is None and ty.rank > 1:
+        return t.ArrayType(ty.name, ty.element, tuple(value.bounds)), value.data
+    return ty, value
+
+
 def _array_length(value: Any, ty: t.ArrayType) -> int:
+    ty, value = _open_as_fixed(ty, value)
     if ty.dims is None:
         return len(value)
     lo, hi = ty.dims[0]
@@ -661,6 +669,7 @@ def _array_length(value: Any, ty: t.ArrayType) -> int:
 
 def _value_children(engine: Engine, node: _Node) -> list[tuple[str, Any, t.Type, str | None, tuple]]:
     ty, value, path = node.type, node.value, node.path
+    ty, value = _open_as_fixed(ty, value)
     out: list[tuple[str, Any, t.Type, str | None, tuple]] = []
     if isinstance(ty, (t.StructType, t.FBType)):
         layout = engine.vm.layouts.of(ty)

@@ -264,7 +264,11 @@ class VariableBridge:
             value = literal_value(text, ty)
         except ValueError as exc:
             raise WriteRejected(str(exc), path) from None
-        if isinstance(ty, t.StringType):
+        if t.is_wide(ty):
+            units = coerce_python_value(value, t.WSTRING)   # its code units, not yet cut to ty
+            if len(units) > ty.max_bytes:
+                raise WriteRejected(f"{len(units)} code units is longer than {ty.name} ({ty.max_bytes})", path)
+        elif isinstance(ty, t.StringType):
             # Choice: a front end's text that does not fit is refused, not cut to the length
             # (an ST assignment truncates; an operator should see that the text was too long)
             data = value.encode("utf-8") if isinstance(value, str) else bytes(value)

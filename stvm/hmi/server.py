@@ -40,6 +40,7 @@ import threading
 from collections import deque
 from typing import Any
 
+from stvm.numeric import utf16_text
 from stvm.frontend import VariableBridge, WriteRejected
 from stvm.hmi.pages import Hmi, RunParameter, check_limits
 from stvm.hmi.robot import PoseSource, robot_state
@@ -204,6 +205,8 @@ class HmiServer:
         if isinstance(ty, t.IntType):
             return int(value)
         if isinstance(ty, t.StringType):
+            if isinstance(value, str):
+                return utf16_text(value)   # a WSTRING's code units
             return bytes(value).decode("utf-8", "replace")
         if isinstance(ty, t.EnumType):
             return ty.name_of(value) or str(value)

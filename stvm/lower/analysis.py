@@ -435,7 +435,8 @@ class _Planner:
         after it is made, and a fixed array's list is never replaced (assignments copy into it),
         so the kept one is equal in every respect. A constant element index is checked here, at
         compile time. None when not applied (the plain `arg_code` path)."""
-        if not self.options.reuse_array_refs or not isinstance(var.type, t.ArrayType) or var.type.dims is not None:
+        if not self.options.reuse_array_refs or not isinstance(var.type, t.ArrayType) or var.type.dims is not None \
+                or var.type.rank > 1:   # an ARRAY[*, *] gets an `_OpenArray`, not an `ArrayRef`
             return None
         vtype = self.facts.types.get(id(value))
         lo = 0

@@ -58,7 +58,7 @@ class ExpressionGenerator:
             return f32(float(value)) if ty.bits == 32 else float(value)
         if isinstance(ty, t.IntType) and isinstance(value, int) and not isinstance(value, bool):
             return ty.wrap(value)
-        if isinstance(ty, t.StringType) and isinstance(value, bytes):
+        if isinstance(ty, t.StringType) and isinstance(value, bytes if not t.is_wide(ty) else str):
             return strfit(value, ty.max_bytes)
         if isinstance(ty, t.BoolType) and isinstance(value, int):
             return bool(value)   # IEC: 0 and 1 are BOOL literals
@@ -203,6 +203,8 @@ class ExpressionGenerator:
         base_type = self.facts.types[id(e.base)]
         code = self.expr(e.base)
         assert isinstance(base_type, t.ArrayType)
+        if base_type.dims is None and base_type.rank > 1:
+            return self.open_array_n_parts(code, e)
         if base_type.dims is None:
             # an ARRAY[*] parameter: index 0 .. elements passed - 1, checked like any array
             # access in user code (`array_oob`); ArrayRef's own check is the instructions'
@@ -373,6 +375,27 @@ class ExpressionGenerator:
             return f"_ArrayRef({code}, 0, {vtype.dims[0][0]})"
         return f"_ArrayRef({code}, 0)"
 
+    def open_array_n_parts(self, code: str, e: n.Index) -> tuple[str, str]:
+        """An element of an ARRAY[*, *] parameter (an `_OpenArray`): each subscript checked
+        against the bounds the argument brought (`array_oob`, as any array access)."""
+        subscripts = []
+        for d, ix in enumerate(e.indices):
+            tmp = self.new_tmp("i")
+            lo, hi = f"{code}.bounds[{d}][0]", f"{code}.bounds[{d}][1]"
+            subscripts.append(f"{tmp} - {lo} if {lo} <= ({tmp} := {self.expr(ix)}) <= {hi} else _oob({tmp}, {lo}, {hi})")
+        return f"{code}.data" + "".join(f"[{sub}]" for sub in subscripts[:-1]), subscripts[-1]
+
+    def open_array_n_code(self, code: str, vtype: t.Type | None) -> str:
+        """A fixed array passed to an ARRAY[*, *] parameter: its lists with the bounds the callee
+        sees (`open_array_bounds`); an ARRAY[*, *] passed on is the same object."""
+        if not isinstance(vtype, t.ArrayType) or vtype.dims is None:
+            return code
+        if self.settings.open_array_bounds is OpenArrayBounds.ACTUAL:
+            bounds = tuple(vtype.dims)
+        else:
+            bounds = tuple((0, hi - lo) for lo, hi in vtype.dims)
+        return f"_OpenArray({code}, {bounds!r})"
+
     def type_query_code(self, e: n.Call) -> str:
         """LOWER_BOUND / UPPER_BOUND of an ARRAY[*] parameter, or a constant (see body.py)."""
         word, operand = self.facts.type_queries[id(e)]
@@ -380,6 +403,9 @@ class ExpressionGenerator:
             ty = self.facts.types.get(id(e))
             converted = self.convert_const(operand, ty) if ty is not None else None
             return py_literal(operand if converted is None else converted)
+        if isinstance(operand, tuple):   # ARRAY[*, *]: (array, dimension)
+            array, dim = operand
+            return f"{self.expr(array)}.bounds[{dim - 1}][{0 if word == 'LOWER_BOUND' else 1}]"
         code = self.expr(operand)  # type: ignore[arg-type]
         if word == "LOWER_BOUND":
             return f"{code}.lo"
@@ -395,7 +421,19 @@ class ExpressionGenerator:
             if what == "valid":
                 return f"({self.expr(e.args[0].value)} is not None)"
             return f"_query_itf({self.expr(e.args[0].value)}, {key!r}, {self.ref_code(e.args[1].value)})"
-        return self.function_call(e, self.facts.calls[id(e)])
+        info = self.facts.calls[id(e)]
+        if info.nested_en:
+            return self.nested_en_call(e, info)
+        return self.function_call(e, info)
+
+    def nested_en_call(self, e: n.Call, info: CallInfo) -> str:
+        """A call with EN/ENO inside a larger expression: `_en_call` runs it only when EN is TRUE
+        (else the result type's initial value) and sets ENO around it, where the call stands."""
+        enabled = self.expr_as(info.en, t.BOOL) if info.en is not None else "True"
+        result = info.generic_type if isinstance(info.pou.return_type, t.GenericType) else info.pou.return_type
+        default = self.default_expr(result) if result is not None else "None"
+        eno, negate = (self.ref_code(info.eno[0]), info.eno[1]) if info.eno is not None else ("None", False)
+        return f"_en_call({enabled}, lambda: {self.function_call(e, info)}, lambda: {default}, {eno}, {negate})"
 
     def arg_code(self, var: Variable, value: n.Expr) -> str:
         """Code for one argument bound to parameter `var` (by value, or a reference for in-outs)."""
@@ -411,6 +449,8 @@ class ExpressionGenerator:
             return f"_ArrayRef({base_code}, ({ix}) - {lo} if {lo} <= {ix} <= {hi} else _oob({ix}, {lo}, {hi}))"
         ptype = var.type
         vtype = self.facts.types.get(id(value))
+        if isinstance(ptype, t.ArrayType) and ptype.dims is None and ptype.rank > 1:
+            return self.open_array_n_code(self.expr(value), vtype)
         if var.section == IN_OUT:
             if isinstance(ptype, t.ArrayType) and ptype.dims is None:
                 code = self.expr(value)

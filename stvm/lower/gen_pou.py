@@ -37,7 +37,7 @@ class PouGenerator:
         if isinstance(ty, t.TimeType):
             return py_literal(init if init is not None else 0)
         if isinstance(ty, t.StringType):
-            return py_literal(init if init is not None else b"")
+            return py_literal(init if init is not None else "" if t.is_wide(ty) else b"")
         if isinstance(ty, t.EnumType):
             return py_literal(init if init is not None else self.enum_default(ty))
         if isinstance(ty, t.StructType):
@@ -160,12 +160,32 @@ class PouGenerator:
         self.struct_assign_body("self", "src", st, 0)
         w.indent -= 2
 
+    def union_class(self, key: str, st: t.UnionType) -> None:
+        """A UNION: a subclass of the runtime's `_Union` (the union's bytes and one value per
+        member, `stvm.runtime.unions`) with a descriptor per member, so member access in the
+        generated code is the same attribute access as a struct's."""
+        w = self.w
+        w.blank_span()
+        cls = self.classes[key]
+        w.line(f"class {cls}(_Union):")
+        w.indent += 1
+        w.line("__slots__ = ()")
+        w.line(f"_size, _codecs, _aggregate = _union_codecs({self.type_const(st)})")
+        for index, (name, _) in enumerate(st.fields):
+            w.line(f"{var_attr(name)} = _UnionMember({index})")
+        w.line("def __init__(self):")
+        w.indent += 1
+        defaults = ", ".join(self.default_expr(fty) for _, fty in st.fields)
+        w.line(f"_Union.__init__(self, [{defaults}])")
+        w.indent -= 2
+
     def struct_assign_body(self, dst: str, src: str, st: t.StructType, depth: int) -> None:
         """Field by field, nested STRUCT fields inline (one Python call per struct assignment,
         not one per nested struct: the thesis copies `_sSOCKET` into every socket FB call)."""
         for name, fty in st.fields:
             attr = var_attr(name)
-            if isinstance(fty, t.StructType) and fty.fields and self.options.inline_struct_assign:
+            if isinstance(fty, t.StructType) and fty.fields and self.options.inline_struct_assign \
+                    and not isinstance(fty, t.UnionType):   # a union copies its bytes: `_assign`
                 d, s = f"d{depth}", f"s{depth}"
                 self.w.line(f"{d} = {dst}.{attr}; {s} = {src}.{attr}")
                 self.struct_assign_body(d, s, fty, depth + 1)

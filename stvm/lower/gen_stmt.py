@@ -373,7 +373,8 @@ class StatementGenerator:
         `_assign` call (the thesis copies its `_sSOCKET` into three socket FBs per CBT FB and
         its parameter structs into every CBT FB, every scan). Only for structs of at most
         `_INLINE_COPY_LEAVES` leaf fields (code size). False when not applied."""
-        if not self.options.inline_input_copy or struct_leaves(st) > _INLINE_COPY_LEAVES:
+        if not self.options.inline_input_copy or struct_leaves(st) > _INLINE_COPY_LEAVES \
+                or isinstance(st, t.UnionType):   # a union copies its bytes (`_assign`), not member by member
             return False
         # `_assign`'s `src is self` shortcut is not needed: copying a struct onto itself field
         # by field changes nothing

@@ -13,7 +13,7 @@ from stvm.syntax import nodes as n
 
 
 def py_literal(value: object) -> str:
-    """Python source for a checked runtime constant (bool, int, float, bytes)."""
+    """Python source for a checked runtime constant (bool, int, float, bytes, str)."""
     if isinstance(value, bool) or value is None:
         return repr(value)
     if isinstance(value, int):
@@ -26,6 +26,8 @@ def py_literal(value: object) -> str:
         return repr(value)
     if isinstance(value, bytes):
         return repr(value)
+    if isinstance(value, str):
+        return ascii(value)   # a WSTRING's code units; ascii() keeps the source ASCII (surrogates escaped)
     raise AssertionError(f"not a literal: {type(value).__name__}")
 
 

@@ -8,6 +8,7 @@
 | BYTE WORD DWORD LWORD      | Byte UInt16 UInt32 UInt64       |                                        |
 | REAL, LREAL                | Float, Double                   |                                        |
 | STRING[n]                  | String                          | UTF-8; at most n-1 bytes, no NUL       |
+| WSTRING[n]                 | String                          | the text of its UTF-16 code units; at most n units, no NUL |
 | TIME                       | Int64: nanoseconds              | Choice: exact (stvm's own unit)        |
 | TIME_OF_DAY                | Int64: nanoseconds since midnight |                                      |
 | DATE, DATE_AND_TIME        | DateTime                        | UTC; microsecond resolution            |
@@ -30,6 +31,7 @@ from typing import Any, Callable
 
 from asyncua import ua
 
+from stvm.numeric import utf16_text, utf16_units
 from stvm.semantics import types as t
 
 NS_PER_DAY = 86_400 * 1_000_000_000
@@ -76,6 +78,9 @@ def ua_type(ty: t.Type) -> UaType | None:
         if ty.bits == 32:
             return UaType(ua.VariantType.Float, _dt(ua.ObjectIds.Float), float, _real_in(True), ty.name)
         return UaType(ua.VariantType.Double, _dt(ua.ObjectIds.Double), float, _real_in(False), ty.name)
+    if t.is_wide(ty):
+        return UaType(ua.VariantType.String, _dt(ua.ObjectIds.String), utf16_text, _wstring_in(ty.max_bytes, ty.name),
+                      ty.name)
     if isinstance(ty, t.StringType):
         text = f"STRING[{ty.size}]" if ty.size != t.STRING.size else "STRING"
         return UaType(ua.VariantType.String, _dt(ua.ObjectIds.String), _string_out, _string_in(ty.max_bytes, text),
@@ -172,6 +177,22 @@ def _string_in(max_bytes: int, name: str) -> Callable[[ua.Variant], bytes]:
             # Choice: refuse rather than truncate (the controller would keep a cut value silently)
             raise BadWrite(ua.StatusCodes.BadOutOfRange, f"{len(data)} bytes do not fit {name} (at most {max_bytes})")
         return data
+    return convert
+
+
+def _wstring_in(max_units: int, name: str) -> Callable[[ua.Variant], str]:
+    """A client's String into a WSTRING: its UTF-16 code units (`stvm.numeric.utf16_units`)."""
+    def convert(variant: ua.Variant) -> str:
+        _scalar(variant)
+        if variant.VariantType != ua.VariantType.String:
+            raise _mismatch(variant, "String")
+        units = utf16_units(variant.Value or "")
+        if "\x00" in units:
+            raise BadWrite(ua.StatusCodes.BadOutOfRange, "a WSTRING cannot hold NUL characters")
+        if len(units) > max_units:
+            raise BadWrite(ua.StatusCodes.BadOutOfRange,
+                           f"{len(units)} UTF-16 code units do not fit {name} (at most {max_units})")
+        return units
     return convert
 
 

@@ -17,7 +17,7 @@ import re
 from typing import Any, Mapping
 
 from stvm.lower.layout import ProjectLayout, VarSlot
-from stvm.runtime.values import AttrRef, ItemRef, MapRef
+from stvm.runtime.values import AttrRef, ItemRef, MapRef, OpenArray
 from stvm.semantics import types as t
 
 
@@ -126,6 +126,10 @@ class VariableAccess:
                 elif slot.section == "VAR_IN_OUT":
                     container, key = _through_reference(container, key, path)
             else:
+                if isinstance(ty, t.ArrayType) and ty.dims is None and isinstance(value, OpenArray):
+                    # an ARRAY[*, *] parameter: the caller's lists, with the bounds it was given
+                    ty = t.ArrayType(ty.name, ty.element, tuple(value.bounds))
+                    container, key, value = value, "data", value.data
                 if not isinstance(ty, t.ArrayType) or ty.dims is None:
                     raise PathError(f"{path!r}: not an array")
                 try:

@@ -82,6 +82,33 @@ def format_string(value: bytes) -> str:
     return "".join(out)
 
 
+_WIDE_ESCAPES = {'"': '$"', "$": "$$", "\n": "$L", "\r": "$R", "\t": "$T", "\f": "$P"}
+
+
+def format_wstring(units: str) -> str:
+    """A WSTRING value as its IEC literal, readable: printable characters as themselves (a
+    surrogate pair as the one character it encodes), the rest as `$hhhh` code units."""
+    out = ['"']
+    i = 0
+    while i < len(units):
+        ch = units[i]
+        code = ord(ch)
+        if 0xD800 <= code < 0xDC00 and i + 1 < len(units) and 0xDC00 <= ord(units[i + 1]) < 0xE000:
+            pair = chr(0x10000 + ((code - 0xD800) << 10) + ord(units[i + 1]) - 0xDC00)
+            out.append(pair if pair.isprintable() else f"${code:04X}${ord(units[i + 1]):04X}")
+            i += 2
+            continue
+        if ch in _WIDE_ESCAPES:
+            out.append(_WIDE_ESCAPES[ch])
+        elif ch.isprintable() and not 0xD800 <= code < 0xE000:
+            out.append(ch)
+        else:
+            out.append(f"${code:04X}")
+        i += 1
+    out.append('"')
+    return "".join(out)
+
+
 def format_real(value: float, bits: int) -> str:
     if math.isnan(value):
         return "nan"
@@ -142,6 +169,8 @@ def format_value(value: object, ty: t.Type, layouts: ProjectLayout | None = None
                 "DATE_AND_TIME": format_dt}[ty.family](ns)
         return "L" + text if ty.long else text   # LTIME#…, LDATE#…, LTOD#…, LDT#…
     if isinstance(ty, t.StringType):
+        if isinstance(value, str):
+            return format_wstring(value)
         return format_string(value)  # type: ignore[arg-type]
     if isinstance(ty, t.EnumType):
         name = ty.name_of(int(value))  # type: ignore[arg-type]
@@ -152,6 +181,8 @@ def format_value(value: object, ty: t.Type, layouts: ProjectLayout | None = None
                  for slot in layout]  # type: ignore[union-attr]
         return "(" + ", ".join(parts) + ")"
     if isinstance(ty, t.ArrayType):
+        if ty.dims is None and ty.rank > 1:   # an ARRAY[*, *] parameter: the lists passed
+            return _format_array(value.data, ty, ty.rank, layouts)  # type: ignore[attr-defined]
         if ty.dims is None:
             return "[" + ", ".join(format_value(v, ty.element, layouts) for v in value.data[value.start:]) + "]"  # type: ignore[attr-defined]
         return _format_array(value, ty, len(ty.dims), layouts)  # type: ignore[arg-type]

@@ -8,7 +8,8 @@ from __future__ import annotations
 import math
 
 from stvm.numeric import f32, strfit
-from stvm.runtime.values import ArrayIndexError, ArrayRef, AttrRef, FunctionError, ItemRef, MapRef, STFault
+from stvm.runtime.values import ArrayIndexError, ArrayRef, AttrRef, FunctionError, ItemRef, MapRef, OpenArray, STFault
+from stvm.runtime.unions import UNION_HELPERS
 
 
 def _idiv(a: int, b: int) -> int:
@@ -164,6 +165,20 @@ def _fb_init_later(pending: list, obj, calls: tuple):
     return obj
 
 
+def _en_call(enabled, call, default, eno, negate: bool):
+    """A call with EN/ENO inside an expression: run `call()` only when `enabled`, else the
+    result type's initial value (`default()`); ENO (a reference, or None) is FALSE before the
+    call (an instruction error leaves it so) and when EN is FALSE, TRUE after it."""
+    if eno is not None:
+        eno.set(negate)
+    if not enabled:
+        return default()
+    value = call()
+    if eno is not None:
+        eno.set(not negate)
+    return value
+
+
 class _Frame:
     """Variables of one function call (attributes `v_<name>`), so in-outs can reference them."""
 
@@ -178,3 +193,6 @@ HELPERS = {
     "_AttrRef": AttrRef, "_MapRef": MapRef, "_ItemRef": ItemRef, "_ArrayRef": ArrayRef, "_FunctionError": FunctionError,
     "_STFault": STFault, "_null_ref": _null_ref, "_null_itf": _null_itf, "_query_itf": _query_itf, "_same_ref": _same_ref, "_ArrayIndexError": ArrayIndexError,
 }
+HELPERS.update(UNION_HELPERS)   # the base class and member descriptor of generated UNION classes
+HELPERS["_OpenArray"] = OpenArray   # ARRAY[*, *] arguments
+HELPERS["_en_call"] = _en_call      # EN/ENO inside an expression

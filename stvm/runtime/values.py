@@ -65,6 +65,18 @@ class ArrayRef:
         self.data[self.start:self.start + len(values)] = values
 
 
+class OpenArray:
+    """An array passed to an ARRAY[*, *] parameter (IEC ed. 3 6.5.3.2): the nested lists of the
+    argument (never copied) and, per dimension, the (lo, hi) the callee indexes with — from 0, or
+    the argument's own bounds under `open_array_bounds=actual`."""
+
+    __slots__ = ("data", "bounds")
+
+    def __init__(self, data: list, bounds: tuple[tuple[int, int], ...]) -> None:
+        self.data = data
+        self.bounds = bounds
+
+
 class AttrRef:
     """Reference to `obj.<attr>` (a variable of a POU instance or a struct field)."""
 

@@ -17,7 +17,7 @@ from dataclasses import dataclass, field
 from types import TracebackType
 from typing import Any, Callable, Mapping
 
-from stvm.numeric import f32, strfit
+from stvm.numeric import f32, strfit, utf16_units
 from stvm.runtime.access import PathError, UnboundInOut, VariableAccess  # noqa: F401 (API: PathError, UnboundInOut)
 from stvm.runtime.context import RunContext
 from stvm.runtime.format import format_time, format_value
@@ -216,12 +216,14 @@ class VM:
         `string_overflow`): a fault, or cut to `max_bytes` with one warning per site."""
         if len(value) <= max_bytes:
             return value
-        destination = f"STRING[{max_bytes + 1}]"
+        wide = isinstance(value, str)
+        destination = f"WSTRING[{max_bytes}]" if wide else f"STRING[{max_bytes + 1}]"
+        unit = "code units" if wide else "bytes"
         if self.settings.string_overflow is StringOverflow.ERROR:
-            raise STFault(f"a string of {len(value)} bytes does not fit {destination} "
-                          f"({max_bytes} bytes; string_overflow=error)")
+            raise STFault(f"a string of {len(value)} {unit} does not fit {destination} "
+                          f"({max_bytes} {unit}; string_overflow=error)")
         self.ctx.warn_at(Span(file, line, column, line, column),
-                         f"a string of {len(value)} bytes is truncated to the {max_bytes} bytes of "
+                         f"a string of {len(value)} {unit} is truncated to the {max_bytes} {unit} of "
                          f"{destination} (string_overflow=truncate_warn; reported once)",
                          once_key=("string_overflow", file, line, column))
         return HELPERS["_strfit"](value, max_bytes)   # the cut the generated code makes
@@ -384,6 +386,9 @@ class VM:
     def _check_string_fits(self, path: str, value: Any, ty: t.StringType) -> None:
         """A string given from outside (API, `--set`, scenario) is stored like an ST assignment:
         too long is an error (`string_overflow=error`) or a warning and a cut."""
+        if t.is_wide(ty):
+            self._check_wstring_fits(path, value, ty)
+            return
         data = value.encode("utf-8") if isinstance(value, str) else value
         if not isinstance(data, (bytes, bytearray)):
             return   # coerce_python_value rejects it
@@ -394,6 +399,21 @@ class VM:
             raise ValueError(f"a string of {length} bytes does not fit {ty.name} ({ty.max_bytes} bytes; "
                              "string_overflow=error)")
         self.ctx.warn(f"{path}: a string of {length} bytes is truncated to the {ty.max_bytes} bytes of {ty.name}")
+
+    def _check_wstring_fits(self, path: str, value: Any, ty: t.StringType) -> None:
+        """`_check_string_fits` for a WSTRING: its length counts UTF-16 code units."""
+        if isinstance(value, (bytes, bytearray)):
+            value = bytes(value).decode("utf-8", "replace")
+        if not isinstance(value, str):
+            return
+        length = len(utf16_units(value.split("\x00", 1)[0]))
+        if length <= ty.max_bytes:
+            return
+        if self.settings.string_overflow is StringOverflow.ERROR:
+            raise ValueError(f"a string of {length} code units does not fit {ty.name} ({ty.max_bytes} code "
+                             "units; string_overflow=error)")
+        self.ctx.warn(f"{path}: a string of {length} code units is truncated to the {ty.max_bytes} code units "
+                      f"of {ty.name}")
 
     def __getitem__(self, path: str) -> Any:
         return self.get(path)
@@ -454,6 +474,11 @@ def coerce_python_value(value: Any, ty: t.Type) -> Any:
             except OverflowError:
                 raise ValueError(f"{value} is out of range for {ty.name}") from None
             return f32(as_float) if ty.bits == 32 else as_float
+    elif t.is_wide(ty):
+        if isinstance(value, (bytes, bytearray)):
+            value = bytes(value).decode("utf-8", "replace")
+        if isinstance(value, str):
+            return strfit(utf16_units(value.split("\x00", 1)[0]), ty.max_bytes)
     elif isinstance(ty, t.StringType):
         if isinstance(value, str):
             value = value.encode("utf-8")

@@ -15,6 +15,7 @@ from dataclasses import replace
 from typing import Any
 
 from stvm.semantics import types as t
+from stvm.numeric import utf16_units
 from stvm.semantics.facts import NOT_CONST, CallInfo, NameRef
 from stvm.semantics.model import EXTERNAL, IN_OUT, INPUT, OUTPUT, POUInfo, Variable
 from stvm.syntax import nodes as n
@@ -62,7 +63,7 @@ def implicit_ok(src: t.Type, dst: t.Type) -> bool:
     if src == dst:
         return True
     if isinstance(src, t.StringType) and isinstance(dst, t.StringType):
-        return True
+        return t.is_wide(src) == t.is_wide(dst)   # STRING <-> WSTRING needs a conversion function
     if isinstance(src, t.IntType) and isinstance(dst, t.IntType):
         if src.bits == dst.bits:
             return True
@@ -77,15 +78,25 @@ def implicit_ok(src: t.Type, dst: t.Type) -> bool:
         return src.qualname.lower() == dst.qualname.lower()
     if isinstance(src, t.ArrayType) and isinstance(dst, t.ArrayType):
         if dst.dims is None:
-            return implicit_ok(src.element, dst.element) and src.element.kind == dst.element.kind
+            return implicit_ok(src.element, dst.element) and src.element.kind == dst.element.kind \
+                and open_rank_ok(src, dst)
         return (src.dims is not None and len(src.dims) == len(dst.dims)
                 and all(h1 - l1 == h2 - l2 for (l1, h1), (l2, h2) in zip(src.dims, dst.dims))
-                and (src.element == dst.element or (isinstance(src.element, t.StringType) and isinstance(dst.element, t.StringType))
+                and (src.element == dst.element or (isinstance(src.element, t.StringType) and isinstance(dst.element, t.StringType)
+                                                   and t.is_wide(src.element) == t.is_wide(dst.element))
                      or (getattr(src.element, "qualname", None) or "x").lower() == (getattr(dst.element, "qualname", None) or "y").lower()))
     if isinstance(src, t.TimeType) and isinstance(dst, t.TimeType):
         # IEC ed. 3 (implicit conversions): TIME -> LTIME, DATE -> LDATE, TOD -> LTOD, DT -> LDT
         return src.family == dst.family and (dst.long or not src.long)
     return False
+
+
+def open_rank_ok(src: t.ArrayType, dst: t.ArrayType) -> bool:
+    """An array passed to an open array of several dimensions (ARRAY[*, *]) has that many
+    (ARRAY[*] takes any array, as before: Sysmac passes a whole array's elements in order)."""
+    if dst.rank == 1:
+        return src.dims is not None or src.rank == 1
+    return len(src.dims) == dst.rank if src.dims is not None else src.rank == dst.rank
 
 
 def conversion_hint(src: t.Type, dst: t.Type) -> str:
@@ -120,6 +131,9 @@ def native_result_rule(pou: POUInfo, natives):
 
 class BodyChecker:
     # `checker`: the Checker that runs this body check (stvm.semantics.checker imports this module)
+    # calls whose result rule rejected the arguments (reported once: no "cannot infer" after it)
+    rejected_calls: frozenset[int] = frozenset()
+
     def __init__(self, checker: Any, pou: POUInfo, node, fb: POUInfo | None = None,
                  fb_node: n.POU | None = None) -> None:
         self.c = checker
@@ -526,7 +540,7 @@ class BodyChecker:
         the code generator cuts it at build time, so the check-time diagnostic is its only
         report (a warning, or an error under `string_overflow=error`)."""
         value = self.facts.consts.get(id(expr))
-        if isinstance(value, bytes) and len(value) > dst.max_bytes:
+        if isinstance(value, (bytes, str)) and len(value) > dst.max_bytes:
             self.c.string_overflow(len(value), dst, span)
 
     # ---- expressions
@@ -552,8 +566,17 @@ class BodyChecker:
         return t.BOOL
 
     def expr_StringLiteral(self, e: n.StringLiteral, expected) -> t.Type:
+        if isinstance(e.value, str) or t.is_wide(expected):
+            return self.wstring_literal(e)
         self.facts.consts[id(e)] = e.value
         return t.string_type(max(len(e.value) + 1, 1))
+
+    def wstring_literal(self, e: n.StringLiteral) -> t.Type:
+        """A WSTRING literal ("…"), or a STRING literal where a WSTRING is expected (CODESYS takes
+        `ws := 'abc'`): its value is the `str` of its UTF-16 code units."""
+        value = e.value if isinstance(e.value, str) else utf16_units(e.value.decode("utf-8", "replace"))
+        self.facts.consts[id(e)] = value
+        return t.wstring_type(max(len(value), 1))
 
     def expr_TimeLiteral(self, e: n.TimeLiteral, expected) -> t.Type:
         self.facts.consts[id(e)] = e.value_ns
@@ -840,8 +863,9 @@ class BodyChecker:
             self.error(f"'{self.describe(e.base)}' is {base.name}, not an array", e.span, "E036")
             return None
         if base.dims is None:
-            if len(e.indices) != 1:
-                self.error("an ARRAY[*] parameter takes one index", e.span, "E036")
+            if len(e.indices) != base.rank:
+                self.error(f"an {base.name.split(' OF ')[0]} parameter takes {base.rank} index(es), got "
+                           f"{len(e.indices)}", e.span, "E036")
             return base.element
         if len(e.indices) != len(base.dims):
             self.error(f"{base.name} needs {len(base.dims)} index(es), got {len(e.indices)}", e.span, "E036")
@@ -977,14 +1001,15 @@ class BodyChecker:
             self.error(f"{word}() needs an array; '{self.describe(arr)}' is {ty.name}", arr.span, "E070")
             return None
         dim = self.c.const_value(dim_expr, self.pou_namespace, self.pou)
-        ndims = 1 if ty.dims is None else len(ty.dims)
+        ndims = ty.rank if ty.dims is None else len(ty.dims)
         if isinstance(dim, bool) or not isinstance(dim, int) or not 1 <= dim <= ndims:
             self.error(f"the dimension of {word}() must be a constant 1..{ndims}", dim_expr.span, "E070")
             return None
         if ty.dims is not None:
             lo, hi = ty.dims[dim - 1]
             return self.constant_type_query(e, lo if word == "LOWER_BOUND" else hi)
-        self.facts.type_queries[id(e)] = (word, arr)
+        # ARRAY[*, *]: the dimension goes with the operand (ARRAY[*] keeps the plain operand)
+        self.facts.type_queries[id(e)] = (word, arr if ty.rank == 1 else (arr, dim))
         return t.DINT
 
     def stmt_RefAssign(self, s: n.RefAssign) -> None:
@@ -1168,7 +1193,7 @@ class BodyChecker:
         if isinstance(lt, (t.IntType, t.RealType)) and isinstance(rt, (t.IntType, t.RealType)):
             return True
         if isinstance(lt, t.StringType) and isinstance(rt, t.StringType):
-            return True
+            return t.is_wide(lt) == t.is_wide(rt)
         if isinstance(lt, t.EnumType) and isinstance(rt, t.EnumType):
             return lt.qualname.lower() == rt.qualname.lower()
         if isinstance(lt, t.BoolType) and isinstance(rt, t.BoolType):
@@ -1294,7 +1319,8 @@ class BodyChecker:
         if isinstance(ret, t.GenericType):
             ret = info.generic_type
             if ret is None:
-                self.error(f"cannot infer the result type of {pou.name}", e.span, "E046")
+                if id(e) not in self.rejected_calls:
+                    self.error(f"cannot infer the result type of {pou.name}", e.span, "E046")
                 return None
         return ret
 
@@ -1384,6 +1410,8 @@ class BodyChecker:
             exprs = [given.get(p.key) for p in params
                      if not (pou.variadic and p is params[-1] and info.extra and p.key not in given)]
             exprs += list(info.extra)
+            if any(p.type == t.GENERICS["ANY_STRING"] for p in params):
+                info.arg_types = self.widen_string_literals(info.arg_types, exprs)
             try:
                 info.generic_type = rule(self.literal_context_types(pou, info.arg_types, exprs))
                 expected = getattr(self, "call_expected", None)
@@ -1392,9 +1420,25 @@ class BodyChecker:
                     info.generic_type = expected   # IEC: TRUNC is ANY_REAL -> ANY_INT
             except Exception as exc:  # a rule rejecting its arguments is a type error in the user's call
                 self.error(f"{self.display(pou)}: {exc}", e.span, "E046")
+                self.rejected_calls = self.rejected_calls | {id(e)}
         elif generic_types:
             typed = [ty for ty, untyped in generic_types if not untyped]
             info.generic_type = self.common_generic(typed or [ty for ty, _ in generic_types], e)
+
+    def widen_string_literals(self, arg_types: tuple, exprs: list) -> tuple:
+        """A '…' literal among WSTRING inputs of a string function is a WSTRING literal, as where
+        a WSTRING is expected (`FIND(ws, '€')`, `CONCAT(ws, '!')`; also under sysmac, whose "…"
+        is a STRING)."""
+        if not any(t.is_wide(ty) for ty, ex in zip(arg_types, exprs)
+                   if ex is not None and not isinstance(ex, n.StringLiteral)):
+            return arg_types
+        out = []
+        for ty, ex in zip(arg_types, exprs):
+            if isinstance(ex, n.StringLiteral) and isinstance(ex.value, bytes):
+                ty = self.wstring_literal(ex)
+                self.facts.types[id(ex)] = ty
+            out.append(ty)
+        return tuple(out)
 
     def display(self, pou: POUInfo) -> str:
         """A callee's name in diagnostics: `FB.Method` for a METHOD, the POU's name otherwise."""
@@ -1449,9 +1493,26 @@ class BodyChecker:
         else:
             return False
         if getattr(self, "en_call", None) is not call:
-            self.error("EN/ENO need a call that is a statement or the whole right side of an assignment",
-                       arg.span, "E047")
+            self.nested_en_eno(info, arg)
         return True
+
+    def nested_en_eno(self, info, arg: n.Argument) -> None:
+        """EN/ENO on a call inside a larger expression (`b := 1 + F(EN := c, …)`, a condition):
+        lowered in place (`_en_call`); EN FALSE gives the result type's initial value. A method
+        call or a function only: an FB call is a statement."""
+        if info.is_fb:
+            self.error("EN/ENO on a function block call need the call to be a statement", arg.span, "E047")
+            return
+        info.nested_en = True
+        if info.eno is not None:
+            # ENO is written through a reference while the expression runs: keep its variable
+            # out of Python locals (like a variable whose REF() is taken)
+            root = info.eno[0]
+            while isinstance(root, (n.Member, n.Index)):
+                root = root.base
+            ref = self.facts.names.get(id(root)) if isinstance(root, n.Name) else None
+            if ref is not None and getattr(ref, "kind", None) == "var":
+                self.facts.addressed.add((self.pou.key, ref.variable.key))  # type: ignore[union-attr]
 
     def variadic_pin(self, pou: POUInfo, name: str) -> Variable | None:
         params = pou.params()
@@ -1468,8 +1529,9 @@ class BodyChecker:
                 continue
             if isinstance(result, t.IntType) and isinstance(ty, t.IntType):
                 result = common_int(result, ty)
-            elif isinstance(result, t.StringType) and isinstance(ty, t.StringType):
-                result = t.STRING
+            elif isinstance(result, t.StringType) and isinstance(ty, t.StringType) \
+                    and t.is_wide(result) == t.is_wide(ty):
+                result = t.WSTRING if t.is_wide(ty) else t.STRING
             elif isinstance(result, (t.IntType, t.RealType)) and isinstance(ty, (t.IntType, t.RealType)):
                 result = t.LREAL if t.LREAL in (result, ty) or any(isinstance(x, t.IntType) and x.bits > 16 for x in (result, ty)) else t.REAL
             else:
@@ -1482,7 +1544,7 @@ class BodyChecker:
         ptype = var.type
         if var.section == IN_OUT:
             # an in-out is passed by reference: it must be a variable
-            if isinstance(ptype, t.ArrayType) and isinstance(arg.value, n.Index):
+            if isinstance(ptype, t.ArrayType) and ptype.rank == 1 and isinstance(arg.value, n.Index):
                 # Sysmac: an element where an array is expected = the array from that element on
                 aty = self.expr(arg.value)
                 base_ty = self.facts.types.get(id(arg.value.base))
@@ -1509,19 +1571,20 @@ class BodyChecker:
                     self.error(f"'{var.name}' of {self.display(pou)} needs {ptype.name}, got {ty.name}", arg.value.span, "E052")
                 generic_types.append((ty, False))
             elif isinstance(ptype, t.ArrayType) and isinstance(ty, t.ArrayType) and ptype.dims is None:
-                if not self.element_ok(ty.element, ptype.element):
+                if not self.element_ok(ty.element, ptype.element) or not open_rank_ok(ty, ptype):
                     self.error(f"'{var.name}' of {self.display(pou)} needs {ptype.name}, got {ty.name}", arg.value.span, "E052")
             elif isinstance(ty, t.FBType) and isinstance(ptype, t.FBType) \
                     and self.c.is_derived(ty.qualname.lower(), ptype.qualname.lower()):
                 pass   # an instance of a derived FB is an instance of its base
-            elif not (ty == ptype or (isinstance(ty, t.StringType) and isinstance(ptype, t.StringType))
+            elif not (ty == ptype or (isinstance(ty, t.StringType) and isinstance(ptype, t.StringType)
+                                      and t.is_wide(ty) == t.is_wide(ptype))
                       or (isinstance(ty, (t.StructType, t.EnumType)) and implicit_ok(ty, ptype))
                       or (isinstance(ty, t.ArrayType) and implicit_ok(ty, ptype))
                       or (isinstance(ty, t.IntType) and isinstance(ptype, t.IntType) and ty.bits == ptype.bits)):
                 self.error(f"in-out '{var.name}' of {self.display(pou)} is {ptype.name}; got {ty.name}", arg.value.span, "E052")
             info.inputs.append((var, arg.value))
             return
-        if isinstance(ptype, t.ArrayType) and ptype.dims is None and isinstance(arg.value, n.Index):
+        if isinstance(ptype, t.ArrayType) and ptype.dims is None and ptype.rank == 1 and isinstance(arg.value, n.Index):
             aty = self.expr(arg.value)
             base_ty = self.facts.types.get(id(arg.value.base))
             if aty is not None and isinstance(base_ty, t.ArrayType) and self.element_ok(aty, ptype.element):
@@ -1538,7 +1601,8 @@ class BodyChecker:
                 # untyped literals only decide the type when no typed argument does
                 generic_types.append((ty, id(arg.value) in self.facts.untyped))
         elif isinstance(ptype, t.ArrayType) and ptype.dims is None:
-            if not (isinstance(ty, t.ArrayType) and self.element_ok(ty.element, ptype.element)):
+            if not (isinstance(ty, t.ArrayType) and self.element_ok(ty.element, ptype.element)
+                    and open_rank_ok(ty, ptype)):
                 self.error(f"'{var.name}' of {self.display(pou)} needs {ptype.name}, got {ty.name}", arg.value.span, "E052")
         else:
             self.require_assignable(arg.value, ty, ptype, arg.value.span)

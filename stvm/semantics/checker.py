@@ -14,7 +14,7 @@ from typing import Any, Mapping
 
 from stvm.diagnostics import Diagnostic
 from stvm.source import is_stdlib_file
-from stvm.numeric import f32
+from stvm.numeric import f32, utf16_units
 from stvm.semantics import types as t
 from stvm.semantics.body import BodyChecker
 from stvm.semantics.facts import NOT_CONST, CallInfo, Facts, NameRef  # noqa: F401 (API: checker.Facts)
@@ -135,13 +135,14 @@ class Checker:
     def string_overflow(self, length: int, dst: t.StringType, span: n.Span, initial: bool = False) -> None:
         """A constant of `length` bytes stored into `dst` (sysmac.md 2, `string_overflow`): a
         warning (the value is cut at build time), or an error under `string_overflow=error`."""
+        unit = "code units" if t.is_wide(dst) else "bytes"
         if self.settings.string_overflow is StringOverflow.ERROR:
-            self.error(f"a string of {length} bytes does not fit {dst.name} ({dst.max_bytes} bytes; "
+            self.error(f"a string of {length} {unit} does not fit {dst.name} ({dst.max_bytes} {unit}; "
                        "string_overflow=error)", span, "E054")
         elif initial:
-            self.warning(f"initial value truncated to {dst.max_bytes} bytes of {dst.name}", span)
+            self.warning(f"initial value truncated to {dst.max_bytes} {unit} of {dst.name}", span)
         else:
-            self.warning(f"a string of {length} bytes is truncated to the {dst.max_bytes} bytes of {dst.name}",
+            self.warning(f"a string of {length} {unit} is truncated to the {dst.max_bytes} {unit} of {dst.name}",
                          span)
 
     # ---- indexing
@@ -852,6 +853,8 @@ class Checker:
             for name, value in members:
                 self.enumerators.setdefault(name.lower(), []).append((result, value))
             self.enums[key] = result
+        elif isinstance(body, n.UnionDecl):
+            result = self.union_type(key, decl, body, qual)
         elif isinstance(body, n.StructDecl):
             fields: list[tuple[str, t.Type]] = []
             inits: dict[str, object] = {}
@@ -882,6 +885,53 @@ class Checker:
         self.resolved_types[key] = result
         return result
 
+    def union_type(self, key: str, decl: n.TypeDecl, body: n.UnionDecl, qual: str) -> t.UnionType:
+        """`TYPE U : UNION … END_UNION`: members of types with a byte image (elementary types,
+        enumerations, STRING/WSTRING, arrays and structs of them), without initial values (the
+        members share their bytes, which start as zeros)."""
+        fields: list[tuple[str, t.Type]] = []
+        self.resolved_types[key] = t.UnionType(decl.name, qual, ())
+        for fdecl in body.fields:
+            ftype = self.resolve_type_spec(fdecl.type_spec, decl.namespace)
+            if fdecl.init is not None:
+                self.error(f"a member of UNION {decl.name} has no initial value (the members share "
+                           "their bytes)", fdecl.init.span, "E023")
+            if ftype is not None and t.byte_size(ftype) is None:
+                self.error(f"UNION member of type {ftype.name} has no byte image to overlay (allowed: "
+                           "elementary types, enumerations, strings, arrays and structs of them)",
+                           fdecl.type_spec.span, "E018")
+                ftype = None
+            for fname, fspan in fdecl.names:
+                self.check_identifier(fname, fspan)
+                if any(f[0].lower() == fname.lower() for f in fields):
+                    self.error(f"duplicate member '{fname}' in {decl.name}", fspan, "E010")
+                    continue
+                fields.append((fname, ftype or t.DINT))
+        if not fields:
+            self.error(f"UNION {decl.name} has no members", body.span, "E018")
+        result = t.UnionType(decl.name, qual, tuple(fields))
+        self.type_inits[key] = {}
+        self.structs[key] = result
+        return result
+
+    def open_array_of_rank(self, spec: n.ArrayTypeSpec, element: t.Type) -> t.ArrayType | None:
+        """ARRAY[*, *] (IEC ed. 3 6.5.3.2): an open array of several dimensions, each `*`."""
+        if any(r is not None for r in spec.ranges):
+            self.error("an open array has '*' for every dimension: ARRAY[*, *]", spec.span, "E019")
+            return None
+        rank = len(spec.ranges)
+        return t.ArrayType(f"ARRAY[{', '.join('*' * rank)}] OF {element.name}", element, None, rank)
+
+    def wstring_spec(self, spec: n.StringTypeSpec, namespace: tuple[str, ...]) -> t.Type:
+        """WSTRING[n]: n UTF-16 code units (IEC; no NUL counted, unlike Sysmac's STRING[n])."""
+        units = self.const_int(spec.size, namespace)
+        if units is None:
+            return t.WSTRING
+        if not 1 <= units <= t.WSTRING.max_bytes:
+            self.error(f"WSTRING size {units} is outside 1..{t.WSTRING.max_bytes}", spec.span, "E019")
+            return t.WSTRING
+        return t.wstring_type(units)
+
     def resolve_type_spec(self, spec: n.TypeSpec, namespace: tuple[str, ...], allow_generic: bool = False,
                           allow_open_array: bool = False) -> t.Type | None:
         if isinstance(spec, n.NamedTypeSpec):
@@ -889,8 +939,6 @@ class Checker:
                 upper = spec.parts[0].upper()
                 if upper in t.ELEMENTARY:
                     return t.ELEMENTARY[upper]
-                if upper == "WSTRING":
-                    return t.STRING
                 if upper in t.GENERICS:
                     if allow_generic:
                         return t.GENERICS[upper]
@@ -910,6 +958,8 @@ class Checker:
                 return t.FBType(pou.name, "\\".join(pou.namespace + (pou.name,)), pou.kind == "PROGRAM")
             self.error(f"unknown type '{spec.text}'", spec.span, "E018")
             return None
+        if isinstance(spec, n.StringTypeSpec) and spec.wide:
+            return self.wstring_spec(spec, namespace)
         if isinstance(spec, n.StringTypeSpec):
             size = self.const_int(spec.size, namespace)
             if size is None:
@@ -925,6 +975,8 @@ class Checker:
             if any(r is None for r in spec.ranges):
                 if not allow_open_array:
                     self.error("ARRAY[*] is only allowed for VAR_IN_OUT and inputs of library POUs", spec.span, "E019")
+                if len(spec.ranges) > 1:
+                    return self.open_array_of_rank(spec, element)
                 return t.ArrayType(f"ARRAY[*] OF {element.name}", element, None)
             dims = []
             for lo_expr, hi_expr in spec.ranges:  # type: ignore[misc]
@@ -1202,7 +1254,13 @@ class Checker:
         elif isinstance(ty, t.RealType):
             if isinstance(value, (int, float)) and not isinstance(value, bool):
                 return _round_real(float(value), ty)
+        elif t.is_wide(ty):
+            return self.wstring_initial_value(value, ty, span)
         elif isinstance(ty, t.StringType):
+            if isinstance(value, str):
+                self.error(f"a WSTRING literal cannot initialise {ty.name}: write STRING literals in single "
+                           "quotes, or convert with WSTRING_TO_STRING", span, "E023")
+                return None
             if isinstance(value, bytes):
                 if len(value) > ty.max_bytes:
                     self.string_overflow(len(value), ty, span, initial=True)
@@ -1219,6 +1277,19 @@ class Checker:
                 return value
         self.error(f"initial value does not fit type {ty.name}", span, "E023")
         return None
+
+    def wstring_initial_value(self, value: object, ty: t.StringType, span: n.Span) -> object:
+        """The initial value of a WSTRING: a WSTRING literal, or a STRING literal taken as its
+        characters (CODESYS accepts `ws : WSTRING := 'abc'`)."""
+        if isinstance(value, bytes):
+            value = utf16_units(value.decode("utf-8", "replace"))
+        if not isinstance(value, str):
+            self.error(f"initial value does not fit type {ty.name}", span, "E023")
+            return None
+        if len(value) > ty.max_bytes:
+            self.string_overflow(len(value), ty, span, initial=True)
+            return value[: ty.max_bytes]
+        return value
 
     # ---- entry
     def run(self) -> Analysis:

@@ -39,6 +39,7 @@ class CallInfo:
     arg_types: tuple[t.Type, ...] = ()                    # per parameter (+ extras), for typed natives
     en: n.Expr | None = None                              # `EN := c`: the call runs only when c is TRUE
     eno: tuple[n.Expr, bool] | None = None                # `ENO => v` / `NOT ENO => v`: (target, negate)
+    nested_en: bool = False                               # EN/ENO on a call inside a larger expression
     # a METHOD call: 'self' (own method, `M()` / `THIS^.M()`), 'inst' (`fb.M()`), 'super'
     # (`SUPER^.M()`, static), 'itf' (through an interface variable); 'super_body' is `SUPER^()`
     oo: str = ""

@@ -13,6 +13,7 @@ Runtime representation of each type (what generated code and native POUs see):
 | LREAL                           | float                                                 |
 | TIME, DATE, TOD, DT             | int nanoseconds (DATE/TOD/DT: since 1970-01-01)       |
 | STRING[n]                       | bytes, at most n-1 bytes, never containing 16#00      |
+| WSTRING[n]                      | str of UTF-16 code units (one Python character per code unit, 0..16#FFFF; a character outside the BMP is its two surrogates), at most n units |
 | enum                            | int (the enumerator's value)                          |
 | STRUCT                          | instance of the generated struct class (attributes `v_<name>`) |
 | ARRAY                           | list (nested lists for several dimensions)            |
@@ -146,6 +147,22 @@ class StringType(Type):
 
 
 @dataclass(frozen=True)
+class WStringType(StringType):
+    """WSTRING[n] (IEC 61131-3 ed. 3, 6.3.3): at most n UTF-16 code units. `size` is n + 1, so
+    that `max_bytes` (the code units it holds, here) reads as for STRING, whose size counts the NUL.
+
+    A subclass so that every string rule (comparison, ANY_STRING, stores that cut at `max_bytes`)
+    holds for it; the places where STRING and WSTRING differ (values are `str`, not `bytes`; one
+    is not assignable to the other) test `is_wide`.
+    """
+
+
+def is_wide(ty: Type | None) -> bool:
+    """Is `ty` a WSTRING (its values `str` of UTF-16 code units)?"""
+    return isinstance(ty, WStringType)
+
+
+@dataclass(frozen=True)
 class EnumType(Type):
     qualname: str = ""
     members: tuple[tuple[str, int], ...] = ()
@@ -193,10 +210,20 @@ class StructType(Type):
 
 
 @dataclass(frozen=True)
+class UnionType(StructType):
+    """CODESYS UNION: the members overlay the same bytes, each at offset 0 (little-endian, as on
+    an x86 CODESYS target); its size is the largest member's, padded to the largest alignment.
+    A StructType, so member access, initialisers and copies follow the struct rules; the value
+    keeps the union's bytes (`stvm.runtime.unions`)."""
+
+
+@dataclass(frozen=True)
 class ArrayType(Type):
     element: Type = None  # type: ignore[assignment]
     # (lo, hi) per dimension; None for an `ARRAY[*]` parameter (any bounds)
     dims: tuple[tuple[int, int], ...] | None = ()
+    # the dimensions of an open array (`dims` None): 1 for ARRAY[*], 2 for ARRAY[*, *], …
+    rank: int = 1
 
     @property
     def kind(self) -> str:
@@ -340,13 +367,14 @@ LDATE = TimeType("LDATE")
 LTOD = TimeType("LTIME_OF_DAY")
 LDT = TimeType("LDATE_AND_TIME")
 STRING = StringType("STRING", 1986)
+WSTRING = WStringType("WSTRING", 1986)   # Choice: as many code units as a STRING holds bytes
 VOID = VoidType("VOID")
 
 ELEMENTARY: dict[str, Type] = {
     "BOOL": BOOL, "REAL": REAL, "LREAL": LREAL,
     "TIME": TIME, "DATE": DATE, "TIME_OF_DAY": TOD, "TOD": TOD, "DATE_AND_TIME": DT, "DT": DT,
     "LTIME": LTIME, "LDATE": LDATE, "LTIME_OF_DAY": LTOD, "LTOD": LTOD, "LDATE_AND_TIME": LDT, "LDT": LDT,
-    "STRING": STRING,
+    "STRING": STRING, "WSTRING": WSTRING,
     **_ints(),
 }
 GENERICS: dict[str, Type] = {
@@ -369,6 +397,11 @@ def time_type(family: str, long: bool) -> TimeType:
 
 def string_type(size: int) -> StringType:
     return STRING if size == 1986 else StringType(f"STRING[{size}]", size)
+
+
+def wstring_type(units: int) -> WStringType:
+    """WSTRING[units]: holds `units` UTF-16 code units."""
+    return WSTRING if units == WSTRING.max_bytes else WStringType(f"WSTRING[{units}]", units + 1)
 
 
 def is_integer(t: Type) -> bool:
@@ -394,6 +427,8 @@ def byte_size(ty: Type) -> int | None:
         return ty.bits // 8
     if isinstance(ty, TimeType):
         return 8
+    if isinstance(ty, WStringType):
+        return 2 * ty.size   # two bytes a code unit, the NUL included (CODESYS)
     if isinstance(ty, StringType):
         return ty.size
     if isinstance(ty, EnumType):
@@ -401,6 +436,12 @@ def byte_size(ty: Type) -> int | None:
     if isinstance(ty, ArrayType):
         element = byte_size(ty.element)
         return None if element is None or ty.dims is None else element * ty.length
+    if isinstance(ty, UnionType):
+        sizes = [byte_size(f) for _, f in ty.fields]
+        align = _alignment(ty)
+        if None in sizes or align is None:
+            return None
+        return -(-max(sizes, default=0) // align) * align  # type: ignore[type-var]
     if isinstance(ty, StructType):
         offset, largest = 0, 1
         for _, field_type in ty.fields:
@@ -419,6 +460,13 @@ def _alignment(ty: Type) -> int | None:
     if isinstance(ty, StructType):
         aligns = [_alignment(f) for _, f in ty.fields]
         return None if None in aligns else max(aligns, default=1)  # type: ignore[type-var]
+    if isinstance(ty, WStringType):
+        return 2
     if isinstance(ty, StringType):
         return 1
     return byte_size(ty)
+
+
+def alignment(ty: Type) -> int | None:
+    """The alignment in bytes a member of `ty` gets in a STRUCT (see `byte_size`)."""
+    return _alignment(ty)

@@ -27,8 +27,9 @@ import re
 from functools import lru_cache
 
 from stvm.runtime.values import FunctionError
-from stvm.semantics.types import ELEMENTARY, BoolType, IntType, RealType, StringType, TimeType, Type
+from stvm.semantics.types import ELEMENTARY, BoolType, IntType, RealType, StringType, TimeType, Type, is_wide
 from stvm.stdlib.registry import native_function
+from stvm.stdlib.strings import text_from_wide, wide_from_text
 from stvm.stdlib.typeops import coerce, real_to_integer
 from stvm.settings import ByteToStringFormat, StouPlus, StouTrailing
 
@@ -320,6 +321,8 @@ def numeric_to_numeric(value, source: Type, target: Type):
 
 def _make_converter(what: str, source_name: str, target_name: str):
     source, target = ELEMENTARY[source_name], ELEMENTARY[target_name]
+    if is_wide(source) or is_wide(target):
+        return _wide_converter(what, source, target)
     if isinstance(target, StringType):
         def convert(ctx, value):
             return to_text(ctx, value, source)
@@ -357,11 +360,32 @@ def _make_converter(what: str, source_name: str, target_name: str):
     return convert
 
 
+def _wide_converter(what: str, source: Type, target: Type):
+    """STRING_TO_WSTRING, WSTRING_TO_STRING, and the conversions between WSTRING and the other
+    elementary types: those of STRING, through the text in UTF-8."""
+    if isinstance(source, StringType) and isinstance(target, StringType):
+        to_wide = is_wide(target)
+
+        def convert(ctx, value):
+            return wide_from_text(ctx, value, what) if to_wide else text_from_wide(ctx, value, what)
+    elif is_wide(target):
+        def convert(ctx, value):
+            return wide_from_text(ctx, to_text(ctx, value, source), what)
+    else:
+        def convert(ctx, units):
+            return from_text(ctx, text_from_wide(ctx, units, what), target, what)
+    convert.__name__ = what.lower()
+    return convert
+
+
 def conversion_pairs() -> list[tuple[str, str]]:
     """(source, target) type names of every conversion function, short type names."""
     pairs = [(a, b) for a in NUMERIC_TYPES for b in NUMERIC_TYPES if a != b]
     for name in NUMERIC_TYPES + TIME_TYPES:
         pairs += [(name, "STRING"), ("STRING", name)]
+    pairs += [("STRING", "WSTRING"), ("WSTRING", "STRING")]
+    for name in NUMERIC_TYPES + TIME_TYPES:
+        pairs += [(name, "WSTRING"), ("WSTRING", name)]
     pairs += [("DT", "DATE"), ("DT", "TOD"), ("LDT", "LDATE"), ("LDT", "LTOD")]
     for short in ("TIME", "DATE", "TOD", "DT"):
         pairs += [(short, "L" + short), ("L" + short, short)]

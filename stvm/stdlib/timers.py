@@ -1,10 +1,12 @@
-"""IEC timers TON, TOF, TP on the VM clock (sysmac.md 7).
+"""IEC timers TON, TOF, TP on the VM clock (sysmac.md 7), and LTON, LTOF, LTP (ed. 3, on LTIME).
 
 Native because they read the clock: "now" is `ctx.now_ns`, the virtual time at the start of the
 scan (`timer_clock = scan_start`), never the wall clock. A timer updates only when its instance
 is called (CONFIRMED for TON): skipped scans freeze it, and ET jumps at the next call.
 
 Pins: IN BOOL, PT TIME → Q BOOL, ET TIME (Omron spells IN as `In`; names are case-insensitive).
+The L forms take PT and give ET as LTIME; TIME and LTIME are both int nanoseconds, so each is the
+same class as its TIME form, registered under a second name.
 """
 
 from __future__ import annotations
@@ -62,6 +64,7 @@ def _elapsed_at_end(ctx, preset: int) -> int:
     return preset
 
 
+@native_fb("LTON")
 @native_fb("TON")
 @st_names("IN", "PT", "Q", "ET")
 class OnDelayTimer:
@@ -97,6 +100,7 @@ class OnDelayTimer:
             inst.ET = elapsed
 
 
+@native_fb("LTOF")
 @native_fb("TOF")
 @st_names("IN", "PT", "Q", "ET")
 class OffDelayTimer:
@@ -135,6 +139,7 @@ class OffDelayTimer:
             inst.ET = elapsed
 
 
+@native_fb("LTP")
 @native_fb("TP")
 @st_names("IN", "PT", "Q", "ET")
 class PulseTimer:

@@ -46,6 +46,10 @@ def decode_string(token_text: str, settings: SysmacSettings) -> tuple[bytes, lis
             i += 2
         elif re.fullmatch(r"[0-9A-Fa-f]{%d}" % hex_digits, body[i + 1:i + 1 + hex_digits] or "x"):
             code = int(body[i + 1:i + 1 + hex_digits], 16)
+            if hex_digits == 4 and 0xD800 <= code < 0xE000:
+                # a STRING is UTF-8 text: half of a UTF-16 pair has no UTF-8 form
+                raise LiteralError(f"'${body[i + 1:i + 5]}' is half of a UTF-16 surrogate pair, which a "
+                                   "STRING cannot hold (write the character itself)")
             out += bytes([code]) if hex_digits == 2 else chr(code).encode("utf-8")
             i += 1 + hex_digits
         else:
@@ -58,6 +62,43 @@ def decode_string(token_text: str, settings: SysmacSettings) -> tuple[bytes, lis
         # an Omron STRING ends at its first NUL
         value = value[: value.index(b"\x00")]
     return value, warnings
+
+
+def decode_wstring(token_text: str, settings: SysmacSettings) -> str:
+    """Decode a double-quoted WSTRING literal (IEC 61131-3 ed. 3, 6.3.3 table 7) to its UTF-16
+    code units, one Python character each (a character outside the BMP becomes two surrogates);
+    `$hhhh` is one code unit (4 hex digits), `$"` a quote. Raises LiteralError."""
+    body = token_text[1:-1]
+    out: list[str] = []
+    i = 0
+    while i < len(body):
+        ch = body[i]
+        if ch != "$":
+            if ord(ch) >= 0x10000:
+                code = ord(ch) - 0x10000
+                out += [chr(0xD800 | code >> 10), chr(0xDC00 | code & 0x3FF)]
+            else:
+                out.append(ch)
+            i += 1
+            continue
+        nxt = body[i + 1] if i + 1 < len(body) else ""
+        if nxt.upper() in _ESCAPES:
+            out.append(_ESCAPES[nxt.upper()].decode("ascii"))
+            i += 2
+        elif nxt.upper() == "N":
+            out.append("\n" if settings.dollar_n is DollarN.LF else "\r\n")
+            i += 2
+        elif re.fullmatch(r"[0-9A-Fa-f]{4}", body[i + 1:i + 5] or "x"):
+            out.append(chr(int(body[i + 1:i + 5], 16)))
+            i += 5
+        else:
+            if settings.invalid_dollar_escape is InvalidDollarEscape.ERROR:
+                raise LiteralError(f"invalid escape '${nxt}' in WSTRING literal "
+                                   "(valid: $$ $\" $' $L $N $P $R $T $hhhh)")
+            out.append("$")
+            i += 1
+    value = "".join(out)
+    return value.split("\x00", 1)[0]   # as a STRING, a WSTRING ends at its first NUL
 
 
 def decode_int(text: str) -> int:

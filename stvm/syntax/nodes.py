@@ -364,6 +364,12 @@ class StructDecl(Node):
 
 
 @dataclass(frozen=True, slots=True)
+class UnionDecl(StructDecl):
+    """CODESYS `UNION … END_UNION`: members that overlay the same bytes. A StructDecl, so every
+    pass that looks at a struct's members (containment, nesting) sees a union's too."""
+
+
+@dataclass(frozen=True, slots=True)
 class EnumDecl(Node):
     members: tuple[tuple[str, int | None, Span], ...]
     base: str | None

@@ -22,7 +22,7 @@ from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput
 
 from stvm.diagnostics import Diagnostic
 from stvm.folders import content_name, private_file
-from stvm.settings import DEFAULT_SETTINGS, DoubleQuoteStrings, SysmacSettings
+from stvm.settings import DEFAULT_SETTINGS, Dialect, DoubleQuoteStrings, SysmacSettings
 from stvm.source import read_source
 from stvm.syntax import nodes as n
 from stvm.syntax import lalr
@@ -60,7 +60,7 @@ def grammar_text() -> str:
 
 
 from stvm.syntax.literals import (LiteralError, decode_date, decode_dt, decode_int, decode_string,  # noqa: F401
-                                  decode_time, decode_tod)
+                                  decode_time, decode_tod, decode_wstring)
 
 
 # ---- parse tree → nodes ------------------------------------------------------------------------
@@ -253,6 +253,9 @@ class _ToNodes:
 
     def struct_spec(self, meta, items):
         return n.StructDecl(tuple(items), self._s(meta))
+
+    def union_spec(self, meta, items):
+        return n.UnionDecl(tuple(items), self._s(meta))
 
     def field_decl(self, meta, items):
         return n.VarDecl(items[0], items[1], items[2], self._s(meta))
@@ -592,6 +595,8 @@ class _ToNodes:
     def string_literal(self, meta, items):
         text = str(items[0])
         span = self._s(meta)
+        if text.startswith('"') and self.settings.dialect is not Dialect.SYSMAC:
+            return self._wstring_literal(text, span)
         try:
             value, _ = decode_string(text, self.settings)
         except LiteralError as exc:
@@ -605,6 +610,16 @@ class _ToNodes:
                 self.diagnostics.append(Diagnostic.warning(
                     "double-quoted string literal accepted as STRING (Sysmac `double_quote_strings`)", span))
         return n.StringLiteral(value, double, span)
+
+    def _wstring_literal(self, text: str, span) -> n.StringLiteral:
+        """IEC: double-quoted text is a WSTRING literal; its value is a `str` of UTF-16 code units
+        (Sysmac, which has no WSTRING, takes it as a STRING: `double_quote_strings`)."""
+        try:
+            value = decode_wstring(text, self.settings)
+        except LiteralError as exc:
+            self._error(str(exc), span)
+            value = ""
+        return n.StringLiteral(value, True, span)
 
 
 def _collect(file: str, items: list, namespace: tuple[str, ...], out: dict[str, list]) -> None:

@@ -56,6 +56,8 @@ class Signal:
 
 
 def type_text(ty: t.Type) -> str:
+    if t.is_wide(ty):
+        return ty.name   # WSTRING, WSTRING[n]
     if isinstance(ty, t.StringType):
         return f"STRING[{ty.size}]" if ty.size != 1986 else "STRING"
     if isinstance(ty, t.EnumType):

@@ -42,7 +42,8 @@ def test_en_eno_semantics():
 @pytest.mark.parametrize("line, message", [
     ("b := Twice(EN := 5, x := 1);", "cannot assign DINT to BOOL"),
     ("b := Twice(x := 1, ENO => b);", "ENO is BOOL; cannot bind it to INT"),
-    ("b := 1 + Twice(EN := c, x := 1);", "EN/ENO need a call that is a statement"),
+    ("b := 1 + Twice(EN := 1.5, x := 1);", "cannot assign LREAL to BOOL"),
+    ("b := 1 + Twice(x := 1, ENO => b);", "ENO is BOOL; cannot bind it to INT"),
     ("b := Twice(EN := c, 1);", "mix of formal"),
     ("f(EN := c, ENO => 5);", "syntax error"),
 ])
@@ -75,3 +76,36 @@ o(EN := FALSE, ENO => e);
 END_PROGRAM
 """, prints=["Main.o.seen", "Main.e"])
     assert values == {"Main.o.seen": False, "Main.e": True}
+
+
+NESTED = """
+FUNCTION Twice : INT
+VAR_INPUT x : INT; END_VAR
+Twice := 2 * x;
+END_FUNCTION
+FUNCTION_BLOCK Counter
+VAR_OUTPUT n : INT; END_VAR
+METHOD Next : INT
+n := n + 1; Next := n;
+END_METHOD
+END_FUNCTION_BLOCK
+PROGRAM Main
+VAR c : BOOL; b, b2, d, k, i : INT; ok1, ok2, ok3, err, ok4, ok5, ok6, short : BOOL := TRUE; f : Counter;
+    s : STRING := 'keep'; arr : ARRAY[0..1] OF BOOL; END_VAR
+b := 1 + Twice(EN := c, x := 5, ENO => ok1);           (* EN FALSE: the initial value, 0 *)
+b2 := 1 + Twice(EN := NOT c, x := 5, ENO => ok2);
+IF Twice(EN := TRUE, x := 2, ENO => ok3) = 4 THEN d := 1; END_IF;
+k := INT#10 + MUX(EN := c, K := 1, IN0 := k, IN1 := b, NOT ENO => err);
+i := f.Next(EN := c, ENO => ok4) + f.Next(EN := TRUE, ENO => arr[1]);
+short := c AND Twice(EN := TRUE, x := 1, ENO => ok6) = 2;   (* not evaluated: ENO untouched *)
+s := CONCAT(s, MID(EN := TRUE, IN := 'abc', L := 1, P := 9, ENO => ok5));   (* instruction error *)
+END_PROGRAM
+"""
+
+
+def test_en_eno_inside_larger_expressions():
+    names = ["b", "ok1", "b2", "ok2", "d", "ok3", "k", "err", "i", "ok4", "arr[1]", "f.n", "ok6", "s", "ok5"]
+    values = run_st(NESTED, prints=[f"Main.{v}" for v in names])
+    assert values == {"Main.b": 1, "Main.ok1": False, "Main.b2": 11, "Main.ok2": True, "Main.d": 1,
+                      "Main.ok3": True, "Main.k": 10, "Main.err": True, "Main.i": 1, "Main.ok4": False,
+                      "Main.arr[1]": True, "Main.f.n": 1, "Main.ok6": True, "Main.s": b"keep", "Main.ok5": False}

@@ -178,8 +178,8 @@ def test_every_declared_conversion_is_registered():
     for name, _, _ in conversion_functions():
         assert name in NATIVE_FUNCTIONS, name
     # numeric pairs, X <-> STRING, DT -> DATE/TOD and LDT -> LDATE/LTOD, each time type <-> its
-    # long form, and the 8 time types <-> 14 numbers (not BOOL)
-    assert len(conversion_pairs()) == 15 * 14 + 23 * 2 + 4 + 4 * 2 + 8 * 14 * 2
+    # long form, the 8 time types <-> 14 numbers (not BOOL), STRING <-> WSTRING and X <-> WSTRING
+    assert len(conversion_pairs()) == 15 * 14 + 23 * 2 + 4 + 4 * 2 + 8 * 14 * 2 + 2 + 23 * 2
 
 
 def test_time_text_round_trip():

@@ -149,3 +149,22 @@ def test_string_literal_node():
 def test_bool_literals(text, value):
     node = lit(text)
     assert isinstance(node, n.BoolLiteral) and node.value is value
+
+
+@pytest.mark.parametrize("dialect", ["iec", "codesys", "twincat"])
+def test_double_quoted_text_is_a_wstring_literal_outside_sysmac(dialect):
+    settings = SysmacSettings().with_table({"dialect": dialect}, "test")
+    node, diags = parse_expression('"Grü$00DF$"e😀"', settings=settings)
+    assert isinstance(node, n.StringLiteral) and node.double_quoted and not diags
+    assert node.value == 'Grüß"e\ud83d\ude00'   # UTF-16 code units, one Python character each
+
+
+def test_a_wstring_escape_needs_four_hex_digits():
+    settings = SysmacSettings().with_table({"dialect": "iec"}, "test")
+    _, diags = parse_expression('"$41"', settings=settings)
+    assert [d for d in diags if d.is_error and "invalid escape '$4' in WSTRING literal" in d.message]
+
+
+def test_a_surrogate_escape_in_a_sysmac_string_is_a_diagnostic():
+    with pytest.raises(LiteralError, match="half of a UTF-16 surrogate pair"):
+        decode_string('"$D800"', SysmacSettings())
