@@ -206,8 +206,8 @@ def test_write_of_the_wrong_type_is_refused(vm, path, value, message):
 
 
 def test_parse_path_tokens():
-    assert parse_path("Main.fb.x[3]") == [("name", "Main"), ("name", "fb"), ("name", "x"), ("index", "3")]
-    assert parse_path("r^") == [("name", "r"), ("deref", "^")]
+    assert parse_path("Main.fb.x[3]") == (("name", "Main"), ("name", "fb"), ("name", "x"), ("index", "3"))
+    assert parse_path("r^") == (("name", "r"), ("deref", "^"))
     with pytest.raises(PathError):
         parse_path("")
 
