@@ -546,11 +546,16 @@ def _native_modules(lowered) -> tuple[str, ...]:
     (what a cached load imports; a superset: a name found in the source counts as called). A
     native FB's class is always in the source: its module is imported when an instance is made."""
     from stvm.stdlib.registry import NATIVE_FUNCTIONS   # lazy: start-up
-    named = set(re.findall(r"\bN[0-9]+_\w+", lowered.source))
+    named = set(_NATIVE_NAME.findall(lowered.source))
     modules = {NATIVE_FUNCTIONS[k].impl.__module__ for py, k in lowered.natives.items()
                if py in named and k in NATIVE_FUNCTIONS}
     return tuple(sorted(modules))
 
+
+# a generated native's name (`\bN[0-9]+_\w+`), the word boundary tested behind the `N`: a
+# pattern that starts with a literal is searched for by its first letter, ~50x faster over the
+# megabytes of a large program's module
+_NATIVE_NAME = re.compile(r"N(?<=\bN)[0-9]+_\w+")
 
 CACHE_MAX_ENTRIES = 200
 UNIT_CACHE_MAX_ENTRIES = 2000   # parsed files (a few KiB to a few MiB each)
