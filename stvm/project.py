@@ -531,8 +531,9 @@ def load(paths: Sequence[str | Path], settings: SysmacSettings | None = None, us
                       _native_modules(lowered))
     if use_cache:
         try:
-            payload = pickle.dumps((analysis.model, lowered, warnings, marshal.dumps(code), sources,
-                                    project.native_modules), protocol=pickle.HIGHEST_PROTOCOL)
+            with _collector_paused():   # pickling allocates (its memo) but frees nothing cyclic
+                payload = pickle.dumps((analysis.model, lowered, warnings, marshal.dumps(code), sources,
+                                        project.native_modules), protocol=pickle.HIGHEST_PROTOCOL)
         except (pickle.PicklingError, RecursionError, TypeError):
             payload = None
         if payload is not None:
