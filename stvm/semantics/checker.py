@@ -530,6 +530,7 @@ class Checker:
         for key, info in list(self.pous.items()):
             if info.kind == "FUNCTION_BLOCK":
                 inherit(key)
+        del inherit   # a closure calling itself is a cycle: it would keep the checker alive
         for key, info in self.pous.items():
             for method in info.methods.values():
                 if method.name.lower() in info.variables and info.inherited:
@@ -1235,6 +1236,7 @@ class Checker:
         for key, decl in self.index.type_decls.items():
             if isinstance(decl.body, n.StructDecl):
                 visit(key, [], [])
+        del visit   # a closure calling itself is a cycle: it would keep the checker alive
 
     def check_nesting_depth(self) -> bool:
         """FB instances nested in FB instances (or structs), and POUs calling POUs, at most
@@ -1339,6 +1341,7 @@ class Checker:
 
         for key in graph:
             visit(key, [])
+        del visit   # a closure calling itself is a cycle: it would keep the checker alive
 
     def check_configuration(self) -> tuple[list[TaskInfo], list[str]]:
         configs = [c for u in self.units for c in u.configurations]
