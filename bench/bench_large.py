@@ -108,7 +108,12 @@ PHASES = textwrap.dedent("""
         del unit
     model, handed_over = analysis.model, [analysis]
     del analysis
-    lowered, code = P._lower_and_compile(handed_over, S, texts, dict(texts)); mark("lower + compile")
+    from stvm.lower import lower_project
+    from stvm.lower.product import compile_module
+    from stvm.runtime.vm import GENERATED_FILENAME
+    with P._collector_paused():   # as P._lower_and_compile, in two steps
+        lowered = lower_project(handed_over.pop(), S); mark("lower")
+        code = compile_module(lowered.source, GENERATED_FILENAME); mark("compile (Python's compile())")
     project = P.Project(model, lowered, code, dict(texts), S, [], False, {}, None, P._native_modules(lowered))
     mark("project (native modules)")
     if "--cache" in sys.argv:
