@@ -45,8 +45,9 @@ def test_load_frees_the_checker_and_the_syntax_tree_without_the_collector():
         before = live(n.Binary)
         project = stvm.load([path], use_cache=False)
         # refcounting alone freed them: nothing cyclic kept the checker or the tree alive
-        assert live(Checker) == 0
-        assert live(n.Binary) == before
+        assert live(Checker) == 0, ("a Checker outlived its load: a cycle holds it (a nested function "
+                                    "that calls itself needs `del name` after its last use)")
+        assert live(n.Binary) == before, "syntax nodes outlived their load: a cycle holds them"
         project.start(scan="10ms").run(cycles=2)
     finally:
         if was_enabled:
