@@ -118,7 +118,9 @@ class SignedCache:
 
     def _tag(self, name: str, payload: bytes) -> bytes:
         assert self._key is not None
-        return hmac.new(self._key, name.encode() + b"\0" + payload, hashlib.sha256).digest()
+        mac = hmac.new(self._key, name.encode() + b"\0", hashlib.sha256)
+        mac.update(payload)   # not joined to the name: no copy of a payload of tens of MB
+        return mac.digest()
 
     def path(self, name: str) -> Path:
         return self.folder / name
@@ -150,7 +152,8 @@ class SignedCache:
             tmp = self.path(f"{name}.tmp{os.getpid()}")
             fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o600)
             with os.fdopen(fd, "wb") as fh:
-                fh.write(self._tag(name, payload) + payload)
+                fh.write(self._tag(name, payload))
+                fh.write(payload)
             tmp.replace(self.path(name))
         except OSError:
             pass

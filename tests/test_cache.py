@@ -213,3 +213,14 @@ def test_forged_check_and_unit_entries_are_never_unpickled(private_cache, tmp_pa
     project_module._CACHES.clear()
     analysis, diags, _ = project_module.check([source], generate=True)
     assert not marker.exists() and analysis is not None and not diags
+
+
+def test_native_name_pattern_matches_whole_generated_names_only():
+    """project._NATIVE_NAME (a cached load imports the modules of the natives it finds) finds
+    what `\\bN[0-9]+_\\w+` finds, on names inside words, at the start and glued to digits."""
+    import re
+
+    from stvm.project import _NATIVE_NAME
+    text = "N1_abs(x) + xN2_no + _N3_no + (N44_max_2) N5_ 9N6_no N7_x\nN8_y.N9_z"
+    assert _NATIVE_NAME.findall(text) == re.findall(r"\bN[0-9]+_\w+", text)
+    assert _NATIVE_NAME.findall(text) == ["N1_abs", "N44_max_2", "N7_x", "N8_y", "N9_z"]

@@ -183,10 +183,14 @@ class StatementGenerator:
         end = self.new_tmp("end")
         self.w.line(f"{start} = {self.expr_as(s.start, var_type)}")
         self.w.line(f"{end} = {self.expr_as(s.end, var_type)}")
+        # constant bounds (in the variable's range, so expr_as left them as they are) decide the
+        # guards below while lowering: only the code that can run is emitted
+        start_value, end_value = (self.const_in(s.start, var_type), self.const_in(s.end, var_type))
         limit = var_type.hi - step if step > 0 else var_type.lo - step
         # the loop variable would wrap before passing `end`: an endless loop on the controller
         guard = f"{end} > {limit}" if step > 0 else f"{end} < {limit}"
-        self.w.line(f"if {guard}: _endless_for({end}, {step}, {var_type.name!r})")
+        if end_value is None or (end_value > limit if step > 0 else end_value < limit):
+            self.w.line(f"if {guard}: _endless_for({end}, {step}, {var_type.name!r})")
         stop = f"{end} + 1" if step > 0 else f"{end} - 1"
         rng = self.new_tmp("range")
         self.w.line(f"{rng} = range({start}, {stop}, {step})")
@@ -199,6 +203,15 @@ class StatementGenerator:
             # for the whole range, run a copy of the loop without per-access checks; otherwise
             # the checked copy faults at exactly the iteration the controller would.
             first, last = (start, end) if step > 0 else (end, start)
+            if start_value is not None and end_value is not None:
+                # the same test on the constants: one copy of the loop, the one that would run
+                first_value, last_value = (start_value, end_value) if step > 0 else (end_value, start_value)
+                fits = all(first_value + c >= lo and last_value + c <= hi for c, lo, hi in accesses)
+                if fits:
+                    self.unchecked.add(key)
+                self.range_loop(s, var, key, rng, start, step, start_const, var_type)
+                self.unchecked.discard(key)
+                return
             conds = [f"{first} + {c} >= {lo} and {last} + {c} <= {hi}" for c, lo, hi in accesses]
             self.w.line(f"if {' and '.join(conds)}:")
             self.w.indent += 1
@@ -212,6 +225,13 @@ class StatementGenerator:
             self.w.indent -= 1
         else:
             self.range_loop(s, var, key, rng, start, step, start_const, var_type)
+
+    def const_in(self, expr: n.Expr, var_type: t.IntType) -> int | None:
+        """The constant value of `expr` when it has one inside `var_type`'s range, else None."""
+        value = self.facts.consts.get(id(expr))
+        if isinstance(value, int) and not isinstance(value, bool) and var_type.lo <= value <= var_type.hi:
+            return value
+        return None
 
     def range_loop(self, s: n.For, var: str, key: str, rng: str, start: str, step: int,
                    start_const: object, var_type: t.IntType) -> None:

@@ -62,6 +62,7 @@ def hot_uses(body) -> dict[str, float]:
                     visit(value, weight)
 
     visit(tuple(body), 1.0)
+    del visit   # the closure refers to itself: break the cycle (no garbage for the collector)
     return counts
 
 

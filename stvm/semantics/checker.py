@@ -572,6 +572,7 @@ class Checker:
         for key, info in list(self.pous.items()):
             if info.kind == "FUNCTION_BLOCK":
                 inherit(key)
+        del inherit   # a closure calling itself is a cycle: it would keep the checker alive
         for key, info in self.pous.items():
             for method in info.methods.values():
                 if method.name.lower() in info.variables and info.inherited:
@@ -1382,6 +1383,7 @@ class Checker:
         for key, decl in self.index.type_decls.items():
             if isinstance(decl.body, n.StructDecl):
                 visit(key, [], [])
+        del visit   # a closure calling itself is a cycle: it would keep the checker alive
 
     def check_nesting_depth(self) -> bool:
         """FB instances nested in FB instances (or structs), and POUs calling POUs, at most
@@ -1486,6 +1488,7 @@ class Checker:
 
         for key in graph:
             visit(key, [])
+        del visit   # a closure calling itself is a cycle: it would keep the checker alive
 
     def check_method_recursion(self) -> None:
         """A METHOD (or property accessor) calling itself, directly or through other methods, by

@@ -478,7 +478,9 @@ class _ToNodes:
                 left = n.Binary(str(op.type), left, right, span)
             return left
 
-        return climb(0)
+        tree = climb(0)
+        del climb   # the closure refers to itself: left alone, each expression would be cyclic garbage
+        return tree
 
     def unary(self, meta, items):
         op, operand = items

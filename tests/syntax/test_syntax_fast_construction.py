@@ -109,3 +109,16 @@ def test_walk_yields_every_node_and_name_uses_weights_loops():
     assert all(dataclasses.is_dataclass(x) for x in walk(fb.body))
     # y, x, a once each outside the loop; inside FOR (bounds included) each use counts 10
     assert name_uses(fb.body) == {"y": 1, "a": 11, "x": 1, "k": 30}
+
+
+def test_fast_nodes_pickle_and_copy_as_constructor_arguments():
+    span = Span("a.st", 1, 2, 3, 4)
+    call = n.Call(n.Name(("f",), False, span), (n.Argument("positional", None, n.IntLiteral(7, span), span),), span)
+    assert n.Call.__reduce__.__qualname__ == "Call.__reduce__"
+    cls, args = call.__reduce__()
+    assert cls is n.Call and cls(*args) == call
+    for back in (pickle.loads(pickle.dumps(call, protocol=pickle.HIGHEST_PROTOCOL)), copy.deepcopy(call),
+                 copy.copy(call)):
+        assert back == call and back.span == span and back.args[0].value.span == span
+    unit = parse_text("PROGRAM P\nVAR x : INT; END_VAR\nx := x + 1;\nEND_PROGRAM\n", "p.st")[0]
+    assert pickle.loads(pickle.dumps(unit, protocol=pickle.HIGHEST_PROTOCOL)) == unit
