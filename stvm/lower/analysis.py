@@ -43,6 +43,12 @@ class RangeFor:
     start: int | None                          # the start, when a constant
     var_type: t.IntType
     hoisted: tuple[tuple[int, int, int], ...]  # (offset, lo, hi) of the accesses checked once
+    # constant start and end inside the variable's type, else None: the endless-loop guard and the
+    # hoisted bounds test are then decided while lowering, and only the code that can run is written
+    bounds: tuple[int, int] | None = None
+    # with `bounds` and `hoisted`: whether every hoisted access stays inside its array (the one
+    # copy of the loop written is the unchecked one); None when the test runs at run time
+    fits: bool | None = None
 
 
 @dataclass(frozen=True)
@@ -315,7 +321,20 @@ class _Planner:
         key = s.variable.parts[0].lower()
         start = self.facts.consts.get(id(s.start))
         hoisted = tuple(sorted(self.hoistable_accesses(s.body, key))) if self.options.hoist_bounds else ()
-        return RangeFor(key, step, start if isinstance(start, int) else None, var_type, hoisted)
+        first, last = self.const_in(s.start, var_type), self.const_in(s.end, var_type)
+        bounds = (first, last) if first is not None and last is not None else None
+        fits = None
+        if bounds is not None and hoisted:
+            low, high = bounds if step > 0 else bounds[::-1]
+            fits = all(low + c >= lo and high + c <= hi for c, lo, hi in hoisted)
+        return RangeFor(key, step, start if isinstance(start, int) else None, var_type, hoisted, bounds, fits)
+
+    def const_in(self, expr: n.Expr, var_type: t.IntType) -> int | None:
+        """The constant value of `expr` when it has one inside `var_type`'s range, else None."""
+        value = self.facts.consts.get(id(expr))
+        if isinstance(value, int) and not isinstance(value, bool) and var_type.lo <= value <= var_type.hi:
+            return value
+        return None
 
     def range_for_ok(self, s: n.For, step: object, cached: Mapping[str, Variable]) -> bool:
         """`range_for`: can this FOR become a Python `for … in range()` (same semantics, much

@@ -183,9 +183,10 @@ class StatementGenerator:
         end = self.new_tmp("end")
         self.w.line(f"{start} = {self.expr_as(s.start, var_type)}")
         self.w.line(f"{end} = {self.expr_as(s.end, var_type)}")
+        plan = self.plan.range_fors[s.nid]
         # constant bounds (in the variable's range, so expr_as left them as they are) decide the
         # guards below while lowering: only the code that can run is emitted
-        start_value, end_value = (self.const_in(s.start, var_type), self.const_in(s.end, var_type))
+        end_value = plan.bounds[1] if plan.bounds is not None else None
         limit = var_type.hi - step if step > 0 else var_type.lo - step
         # the loop variable would wrap before passing `end`: an endless loop on the controller
         guard = f"{end} > {limit}" if step > 0 else f"{end} < {limit}"
@@ -195,7 +196,6 @@ class StatementGenerator:
         rng = self.new_tmp("range")
         self.w.line(f"{rng} = range({start}, {stop}, {step})")
         self.assigned.add(key)
-        plan = self.plan.range_fors[s.nid]
         start_const = plan.start
         accesses = plan.hoisted
         if accesses:
@@ -203,11 +203,9 @@ class StatementGenerator:
             # for the whole range, run a copy of the loop without per-access checks; otherwise
             # the checked copy faults at exactly the iteration the controller would.
             first, last = (start, end) if step > 0 else (end, start)
-            if start_value is not None and end_value is not None:
-                # the same test on the constants: one copy of the loop, the one that would run
-                first_value, last_value = (start_value, end_value) if step > 0 else (end_value, start_value)
-                fits = all(first_value + c >= lo and last_value + c <= hi for c, lo, hi in accesses)
-                if fits:
+            if plan.fits is not None:
+                # the analysis ran the test on the constant bounds: one copy, the one that would run
+                if plan.fits:
                     self.unchecked.add(key)
                 self.range_loop(s, var, key, rng, start, step, start_const, var_type)
                 self.unchecked.discard(key)
@@ -225,13 +223,6 @@ class StatementGenerator:
             self.w.indent -= 1
         else:
             self.range_loop(s, var, key, rng, start, step, start_const, var_type)
-
-    def const_in(self, expr: n.Expr, var_type: t.IntType) -> int | None:
-        """The constant value of `expr` when it has one inside `var_type`'s range, else None."""
-        value = self.facts.consts.get(id(expr))
-        if isinstance(value, int) and not isinstance(value, bool) and var_type.lo <= value <= var_type.hi:
-            return value
-        return None
 
     def range_loop(self, s: n.For, var: str, key: str, rng: str, start: str, step: int,
                    start_const: object, var_type: t.IntType) -> None:

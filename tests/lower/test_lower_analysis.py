@@ -25,6 +25,9 @@ VAR i : INT; data : ARRAY[0..9] OF INT; END_VAR
 FOR i := 0 TO 8 DO
   data[i + 1] := data[i] + x;
 END_FOR;
+FOR i := 0 TO x DO
+  data[i] := 0;
+END_FOR;
 IF x > 0 THEN
   IF x > 1 THEN
     total := total + ABS(x);
@@ -55,11 +58,22 @@ def nodes_of(analysis, key: str, kind) -> list:
     return [x for x in walk(analysis.pou_nodes[key].body) if isinstance(x, kind)]
 
 
+def test_constant_bounds_decide_the_hoisted_test_while_lowering():
+    analysis, settings = analysed(SOURCE)
+    lowerer = Lowerer(analysis, settings, DEFAULT_OPTIONS)
+    lowerer.lower()
+    constant, variable = sorted(nodes_of(analysis, "acc", n.For), key=lambda loop: loop.span.line)
+    planned = lowerer.plan.range_fors
+    assert planned[constant.nid].bounds == (0, 8) and planned[constant.nid].fits is True
+    assert planned[variable.nid].bounds is None and planned[variable.nid].fits is None
+    assert planned[variable.nid].hoisted   # tested at run time: both copies are written
+
+
 def test_the_plan_holds_each_optimisation_decision_by_node_id():
     analysis, settings = analysed(SOURCE)
     plan = plan_project(analysis, settings, DEFAULT_OPTIONS)
     acc, main = plan.pous["acc"], plan.pous["main"]
-    loop = nodes_of(analysis, "acc", n.For)[0]
+    loop = min(nodes_of(analysis, "acc", n.For), key=lambda loop: loop.span.line)
     decision = plan.range_fors[loop.nid]
     assert (decision.key, decision.step, decision.start, decision.var_type.name) == ("i", 1, 0, "INT")
     assert decision.hoisted == ((0, 0, 9), (1, 0, 9))   # data[i] and data[i + 1], checked once
@@ -106,10 +120,11 @@ def test_statement_flags_match_a_walk_of_each_statement():
 @pytest.mark.parametrize("options", [DEFAULT_OPTIONS, LowerOptions.none()], ids=["default", "none"])
 def test_the_generators_read_the_plan(options):
     """What the plan decides is what the code shows: one Python `range` loop per planned FOR (two
-    when its bounds checks are hoisted: the unchecked and the checked copy), one direct native
-    call per planned one."""
+    when its bounds checks are hoisted and tested at run time: the unchecked and the checked
+    copy; one when constant bounds decided the test), one direct native call per planned one."""
     analysis, settings = analysed(SOURCE)
     lowerer = Lowerer(analysis, settings, options)
     source = lowerer.lower().source
-    assert source.count(" in _range") == sum(1 + bool(d.hoisted) for d in lowerer.plan.range_fors.values())
+    assert source.count(" in _range") == sum(1 + (bool(d.hoisted) and d.fits is None)
+                                                  for d in lowerer.plan.range_fors.values())
     assert source.count("._impl.call(v_") == len(lowerer.plan.direct_native)
