@@ -160,7 +160,7 @@ class _ScopeLowerer(Lowerer):
     written through their reference objects."""
 
     def fb_member(self, e: n.Member) -> Variable | None:
-        base_type = self.facts.types.get(id(e.base))
+        base_type = self.facts.types.get(e.base.nid)
         if isinstance(base_type, t.FBType):
             pou = self.model.pous.get(base_type.qualname.lower())
             return pou.pin(e.name) if pou is not None else None
@@ -267,7 +267,7 @@ class ScopeCompiler:
                 checker.stmt_Assign(statement)
             finally:
                 self._finish(saved_facts, saved_diags, f"{target_text} := {value_text}")
-            ty = facts.types.get(id(target))
+            ty = facts.types.get(target.nid)
             if ty is None:
                 raise DebugError(f"{target_text.strip()!r} cannot be assigned")
             value_source = lowerer.expr_as(value, ty)
@@ -277,7 +277,7 @@ class ScopeCompiler:
             root = target
             while isinstance(root, (n.Member, n.Index, n.BitAccess)):
                 root = root.base
-            ref = facts.names.get(id(root))
+            ref = facts.names.get(root.nid)
             local = ref is not None and ref.kind == "var"
             canonical = unparse(target, facts)
         return CompiledStore(target_text.strip(), _compile(value_source, "eval"), _compile(store_source, "exec"),
@@ -286,11 +286,11 @@ class ScopeCompiler:
     # ---- running
     def namespace(self, vm, scope: Scope) -> dict[str, Any]:
         """Locals for evaluating compiled text in `scope` (globals are the VM's module namespace)."""
-        view = self._views.get(id(vm))
+        view = self._views.get(id(vm))   # not a node: one view per VM object
         if view is None or view[0] is not vm:
             # program instances never change during a run: one view per VM
             programs = {var_attr(name): inst for name, inst, _ in vm.instances.values()}
-            view = self._views[id(vm)] = (vm, GlobalsView(vm.globals, programs))
+            view = self._views[id(vm)] = (vm, GlobalsView(vm.globals, programs))   # not a node
         return {"self": scope.instance, "_f": scope.frame, "_r": scope.result, "_T": self.types, "_G": view[1]}
 
     def evaluate(self, vm, scope: Scope, compiled: Compiled) -> Any:
@@ -345,7 +345,7 @@ def unparse(e: n.Expr, facts: Facts | None = None) -> str:
     if isinstance(e, n.Index):
         parts = []
         for ix in e.indices:
-            value = facts.consts.get(id(ix)) if facts is not None else None
+            value = facts.consts.get(ix.nid) if facts is not None else None
             parts.append(str(value) if isinstance(value, int) else unparse(ix, facts))
         return f"{unparse(e.base, facts)}[{','.join(parts)}]"
     if isinstance(e, n.IntLiteral):

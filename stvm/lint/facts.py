@@ -30,27 +30,27 @@ class FactsView:
         self.place_keys: dict[int, str | None] = {}   # memo of place_key, per expression
 
     def type_of(self, expr: n.Expr) -> t.Type | None:
-        return self._facts.types.get(id(expr))
+        return self._facts.types.get(expr.nid)
 
     def name_ref(self, expr: n.Expr):
         """The checker's NameRef (kind 'var', 'global', 'enum', 'const', 'pou', 'result') or None."""
-        return self._facts.names.get(id(expr))
+        return self._facts.names.get(expr.nid)
 
     def call(self, call: n.Expr):
         """The checker's CallInfo of a call expression (pou, is_fb, instance, inputs, outputs, extra)."""
-        return self._facts.calls.get(id(call))
+        return self._facts.calls.get(call.nid)
 
     def const(self, expr: n.Expr) -> object:
         """The compile-time value of a constant expression, else NOT_CONST."""
-        return self._facts.consts.get(id(expr), NOT_CONST)
+        return self._facts.consts.get(expr.nid, NOT_CONST)
 
     def operand_type(self, binary: n.Binary) -> t.Type | None:
         """The type a comparison compares in."""
-        return self._facts.operand_types.get(id(binary))
+        return self._facts.operand_types.get(binary.nid)
 
     def is_array_from_element(self, expr: n.Expr) -> bool:
         """`Data[0]` passed where an array is expected (Sysmac: the array from that element on)."""
-        return id(expr) in self._facts.array_from_element
+        return expr.nid in self._facts.array_from_element
 
     def pou(self, qualname: str) -> POUInfo | None:
         return self.model.pous.get(qualname.lower())
@@ -157,7 +157,7 @@ def place_key(expr: n.Expr, facts: FactsView) -> str | None:
     """A canonical name for the storage an expression denotes ('x', 'cbt.connected',
     'buf[0]'), or None when it is not a fixed place (`a[i]`, a call result, a bit)."""
     memo = facts.place_keys
-    key = id(expr)
+    key = expr.nid
     if key in memo:
         return memo[key]
     value = memo[key] = _place_key(expr, facts)

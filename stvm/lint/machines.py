@@ -92,7 +92,7 @@ def _step_machines(ctx: PouContext) -> list[Machine]:
     by_stmt: dict[int, list] = {}
     for node in ctx.cfg.nodes:
         if node.stmt is not None:
-            by_stmt.setdefault(id(node.stmt), []).append(node)
+            by_stmt.setdefault(node.stmt.nid, []).append(node)
     out = []
     for stmt in _statements(ctx.node.body):
         if not isinstance(stmt, n.Case) or not isinstance(stmt.selector, n.Name):
@@ -100,12 +100,12 @@ def _step_machines(ctx: PouContext) -> list[Machine]:
         var = ctx.facts.variable_of(stmt.selector)
         if var is None or var.section not in (LOCAL, OUTPUT) or not isinstance(var.type, (t.IntType, t.EnumType)):
             continue
-        case_node = next(node for node in by_stmt[id(stmt)] if node.kind == "case")
+        case_node = next(node for node in by_stmt[stmt.nid] if node.kind == "case")
         machine = Machine(var, stmt, case_node, set())
         for labels, body in stmt.elements:
             values = _label_values(ctx, labels)
             for inner in _statements(body):
-                for node in by_stmt.get(id(inner), []):
+                for node in by_stmt.get(inner.nid, []):
                     machine.inside.add(node.index)
                     machine.branch_of.setdefault(node.index, values)
                     if node.kind == "assign" and place_key(inner.target, ctx.facts) == var.key:

@@ -460,8 +460,8 @@ class RangeAnalysis:
         """Root variables that the loop of this head writes (its body, its own FOR step)."""
         cached = self._loop_writes.get(head.index)
         if cached is None:
-            inner = {id(s) for s in _statements_in(head.stmt)}
-            cached = {a.var.key for node in self.cfg.nodes if id(node.stmt) in inner
+            inner = {s.nid for s in _statements_in(head.stmt)}
+            cached = {a.var.key for node in self.cfg.nodes if node.stmt is not None and node.stmt.nid in inner
                       for a in node_accesses(node, self.facts) if a.kind != "read"}
             self._loop_writes[head.index] = cached
         return cached

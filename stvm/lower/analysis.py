@@ -13,8 +13,7 @@ decides *whether* something is done is a named function here that consults its `
 switch; the ones that only change *how* an expression is written (`ring_chain`,
 `no_wrap_in_range`, `inline_struct_assign`, `inline_input_copy`) stay with their generator.
 
-Semantic facts of the checker (`Analysis.facts`) are still keyed by `id(node)` and read that way;
-what this pass adds is keyed by `node.nid`.
+The checker's facts (`Analysis.facts`) and what this pass adds are both keyed by `node.nid`.
 """
 
 from __future__ import annotations
@@ -149,7 +148,7 @@ class _Planner:
             if decision is not None:
                 self.range_fors[s.nid] = decision
         for s in call_statements:
-            info = self.facts.calls.get(id(s.call))
+            info = self.facts.calls.get(s.call.nid)
             if info is not None and info.is_fb and info.oo != "super_body":
                 self.fb_call(s.call, info)
 
@@ -159,7 +158,7 @@ class _Planner:
         FUNCTION's or METHOD's outputs, an FB's variables its methods reach, REF/ADR targets."""
         referenced: set[str] = set()
         for call in calls:
-            info = self.facts.calls.get(id(call))
+            info = self.facts.calls.get(call.nid)
             if info is None:
                 continue
             for var, value in info.inputs:
@@ -278,7 +277,7 @@ class _Planner:
                 continue   # a Name holds no nodes
             if cls is call_cls:
                 calls.append(node)
-                info = facts_calls.get(id(node))
+                info = facts_calls.get(node.nid)
                 if info is not None and not info.is_fb and not info.oo:
                     _mark(open_statements, native)
             elif cls is index_cls:
@@ -313,13 +312,13 @@ class _Planner:
 
     # ---- range_for, hoist_bounds
     def range_for(self, s: n.For, cached: Mapping[str, Variable]) -> RangeFor | None:
-        var_type = self.facts.types[id(s.variable)]
-        step = self.facts.consts.get(id(s.step)) if s.step is not None else 1
+        var_type = self.facts.types[s.variable.nid]
+        step = self.facts.consts.get(s.step.nid) if s.step is not None else 1
         if not self.range_for_ok(s, step, cached):
             return None
         assert isinstance(var_type, t.IntType) and isinstance(step, int)
         key = s.variable.parts[0].lower()
-        start = self.facts.consts.get(id(s.start))
+        start = self.facts.consts.get(s.start.nid)
         hoisted = tuple(sorted(self.hoistable_accesses(s.body, key))) if self.options.hoist_bounds else ()
         first, last = self.const_in(s.start, var_type), self.const_in(s.end, var_type)
         bounds = (first, last) if first is not None and last is not None else None
@@ -331,7 +330,7 @@ class _Planner:
 
     def const_in(self, expr: n.Expr, var_type: t.IntType) -> int | None:
         """The constant value of `expr` when it has one inside `var_type`'s range, else None."""
-        value = self.facts.consts.get(id(expr))
+        value = self.facts.consts.get(expr.nid)
         if isinstance(value, int) and not isinstance(value, bool) and var_type.lo <= value <= var_type.hi:
             return value
         return None
@@ -349,7 +348,7 @@ class _Planner:
             return False
         if self.settings.for_end_eval is not ForEndEval.ONCE:
             return False
-        ref = self.facts.names.get(id(s.variable))
+        ref = self.facts.names.get(s.variable.nid)
         if ref is None or ref.kind != "var" or ref.variable is None or ref.variable.key not in cached:
             return False
         key = ref.variable.key
@@ -371,7 +370,7 @@ class _Planner:
         found: set[tuple[int, int, int]] = set()
         for node in walk(body):
             if isinstance(node, n.Index) and len(node.indices) == 1:
-                base_type = self.facts.types.get(id(node.base))
+                base_type = self.facts.types.get(node.base.nid)
                 if isinstance(base_type, t.ArrayType) and base_type.dims and len(base_type.dims) == 1:
                     c = loop_offset(self.facts, node.indices[0], key)
                     if c is not None:
@@ -424,9 +423,9 @@ class _Planner:
         """A plain variable of `pou` (its own instance's), or for a value also a literal or
         NOT/AND/OR/XOR of such: code that cannot call, index, fault or reach another object."""
         if isinstance(e, n.Name):
-            ref = self.facts.names.get(id(e))
+            ref = self.facts.names.get(e.nid)
             return ref is not None and ref.kind == "var" and ref.variable is not None \
-                and ref.variable.key in pou.variables and id(e) not in self.facts.auto_deref \
+                and ref.variable.key in pou.variables and e.nid not in self.facts.auto_deref \
                 and isinstance(ref.variable.type, t.BoolType)
         if target:
             return False
@@ -457,15 +456,15 @@ class _Planner:
         if not self.options.reuse_array_refs or not isinstance(var.type, t.ArrayType) or var.type.dims is not None \
                 or var.type.rank > 1:   # an ARRAY[*, *] gets an `_OpenArray`, not an `ArrayRef`
             return None
-        vtype = self.facts.types.get(id(value))
+        vtype = self.facts.types.get(value.nid)
         lo = 0
-        if id(value) in self.facts.array_from_element:
+        if value.nid in self.facts.array_from_element:
             assert isinstance(value, n.Index)
-            base_type = self.facts.types[id(value.base)]
+            base_type = self.facts.types[value.base.nid]
             if not isinstance(base_type, t.ArrayType) or base_type.dims is None or len(value.indices) != 1:
                 return None
             first, last = base_type.dims[0]
-            const = self.facts.consts.get(id(value.indices[0]))
+            const = self.facts.consts.get(value.indices[0].nid)
             if not isinstance(const, int) or isinstance(const, bool) or not first <= const <= last:
                 return None
             return ArrayRefReuse(value.base, const - first, lo)
@@ -495,8 +494,8 @@ def loop_offset(facts, ix: n.Expr, key: str) -> int | None:
         return 0
     if isinstance(ix, n.Binary) and ix.op in ("PLUS", "MINUS") and isinstance(ix.left, n.Name) \
             and len(ix.left.parts) == 1 and ix.left.parts[0].lower() == key:
-        c = facts.consts.get(id(ix.right))
-        if isinstance(c, int) and not isinstance(c, bool) and id(ix.right) in facts.untyped:
+        c = facts.consts.get(ix.right.nid)
+        if isinstance(c, int) and not isinstance(c, bool) and ix.right.nid in facts.untyped:
             return c if ix.op == "PLUS" else -c
     return None
 

@@ -41,13 +41,13 @@ class ExpressionGenerator:
 
     def expr_as(self, e: n.Expr, ty: t.Type | None) -> str:
         """Code for `e` converted to type `ty` (implicit conversion of an assignment/argument)."""
-        src = self.facts.types.get(id(e))
+        src = self.facts.types.get(e.nid)
         if ty is None or src is None:
             return self.expr(e)
-        if isinstance(ty, t.InterfaceType) and id(e) in self.facts.untyped:
+        if isinstance(ty, t.InterfaceType) and e.nid in self.facts.untyped:
             return "None"   # `itf := 0`
-        if id(e) in self.facts.consts and not isinstance(self.facts.consts[id(e)], (list, dict)):
-            value = self.facts.consts[id(e)]
+        if e.nid in self.facts.consts and not isinstance(self.facts.consts[e.nid], (list, dict)):
+            value = self.facts.consts[e.nid]
             converted = self.convert_const(value, ty)
             if converted is not None:
                 return py_literal(converted)
@@ -93,9 +93,9 @@ class ExpressionGenerator:
         return code
 
     def expr(self, e: n.Expr) -> str:
-        if id(e) in self.facts.consts and not isinstance(e, n.Call):
-            value = self.facts.consts[id(e)]
-            ty = self.facts.types.get(id(e))
+        if e.nid in self.facts.consts and not isinstance(e, n.Call):
+            value = self.facts.consts[e.nid]
+            ty = self.facts.types.get(e.nid)
             if ty is not None and not isinstance(value, (list, dict)):
                 converted = self.convert_const(value, ty)
                 if converted is not None:
@@ -105,9 +105,9 @@ class ExpressionGenerator:
         return getattr(self, "ex_" + type(e).__name__)(e)
 
     def ex_Name(self, e: n.Name) -> str:
-        if self.facts.props and id(e) in self.facts.props:
+        if self.facts.props and e.nid in self.facts.props:
             return self.property_get(e)
-        ref = self.facts.names[id(e)]
+        ref = self.facts.names[e.nid]
         if ref.kind == "enum":
             return py_literal(ref.value)
         if ref.kind == "result":
@@ -119,7 +119,7 @@ class ExpressionGenerator:
         var = ref.variable
         assert var is not None
         place = self.name_place(ref)
-        if id(e) in self.facts.auto_deref:
+        if e.nid in self.facts.auto_deref:
             return self.deref_code(place, var.type.target)  # type: ignore[attr-defined]
         if var.section == IN_OUT and not isinstance(var.type, (t.StructType, t.ArrayType, t.FBType)):
             return f"{place}.get()"
@@ -133,7 +133,7 @@ class ExpressionGenerator:
 
     def property_target(self, e: n.Expr, accessor: str) -> str:
         """`obj.g_p` / `obj.s_p` for a property use (checked: facts.props)."""
-        prop, how = self.facts.props[id(e)]
+        prop, how = self.facts.props[e.nid]
         attr = method_attr(prop.name, accessor)
         if how == "self":
             return f"self.{attr}"
@@ -157,24 +157,24 @@ class ExpressionGenerator:
         return f"({code} or _null_ref()).get()"
 
     def ex_Deref(self, e: n.Deref) -> str:
-        if isinstance(e.base, n.Name) and getattr(self.facts.names.get(id(e.base)), "kind", None) in ("this", "super"):
+        if isinstance(e.base, n.Name) and getattr(self.facts.names.get(e.base.nid), "kind", None) in ("this", "super"):
             return "self"   # THIS^ / SUPER^: the instance itself, never NULL
-        return self.deref_code(self.expr(e.base), self.facts.types[id(e)])
+        return self.deref_code(self.expr(e.base), self.facts.types[e.nid])
 
     def raw_place(self, target: n.Expr) -> str:
         """The storage of a Name/Member itself (for a REFERENCE TO variable: the reference)."""
         if isinstance(target, n.Name):
-            return self.name_place(self.facts.names[id(target)])
+            return self.name_place(self.facts.names[target.nid])
         assert isinstance(target, n.Member)
-        base_type = self.facts.types[id(target.base)]
+        base_type = self.facts.types[target.base.nid]
         return f"{self.expr(target.base)}.{var_attr(self.member_name(base_type, target.name))}"
 
     def reference_code(self, value: n.Expr) -> str:
         """REF(x) / ADR(x) / `REF= x`: the reference object for the variable x (see RefType)."""
-        ty = self.facts.types[id(value)]
+        ty = self.facts.types[value.nid]
         if isinstance(value, n.Deref):
             return self.expr(value.base)
-        if isinstance(value, (n.Name, n.Member)) and id(value) in self.facts.auto_deref:
+        if isinstance(value, (n.Name, n.Member)) and value.nid in self.facts.auto_deref:
             return self.raw_place(value)
         if isinstance(ty, t.RefType) and ty.is_null:
             return "None"
@@ -183,9 +183,9 @@ class ExpressionGenerator:
         return self.ref_code(value)
 
     def ex_Member(self, e: n.Member) -> str:
-        if self.facts.props and id(e) in self.facts.props:
+        if self.facts.props and e.nid in self.facts.props:
             return self.property_get(e)
-        base_type = self.facts.types[id(e.base)]
+        base_type = self.facts.types[e.base.nid]
         return f"{self.expr(e.base)}.{var_attr(self.member_name(base_type, e.name))}"
 
     def ex_PartialAccess(self, e: n.PartialAccess) -> str:
@@ -200,7 +200,7 @@ class ExpressionGenerator:
 
     def index_parts(self, e: n.Index) -> tuple[str, str]:
         """(code of the container, code of the last subscript) for an element access."""
-        base_type = self.facts.types[id(e.base)]
+        base_type = self.facts.types[e.base.nid]
         code = self.expr(e.base)
         assert isinstance(base_type, t.ArrayType)
         if base_type.dims is None and base_type.rank > 1:
@@ -228,7 +228,7 @@ class ExpressionGenerator:
                     name = self.expr(ix if isinstance(ix, n.Name) else ix.left)  # type: ignore[attr-defined]
                     return code, name if offset == 0 else f"{name} + {offset}" if offset > 0 else f"{name} - {-offset}"
         for ix, (lo, hi) in zip(e.indices, base_type.dims):
-            const = self.facts.consts.get(id(ix))
+            const = self.facts.consts.get(ix.nid)
             if isinstance(const, int):
                 subscripts.append(f"{const - lo}")
                 continue
@@ -246,7 +246,7 @@ class ExpressionGenerator:
         return self.index_code(e)
 
     def ex_Unary(self, e: n.Unary) -> str:
-        ty = self.facts.types[id(e)]
+        ty = self.facts.types[e.nid]
         operand = self.expr_as(e.operand, ty)
         if e.op == "NOT":
             if isinstance(ty, t.BoolType):
@@ -263,26 +263,26 @@ class ExpressionGenerator:
 
     def ex_Binary(self, e: n.Binary) -> str:
         op = e.op
-        lt = self.facts.types.get(id(e.left))
+        lt = self.facts.types.get(e.left.nid)
         if op in ("EQ", "NE") and (isinstance(lt, t.InterfaceType)
-                                   or isinstance(self.facts.types.get(id(e.right)), t.InterfaceType)):
+                                   or isinstance(self.facts.types.get(e.right.nid), t.InterfaceType)):
             # interfaces compare by the instance they hold; 0 and NULL are "none"
-            left, right = ("None" if id(x) in self.facts.untyped else self.expr(x) for x in (e.left, e.right))
+            left, right = ("None" if x.nid in self.facts.untyped else self.expr(x) for x in (e.left, e.right))
             return f"({left} {'is' if op == 'EQ' else 'is not'} {right})"
         if op in ("EQ", "NE") and isinstance(lt, t.RefType):
-            rt = self.facts.types[id(e.right)]
+            rt = self.facts.types[e.right.nid]
             target = lt.target if not lt.is_null else rt.target  # type: ignore[attr-defined]
             left, right = self.expr(e.left), self.expr(e.right)
             # aggregates: the same object; scalars: the same variable (AttrRef/ItemRef equality)
             same = f"({left} is {right})" if target is None or t.is_aggregate(target) else f"_same_ref({left}, {right})"
             return same if op == "EQ" else f"(not {same})"
         if op in ("EQ", "NE", "LT", "GT", "LE", "GE"):
-            operand = self.facts.operand_types.get(id(e))
+            operand = self.facts.operand_types.get(e.nid)
             left = self.expr_as(e.left, operand) if operand is not None else self.expr(e.left)
             right = self.expr_as(e.right, operand) if operand is not None else self.expr(e.right)
             pyop = {"EQ": "==", "NE": "!=", "LT": "<", "GT": ">", "LE": "<=", "GE": ">="}[op]
             return f"({left} {pyop} {right})"
-        ty = self.facts.types[id(e)]
+        ty = self.facts.types[e.nid]
         if op in ("AND", "AMP", "OR", "XOR"):
             pyop = {"AND": "&", "AMP": "&", "OR": "|", "XOR": "^"}[op]
             return f"({self.expr_as(e.left, ty)} {pyop} {self.expr_as(e.right, ty)})"
@@ -293,7 +293,7 @@ class ExpressionGenerator:
             return f"_f32({code})" if isinstance(ty, t.RealType) and ty.bits == 32 else code
         if self.options.ring_chain and isinstance(ty, t.IntType) and op in _RING_OPS \
                 and not self.in_range_without_wrap(e, ty) \
-                and id(e) not in self.facts.consts:
+                and e.nid not in self.facts.consts:
             # A chain of + - * in one integer type wraps once at the end: arithmetic modulo 2^n
             # gives the same result as wrapping every step, and long sums stay shallow for Python.
             return wrap_int(self.ring_chain(e, ty), ty)
@@ -321,8 +321,8 @@ class ExpressionGenerator:
         """Unwrapped Python code of `e` (+, -, * in type `ty`), flattening operands that are
         themselves + - * chains computed in the same type."""
         def operand(x: n.Expr) -> tuple[str, str | None]:
-            if isinstance(x, n.Binary) and x.op in _RING_OPS and self.facts.types.get(id(x)) == ty \
-                    and id(x) not in self.facts.consts and not self.in_range_without_wrap(x, ty):
+            if isinstance(x, n.Binary) and x.op in _RING_OPS and self.facts.types.get(x.nid) == ty \
+                    and x.nid not in self.facts.consts and not self.in_range_without_wrap(x, ty):
                 return self.ring_chain(x, ty), x.op
             return self.expr_as(x, ty), None
         left, left_op = operand(e.left)
@@ -343,7 +343,7 @@ class ExpressionGenerator:
         if not isinstance(e.left, n.Name) or e.op not in ("PLUS", "MINUS"):
             return False
         info = self.range_vars.get(e.left.parts[0].lower())
-        k = self.facts.consts.get(id(e.right))
+        k = self.facts.consts.get(e.right.nid)
         if info is None or not isinstance(k, int) or isinstance(k, bool) or k < 0:
             return False
         step, start, var_type = info
@@ -354,8 +354,8 @@ class ExpressionGenerator:
         return step > 0 and start is not None and start - k >= ty.lo
 
     def time_binary(self, e: n.Binary, ty: t.Type) -> str:
-        lt = self.facts.types[id(e.left)]
-        rt = self.facts.types[id(e.right)]
+        lt = self.facts.types[e.left.nid]
+        rt = self.facts.types[e.right.nid]
         left, right = self.expr(e.left), self.expr(e.right)
         if e.op in ("PLUS", "MINUS"):
             return wrap_int(f"{left} {'+' if e.op == 'PLUS' else '-'} {right}", t.LINT)  # type: ignore[arg-type]
@@ -398,9 +398,9 @@ class ExpressionGenerator:
 
     def type_query_code(self, e: n.Call) -> str:
         """LOWER_BOUND / UPPER_BOUND of an ARRAY[*] parameter, or a constant (see body.py)."""
-        word, operand = self.facts.type_queries[id(e)]
+        word, operand = self.facts.type_queries[e.nid]
         if word == "CONST":
-            ty = self.facts.types.get(id(e))
+            ty = self.facts.types.get(e.nid)
             converted = self.convert_const(operand, ty) if ty is not None else None
             return py_literal(operand if converted is None else converted)
         if isinstance(operand, tuple):   # ARRAY[*, *]: (array, dimension)
@@ -412,16 +412,16 @@ class ExpressionGenerator:
         return f"({code}.lo + len({code}) - 1)"
 
     def ex_Call(self, e: n.Call) -> str:
-        if id(e) in self.facts.ref_calls:
+        if e.nid in self.facts.ref_calls:
             return self.reference_code(e.args[0].value)
-        if id(e) in self.facts.type_queries:
+        if e.nid in self.facts.type_queries:
             return self.type_query_code(e)
-        if self.facts.intrinsics and id(e) in self.facts.intrinsics:
-            what, key = self.facts.intrinsics[id(e)]
+        if self.facts.intrinsics and e.nid in self.facts.intrinsics:
+            what, key = self.facts.intrinsics[e.nid]
             if what == "valid":
                 return f"({self.expr(e.args[0].value)} is not None)"
             return f"_query_itf({self.expr(e.args[0].value)}, {key!r}, {self.ref_code(e.args[1].value)})"
-        info = self.facts.calls[id(e)]
+        info = self.facts.calls[e.nid]
         if info.nested_en:
             return self.nested_en_call(e, info)
         return self.function_call(e, info)
@@ -437,10 +437,10 @@ class ExpressionGenerator:
 
     def arg_code(self, var: Variable, value: n.Expr) -> str:
         """Code for one argument bound to parameter `var` (by value, or a reference for in-outs)."""
-        if id(value) in self.facts.array_from_element:
+        if value.nid in self.facts.array_from_element:
             assert isinstance(value, n.Index)
             base_code = self.expr(value.base)
-            base_type = self.facts.types[id(value.base)]
+            base_type = self.facts.types[value.base.nid]
             assert isinstance(base_type, t.ArrayType)
             if base_type.dims is None:
                 return f"_ArrayRef({base_code}.data, {base_code}.start + {self.expr(value.indices[0])})"
@@ -448,7 +448,7 @@ class ExpressionGenerator:
             ix = self.expr(value.indices[0])
             return f"_ArrayRef({base_code}, ({ix}) - {lo} if {lo} <= {ix} <= {hi} else _oob({ix}, {lo}, {hi}))"
         ptype = var.type
-        vtype = self.facts.types.get(id(value))
+        vtype = self.facts.types.get(value.nid)
         if isinstance(ptype, t.ArrayType) and ptype.dims is None and ptype.rank > 1:
             return self.open_array_n_code(self.expr(value), vtype)
         if var.section == IN_OUT:
@@ -472,20 +472,20 @@ class ExpressionGenerator:
 
     def ref_code(self, value: n.Expr) -> str:
         if isinstance(value, n.Name):
-            ref = self.facts.names[id(value)]
+            ref = self.facts.names[value.nid]
             var = ref.variable
             assert var is not None
             if var.section == IN_OUT and ref.kind != "global":
                 return f"{'self' if ref.kind == 'field' else self.owner}.{var_attr(var.name)}"
             place = self.name_place(ref)
-            if id(value) in self.facts.auto_deref:
+            if value.nid in self.facts.auto_deref:
                 return place   # a REFERENCE TO variable passed on: its reference object
             obj, attr = place.rsplit(".", 1)
             return f"_AttrRef({obj}, {attr!r})"
         if isinstance(value, n.Deref):
             return self.expr(value.base)
         if isinstance(value, n.Member):
-            base_type = self.facts.types[id(value.base)]
+            base_type = self.facts.types[value.base.nid]
             return f"_AttrRef({self.expr(value.base)}, {var_attr(self.member_name(base_type, value.name))!r})"
         if isinstance(value, n.Index):
             base, ix = self.index_parts(value)
@@ -509,7 +509,7 @@ class ExpressionGenerator:
             args.append(self.arg_code(last, extra))
         for var, target, negate in info.outputs:
             ref = self.ref_code(target)
-            target_type = self.facts.types.get(id(target))
+            target_type = self.facts.types.get(target.nid)
             convert = "(not v)" if negate else self.coerce("v", var.type, target_type, target.span) \
                 if target_type is not None else "v"
             if convert != "v":

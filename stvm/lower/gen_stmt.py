@@ -54,7 +54,7 @@ class StatementGenerator:
         """Emit `emit()` under the call's EN (run only when TRUE) and set its ENO: FALSE before
         the call (an instruction error leaves it FALSE), TRUE after it, FALSE when EN is FALSE.
         False when the call has neither."""
-        info = self.facts.calls.get(id(call)) if isinstance(call, n.Call) else None
+        info = self.facts.calls.get(call.nid) if isinstance(call, n.Call) else None
         if info is None or (info.en is None and info.eno is None):
             return False
 
@@ -84,7 +84,7 @@ class StatementGenerator:
         self.plain_assign(s)
 
     def plain_assign(self, s: n.Assign) -> None:
-        target_type = self.facts.types.get(id(s.target))
+        target_type = self.facts.types.get(s.target.nid)
         if target_type is None and isinstance(s.target, n.Name):
             target_type = self.pou.return_type  # type: ignore[union-attr]
         value = self.expr_as(s.value, target_type)
@@ -96,7 +96,7 @@ class StatementGenerator:
         self.plain_call(s)
 
     def plain_call(self, s: n.CallStatement) -> None:
-        info = self.facts.calls[id(s.call)]
+        info = self.facts.calls[s.call.nid]
         if info.oo == "super_body":
             self.w.line(f"{self.classes[info.static_owner]}.__call__(self)")
         elif info.is_fb:
@@ -125,11 +125,11 @@ class StatementGenerator:
         for labels, body in s.elements:
             tests = []
             for label in labels:
-                lo = self.facts.consts.get(id(label.low))
+                lo = self.facts.consts.get(label.low.nid)
                 if label.high is None:
                     tests.append(f"{sel} == {py_literal(lo)}")
                 else:
-                    hi = self.facts.consts.get(id(label.high))
+                    hi = self.facts.consts.get(label.high.nid)
                     tests.append(f"{py_literal(lo)} <= {sel} <= {py_literal(hi)}")
             self.w.line(f"{'if' if first else 'elif'} {' or '.join(tests) or 'False'}:")
             first = False
@@ -146,9 +146,9 @@ class StatementGenerator:
             self.w.indent -= 1
 
     def st_For(self, s: n.For) -> None:
-        var_type = self.facts.types[id(s.variable)]
+        var_type = self.facts.types[s.variable.nid]
         assert isinstance(var_type, t.IntType)
-        step_const = self.facts.consts.get(id(s.step)) if s.step is not None else 1
+        step_const = self.facts.consts.get(s.step.nid) if s.step is not None else 1
         if s.nid in self.plan.range_fors:
             self.range_for(s, var_type, step_const)  # type: ignore[arg-type]
             return
@@ -293,16 +293,16 @@ class StatementGenerator:
     def store_code(self, target: n.Expr, value: str, ty: t.Type | None) -> list[str]:
         """Python statements that store `value` (already converted to `ty`) into `target`."""
         aggregate = isinstance(ty, (t.StructType, t.ArrayType))
-        if self.facts.props and id(target) in self.facts.props:
+        if self.facts.props and target.nid in self.facts.props:
             return [f"{self.property_target(target, 'SET')}({value})"]
         if isinstance(target, n.Name):
-            ref = self.facts.names[id(target)]
+            ref = self.facts.names[target.nid]
             if ref.kind == "result":
                 return [f"_r = {value}" if not aggregate else f"_r = _copy_value({value})"]
             var = ref.variable
             assert var is not None
             place = self.name_place(ref)
-            if id(target) in self.facts.auto_deref:
+            if target.nid in self.facts.auto_deref:
                 return self.store_through(place, value, ty)
             if var.key in self.cached and ref.kind not in ("global", "field"):
                 self.assigned.add(var.key)
@@ -313,9 +313,9 @@ class StatementGenerator:
             return self.store_through(self.expr(target.base), value, ty)
         if isinstance(target, n.Member):
             base = self.expr(target.base)
-            base_type = self.facts.types[id(target.base)]
+            base_type = self.facts.types[target.base.nid]
             attr = var_attr(self.member_name(base_type, target.name))
-            if id(target) in self.facts.auto_deref:
+            if target.nid in self.facts.auto_deref:
                 return self.store_through(f"{base}.{attr}", value, ty)
             return [self.assign_into(f"{base}.{attr}", value, ty)]
         if isinstance(target, n.Index):
@@ -323,7 +323,7 @@ class StatementGenerator:
             return [self.assign_into(place, value, ty)]
         if isinstance(target, n.PartialAccess):
             current = self.expr(target.base)
-            base_type = self.facts.types[id(target.base)]
+            base_type = self.facts.types[target.base.nid]
             shift, mask = target.bit * target.width, (1 << target.width) - 1
             merged = f"(({current}) & {~(mask << shift) & ((1 << base_type.bits) - 1)}) | (({value}) << {shift})"  # type: ignore[attr-defined]
             if base_type.signed:  # type: ignore[attr-defined]
@@ -331,7 +331,7 @@ class StatementGenerator:
             return self.store_code(target.base, merged, base_type)
         if isinstance(target, n.BitAccess):
             current = self.expr(target.base)
-            base_type = self.facts.types[id(target.base)]
+            base_type = self.facts.types[target.base.nid]
             return self.store_code(target.base, f"_setbit({current}, {target.bit}, {value})", base_type)
         raise AssertionError("checked: not an lvalue")
 
@@ -371,7 +371,7 @@ class StatementGenerator:
         else:
             self.w.line(self.direct_native_call(inst, e) or f"{inst}()")
         for var, target, negate in info.outputs:
-            target_type = self.facts.types.get(id(target))
+            target_type = self.facts.types.get(target.nid)
             value = f"{inst}.{var_attr(var.name)}"
             if negate:
                 value = f"(not {value})"

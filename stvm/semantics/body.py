@@ -226,11 +226,11 @@ class BodyChecker:
             if isinstance(sel, t.EnumType):
                 value = sel.value_of(expr.parts[0])
                 if value is not None:
-                    self.facts.consts[id(expr)] = value
+                    self.facts.consts[expr.nid] = value
                     return value
             value = self.c.const_value(expr, self.pou_namespace, self.pou)
             if isinstance(value, int) and not isinstance(value, bool):
-                self.facts.consts[id(expr)] = value
+                self.facts.consts[expr.nid] = value
                 return value
             self.error(f"case label '{expr.parts[0]}' is not a constant of the selector's type", expr.span, "E042")
             return None
@@ -240,14 +240,14 @@ class BodyChecker:
                 return None
             if isinstance(sel, t.EnumType) and lit[0] != sel:
                 self.error(f"case label is {lit[0].name}, the selector is {sel.name}", expr.span, "E042")
-            self.facts.consts[id(expr)] = lit[1]
+            self.facts.consts[expr.nid] = lit[1]
             return lit[1]  # type: ignore[return-value]
         if isinstance(expr, n.IntLiteral):
             if isinstance(sel, t.EnumType):
                 self.error(f"case label {expr.value} is an integer; the selector is {sel.name}", expr.span, "E042")
             elif isinstance(sel, t.IntType) and not sel.lo <= expr.value <= sel.hi:
                 self.error(f"case label {expr.value} is out of range for {sel.name}", expr.span, "E042")
-            self.facts.consts[id(expr)] = expr.value
+            self.facts.consts[expr.nid] = expr.value
             return expr.value
         return None
 
@@ -363,7 +363,7 @@ class BodyChecker:
             if ref is None:
                 self.undeclared(target)
                 return None
-            self.facts.names[id(target)] = ref  # type: ignore[assignment]
+            self.facts.names[target.nid] = ref  # type: ignore[assignment]
             kind = ref.kind  # type: ignore[attr-defined]
             if kind == "enum":
                 self.error(f"cannot assign to enumerator '{target.text}'", target.span, "E050")
@@ -371,7 +371,7 @@ class BodyChecker:
             if kind == "prop":
                 return self.property_store(target, ref.value, "self")  # type: ignore[attr-defined]
             if kind == "result":
-                self.facts.types[id(target)] = self.pou.return_type  # type: ignore[assignment]
+                self.facts.types[target.nid] = self.pou.return_type  # type: ignore[assignment]
                 return self.pou.return_type
             var: Variable = ref.variable  # type: ignore[attr-defined]
             if var.constant:
@@ -379,8 +379,8 @@ class BodyChecker:
             if isinstance(var.type, t.FBType):
                 self.error(f"cannot assign to function block instance '{target.text}'", target.span, "E050")
                 return None
-            self.facts.types[id(target)] = self.implicit_deref(target, var.type)
-            return self.facts.types[id(target)]
+            self.facts.types[target.nid] = self.implicit_deref(target, var.type)
+            return self.facts.types[target.nid]
         if isinstance(target, n.Deref):
             return self.expr(target)
         if isinstance(target, n.Member):
@@ -390,7 +390,7 @@ class BodyChecker:
             if isinstance(base_type, (t.FBType, t.InterfaceType)):
                 prop = self.c.find_property(base_type.qualname.lower(), target.name)
                 if prop is not None:
-                    self.facts.names.pop(id(target), None)
+                    self.facts.names.pop(target.nid, None)
                     return self.property_store(target, prop, self.member_how(target.base, base_type))
             if isinstance(base_type, t.FBType) and not self.inside_own(target.base, base_type):
                 fb = self.c.pous.get(base_type.qualname.lower())
@@ -423,7 +423,7 @@ class BodyChecker:
     def is_constant_path(self, base: n.Expr) -> bool:
         while isinstance(base, (n.Member, n.Index, n.BitAccess)):
             base = base.base
-        ref = self.facts.names.get(id(base))
+        ref = self.facts.names.get(base.nid)
         return bool(ref is not None and getattr(ref, "variable", None) is not None and ref.variable.constant)  # type: ignore[attr-defined]
 
     def undeclared(self, name: n.Name) -> None:
@@ -443,8 +443,8 @@ class BodyChecker:
         if isinstance(src, t.VoidType):
             self.error("this call has no result value", span, "E052")
             return
-        if id(expr) in self.facts.untyped:
-            value = self.facts.consts.get(id(expr))
+        if expr.nid in self.facts.untyped:
+            value = self.facts.consts.get(expr.nid)
             if isinstance(value, int) and not isinstance(value, bool):
                 if isinstance(dst, t.IntType):
                     if not dst.lo <= value <= dst.hi:
@@ -496,7 +496,7 @@ class BodyChecker:
         self.error(f"type mismatch: cannot assign {src.name} to interface {dst.name}", span, "E052")
 
     def is_zero_literal(self, expr: n.Expr) -> bool:
-        return id(expr) in self.facts.untyped and self.facts.consts.get(id(expr)) == 0
+        return expr.nid in self.facts.untyped and self.facts.consts.get(expr.nid) == 0
 
     def intrinsic(self, e: n.Call, word: str) -> t.Type | None:
         """__QUERYINTERFACE(itf, itf2) (CODESYS): itf2 := the instance itf holds when its FB
@@ -514,7 +514,7 @@ class BodyChecker:
             if not isinstance(ty, (t.InterfaceType, t.RefType)):
                 self.error(f"__ISVALIDREF needs an interface or a reference, not {ty.name}", args[0].value.span, "E052")
                 return None
-            self.facts.intrinsics[id(e)] = ("valid", None)
+            self.facts.intrinsics[e.nid] = ("valid", None)
             return t.BOOL
         if not isinstance(ty, (t.InterfaceType, t.FBType)):
             self.error(f"__QUERYINTERFACE needs an interface or an FB instance, not {ty.name}", args[0].value.span, "E052")
@@ -528,18 +528,18 @@ class BodyChecker:
         root = target
         while isinstance(root, (n.Member, n.Index)):
             root = root.base
-        ref = self.facts.names.get(id(root)) if isinstance(root, n.Name) else None
+        ref = self.facts.names.get(root.nid) if isinstance(root, n.Name) else None
         if ref is not None and ref.kind in ("var", "field"):  # type: ignore[attr-defined]
             owner = self.pou.key if ref.kind == "var" else self.fb.key  # type: ignore[attr-defined,union-attr]
             self.facts.addressed.add((owner, ref.variable.key))  # type: ignore[attr-defined]
-        self.facts.intrinsics[id(e)] = ("query", tty.qualname.lower())
+        self.facts.intrinsics[e.nid] = ("query", tty.qualname.lower())
         return t.BOOL
 
     def string_constant_fits(self, expr: n.Expr, dst: t.StringType, span: n.Span) -> None:
         """A constant text that provably overflows STRING[n] (sysmac.md 2, `string_overflow`):
         the code generator cuts it at build time, so the check-time diagnostic is its only
         report (a warning, or an error under `string_overflow=error`)."""
-        value = self.facts.consts.get(id(expr))
+        value = self.facts.consts.get(expr.nid)
         if isinstance(value, (bytes, str)) and len(value) > dst.max_bytes:
             self.c.string_overflow(len(value), dst, span)
 
@@ -548,45 +548,45 @@ class BodyChecker:
         method = getattr(self, "expr_" + type(e).__name__)
         ty = method(e, expected) if not isinstance(e, n.Call) else self.expr_Call(e, expected, statement)
         if ty is not None:
-            self.facts.types[id(e)] = ty
+            self.facts.types[e.nid] = ty
         return ty
 
     def expr_IntLiteral(self, e: n.IntLiteral, expected) -> t.Type:
-        self.facts.untyped.add(id(e))
-        self.facts.consts[id(e)] = e.value
+        self.facts.untyped.add(e.nid)
+        self.facts.consts[e.nid] = e.value
         return int_literal_type(e.value, self.settings)
 
     def expr_RealLiteral(self, e: n.RealLiteral, expected) -> t.Type:
-        self.facts.untyped.add(id(e))
-        self.facts.consts[id(e)] = e.value
+        self.facts.untyped.add(e.nid)
+        self.facts.consts[e.nid] = e.value
         return t.LREAL
 
     def expr_BoolLiteral(self, e, expected) -> t.Type:
-        self.facts.consts[id(e)] = e.value
+        self.facts.consts[e.nid] = e.value
         return t.BOOL
 
     def expr_StringLiteral(self, e: n.StringLiteral, expected) -> t.Type:
         if isinstance(e.value, str) or t.is_wide(expected):
             return self.wstring_literal(e)
-        self.facts.consts[id(e)] = e.value
+        self.facts.consts[e.nid] = e.value
         return t.string_type(max(len(e.value) + 1, 1))
 
     def wstring_literal(self, e: n.StringLiteral) -> t.Type:
         """A WSTRING literal ("…"), or a STRING literal where a WSTRING is expected (CODESYS takes
         `ws := 'abc'`): its value is the `str` of its UTF-16 code units."""
         value = e.value if isinstance(e.value, str) else utf16_units(e.value.decode("utf-8", "replace"))
-        self.facts.consts[id(e)] = value
+        self.facts.consts[e.nid] = value
         return t.wstring_type(max(len(value), 1))
 
     def expr_TimeLiteral(self, e: n.TimeLiteral, expected) -> t.Type:
-        self.facts.consts[id(e)] = e.value_ns
+        self.facts.consts[e.nid] = e.value_ns
         return t.ELEMENTARY[e.type_name]
 
     def expr_HashLiteral(self, e: n.HashLiteral, expected) -> t.Type | None:
         lit = self.c.hash_literal(e, self.pou_namespace)
         if lit is None:
             return None
-        self.facts.consts[id(e)] = lit[1]
+        self.facts.consts[e.nid] = lit[1]
         return lit[0]
 
     def expr_Name(self, e: n.Name, expected) -> t.Type | None:
@@ -595,16 +595,16 @@ class BodyChecker:
             if len(e.parts) == 1 and isinstance(expected, t.EnumType) and expected.value_of(e.parts[0]) is not None:
                 ref = NameRef("enum", value=expected.value_of(e.parts[0]), variable=Variable(e.parts[0], "ENUM", expected))
             elif len(e.parts) == 1 and not e.rooted and e.parts[0].upper() == "NULL":
-                self.facts.names[id(e)] = NameRef("null")  # type: ignore[assignment]
+                self.facts.names[e.nid] = NameRef("null")  # type: ignore[assignment]
                 return t.NULL_REF
             elif len(e.parts) == 1 and not e.rooted and e.parts[0].upper() in ("THIS", "SUPER"):
                 return self.this_or_super(e)
             else:
                 self.undeclared(e)
                 return None
-        self.facts.names[id(e)] = ref  # type: ignore[assignment]
+        self.facts.names[e.nid] = ref  # type: ignore[assignment]
         if ref.kind == "enum":  # type: ignore[attr-defined]
-            self.facts.consts[id(e)] = ref.value  # type: ignore[attr-defined]
+            self.facts.consts[e.nid] = ref.value  # type: ignore[attr-defined]
             return ref.variable.type  # type: ignore[attr-defined]
         if ref.kind == "result":  # type: ignore[attr-defined]
             return self.pou.return_type
@@ -612,7 +612,7 @@ class BodyChecker:
             return self.property_load(e, ref.value, "self")  # type: ignore[attr-defined]
         var: Variable = ref.variable  # type: ignore[attr-defined]
         if var.constant and var.init is not None and not isinstance(var.init, (list, dict)):
-            self.facts.consts[id(e)] = var.init
+            self.facts.consts[e.nid] = var.init
         return self.implicit_deref(e, var.type)
 
     def expr_Member(self, e: n.Member, expected) -> t.Type | None:
@@ -660,13 +660,13 @@ class BodyChecker:
     def through_property(self, base: n.Expr) -> bool:
         """`fb.P.x := …` / `fb.P[i] := …`: the GET returns a copy, so the write would be lost."""
         while isinstance(base, (n.Member, n.Index)):
-            if self.facts.props and id(base) in self.facts.props:
-                name = self.facts.props[id(base)][0].name
+            if self.facts.props and base.nid in self.facts.props:
+                name = self.facts.props[base.nid][0].name
                 self.error(f"cannot assign into property '{name}': its GET returns a copy; assign the whole "
                            f"property", base.span, "E073")
                 return True
             base = base.base
-        if isinstance(base, n.Name) and self.facts.props and id(base) in self.facts.props:
+        if isinstance(base, n.Name) and self.facts.props and base.nid in self.facts.props:
             self.error(f"cannot assign into property '{base.parts[0]}': its GET returns a copy; assign the whole "
                        f"property", base.span, "E073")
             return True
@@ -675,8 +675,8 @@ class BodyChecker:
     def is_property(self, e: n.Expr, what: str) -> bool:
         """A property where a variable is needed (FOR, `=>`, an in-out, REF()): an error, since
         it has no storage of its own (its GET and SET are calls)."""
-        if self.facts.props and id(e) in self.facts.props:
-            self.error(f"{what} needs a variable; property '{self.facts.props[id(e)][0].name}' is a pair of "
+        if self.facts.props and e.nid in self.facts.props:
+            self.error(f"{what} needs a variable; property '{self.facts.props[e.nid][0].name}' is a pair of "
                        f"GET/SET calls (use a variable and assign the property)", e.span, "E073")
             return True
         return False
@@ -694,14 +694,14 @@ class BodyChecker:
                 return None
             key = self.fb.base
         info = self.c.pous[key]
-        self.facts.names[id(e)] = NameRef(word.lower(), pou=info)  # type: ignore[assignment]
+        self.facts.names[e.nid] = NameRef(word.lower(), pou=info)  # type: ignore[assignment]
         return t.ref_type(t.FBType(info.name, info.qualname, info.kind == "PROGRAM"), "POINTER")
 
     def inside_own(self, base: n.Expr, base_type: t.FBType) -> bool:
         """Is `base` THIS^ / SUPER^, or an instance of the FB being checked (whose internals its
         own body and methods may see)?"""
         if isinstance(base, n.Deref) and isinstance(base.base, n.Name) and base.base.parts[0].upper() in ("THIS", "SUPER") \
-                and getattr(self.facts.names.get(id(base.base)), "kind", None) in ("this", "super"):
+                and getattr(self.facts.names.get(base.base.nid), "kind", None) in ("this", "super"):
             return True
         return False
 
@@ -709,7 +709,7 @@ class BodyChecker:
         if isinstance(base_type, t.InterfaceType):
             return "itf"
         if isinstance(base, n.Deref) and isinstance(base.base, n.Name) \
-                and getattr(self.facts.names.get(id(base.base)), "kind", None) == "super":
+                and getattr(self.facts.names.get(base.base.nid), "kind", None) == "super":
             return "super"
         return "inst"
 
@@ -741,7 +741,7 @@ class BodyChecker:
             return None
         self.check_access(prop.getter if prop.access == "PUBLIC" else _with_access(prop.getter, prop.access),
                           "property", e.span)
-        self.facts.props[id(e)] = (prop, how)
+        self.facts.props[e.nid] = (prop, how)
         return prop.type
 
     def property_store(self, target: n.Expr, prop, how: str) -> t.Type | None:
@@ -750,8 +750,8 @@ class BodyChecker:
             return None
         self.check_access(prop.setter if prop.access == "PUBLIC" else _with_access(prop.setter, prop.access),
                           "property", target.span)
-        self.facts.props[id(target)] = (prop, how)
-        self.facts.types[id(target)] = prop.type
+        self.facts.props[target.nid] = (prop, how)
+        self.facts.types[target.nid] = prop.type
         return prop.type
 
     def method_call(self, e: n.Call, method: POUInfo, oo: str, instance: n.Expr | None, static_owner: str,
@@ -766,7 +766,7 @@ class BodyChecker:
             self.bind_args(e, method, info, fb=False)
         finally:
             self.call_expected = outer
-        self.facts.calls[id(e)] = info
+        self.facts.calls[e.nid] = info
         return method.return_type or t.VOID
 
     def oo_call(self, e: n.Call, expected, statement: bool) -> tuple[bool, t.Type | None]:
@@ -789,7 +789,7 @@ class BodyChecker:
             if not statement:
                 self.error("SUPER^() is a statement", e.span, "E045")
             base = self.c.pous[self.fb.base]  # type: ignore[union-attr,index]
-            self.facts.calls[id(e)] = CallInfo(base, True, None, oo="super_body", static_owner=base.key)
+            self.facts.calls[e.nid] = CallInfo(base, True, None, oo="super_body", static_owner=base.key)
             return True, t.VOID
         if not isinstance(callee, n.Member):
             return False, None
@@ -871,7 +871,7 @@ class BodyChecker:
             self.error(f"{base.name} needs {len(base.dims)} index(es), got {len(e.indices)}", e.span, "E036")
             return None
         for ix, (lo, hi) in zip(e.indices, base.dims):
-            value = self.facts.consts.get(id(ix))
+            value = self.facts.consts.get(ix.nid)
             if isinstance(value, int) and not isinstance(value, bool) and not lo <= value <= hi:
                 self.error(f"index {value} is outside the bounds {lo}..{hi}", ix.span, "E036")
         return base.element
@@ -900,7 +900,7 @@ class BodyChecker:
     def implicit_deref(self, e: n.Expr, ty: t.Type) -> t.Type:
         """A REFERENCE TO variable stands for its target wherever it is used (CODESYS)."""
         if isinstance(ty, t.RefType) and ty.flavour == "REFERENCE":
-            self.facts.auto_deref.add(id(e))
+            self.facts.auto_deref.add(e.nid)
             return self.canonical(ty.target)
         return ty
 
@@ -924,12 +924,12 @@ class BodyChecker:
         root: n.Expr = arg
         while isinstance(root, (n.Member, n.Index)):
             if isinstance(root, n.Member):
-                base_type = self.facts.types.get(id(root.base))
+                base_type = self.facts.types.get(root.base.nid)
                 if isinstance(base_type, t.FBType):
                     self.facts.addressed.add((base_type.qualname.lower(), root.name.lower()))
             root = root.base
         if isinstance(root, n.Name):
-            ref = self.facts.names.get(id(root))
+            ref = self.facts.names.get(root.nid)
             kind = getattr(ref, "kind", None)
             if kind in ("enum", "null", "result"):
                 self.error(f"{word}() needs a variable; '{root.text}' is a value", arg.span, "E055")
@@ -941,7 +941,7 @@ class BodyChecker:
                 return None
             if kind == "var":
                 self.facts.addressed.add((self.pou.key, var.key))
-        self.facts.ref_calls.add(id(e))
+        self.facts.ref_calls.add(e.nid)
         return t.ref_type(ty, "POINTER" if word == "ADR" else "REF_TO")
 
     # ---- operators answered from the types (LOWER_BOUND, UPPER_BOUND, SIZEOF, XSIZEOF)
@@ -965,16 +965,16 @@ class BodyChecker:
                        "(stvm does not model the memory of function blocks or references)", arg.span, "E070")
             return None
         if word == "XSIZEOF":
-            self.facts.type_queries[id(e)] = ("CONST", size)
+            self.facts.type_queries[e.nid] = ("CONST", size)
             return t.UDINT   # Choice: a 32-bit platform (CODESYS: UDINT there, ULINT on 64-bit ones)
         # CODESYS/TwinCAT: "the type adapts to the size" (USINT < 256 <= UINT ...): a constant that
         # takes the type its context needs, like an untyped literal
         return self.constant_type_query(e, size)
 
     def constant_type_query(self, e: n.Call, value: int) -> t.Type:
-        self.facts.type_queries[id(e)] = ("CONST", value)
-        self.facts.consts[id(e)] = value
-        self.facts.untyped.add(id(e))
+        self.facts.type_queries[e.nid] = ("CONST", value)
+        self.facts.consts[e.nid] = value
+        self.facts.untyped.add(e.nid)
         return int_literal_type(value, self.settings)
 
     def sizeof_operand(self, arg: n.Expr) -> t.Type | None:
@@ -1009,7 +1009,7 @@ class BodyChecker:
             lo, hi = ty.dims[dim - 1]
             return self.constant_type_query(e, lo if word == "LOWER_BOUND" else hi)
         # ARRAY[*, *]: the dimension goes with the operand (ARRAY[*] keeps the plain operand)
-        self.facts.type_queries[id(e)] = (word, arr if ty.rank == 1 else (arr, dim))
+        self.facts.type_queries[e.nid] = (word, arr if ty.rank == 1 else (arr, dim))
         return t.DINT
 
     def stmt_RefAssign(self, s: n.RefAssign) -> None:
@@ -1017,16 +1017,16 @@ class BodyChecker:
         raw = None
         if isinstance(target, (n.Name, n.Member)):
             self.lvalue(target)
-            if id(target) in self.facts.auto_deref:
+            if target.nid in self.facts.auto_deref:
                 if isinstance(target, n.Name):
-                    raw = self.facts.names[id(target)].variable.type  # type: ignore[attr-defined]
+                    raw = self.facts.names[target.nid].variable.type  # type: ignore[attr-defined]
                 else:
                     raw = self.member_raw_type(target)
         if raw is None:
             self.expr(s.value)
             self.error("REF= needs a REFERENCE TO variable on its left", target.span, "E056")
             return
-        self.facts.types[id(target)] = raw
+        self.facts.types[target.nid] = raw
         value_type = self.expr(s.value)
         if value_type is None:
             return
@@ -1041,12 +1041,12 @@ class BodyChecker:
         root: n.Expr = s.value
         while isinstance(root, (n.Member, n.Index)):
             root = root.base
-        ref = self.facts.names.get(id(root)) if isinstance(root, n.Name) else None
+        ref = self.facts.names.get(root.nid) if isinstance(root, n.Name) else None
         if ref is not None and getattr(ref, "kind", None) == "var":
             self.facts.addressed.add((self.pou.key, ref.variable.key))  # type: ignore[union-attr]
 
     def member_raw_type(self, target: n.Member) -> t.Type | None:
-        base = self.facts.types.get(id(target.base))
+        base = self.facts.types.get(target.base.nid)
         if isinstance(base, t.StructType):
             return base.field_type(target.name)
         if isinstance(base, t.FBType):
@@ -1066,32 +1066,32 @@ class BodyChecker:
             return None
         if e.op == "NOT":
             if isinstance(ty, t.BoolType) or (isinstance(ty, t.IntType)):
-                if id(e.operand) in self.facts.consts and isinstance(ty, t.BoolType):
-                    self.facts.consts[id(e)] = not self.facts.consts[id(e.operand)]
+                if e.operand.nid in self.facts.consts and isinstance(ty, t.BoolType):
+                    self.facts.consts[e.nid] = not self.facts.consts[e.operand.nid]
                 return ty
             self.error(f"NOT needs BOOL or a bit string, not {ty.name}", e.span, "E038")
             return None
         if isinstance(ty, (t.IntType, t.RealType)) or getattr(ty, "family", "") == "TIME":
-            if id(e.operand) in self.facts.untyped:
-                value = self.facts.consts[id(e.operand)]
+            if e.operand.nid in self.facts.untyped:
+                value = self.facts.consts[e.operand.nid]
                 folded = -value if e.op == "MINUS" else value
-                self.facts.untyped.add(id(e))
-                self.facts.consts[id(e)] = folded
+                self.facts.untyped.add(e.nid)
+                self.facts.consts[e.nid] = folded
                 if isinstance(folded, int):
                     return int_literal_type(folded, self.settings)
                 return ty
             if isinstance(ty, t.IntType) and not ty.signed and e.op == "MINUS":
                 # IEC: negation of an unsigned value wraps; Sysmac accepts it
                 return ty
-            if id(e.operand) in self.facts.consts and e.op == "MINUS" and isinstance(self.facts.consts[id(e.operand)], (int, float)) \
-                    and not isinstance(self.facts.consts[id(e.operand)], bool):
-                self.facts.consts[id(e)] = -self.facts.consts[id(e.operand)]  # type: ignore[operator]
+            if e.operand.nid in self.facts.consts and e.op == "MINUS" and isinstance(self.facts.consts[e.operand.nid], (int, float)) \
+                    and not isinstance(self.facts.consts[e.operand.nid], bool):
+                self.facts.consts[e.nid] = -self.facts.consts[e.operand.nid]  # type: ignore[operator]
             return ty
         self.error(f"unary {OP_TEXT.get(e.op, e.op)} needs a number, not {ty.name}", e.span, "E038")
         return None
 
     def literal_fits(self, e: n.Expr, ty: t.Type) -> bool:
-        value = self.facts.consts.get(id(e))
+        value = self.facts.consts.get(e.nid)
         if isinstance(ty, t.IntType) and isinstance(value, int) and not isinstance(value, bool):
             return ty.lo <= value <= ty.hi
         if isinstance(ty, t.RealType):
@@ -1103,8 +1103,8 @@ class BodyChecker:
         rt = self.expr(e.right)
         if lt is None or rt is None:
             return None
-        lu = id(e.left) in self.facts.untyped
-        ru = id(e.right) in self.facts.untyped
+        lu = e.left.nid in self.facts.untyped
+        ru = e.right.nid in self.facts.untyped
         op = e.op
         sym = OP_TEXT.get(op, op)
         if op in _LOGIC or op in ("EQ", "NE"):
@@ -1115,10 +1115,10 @@ class BodyChecker:
                 lt = t.BOOL
         if op in _COMPARE:
             if self.comparable(lt, rt, e.left, e.right, op):
-                self.facts.types[id(e)] = t.BOOL
+                self.facts.types[e.nid] = t.BOOL
                 operand = self.operand_type(lt, rt, lu, ru, e)
                 if operand is not None:
-                    self.facts.operand_types[id(e)] = operand
+                    self.facts.operand_types[e.nid] = operand
                 return t.BOOL
             self.error(f"cannot compare {lt.name} {sym} {rt.name}", e.span, "E039")
             return None
@@ -1140,8 +1140,8 @@ class BodyChecker:
         if lu and ru:
             folded = self.c.const_value(e, self.pou_namespace, self.pou)
             if folded is not NOT_CONST and isinstance(folded, (int, float)):
-                self.facts.untyped.add(id(e))
-                self.facts.consts[id(e)] = folded
+                self.facts.untyped.add(e.nid)
+                self.facts.consts[e.nid] = folded
                 if isinstance(folded, int):
                     return int_literal_type(folded, self.settings)
                 return t.LREAL
@@ -1156,10 +1156,10 @@ class BodyChecker:
         return None
 
     def bool_literal(self, e: n.Expr) -> bool:
-        if id(e) in self.facts.untyped and self.facts.consts.get(id(e)) in (0, 1) \
-                and not isinstance(self.facts.consts.get(id(e)), float):
-            self.facts.types[id(e)] = t.BOOL
-            self.facts.consts[id(e)] = bool(self.facts.consts[id(e)])
+        if e.nid in self.facts.untyped and self.facts.consts.get(e.nid) in (0, 1) \
+                and not isinstance(self.facts.consts.get(e.nid), float):
+            self.facts.types[e.nid] = t.BOOL
+            self.facts.consts[e.nid] = bool(self.facts.consts[e.nid])
             return True
         return False
 
@@ -1294,7 +1294,7 @@ class BodyChecker:
                 return None
             instance = callee
         if instance is not None:
-            fbt = self.facts.types[id(instance)]
+            fbt = self.facts.types[instance.nid]
             pou = self.c.pous.get(fbt.qualname.lower())  # type: ignore[attr-defined]
             if pou is None:
                 return None
@@ -1305,7 +1305,7 @@ class BodyChecker:
                 self.error(f"a function block call is a statement; read its outputs as {self.describe(instance)}.Q", e.span, "E045")
             info = CallInfo(pou, True, instance)
             self.bind_args(e, pou, info, fb=True)
-            self.facts.calls[id(e)] = info
+            self.facts.calls[e.nid] = info
             return t.VOID
         assert pou is not None
         info = CallInfo(pou, False, None)
@@ -1314,12 +1314,12 @@ class BodyChecker:
             self.bind_args(e, pou, info, fb=False)
         finally:
             self.call_expected = outer
-        self.facts.calls[id(e)] = info
+        self.facts.calls[e.nid] = info
         ret = pou.return_type
         if isinstance(ret, t.GenericType):
             ret = info.generic_type
             if ret is None:
-                if id(e) not in self.rejected_calls:
+                if e.nid not in self.rejected_calls:
                     self.error(f"cannot infer the result type of {pou.name}", e.span, "E046")
                 return None
         return ret
@@ -1401,9 +1401,9 @@ class BodyChecker:
                     self.error(f"in-out '{p.name}' of {self.display(pou)} is not bound", e.span, "E048")
         # static argument types in parameter order (omitted inputs: their declared type), extras last
         given = {var.key: value for var, value in info.inputs}
-        arg_types = [self.facts.types.get(id(given[p.key]), p.type) if p.key in given else p.type
+        arg_types = [self.facts.types.get(given[p.key].nid, p.type) if p.key in given else p.type
                      for p in params if not (pou.variadic and p is params[-1] and info.extra and p.key not in given)]
-        arg_types += [self.facts.types.get(id(x), params[-1].type) for x in info.extra]
+        arg_types += [self.facts.types.get(x.nid, params[-1].type) for x in info.extra]
         info.arg_types = tuple(arg_types)
         rule = native_result_rule(pou, self.c.natives)
         if rule is not None:
@@ -1420,7 +1420,7 @@ class BodyChecker:
                     info.generic_type = expected   # IEC: TRUNC is ANY_REAL -> ANY_INT
             except Exception as exc:  # a rule rejecting its arguments is a type error in the user's call
                 self.error(f"{self.display(pou)}: {exc}", e.span, "E046")
-                self.rejected_calls = self.rejected_calls | {id(e)}
+                self.rejected_calls = self.rejected_calls | {e.nid}
         elif generic_types:
             typed = [ty for ty, untyped in generic_types if not untyped]
             info.generic_type = self.common_generic(typed or [ty for ty, _ in generic_types], e)
@@ -1436,7 +1436,7 @@ class BodyChecker:
         for ty, ex in zip(arg_types, exprs):
             if isinstance(ex, n.StringLiteral) and isinstance(ex.value, bytes):
                 ty = self.wstring_literal(ex)
-                self.facts.types[id(ex)] = ty
+                self.facts.types[ex.nid] = ty
             out.append(ty)
         return tuple(out)
 
@@ -1452,11 +1452,11 @@ class BodyChecker:
         arguments it is mixed with (SEL(c, 0, i) is INT, MUX(k, 0.5, r) is REAL), or, when all are
         literals, the type the context expects (j : SINT := SEL(c, 1, 2)) if the literal fits."""
         typed = [ty for ty, ex in zip(arg_types, exprs)
-                 if ex is not None and id(ex) not in self.facts.untyped and isinstance(ty, (t.IntType, t.RealType))]
+                 if ex is not None and ex.nid not in self.facts.untyped and isinstance(ty, (t.IntType, t.RealType))]
         expected = getattr(self, "call_expected", None)
         out = []
         for ty, ex in zip(arg_types, exprs):
-            if ex is None or id(ex) not in self.facts.untyped or not isinstance(ty, (t.IntType, t.RealType)):
+            if ex is None or ex.nid not in self.facts.untyped or not isinstance(ty, (t.IntType, t.RealType)):
                 out.append(ty)
                 continue
             candidates = [c for c in typed if self.literal_fits(ex, c) and (isinstance(c, t.RealType) or isinstance(ty, t.IntType))]
@@ -1472,8 +1472,8 @@ class BodyChecker:
     def untyped_bits_literal(self, e: n.Expr, ptype: t.GenericType) -> bool:
         """An untyped non-negative integer literal (16#FF00) may stand for a bit string: it takes
         the type of the call's typed arguments (AND(w, 16#FF00) is WORD)."""
-        value = self.facts.consts.get(id(e))
-        return (ptype.name == "ANY_BIT" and id(e) in self.facts.untyped and isinstance(value, int)
+        value = self.facts.consts.get(e.nid)
+        return (ptype.name == "ANY_BIT" and e.nid in self.facts.untyped and isinstance(value, int)
                 and not isinstance(value, bool) and value >= 0)
 
     def bind_en_eno(self, pou: POUInfo, arg: n.Argument, info, call: n.Call) -> bool:
@@ -1510,7 +1510,7 @@ class BodyChecker:
             root = info.eno[0]
             while isinstance(root, (n.Member, n.Index)):
                 root = root.base
-            ref = self.facts.names.get(id(root)) if isinstance(root, n.Name) else None
+            ref = self.facts.names.get(root.nid) if isinstance(root, n.Name) else None
             if ref is not None and getattr(ref, "kind", None) == "var":
                 self.facts.addressed.add((self.pou.key, ref.variable.key))  # type: ignore[union-attr]
 
@@ -1547,9 +1547,9 @@ class BodyChecker:
             if isinstance(ptype, t.ArrayType) and ptype.rank == 1 and isinstance(arg.value, n.Index):
                 # Sysmac: an element where an array is expected = the array from that element on
                 aty = self.expr(arg.value)
-                base_ty = self.facts.types.get(id(arg.value.base))
+                base_ty = self.facts.types.get(arg.value.base.nid)
                 if aty is not None and isinstance(base_ty, t.ArrayType) and self.element_ok(aty, ptype.element):
-                    self.facts.array_from_element.add(id(arg.value))
+                    self.facts.array_from_element.add(arg.value.nid)
                     self.lvalue_check_only(arg.value)
                     info.inputs.append((var, arg.value))
                     return
@@ -1586,9 +1586,9 @@ class BodyChecker:
             return
         if isinstance(ptype, t.ArrayType) and ptype.dims is None and ptype.rank == 1 and isinstance(arg.value, n.Index):
             aty = self.expr(arg.value)
-            base_ty = self.facts.types.get(id(arg.value.base))
+            base_ty = self.facts.types.get(arg.value.base.nid)
             if aty is not None and isinstance(base_ty, t.ArrayType) and self.element_ok(aty, ptype.element):
-                self.facts.array_from_element.add(id(arg.value))
+                self.facts.array_from_element.add(arg.value.nid)
                 info.inputs.append((var, arg.value))
             return
         ty = self.expr(arg.value, expected=ptype if not isinstance(ptype, t.GenericType) else None)
@@ -1599,7 +1599,7 @@ class BodyChecker:
                 self.error(f"'{var.name}' of {self.display(pou)} needs {ptype.name}, got {ty.name}", arg.value.span, "E052")
             else:
                 # untyped literals only decide the type when no typed argument does
-                generic_types.append((ty, id(arg.value) in self.facts.untyped))
+                generic_types.append((ty, arg.value.nid in self.facts.untyped))
         elif isinstance(ptype, t.ArrayType) and ptype.dims is None:
             if not (isinstance(ty, t.ArrayType) and self.element_ok(ty.element, ptype.element)
                     and open_rank_ok(ty, ptype)):

@@ -325,7 +325,7 @@ class Checker:
                 self.error("VAR_GLOBAL is not allowed inside a POU; declare globals at top level", block.span, "E012")
                 continue
             for decl in block.decls:
-                if id(decl) in early:
+                if decl.nid in early:
                     continue
                 vtype = self.resolve_type_spec(decl.type_spec, namespace, allow_generic=native,
                                                allow_open_array=kind in (IN_OUT, INPUT))
@@ -719,13 +719,13 @@ class Checker:
                                 self.error(f"property '{impl_p.name}' needs a {kind} (interface {iinfo.name} "
                                            f"declares one)", impl_p.span, "E068")
         # an ABSTRACT function block has no instances (only references and interfaces to derived ones)
-        seen_vars: set[int] = set()
+        seen_vars: set[int] = set()   # Variable objects (shared by a holder and its members), not nodes
         for key, info in self.pous.items():
             for holder in [info] + self.members_of(info):
                 for var in holder.variables.values():
-                    if id(var) in seen_vars:
+                    if id(var) in seen_vars:   # not a node
                         continue
-                    seen_vars.add(id(var))
+                    seen_vars.add(id(var))   # not a node
                     ty = var.type
                     while isinstance(ty, t.ArrayType):
                         ty = ty.element
@@ -784,7 +784,7 @@ class Checker:
                     var = Variable(name, LOCAL, vtype, True, span)
                     var.init = self.initial_value(decl.init, vtype, pou.namespace, info)
                     info.variables[name.lower()] = var
-                done.add(id(decl))
+                done.add(decl.nid)
         return done
 
     # ---- types
@@ -1030,7 +1030,7 @@ class Checker:
         """Evaluate a constant expression at compile time; `NOT_CONST` if it is not one."""
         if isinstance(expr, n.Call):
             # LOWER_BOUND/UPPER_BOUND of a declared array, SIZEOF: constants once checked
-            word, value = self.facts.type_queries.get(id(expr), ("", None))
+            word, value = self.facts.type_queries.get(expr.nid, ("", None))
             return value if word == "CONST" else NOT_CONST
         if isinstance(expr, (n.IntLiteral, n.BoolLiteral, n.StringLiteral)):
             return expr.value
@@ -1402,7 +1402,7 @@ class Checker:
         for key, node in self.index.pou_nodes.items():
             seen: set[str] = set()
             for call in self._calls_of(key, node):
-                info = self.facts.calls.get(id(call))
+                info = self.facts.calls.get(call.nid)
                 if info is not None and info.pou.key not in seen:
                     seen.add(info.pou.key)
                     calls[key].append((info.pou.name, info.pou.key))
@@ -1467,7 +1467,7 @@ class Checker:
         graph: dict[str, set[str]] = {key: set() for key in self.index.pou_nodes}
         for key, node in self.index.pou_nodes.items():
             for call in self._calls_of(key, node):
-                info = self.facts.calls.get(id(call))
+                info = self.facts.calls.get(call.nid)
                 if info is not None and info.pou.kind == "FUNCTION":
                     graph[key].add(info.pou.key)
         state: dict[str, str] = {}
@@ -1504,8 +1504,9 @@ class Checker:
                 node = self.method_nodes.get(method.key)
                 if node is None:
                     continue
-                graph[method.key] = {call.pou.key for call in map(self.facts.calls.get, map(id, self._calls_of(
-                    method.key, node))) if call is not None and call.pou.kind == "METHOD" and call.oo != "itf"}
+                calls = (self.facts.calls.get(call.nid) for call in self._calls_of(method.key, node))
+                graph[method.key] = {call.pou.key for call in calls
+                                     if call is not None and call.pou.kind == "METHOD" and call.oo != "itf"}
         if not any(graph.values()):
             return
         methods = {m.key: m for info in self.pous.values() for m in self.members_of(info)}

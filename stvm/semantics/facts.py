@@ -48,6 +48,10 @@ class CallInfo:
 
 @dataclass
 class Facts:
+    """Every map is keyed by the node's `nid` (stvm/syntax/nodes.py): nodes compare by value, so
+    two equal expressions in different places need different keys, and a nid, unlike `id()`, is
+    never reused while the node lives elsewhere."""
+
     types: dict[int, t.Type] = field(default_factory=dict)
     names: dict[int, NameRef] = field(default_factory=dict)
     calls: dict[int, CallInfo] = field(default_factory=dict)
@@ -60,6 +64,5 @@ class Facts:
     type_queries: dict[int, tuple[str, object]] = field(default_factory=dict)
     auto_deref: set[int] = field(default_factory=set)     # names of REFERENCE TO variables (used as the target)
     addressed: set[tuple[str, str]] = field(default_factory=set)  # (POU key, variable key) whose reference is taken
-    keep: list = field(default_factory=list)              # keeps nodes alive so ids stay unique
-    props: dict[int, tuple] = field(default_factory=dict)  # property uses: id → (PropertyInfo, how) how: self/inst/itf
+    props: dict[int, tuple] = field(default_factory=dict)  # property uses: nid → (PropertyInfo, how) how: self/inst/itf
     intrinsics: dict[int, tuple] = field(default_factory=dict)  # __QUERYINTERFACE ('query', key) / __ISVALIDREF ('valid', None)

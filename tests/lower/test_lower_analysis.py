@@ -109,7 +109,7 @@ def test_statement_flags_match_a_walk_of_each_statement():
     assert len(statements) > 500
 
     def native(s) -> bool:
-        return any(isinstance(x, n.Call) and (info := analysis.facts.calls.get(id(x))) is not None
+        return any(isinstance(x, n.Call) and (info := analysis.facts.calls.get(x.nid)) is not None
                    and not info.is_fb and not info.oo for x in walk((s,)))
     for s in statements:
         assert (s.nid in plan.skips_on_bad_index) == any(isinstance(x, n.Index) for x in walk((s,)))

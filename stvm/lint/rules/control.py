@@ -309,7 +309,7 @@ def for_variable_written(ctx: PouContext):
     by_stmt = {}
     for node in ctx.cfg.nodes:
         if node.stmt is not None:
-            by_stmt.setdefault(id(node.stmt), []).append(node)
+            by_stmt.setdefault(node.stmt.nid, []).append(node)
     for stmt in _all_statements(ctx.node.body):
         if not isinstance(stmt, n.For):
             continue
@@ -317,7 +317,7 @@ def for_variable_written(ctx: PouContext):
         if var is None:
             continue
         for inner in _all_statements(stmt.body):
-            for node in by_stmt.get(id(inner), []):
+            for node in by_stmt.get(inner.nid, []):
                 if node.kind in ("for_init", "for_step"):
                     if node.kind == "for_init" and inner.variable is not None and \
                             ctx.facts.variable_of(inner.variable) is var:

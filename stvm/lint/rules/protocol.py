@@ -31,11 +31,11 @@ def _parents(root: n.Expr) -> dict[int, n.Expr]:
     for expr in iter_exprs(root):
         if isinstance(expr, n.Call):
             for arg in expr.args:
-                out[id(arg.value)] = expr
+                out[arg.value.nid] = expr
         elif isinstance(expr, n.Binary):
-            out[id(expr.left)] = out[id(expr.right)] = expr
+            out[expr.left.nid] = out[expr.right.nid] = expr
         elif isinstance(expr, n.Unary):
-            out[id(expr.operand)] = expr
+            out[expr.operand.nid] = expr
     return out
 
 
@@ -48,7 +48,7 @@ def _padded(call: n.Call, top: n.Expr, ctx: PouContext) -> bool:
     """Inside a CONCAT that puts literal '0'/'00' text before it (possibly cut with RIGHT)."""
     parents = _parents(top)
     child: n.Expr = call
-    parent = parents.get(id(call))
+    parent = parents.get(call.nid)
     while parent is not None:
         if isinstance(parent, n.Call):
             info = ctx.facts.call(parent)
@@ -57,7 +57,7 @@ def _padded(call: n.Call, top: n.Expr, ctx: PouContext) -> bool:
                 position = next((i for i, v in enumerate(values) if v is child), 0)
                 if any(_is_zero_text(v, ctx) for v in values[:position]):
                     return True
-        child, parent = parent, parents.get(id(parent))
+        child, parent = parent, parents.get(parent.nid)
     return False
 
 

@@ -70,10 +70,10 @@ def _loops_over(ctx: PouContext):
     loops = {}
     for node in ctx.cfg.nodes:
         if node.kind == "for_test":
-            loops[id(node.stmt)] = node.stmt
+            loops[node.stmt.nid] = node.stmt
     for loop in loops.values():
-        inner = {id(s) for s in _statements(loop.body)}
-        by_loop[id(loop)] = [node for node in ctx.cfg.nodes if id(node.stmt) in inner]
+        inner = {s.nid for s in _statements(loop.body)}
+        by_loop[loop.nid] = [node for node in ctx.cfg.nodes if node.stmt is not None and node.stmt.nid in inner]
     return [(loops[k], v) for k, v in by_loop.items()]
 
 
@@ -145,9 +145,9 @@ def index_out_of_bounds(ctx: PouContext):
                 rng = ctx.value(ix, state)
                 if rng is None or (lo <= rng[0] and rng[1] <= hi):
                     continue
-                if rng == type_range(ctx.type_of(ix)) or id(sub) in reported:
+                if rng == type_range(ctx.type_of(ix)) or sub.nid in reported:
                     continue
-                reported.add(id(sub))
+                reported.add(sub.nid)
                 yield ctx.finding("SA201", f"index {text_of(ix)} can be {fmt(rng)} here, outside "
                                            f"{text_of(sub.base)}'s bounds {lo}..{hi}", ix.span)
     # the data a string copy left in a buffer
@@ -167,7 +167,7 @@ def index_out_of_bounds(ctx: PouContext):
             if ctx.state_at(node) is None:
                 continue
             for sub in node_subexprs(node):
-                if not isinstance(sub, n.Index) or len(sub.indices) != 1 or id(sub) in reported:
+                if not isinstance(sub, n.Index) or len(sub.indices) != 1 or sub.nid in reported:
                     continue
                 array_key = place_key(sub.base, ctx.facts)
                 fill = fills.get(array_key or "")
@@ -177,7 +177,7 @@ def index_out_of_bounds(ctx: PouContext):
                 past = end[1] + idx[1] - fill[1]     # how far the last index is past the text's last byte + 1
                 if past < 0:
                     continue
-                reported.add(id(sub))
+                reported.add(sub.nid)
                 byte = {ToarybyteStringModel.TEXT_NUL: "the terminating 16#00 ToAryByte adds",
                         ToarybyteStringModel.TEXT: "a stale byte",
                         ToarybyteStringModel.IMAGE: "the string's unused storage"}[model]
