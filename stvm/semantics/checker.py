@@ -1470,25 +1470,10 @@ class Checker:
                 info = self.facts.calls.get(call.nid)
                 if info is not None and info.pou.kind == "FUNCTION":
                     graph[key].add(info.pou.key)
-        state: dict[str, str] = {}
-
-        def visit(key: str, chain: list[str]) -> None:
-            if state.get(key) == "done":
-                return
-            if state.get(key) == "open":
-                start = chain.index(key)
-                names = " -> ".join(self.pous[k].name for k in chain[start:] + [key])
-                node = self.index.pou_nodes[key]
-                self.error(f"recursive call {names}: IEC 61131-3 does not allow recursion", node.span, "E027")
-                return
-            state[key] = "open"
-            for callee in sorted(graph.get(key, ())):
-                visit(callee, chain + [key])
-            state[key] = "done"
-
-        for key in graph:
-            visit(key, [])
-        del visit   # a closure calling itself is a cycle: it would keep the checker alive
+        for cycle in _cycles_closed(graph):
+            names = " -> ".join(self.pous[k].name for k in cycle)
+            node = self.index.pou_nodes[cycle[0]]
+            self.error(f"recursive call {names}: IEC 61131-3 does not allow recursion", node.span, "E027")
 
     def check_method_recursion(self) -> None:
         """A METHOD (or property accessor) calling itself, directly or through other methods, by
@@ -1511,31 +1496,19 @@ class Checker:
             return
         methods = {m.key: m for info in self.pous.values() for m in self.members_of(info)}
         allowed = self.settings.dialect in (Dialect.CODESYS, Dialect.TWINCAT)
-        state: dict[str, str] = {}
 
         def name(key: str) -> str:
             m = methods[key]
             return f"{self.pous[m.owner].name}.{m.name}" if m.owner in self.pous else m.name
 
-        def visit(key: str, chain: list[str]) -> None:
-            if state.get(key) == "done":
-                return
-            if state.get(key) == "open":
-                names = " -> ".join(name(k) for k in chain[chain.index(key):] + [key])
-                span = self.method_nodes[key].name_span
-                if allowed:
-                    self.warning(f"recursive method call {names}: allowed in {self.settings.dialect.value}, "
-                                 f"but a recursion too deep ends the run in a stack-overflow fault", span)
-                else:
-                    self.error(f"recursive method call {names}: IEC 61131-3 does not allow recursion", span, "E027")
-                return
-            state[key] = "open"
-            for callee in sorted(graph.get(key, ())):
-                visit(callee, chain + [key])
-            state[key] = "done"
-
-        for key in graph:
-            visit(key, [])
+        for cycle in _cycles_closed(graph):
+            names = " -> ".join(name(k) for k in cycle)
+            span = self.method_nodes[cycle[0]].name_span
+            if allowed:
+                self.warning(f"recursive method call {names}: allowed in {self.settings.dialect.value}, "
+                             f"but a recursion too deep ends the run in a stack-overflow fault", span)
+            else:
+                self.error(f"recursive method call {names}: IEC 61131-3 does not allow recursion", span, "E027")
 
     def check_configuration(self) -> tuple[list[TaskInfo], list[str]]:
         configs = [c for u in self.units for c in u.configurations]
@@ -1607,3 +1580,33 @@ def analyze(units: list[n.CompilationUnit], settings: SysmacSettings = DEFAULT_S
     `natives`: the stdlib's native functions (stvm.stdlib.NATIVE_FUNCTIONS), for the result types
     of generic ones (SHL, MUX, TRUNC, …); without it their result is the common input type."""
     return Checker(units, settings, natives).run()
+
+
+def _cycles_closed(graph: Mapping[str, set[str]]) -> list[list[str]]:
+    """The cycles a depth-first walk of a call graph closes (roots in the graph's order, callees
+    sorted), each as the chain from the key called again back to it: `['a', 'b', 'a']`.
+
+    Iterative: a nested function that calls itself is a reference cycle, which would keep
+    whatever it closes over (the checker) alive until the collector runs."""
+    state: dict[str, str] = {}
+    cycles: list[list[str]] = []
+    for root in graph:
+        if root in state:
+            continue
+        state[root] = "open"
+        chain = [root]
+        stack = [iter(sorted(graph.get(root, ())))]
+        while stack:
+            for callee in stack[-1]:
+                seen = state.get(callee)
+                if seen == "open":
+                    cycles.append(chain[chain.index(callee):] + [callee])
+                elif seen is None:
+                    state[callee] = "open"
+                    chain.append(callee)
+                    stack.append(iter(sorted(graph.get(callee, ()))))
+                    break
+            else:
+                state[chain.pop()] = "done"
+                stack.pop()
+    return cycles
