@@ -24,6 +24,8 @@ class Variable:
     constant: bool = False
     span: Span = NO_SPAN
     init: object = None       # the constant initial value (runtime representation) or None for the type default
+    # CODESYS `fb : F(1, nMax := 5)`: F's FB_init inputs given in the declaration, {input key: value}
+    fb_args: dict | None = None
 
     @property
     def key(self) -> str:

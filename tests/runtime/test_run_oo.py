@@ -740,6 +740,33 @@ END_PROGRAM
     assert rc == 3 and ":5:1: fault: integer division by zero (task FB_init, scan 0" in err, err
 
 
+def test_fb_init_arguments_in_a_declaration_reach_every_fb_init_of_the_chain():
+    src = """FUNCTION_BLOCK F
+VAR_INPUT x : INT; END_VAR
+VAR n : INT; END_VAR
+METHOD FB_init : BOOL
+VAR_INPUT bInitRetains : BOOL; bInCopyCode : BOOL; a : INT; nMax : INT := 100; END_VAR
+n := a + nMax + x;
+END_METHOD
+END_FUNCTION_BLOCK
+FUNCTION_BLOCK G EXTENDS F
+VAR seen : INT; END_VAR
+METHOD FB_init : BOOL
+VAR_INPUT bInitRetains : BOOL; bInCopyCode : BOOL; a : INT; nMax : INT := 100; END_VAR
+seen := nMax;
+END_METHOD
+END_FUNCTION_BLOCK
+VAR_GLOBAL gf : F(7, 8); END_VAR
+PROGRAM Main
+VAR f1 : F(1, 2); f2 : F(a := 3) := (x := 4); f3 : F(); g : G(nMax := 20, a := 1); END_VAR
+END_PROGRAM
+"""
+    # positional and named, the instance initialiser (x := 4) before FB_init, the other inputs'
+    # initial values (nMax := 100), a base's FB_init gets the derived instance's arguments
+    assert run_st(src, prints=["gf.n", "Main.f1.n", "Main.f2.n", "Main.f3.n", "Main.g.n", "Main.g.seen"]) == {
+        "gf.n": 15, "Main.f1.n": 3, "Main.f2.n": 107, "Main.f3.n": 100, "Main.g.n": 21, "Main.g.seen": 20}
+
+
 def test_a_recursive_method_runs_under_codesys():
     src = """FUNCTION_BLOCK F
 METHOD Down : INT
