@@ -66,14 +66,17 @@ class PouGenerator:
         first (runtime/vm.py `run_fb_inits`); the bare expression when no FB_init is declared.
         `fb_args` ({input key: constant}, `fb : F(1, 2)`) go to every FB_init with that input."""
         fb_args = fb_args or {}
-        chain = []
+        chain, after_init = [], {}
         pou = self.model.pous.get(ty.qualname.lower())
         while pou is not None:
             method = pou.methods.get("fb_init")
             if method is not None:
                 chain.append((self.classes[pou.key], method))
+            # {attribute 'call_after_init'} (on the method anywhere in the chain): called once,
+            # through the instance's own class, so an override runs; a base's first
+            after_init.update({k: m for k, m in pou.methods.items() if m.call_after_init})
             pou = self.model.pous.get(pou.base) if pou.base else None
-        if not chain:
+        if not chain and not after_init:
             return made
         calls = []
         for cls, method in reversed(chain):
@@ -81,6 +84,9 @@ class PouGenerator:
                     else self.default_expr(v.type, fb_args[v.key] if v.key in fb_args else v.init)
                     for v in method.params()]
             calls.append(f"({cls}.{method_attr(method.name)}, ({''.join(a + ', ' for a in args)}))")
+        own_class = self.classes[ty.qualname.lower()]
+        for method in reversed(list(after_init.values())):   # after every FB_init
+            calls.append(f"({own_class}.{method_attr(method.name)}, ())")
         return f"_fb_init_later(_fb_pending, {made}, ({''.join(c + ', ' for c in calls)}))"
 
     def fb_instance_expr(self, ty: t.FBType, init: dict) -> str:

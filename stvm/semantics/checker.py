@@ -17,6 +17,7 @@ from stvm.source import is_stdlib_file
 from stvm.numeric import f32, utf16_units
 from stvm.semantics import types as t
 from stvm.semantics.body import BodyChecker
+from stvm.syntax.pragmas import has_attribute
 from stvm.semantics.facts import NOT_CONST, CallInfo, Facts, NameRef  # noqa: F401 (API: checker.Facts)
 from stvm.semantics.qualified import resolve as resolve_qualified
 from stvm.semantics.model import (EXTERNAL, GLOBAL, IN_OUT, INPUT, LOCAL, OUTPUT, POUInfo,
@@ -449,6 +450,23 @@ class Checker:
             self.error(f"{m.name} takes inputs only (stvm calls it at instance creation), not "
                        f"{extra.section} '{extra.name}'", extra.span, "E063")
 
+    def check_call_after_init(self, m: n.Method, info: POUInfo, pou: n.POU) -> None:
+        """CODESYS `{attribute 'call_after_init'}` on a METHOD of an FB: stvm calls it once for every
+        instance, after the FB_init methods (runtime/vm.py `run_fb_inits`), so it takes no
+        inputs, outputs or in-outs."""
+        if pou.kind != "FUNCTION_BLOCK":
+            self.error("{attribute 'call_after_init'} is for a METHOD of a FUNCTION_BLOCK", m.name_span, "E063")
+            return
+        if m.name.lower() in ("fb_init", "fb_exit", "fb_reinit"):
+            self.error(f"{{attribute 'call_after_init'}} cannot mark {m.name}", m.name_span, "E063")
+            return
+        param = next((v for v in info.variables.values() if v.section in (INPUT, OUTPUT, IN_OUT)), None)
+        if param is not None:
+            self.error(f"a call_after_init method takes no parameters (stvm calls it at instance creation), "
+                       f"not {param.section} '{param.name}'", param.span, "E063")
+            return
+        info.call_after_init = True
+
     def declare_method(self, m: n.Method, owner: POUInfo, pou: n.POU, accessor: str = "",
                        prop_type: t.Type | None = None) -> POUInfo:
         qual = owner.qualname + "." + (f"__{accessor.lower()}_" if accessor else "") + m.name
@@ -482,6 +500,8 @@ class Checker:
                 info.inst_vars[key] = hidden.key
         if not accessor and m.name.lower() in ("fb_init", "fb_exit") and pou.kind == "FUNCTION_BLOCK":
             self.check_lifecycle_method(m, info)
+        if not accessor and has_attribute(m.pragmas, "call_after_init"):
+            self.check_call_after_init(m, info, pou)
         if pou.kind == "INTERFACE":
             if m.body:
                 self.error(f"method '{m.name}' of interface {pou.name} cannot have statements", m.body[0].span, "E063")

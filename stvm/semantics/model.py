@@ -59,6 +59,7 @@ class POUInfo:
     inherited: int = 0                # FB: how many of `variables` (the first ones) come from the base
     inst_vars: dict[str, str] = field(default_factory=dict)  # METHOD: VAR_INST key → the instance variable's key
     stat_vars: dict[str, str] = field(default_factory=dict)  # VAR_STAT key → its hidden global's key
+    call_after_init: bool = False     # METHOD with {attribute 'call_after_init'} (CODESYS): run after FB_init
 
     @property
     def key(self) -> str:

@@ -767,6 +767,45 @@ END_PROGRAM
         "gf.n": 15, "Main.f1.n": 3, "Main.f2.n": 107, "Main.f3.n": 100, "Main.g.n": 21, "Main.g.seen": 20}
 
 
+def test_call_after_init_methods_run_once_after_fb_init():
+    src = """FUNCTION_BLOCK B
+VAR seq : INT; initAt : INT; afterAt : INT; baseAfter : INT; END_VAR
+METHOD FB_init : BOOL
+VAR_INPUT bInitRetains : BOOL; bInCopyCode : BOOL; END_VAR
+seq := seq + 1; initAt := seq;
+END_METHOD
+{attribute 'call_after_init'}
+METHOD BaseReady
+seq := seq + 1; baseAfter := seq;
+END_METHOD
+END_FUNCTION_BLOCK
+{attribute 'call_after_init'}
+FUNCTION_BLOCK F EXTENDS B
+VAR_INPUT x : INT; END_VAR
+VAR seen : INT; END_VAR
+{attribute 'call_after_init'}
+METHOD Ready
+seq := seq + 1; afterAt := seq; seen := x;
+END_METHOD
+END_FUNCTION_BLOCK
+FUNCTION_BLOCK P
+VAR n : INT; END_VAR
+{attribute 'call_after_init'}
+METHOD Only
+n := n + 10;
+END_METHOD
+END_FUNCTION_BLOCK
+PROGRAM Main
+VAR f : F := (x := 3); p : P; END_VAR
+END_PROGRAM
+"""
+    # after FB_init and the instance initialiser, a base's first; once (not every scan); also
+    # on an FB without FB_init
+    assert run_st(src, cycles=3, prints=["Main.f.initAt", "Main.f.baseAfter", "Main.f.afterAt", "Main.f.seen",
+                                         "Main.p.n"]) == {
+        "Main.f.initAt": 1, "Main.f.baseAfter": 2, "Main.f.afterAt": 3, "Main.f.seen": 3, "Main.p.n": 10}
+
+
 def test_a_recursive_method_runs_under_codesys():
     src = """FUNCTION_BLOCK F
 METHOD Down : INT

@@ -270,6 +270,18 @@ def test_fb_init_argument_errors(decl, column, message):
     assert f"case.st:15:{column}: error: {message}" in err, err
 
 
+@pytest.mark.parametrize("source, line, message", [
+    ("FUNCTION_BLOCK F\n{attribute 'call_after_init'}\nMETHOD M\nVAR_INPUT a : INT; END_VAR\nEND_METHOD\n"
+     "END_FUNCTION_BLOCK\n", 4, "a call_after_init method takes no parameters (stvm calls it at instance creation), "
+     "not VAR_INPUT 'a'"),
+    ("PROGRAM Main\n{attribute 'call_after_init'}\nMETHOD N\nEND_METHOD\nEND_PROGRAM\n", 3,
+     "{attribute 'call_after_init'} is for a METHOD of a FUNCTION_BLOCK"),
+])
+def test_call_after_init_errors(source, line, message):
+    found = errors(source)
+    assert any(l == line and message in m for l, m in found), found
+
+
 RECURSIVE_METHODS = """FUNCTION_BLOCK F
 METHOD Down : INT
 VAR_INPUT k : INT; END_VAR

@@ -165,3 +165,23 @@ END_PROGRAM
     assert isinstance(f2.init, n.StructInit)
     assert f3.fb_args == () and f4.fb_args is None and r.fb_args is None
     assert (r.type_spec.low, r.type_spec.high) == (-5, 5)
+
+
+def test_a_pragma_right_before_a_method_is_the_methods():
+    fb = _unit("""
+{attribute 'call_after_init'}
+FUNCTION_BLOCK F
+VAR x : INT; END_VAR
+x := 1; {warning 'in the body'}
+x := 2;
+{attribute 'call_after_init'}
+METHOD Ready
+{attribute 'inside'}
+x := 3;
+END_METHOD
+METHOD Other
+END_METHOD
+END_FUNCTION_BLOCK
+""").pous[0]
+    assert fb.pragmas == ("attribute 'call_after_init'",)
+    assert [(m.name, m.pragmas) for m in fb.methods] == [("Ready", ("attribute 'call_after_init'",)), ("Other", ())]
