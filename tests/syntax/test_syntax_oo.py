@@ -167,6 +167,12 @@ END_PROGRAM
     assert (r.type_spec.low, r.type_spec.high) == (-5, 5)
 
 
+def test_fb_init_arguments_parse_the_same_with_lark_and_the_fast_driver():
+    from stvm.syntax.parser import parse_text_lark
+    text = "PROGRAM Main\nVAR f1 : F(1, -2); f2 : F(a := 3) := (x := 4); f3 : F(); r : INT(-5..5); END_VAR\nEND_PROGRAM\n"
+    assert parse_text(text, "t.st")[0] == parse_text_lark(text, "t.st")[0]
+
+
 def test_a_pragma_right_before_a_method_is_the_methods():
     fb = _unit("""
 {attribute 'call_after_init'}
