@@ -27,7 +27,7 @@ class PouGenerator:
             return 0
         return ty.members[0][1]
 
-    def default_expr(self, ty: t.Type, init: object = None) -> str:
+    def default_expr(self, ty: t.Type, init: object = None, fb_args: dict | None = None) -> str:
         if isinstance(ty, t.BoolType):
             return py_literal(bool(init) if init is not None else False)
         if isinstance(ty, t.IntType):
@@ -52,7 +52,7 @@ class PouGenerator:
                 made = self.fb_instance_expr(ty, init)
             else:
                 made = f"{self.classes[ty.qualname.lower()]}()"
-            return self.with_fb_init(ty, made)
+            return self.with_fb_init(ty, made, fb_args)
         if isinstance(ty, t.ArrayType):
             if ty.dims is None:
                 return "None"
@@ -60,24 +60,33 @@ class PouGenerator:
             return self.array_expr(ty, list(ty.dims), values)
         return "None"
 
-    def with_fb_init(self, ty: t.FBType, made: str) -> str:
+    def with_fb_init(self, ty: t.FBType, made: str, fb_args: dict | None = None) -> str:
         """CODESYS FB_init: the instance `made` queued for its FB_init methods (the base's first,
         TwinCAT/CODESYS order), which the VM runs once every instance exists, the inner ones
-        first (runtime/vm.py `run_fb_inits`); the bare expression when no FB_init is declared."""
-        chain = []
+        first (runtime/vm.py `run_fb_inits`); the bare expression when no FB_init is declared.
+        `fb_args` ({input key: constant}, `fb : F(1, 2)`) go to every FB_init with that input."""
+        fb_args = fb_args or {}
+        chain, after_init = [], {}
         pou = self.model.pous.get(ty.qualname.lower())
         while pou is not None:
             method = pou.methods.get("fb_init")
             if method is not None:
                 chain.append((self.classes[pou.key], method))
+            # {attribute 'call_after_init'} (on the method anywhere in the chain): called once,
+            # through the instance's own class, so an override runs; a base's first
+            after_init.update({k: m for k, m in pou.methods.items() if m.call_after_init})
             pou = self.model.pous.get(pou.base) if pou.base else None
-        if not chain:
+        if not chain and not after_init:
             return made
         calls = []
         for cls, method in reversed(chain):
             args = ["True" if v.key == "binitretains" else "False" if v.key == "bincopycode"
-                    else self.default_expr(v.type, v.init) for v in method.params()]
+                    else self.default_expr(v.type, fb_args[v.key] if v.key in fb_args else v.init)
+                    for v in method.params()]
             calls.append(f"({cls}.{method_attr(method.name)}, ({''.join(a + ', ' for a in args)}))")
+        own_class = self.classes[ty.qualname.lower()]
+        for method in reversed(list(after_init.values())):   # after every FB_init
+            calls.append(f"({own_class}.{method_attr(method.name)}, ())")
         return f"_fb_init_later(_fb_pending, {made}, ({''.join(c + ', ' for c in calls)}))"
 
     def fb_instance_expr(self, ty: t.FBType, init: dict) -> str:
@@ -107,7 +116,7 @@ class PouGenerator:
         return "[" + ", ".join(rows) + "]"
 
     def var_default(self, var: Variable) -> str:
-        return self.default_expr(var.type, var.init)
+        return self.default_expr(var.type, var.init, var.fb_args)
 
     def class_order(self) -> list[tuple[str, POUInfo]]:
         """POUs in key order, except that a base FB comes before the FBs extending it."""

@@ -17,6 +17,7 @@ from stvm.source import is_stdlib_file
 from stvm.numeric import f32, utf16_units
 from stvm.semantics import types as t
 from stvm.semantics.body import BodyChecker
+from stvm.syntax.pragmas import has_attribute
 from stvm.semantics.facts import NOT_CONST, CallInfo, Facts, NameRef  # noqa: F401 (API: checker.Facts)
 from stvm.semantics.qualified import resolve as resolve_qualified
 from stvm.semantics.model import (EXTERNAL, GLOBAL, IN_OUT, INPUT, LOCAL, OUTPUT, POUInfo,
@@ -118,6 +119,7 @@ class Checker:
         self.globals: dict[str, Variable] = {}
         self.any_static = False    # a VAR_STAT was hoisted to a global (hoist_static_variables)
         self.fb_instance_inits: list = []   # `fb : F := (x := 1)` waiting for F's variables (fb_instance_init)
+        self.fb_init_arg_decls: list = []   # `fb : F(1, 2)` waiting for F's FB_init (resolve_fb_init_args)
         self.global_nodes: dict[str, n.VarDecl] = {}
         self.enumerators: dict[str, list[tuple[t.EnumType, int]]] = {}
         self.structs: dict[str, t.Type] = {}
@@ -190,6 +192,7 @@ class Checker:
             self.pous[key] = self.declare_pou(pou)
         self.link_oo()
         self.resolve_fb_instance_inits()
+        self.resolve_fb_init_args()
 
     def check_identifier(self, name: str, span: n.Span) -> None:
         if name.lower() in _RESERVED:
@@ -246,6 +249,8 @@ class Checker:
                     self.error(f"constant '{name}' needs an initial value", span, "E013")
                 self.globals[name.lower()] = var
                 self.global_nodes[name.lower()] = decl
+                if decl.fb_args is not None:
+                    self.fb_init_arg_decls.append((var, decl, vtype, namespace, None))
 
     def alias_init(self, spec: n.TypeSpec, namespace: tuple[str, ...], seen: frozenset = frozenset()) -> object:
         """The initial value an alias type declares (`TYPE T : INT := 7;`), for variables of type
@@ -344,6 +349,8 @@ class Checker:
                     if block.constant and decl.init is None and kind != EXTERNAL:
                         self.error(f"constant '{name}' needs an initial value", span, "E013")
                     info.variables[key] = var
+                    if decl.fb_args is not None:
+                        self.fb_init_arg_decls.append((var, decl, vtype, namespace, info))
                     if vtype is not None and decl.init is not None:
                         if kind == IN_OUT:
                             self.error(f"VAR_IN_OUT '{name}' cannot have an initial value", span, "E013")
@@ -443,6 +450,23 @@ class Checker:
             self.error(f"{m.name} takes inputs only (stvm calls it at instance creation), not "
                        f"{extra.section} '{extra.name}'", extra.span, "E063")
 
+    def check_call_after_init(self, m: n.Method, info: POUInfo, pou: n.POU) -> None:
+        """CODESYS `{attribute 'call_after_init'}` on a METHOD of an FB: stvm calls it once for every
+        instance, after the FB_init methods (runtime/vm.py `run_fb_inits`), so it takes no
+        inputs, outputs or in-outs."""
+        if pou.kind != "FUNCTION_BLOCK":
+            self.error("{attribute 'call_after_init'} is for a METHOD of a FUNCTION_BLOCK", m.name_span, "E063")
+            return
+        if m.name.lower() in ("fb_init", "fb_exit", "fb_reinit"):
+            self.error(f"{{attribute 'call_after_init'}} cannot mark {m.name}", m.name_span, "E063")
+            return
+        param = next((v for v in info.variables.values() if v.section in (INPUT, OUTPUT, IN_OUT)), None)
+        if param is not None:
+            self.error(f"a call_after_init method takes no parameters (stvm calls it at instance creation), "
+                       f"not {param.section} '{param.name}'", param.span, "E063")
+            return
+        info.call_after_init = True
+
     def declare_method(self, m: n.Method, owner: POUInfo, pou: n.POU, accessor: str = "",
                        prop_type: t.Type | None = None) -> POUInfo:
         qual = owner.qualname + "." + (f"__{accessor.lower()}_" if accessor else "") + m.name
@@ -476,6 +500,8 @@ class Checker:
                 info.inst_vars[key] = hidden.key
         if not accessor and m.name.lower() in ("fb_init", "fb_exit") and pou.kind == "FUNCTION_BLOCK":
             self.check_lifecycle_method(m, info)
+        if not accessor and has_attribute(m.pragmas, "call_after_init"):
+            self.check_call_after_init(m, info, pou)
         if pou.kind == "INTERFACE":
             if m.body:
                 self.error(f"method '{m.name}' of interface {pou.name} cannot have statements", m.body[0].span, "E063")
@@ -1233,6 +1259,79 @@ class Checker:
                     self.error(f"'{var.name}' is initialised twice", finit.span, "E024")
                     continue
                 out[var.key] = self.initial_value(finit, var.type, namespace, pou)
+
+    def resolve_fb_init_args(self) -> None:
+        """CODESYS/TwinCAT `fb : F(1, nMax := 5)`: the inputs of F's FB_init (its own or its
+        base's; bInitRetains and bInCopyCode excluded, stvm passes them), positional in
+        declaration order or by name, each a constant. They become `Variable.fb_args`, which the
+        lowering passes to every FB_init of the chain that has such an input."""
+        while self.fb_init_arg_decls:
+            var, decl, vtype, namespace, pou = self.fb_init_arg_decls.pop(0)
+            span = decl.type_spec.span
+            if vtype is None:
+                continue   # an unknown type, already reported
+            if not isinstance(vtype, t.FBType):
+                self.error(f"arguments in parentheses after a type are FB_init arguments, but {vtype.name} "
+                           "is not a function block", span, "E063")
+                continue
+            if var.section in (IN_OUT, EXTERNAL) or (var.section == INPUT and pou is not None
+                                                     and pou.kind in ("FUNCTION", "METHOD")):
+                self.error(f"FB_init arguments are given where an instance is declared, not on "
+                           f"{var.section} '{var.name}'", span, "E063")
+                continue
+            fb = self.pous.get(vtype.qualname.lower())
+            method = None
+            while fb is not None and method is None:
+                method = fb.methods.get("fb_init")
+                fb = self.pous.get(fb.base) if fb.base else None
+            if method is None:
+                self.error(f"function block {vtype.name} has no FB_init method to take arguments", span, "E063")
+                continue
+            params = [v for v in method.params() if v.section == INPUT
+                      and v.key not in ("binitretains", "bincopycode")]
+            by_key = {v.key: v for v in params}
+            values: dict = {}
+            positional = 0
+            named = False
+            for arg in decl.fb_args:
+                if arg.kind == "positional":
+                    if named:
+                        self.error("a positional FB_init argument after a named one", arg.span, "E063")
+                        continue
+                    if positional >= len(params):
+                        self.error(f"too many FB_init arguments: {vtype.name}'s FB_init takes {len(params)} "
+                                   f"besides bInitRetains and bInCopyCode", arg.span, "E063")
+                        continue
+                    target = params[positional]
+                    positional += 1
+                elif arg.kind == "input":
+                    named = True
+                    target = by_key.get((arg.name or "").lower())
+                    if target is None:
+                        self.error(f"{vtype.name}'s FB_init has no input '{arg.name}'"
+                                   + (" (stvm passes bInitRetains and bInCopyCode itself)"
+                                      if (arg.name or "").lower() in ("binitretains", "bincopycode") else ""),
+                                   arg.span, "E063")
+                        continue
+                    if target.key in values:
+                        self.error(f"FB_init input '{target.name}' is given twice", arg.span, "E063")
+                        continue
+                else:
+                    self.error("FB_init takes inputs only: no '=>' in a declaration", arg.span, "E063")
+                    continue
+                value = self.const_value(arg.value, namespace, pou)
+                if value is NOT_CONST:
+                    self.error("an FB_init argument in a declaration must be a constant expression",
+                               arg.value.span, "E063")
+                    continue
+                value = self.convert_constant(value, target.type, arg.value.span, arg.value)
+                if value is not None:
+                    values[target.key] = value
+            if 0 < positional < len(params) and not named:
+                self.error(f"{positional} FB_init argument{'s' if positional > 1 else ''} for "
+                           f"{len(params)} inputs of {vtype.name}'s FB_init: give all of them, or name them",
+                           span, "E063")
+            var.fb_args = values
 
     def convert_constant(self, value: object, ty: t.Type, span: n.Span, expr: n.Expr | None = None) -> object:
         if isinstance(ty, t.BoolType):

@@ -24,6 +24,8 @@ class Variable:
     constant: bool = False
     span: Span = NO_SPAN
     init: object = None       # the constant initial value (runtime representation) or None for the type default
+    # CODESYS `fb : F(1, nMax := 5)`: F's FB_init inputs given in the declaration, {input key: value}
+    fb_args: dict | None = None
 
     @property
     def key(self) -> str:
@@ -57,6 +59,7 @@ class POUInfo:
     inherited: int = 0                # FB: how many of `variables` (the first ones) come from the base
     inst_vars: dict[str, str] = field(default_factory=dict)  # METHOD: VAR_INST key → the instance variable's key
     stat_vars: dict[str, str] = field(default_factory=dict)  # VAR_STAT key → its hidden global's key
+    call_after_init: bool = False     # METHOD with {attribute 'call_after_init'} (CODESYS): run after FB_init
 
     @property
     def key(self) -> str:

@@ -27,7 +27,7 @@ import re
 from functools import lru_cache
 
 from stvm.runtime.values import FunctionError
-from stvm.semantics.types import ELEMENTARY, BoolType, IntType, RealType, StringType, TimeType, Type, is_wide
+from stvm.semantics.types import ELEMENTARY, BoolType, EnumType, IntType, RealType, StringType, TimeType, Type, is_wide
 from stvm.stdlib.registry import native_function
 from stvm.stdlib.strings import text_from_wide, wide_from_text
 from stvm.stdlib.typeops import coerce, real_to_integer
@@ -428,12 +428,81 @@ def conversion_declarations() -> str:
     for name, source, target in conversion_functions():
         lines += ["{native}", f"FUNCTION {name} : {target}",
                   f"VAR_INPUT In : {source}; END_VAR", "END_FUNCTION", ""]
+    lines += generic_conversion_declarations()
     return "\n".join(lines)
+
+
+# --- TO_<type>: the overloaded conversions (IEC 61131-3 ed. 3 table 22) ------------------------
+
+_SHORT_NAMES = {long: short for short, long in LONG_NAMES.items()}
+
+
+def source_type_name(ty: Type) -> str:
+    """The short elementary name a `<SRC>_TO_…` function is named by, for a static type: a
+    subrange is its base type, an enumeration its base type (INT unless it names one), a
+    STRING[n] STRING."""
+    if isinstance(ty, StringType):
+        return "WSTRING" if is_wide(ty) else "STRING"
+    if isinstance(ty, EnumType):
+        ty = ty.base or ELEMENTARY["INT"]
+    name = ty.name.upper()
+    return _SHORT_NAMES.get(name, name)
+
+
+def generic_conversion_functions() -> list[tuple[str, str]]:
+    """(function name, result type) of every TO_<type>, long type names included."""
+    targets = NUMERIC_TYPES + TIME_TYPES + ["STRING", "WSTRING"]
+    return [(f"TO_{spelling}", target) for target in targets for spelling in _spellings(target)]
+
+
+@lru_cache(maxsize=None)
+def _pairs() -> frozenset:
+    return frozenset(conversion_pairs())
+
+
+def _generic_rule(target: str):
+    """The check: TO_<target> of a type with a `<SRC>_TO_<target>` (or of `target` itself)."""
+    def rule(arg_types):
+        source = source_type_name(arg_types[0])
+        if source != target and (source, target) not in _pairs():
+            raise ValueError(f"no conversion from {arg_types[0].name} to {target}")
+        return ELEMENTARY[target]
+    return rule
+
+
+def _generic_converter(what: str, target: str):
+    """TO_<target>: the `<SRC>_TO_<target>` of the argument's static type (`{native typed}`),
+    looked up once per source type."""
+    by_source: dict = {}
+
+    def convert(ctx, arg_types, value):
+        source = source_type_name(arg_types[0])
+        impl = by_source.get(source)
+        if impl is None:
+            impl = by_source[source] = (_identity if source == target
+                                        else _make_converter(f"{source}_TO_{target}", source, target))
+        return impl(ctx, value)
+    convert.__name__ = what.lower()
+    return convert
+
+
+def _identity(ctx, value):
+    return value
+
+
+def generic_conversion_declarations() -> list[str]:
+    lines = []
+    for name, target in generic_conversion_functions():
+        lines += ["{native typed}", f"FUNCTION {name} : {target}",
+                  "VAR_INPUT In : ANY_ELEMENTARY; END_VAR", "END_FUNCTION", ""]
+    return lines
 
 
 def _register_all() -> None:
     for name, source, target in conversion_functions():
         native_function(name)(_make_converter(name, source, target))
+    for name, target in generic_conversion_functions():
+        native_function(name, typed=True, result_rule=_generic_rule(target))(_generic_converter(name, target))
 
 
 _register_all()

@@ -343,6 +343,8 @@ class VarDecl(Node):
     type_spec: TypeSpec
     init: Initializer | None
     span: Span = _span()
+    # CODESYS/TwinCAT `fb : F(1, nMax := 5)`: the arguments of F's FB_init (None: no parentheses)
+    fb_args: tuple[Argument, ...] | None = None
 
 
 @dataclass(frozen=True, slots=True)

@@ -235,6 +235,15 @@ class _ToNodes:
         init = rest[1] if len(rest) > 1 else None
         return n.VarDecl(names, type_spec, init, self._s(meta))
 
+    def fb_args_var_decl(self, meta, items):
+        names = items[0]
+        rest = [x for x in items[1:] if not (isinstance(x, tuple) and x and x[0] == "location")]
+        name = rest[0]
+        args = tuple(a for a in rest[1:] if isinstance(a, n.Argument))
+        init = next((x for x in rest[1:] if x is not None and not isinstance(x, n.Argument)), None)
+        type_spec = n.NamedTypeSpec(name.parts, name.rooted, name.span)
+        return n.VarDecl(names, type_spec, init, self._s(meta), args)
+
     def ident_list(self, meta, items):
         return tuple((str(t), self._ts(t)) for t in items)
 
@@ -269,6 +278,8 @@ class _ToNodes:
                 members.append(item[1:])
             elif isinstance(item, tuple) and item and item[0] == "elem":
                 base = item[1]
+            elif isinstance(item, n.Name):   # the leading base type (a qualified_name, see st.lark)
+                base = "\\".join(item.parts)
             elif isinstance(item, Token):
                 default = str(item)
         return n.EnumDecl(tuple(members), base, default, self._s(meta))
@@ -306,7 +317,7 @@ class _ToNodes:
         return None
 
     def subrange_spec(self, meta, items):
-        return n.SubrangeTypeSpec(items[0][1], items[1], items[2], self._s(meta))
+        return n.SubrangeTypeSpec("\\".join(items[0].parts), items[1], items[2], self._s(meta))
 
     def ref_spec(self, meta, items):
         return n.RefTypeSpec(items[-1], "REF_TO", self._s(meta))

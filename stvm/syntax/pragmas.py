@@ -60,13 +60,15 @@ def attach(unit: n.CompilationUnit, tokens: list) -> n.CompilationUnit:
         if i > 0 and elements[i - 1][1] > where:
             continue      # inside the element before it (a variable's or a statement's pragma)
         found.setdefault((elements[i][2], elements[i][3]), []).append(str(tok)[1:-1].strip())
-    if not found:
+    if not found and not any(p.methods for p in unit.pous):
         return unit
 
     def with_pragmas(kind: str, items: tuple) -> tuple:
         out = []
         for i, item in enumerate(items):
             extra = found.get((kind, i))
+            if kind == "pous" and item.methods:
+                item = with_method_pragmas(item, tokens)
             if extra:
                 item = dataclasses.replace(item, pragmas=tuple(item.pragmas) + tuple(extra))
                 if kind == "globals":
@@ -78,3 +80,23 @@ def attach(unit: n.CompilationUnit, tokens: list) -> n.CompilationUnit:
 
     return dataclasses.replace(unit, pous=with_pragmas("pous", unit.pous), types=with_pragmas("types", unit.types),
                                globals=with_pragmas("globals", unit.globals))
+
+
+def with_method_pragmas(pou, tokens: list):
+    """`pou` with each METHOD's leading pragmas (`{attribute 'call_after_init'}` right before
+    METHOD): the ones inside the POU with no variable block, statement, method or property
+    between them and the method."""
+    s = pou.span
+    inside = [tok for tok in tokens if (s.line, s.column) < (tok.line, tok.column) < (s.end_line, s.end_column)]
+    if not inside:
+        return pou
+    parts = sorted(((x.span.line, x.span.column), (x.span.end_line, x.span.end_column))
+                   for x in (*pou.var_blocks, *pou.body, *pou.methods, *pou.properties))
+    methods = []
+    for m in pou.methods:
+        start = (m.span.line, m.span.column)
+        # the end of the last element before the method: a pragma after it belongs to the method
+        before = max((end for begin, end in parts if begin < start), default=(s.line, s.column))
+        mine = tuple(str(tok)[1:-1].strip() for tok in inside if before <= (tok.line, tok.column) < start)
+        methods.append(dataclasses.replace(m, pragmas=tuple(m.pragmas) + mine) if mine else m)
+    return dataclasses.replace(pou, methods=tuple(methods))

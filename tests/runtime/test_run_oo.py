@@ -740,6 +740,72 @@ END_PROGRAM
     assert rc == 3 and ":5:1: fault: integer division by zero (task FB_init, scan 0" in err, err
 
 
+def test_fb_init_arguments_in_a_declaration_reach_every_fb_init_of_the_chain():
+    src = """FUNCTION_BLOCK F
+VAR_INPUT x : INT; END_VAR
+VAR n : INT; END_VAR
+METHOD FB_init : BOOL
+VAR_INPUT bInitRetains : BOOL; bInCopyCode : BOOL; a : INT; nMax : INT := 100; END_VAR
+n := a + nMax + x;
+END_METHOD
+END_FUNCTION_BLOCK
+FUNCTION_BLOCK G EXTENDS F
+VAR seen : INT; END_VAR
+METHOD FB_init : BOOL
+VAR_INPUT bInitRetains : BOOL; bInCopyCode : BOOL; a : INT; nMax : INT := 100; END_VAR
+seen := nMax;
+END_METHOD
+END_FUNCTION_BLOCK
+VAR_GLOBAL gf : F(7, 8); END_VAR
+PROGRAM Main
+VAR f1 : F(1, 2); f2 : F(a := 3) := (x := 4); f3 : F(); g : G(nMax := 20, a := 1); END_VAR
+END_PROGRAM
+"""
+    # positional and named, the instance initialiser (x := 4) before FB_init, the other inputs'
+    # initial values (nMax := 100), a base's FB_init gets the derived instance's arguments
+    assert run_st(src, prints=["gf.n", "Main.f1.n", "Main.f2.n", "Main.f3.n", "Main.g.n", "Main.g.seen"]) == {
+        "gf.n": 15, "Main.f1.n": 3, "Main.f2.n": 107, "Main.f3.n": 100, "Main.g.n": 21, "Main.g.seen": 20}
+
+
+def test_call_after_init_methods_run_once_after_fb_init():
+    src = """FUNCTION_BLOCK B
+VAR seq : INT; initAt : INT; afterAt : INT; baseAfter : INT; END_VAR
+METHOD FB_init : BOOL
+VAR_INPUT bInitRetains : BOOL; bInCopyCode : BOOL; END_VAR
+seq := seq + 1; initAt := seq;
+END_METHOD
+{attribute 'call_after_init'}
+METHOD BaseReady
+seq := seq + 1; baseAfter := seq;
+END_METHOD
+END_FUNCTION_BLOCK
+{attribute 'call_after_init'}
+FUNCTION_BLOCK F EXTENDS B
+VAR_INPUT x : INT; END_VAR
+VAR seen : INT; END_VAR
+{attribute 'call_after_init'}
+METHOD Ready
+seq := seq + 1; afterAt := seq; seen := x;
+END_METHOD
+END_FUNCTION_BLOCK
+FUNCTION_BLOCK P
+VAR n : INT; END_VAR
+{attribute 'call_after_init'}
+METHOD Only
+n := n + 10;
+END_METHOD
+END_FUNCTION_BLOCK
+PROGRAM Main
+VAR f : F := (x := 3); p : P; END_VAR
+END_PROGRAM
+"""
+    # after FB_init and the instance initialiser, a base's first; once (not every scan); also
+    # on an FB without FB_init
+    assert run_st(src, cycles=3, prints=["Main.f.initAt", "Main.f.baseAfter", "Main.f.afterAt", "Main.f.seen",
+                                         "Main.p.n"]) == {
+        "Main.f.initAt": 1, "Main.f.baseAfter": 2, "Main.f.afterAt": 3, "Main.f.seen": 3, "Main.p.n": 10}
+
+
 def test_a_recursive_method_runs_under_codesys():
     src = """FUNCTION_BLOCK F
 METHOD Down : INT

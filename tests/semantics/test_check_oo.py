@@ -232,6 +232,56 @@ def test_fb_init_and_fb_exit_signatures(source, line, message):
     assert any(l == line and message in m for l, m in found), found
 
 
+FB_WITH_INIT = """FUNCTION_BLOCK F
+VAR n : INT; END_VAR
+METHOD FB_init : BOOL
+VAR_INPUT bInitRetains : BOOL; bInCopyCode : BOOL; a : INT; nMax : INT := 100; END_VAR
+n := a + nMax;
+END_METHOD
+END_FUNCTION_BLOCK
+FUNCTION_BLOCK H
+END_FUNCTION_BLOCK
+FUNCTION_BLOCK G EXTENDS F
+END_FUNCTION_BLOCK
+"""
+
+
+def test_fb_init_arguments_in_declarations_check_clean():
+    assert errors(FB_WITH_INIT + "VAR_GLOBAL gf : F(7, 8); END_VAR\nPROGRAM Main\nVAR f1 : F(1, 2); "
+                  "f2 : F(nMax := 5) := (n := 1); f3 : F(); g : G(a := 1, nMax := -1); END_VAR\nEND_PROGRAM\n") == []
+
+
+@pytest.mark.parametrize("decl, column, message", [
+    ("e : F(1, 2, 3);", 13, "too many FB_init arguments: F's FB_init takes 2 besides bInitRetains and bInCopyCode"),
+    ("e : F(b := 3);", 7, "F's FB_init has no input 'b'"),
+    ("e : F(a := 1, a := 2);", 15, "FB_init input 'a' is given twice"),
+    ("e : H(1);", 5, "function block H has no FB_init method to take arguments"),
+    ("e : INT(1, 2);", 5, "arguments in parentheses after a type are FB_init arguments, but INT is not a function block"),
+    ("e : F(v, 1);", 7, "an FB_init argument in a declaration must be a constant expression"),
+    ("e : F(1);", 5, "1 FB_init argument for 2 inputs of F's FB_init: give all of them, or name them"),
+    ("e : F(a := 1, 2);", 15, "a positional FB_init argument after a named one"),
+    ("e : F(a := 100000);", 12, "100000 is out of range for INT (-32768..32767)"),
+    ("e : F(bInitRetains := FALSE);", 7, "F's FB_init has no input 'bInitRetains' (stvm passes bInitRetains"),
+    ("e : F(a => v);", 7, "FB_init takes inputs only: no '=>' in a declaration"),
+])
+def test_fb_init_argument_errors(decl, column, message):
+    rc, err = check_text(FB_WITH_INIT + f"PROGRAM Main\nVAR\nv : INT;\n{decl}\nEND_VAR\nEND_PROGRAM\n")
+    assert rc == 1 and "Traceback" not in err
+    assert f"case.st:15:{column}: error: {message}" in err, err
+
+
+@pytest.mark.parametrize("source, line, message", [
+    ("FUNCTION_BLOCK F\n{attribute 'call_after_init'}\nMETHOD M\nVAR_INPUT a : INT; END_VAR\nEND_METHOD\n"
+     "END_FUNCTION_BLOCK\n", 4, "a call_after_init method takes no parameters (stvm calls it at instance creation), "
+     "not VAR_INPUT 'a'"),
+    ("PROGRAM Main\n{attribute 'call_after_init'}\nMETHOD N\nEND_METHOD\nEND_PROGRAM\n", 3,
+     "{attribute 'call_after_init'} is for a METHOD of a FUNCTION_BLOCK"),
+])
+def test_call_after_init_errors(source, line, message):
+    found = errors(source)
+    assert any(l == line and message in m for l, m in found), found
+
+
 RECURSIVE_METHODS = """FUNCTION_BLOCK F
 METHOD Down : INT
 VAR_INPUT k : INT; END_VAR

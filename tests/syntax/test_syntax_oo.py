@@ -138,3 +138,56 @@ END_FUNCTION_BLOCK""")
     assert (internal.name, internal.modifiers) == ("Internal", ())
     assert [(m.name, m.modifiers) for m in internal.methods] == [("Public", ()), ("Abstract", ("PRIVATE", "FINAL"))]
     assert (shape.name, shape.modifiers) == ("Shape", ("ABSTRACT", "PUBLIC"))
+
+
+def test_fb_init_arguments_in_a_declaration_next_to_subranges_and_enums():
+    """`fb : F(1, nMax := 5)` (CODESYS/TwinCAT) shares `Name (` with a subrange `INT(0..100)` and
+    an enumeration with a base type `INT (a := 1)`: the grammar tells them apart after `(`."""
+    unit = _unit("""
+TYPE E : INT (a := 1, b := 2); END_TYPE
+TYPE R : INT(0..100); END_TYPE
+PROGRAM Main
+VAR
+  f1 : F(1, 2);
+  f2 : Lib\\F(a := 3, nMax := 5) := (x := 4);
+  f3 : F();
+  f4 : F;
+  r : INT(-5..5);
+END_VAR
+END_PROGRAM
+""")
+    enum, subrange = (d.body for d in unit.types)
+    assert isinstance(enum, n.EnumDecl) and enum.base == "INT" and [m[0] for m in enum.members] == ["a", "b"]
+    assert isinstance(subrange.type_spec, n.SubrangeTypeSpec) and subrange.type_spec.base == "INT"
+    f1, f2, f3, f4, r = unit.pous[0].var_blocks[0].decls
+    assert [(a.kind, a.value.value) for a in f1.fb_args] == [("positional", 1), ("positional", 2)]
+    assert f2.type_spec.parts == ("Lib", "F") and [a.name for a in f2.fb_args] == ["a", "nMax"]
+    assert isinstance(f2.init, n.StructInit)
+    assert f3.fb_args == () and f4.fb_args is None and r.fb_args is None
+    assert (r.type_spec.low, r.type_spec.high) == (-5, 5)
+
+
+def test_fb_init_arguments_parse_the_same_with_lark_and_the_fast_driver():
+    from stvm.syntax.parser import parse_text_lark
+    text = "PROGRAM Main\nVAR f1 : F(1, -2); f2 : F(a := 3) := (x := 4); f3 : F(); r : INT(-5..5); END_VAR\nEND_PROGRAM\n"
+    assert parse_text(text, "t.st")[0] == parse_text_lark(text, "t.st")[0]
+
+
+def test_a_pragma_right_before_a_method_is_the_methods():
+    fb = _unit("""
+{attribute 'call_after_init'}
+FUNCTION_BLOCK F
+VAR x : INT; END_VAR
+x := 1; {warning 'in the body'}
+x := 2;
+{attribute 'call_after_init'}
+METHOD Ready
+{attribute 'inside'}
+x := 3;
+END_METHOD
+METHOD Other
+END_METHOD
+END_FUNCTION_BLOCK
+""").pous[0]
+    assert fb.pragmas == ("attribute 'call_after_init'",)
+    assert [(m.name, m.pragmas) for m in fb.methods] == [("Ready", ("attribute 'call_after_init'",)), ("Other", ())]
