@@ -61,6 +61,15 @@ class ArrayRefReuse:
 
 
 @dataclass(frozen=True)
+class HeldDeref:
+    """`hold_derefs_in_loops`: a loop during which the scalar target of the reference `ref` (a
+    Python local never assigned in the loop) is kept in a Python local; `written`: the loop stores
+    through it (the local is written back after the loop)."""
+    ref: Variable
+    written: bool
+
+
+@dataclass(frozen=True)
 class PouPlan:
     """What the code of one call body (FB/PROGRAM `__call__`, FUNCTION, METHOD, accessor) needs."""
     key: str
@@ -80,6 +89,7 @@ class ProjectPlan:
     inlined_fbs: Mapping[int, n.POU] = field(default_factory=dict)         # Call nid → the FB inlined
     direct_native: frozenset[int] = frozenset()             # Call nids of native FBs called directly
     array_refs: Mapping[int, ArrayRefReuse] = field(default_factory=dict)  # argument value nid → kept ArrayRef
+    held_derefs: Mapping[int, HeldDeref] = field(default_factory=dict)     # loop nid → the dereference held
 
 
 EMPTY_PLAN = ProjectPlan()
@@ -103,6 +113,7 @@ class _Planner:
     inlined: dict[int, n.POU] = field(default_factory=dict)
     direct: set[int] = field(default_factory=set)
     array_refs: dict[int, ArrayRefReuse] = field(default_factory=dict)
+    held: dict[int, HeldDeref] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         self.model = self.a.model   # type: ignore[attr-defined]
@@ -126,7 +137,7 @@ class _Planner:
         return ProjectPlan(MappingProxyType(self.pous), frozenset(self.function_errors),
                            frozenset(self.indexed), MappingProxyType(self.range_fors),
                            MappingProxyType(self.inlined), frozenset(self.direct),
-                           MappingProxyType(self.array_refs))
+                           MappingProxyType(self.array_refs), MappingProxyType(self.held))
 
     # ---- one body
     def plan_body(self, pou: POUInfo, node, method: bool) -> None:
@@ -151,6 +162,8 @@ class _Planner:
             info = self.facts.calls.get(s.call.nid)
             if info is not None and info.is_fb and info.oo != "super_body":
                 self.fb_call(s.call, info)
+        if self.options.hold_derefs_in_loops and self.options.cache_locals:
+            self.held_derefs(body, cached)
 
     def by_reference(self, pou: POUInfo, calls: list[n.Call]) -> set[str]:
         """Variables of the POU that code other than the body's own may read or write during a
@@ -309,6 +322,70 @@ class _Planner:
         guarded = (n.Assign, n.CallStatement)
         self.function_errors.update(nid for nid, cls in native.items() if cls in guarded)
         return uses, calls, fors, call_statements, assigned
+
+    # ---- hold_derefs_in_loops
+    def held_derefs(self, body, cached: Mapping[str, Variable]) -> None:
+        """The outermost loops of a body for which `held_deref` holds."""
+        inner: set[int] = set()
+        found: dict[int, HeldDeref] = {}
+        for node in walk(body):
+            if node.__class__ in _LOOPS and node.nid not in inner:
+                decision = self.held_deref(node, cached)
+                if decision is not None:
+                    found[node.nid] = decision
+                    inner.update(x.nid for x in walk((node,)) if x is not node and x.__class__ in _LOOPS)
+        self.held.update((nid, d) for nid, d in found.items() if nid not in inner)
+
+    def held_deref(self, loop, cached: Mapping[str, Variable]) -> HeldDeref | None:
+        """`hold_derefs_in_loops`: can `r^` be kept in a Python local for the whole loop?
+
+        Only when nothing else in the loop can read or write its target: every variable the loop
+        names is a Python local of this call (a variable whose reference is taken is never one), the
+        only dereferences are of one reference `r` to a scalar, which the loop never assigns, and
+        there are no calls (a callee could reach anything), member or index accesses (a struct
+        field or array element may be the target). Faults inside the loop still see the value
+        written so far: it is written back in a `finally`."""
+        ref: Variable | None = None
+        written = False
+        for node in walk((loop,)):
+            cls = node.__class__
+            if cls is n.Name:
+                name = self.facts.names.get(node.nid)
+                if name is None or node.nid in self.facts.auto_deref or (self.facts.props and node.nid in self.facts.props):
+                    return None
+                if name.kind in ("enum", "null", "result"):
+                    continue
+                if name.kind != "var" or name.variable is None or name.variable.key not in cached:
+                    return None
+                if t.is_aggregate(name.variable.type):
+                    return None   # a whole-struct or array assignment writes the fields and elements
+            elif cls is n.Deref:
+                base = node.base
+                name = self.facts.names.get(base.nid) if isinstance(base, n.Name) else None
+                if name is None or name.kind != "var" or name.variable is None:
+                    return None
+                ty = name.variable.type
+                if not isinstance(ty, t.RefType) or ty.is_null or t.is_aggregate(ty.target):
+                    return None
+                if ref is not None and ref.key != name.variable.key:
+                    return None   # two references may name the same variable
+                ref = name.variable
+            elif cls in (n.Assign, n.RefAssign):
+                if cls is n.RefAssign:
+                    return None
+                if isinstance(node.target, n.Deref) or (isinstance(node.target, n.BitAccess)
+                                                        and _through_deref(node.target)):
+                    written = True
+            elif cls not in _HELD_OK:
+                return None
+        if ref is None:
+            return None
+        for node in walk((loop,)):
+            if isinstance(node, n.Assign) and isinstance(node.target, n.Name) and root_name(node.target) == ref.key:
+                return None
+            if isinstance(node, n.For) and root_name(node.variable) == ref.key:
+                return None
+        return HeldDeref(ref, written)
 
     # ---- range_for, hoist_bounds
     def range_for(self, s: n.For, cached: Mapping[str, Variable]) -> RangeFor | None:
@@ -475,6 +552,13 @@ class _Planner:
         return None
 
 
+def _through_deref(target: n.Expr) -> bool:
+    """A bit or part of a dereference (`r^.3 := TRUE` stores through `r`)."""
+    while isinstance(target, n.BitAccess):
+        target = target.base
+    return isinstance(target, n.Deref)
+
+
 def hot_enough(var: Variable, hot: tuple[dict[str, float], set[str]]) -> bool:
     """`hot_path_cache`: is a local worth its load on entry (and store on exit) on a typical
     call? Yes for a FOR variable (a range-FOR needs it in a local), or when the uses one call
@@ -520,6 +604,10 @@ _CHILD_FIELDS: dict[type, tuple[str, ...] | None] = {}
 
 _LOOPS = frozenset({n.For, n.While, n.Repeat})
 _STATEMENTS = frozenset(cls for cls in vars(n).values() if isinstance(cls, type) and issubclass(cls, n.Statement))
+# what a loop with a held dereference may contain besides names, dereferences and assignments
+_HELD_OK = frozenset({n.IntLiteral, n.RealLiteral, n.BoolLiteral, n.StringLiteral, n.TimeLiteral,
+                      n.HashLiteral, n.Unary, n.Binary, n.BitAccess, n.PartialAccess, n.If, n.Case,
+                      n.CaseLabel, n.For, n.While, n.Repeat, n.Exit, n.Continue, n.Return, n.Empty})
 _SCALARS = {"str", "int", "bool", "float", "bytes", "None", "Span", "n.Span"}
 
 

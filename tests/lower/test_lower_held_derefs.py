@@ -1,0 +1,151 @@
+"""`hold_derefs_in_loops` (stvm/lower/options.py, issue 11): a loop that only touches Python locals and
+one reference's scalar target keeps `r^` in a local. Each program runs with the option on and off:
+the same values scan by scan, the same faults at the same ST lines; the plan refuses the loops in
+which something else could read or write the target."""
+
+from __future__ import annotations
+
+import pytest
+
+import stvm
+from core_helpers import write_st
+from stvm.lower.analysis import plan_project
+from stvm.lower.options import DEFAULT_OPTIONS
+from stvm.project import check, project_settings
+from test_lower_scan_options import load_with, run_both
+
+OPTION = "hold_derefs_in_loops"
+
+SWITCHING = """
+PROGRAM Main
+VAR a : DINT; arr : ARRAY[1..3] OF DINT; n : INT; i : INT; r : REF_TO DINT; pi : POINTER TO DINT;
+    bits : WORD; rw : REF_TO WORD; END_VAR
+n := n + 1;
+IF n MOD 2 = 0 THEN r := REF(a); ELSE r := REF(arr[2]); END_IF;
+FOR i := 1 TO 10 DO
+    r^ := r^ + i;
+    IF r^ > 100 THEN r^ := r^ - 100; END_IF;
+END_FOR;
+pi := ADR(arr[3]);
+WHILE pi^ < n * 5 DO pi^ := pi^ + 2; END_WHILE;
+rw := REF(bits);
+REPEAT rw^.3 := NOT rw^.3; i := i - 1; UNTIL i < 5 END_REPEAT;
+END_PROGRAM
+"""
+
+
+def test_loops_hold_the_target_and_compute_the_same():
+    paths = ["Main.a", "Main.arr[2]", "Main.arr[3]", "Main.bits", "Main.i"]
+    on, off, seen = run_both(SWITCHING, OPTION, 6, lambda k: {}, paths)
+    assert on.count("_held") > 0 and "_held" not in off
+    assert seen[-1]["Main.a"] != 0 and seen[-1]["Main.arr[2]"] != 0 and seen[-1]["Main.arr[3]"] >= 30
+
+
+EXITS = """
+FUNCTION Sum : DINT
+VAR_INPUT r : REF_TO DINT; n : INT; END_VAR
+VAR i : INT; END_VAR
+FOR i := 1 TO 20 DO
+    r^ := r^ + i;
+    IF i = n THEN RETURN; END_IF;
+END_FOR;
+Sum := r^;
+END_FUNCTION
+PROGRAM Main
+VAR a : DINT; b : DINT; k : INT; res : DINT; r : REF_TO DINT; END_VAR
+r := REF(b);
+k := 0;
+WHILE TRUE DO
+    r^ := r^ + 1;
+    k := k + 1;
+    IF k >= 3 THEN EXIT; END_IF;
+END_WHILE;
+res := Sum(REF(a), 4);
+END_PROGRAM
+"""
+
+
+def test_exit_and_return_leave_the_target_written():
+    on, _, seen = run_both(EXITS, OPTION, 2, lambda k: {}, ["Main.a", "Main.b", "Main.res"])
+    assert "_held" in on
+    assert seen == [{"Main.a": 10, "Main.b": 3, "Main.res": 0}, {"Main.a": 20, "Main.b": 6, "Main.res": 0}]
+
+
+NULL_IN_LOOP = """
+PROGRAM Main
+VAR r : REF_TO DINT; i : INT; n : INT; x : DINT; END_VAR
+FOR i := 1 TO n DO
+    x := x + i;
+    r^ := x;
+END_FOR;
+n := 2;
+END_PROGRAM
+"""
+
+
+@pytest.mark.parametrize("options", [DEFAULT_OPTIONS, DEFAULT_OPTIONS.without(OPTION)], ids=["on", "off"])
+def test_null_reference_faults_at_its_line_only_when_the_loop_runs(options):
+    vm = load_with(NULL_IN_LOOP, options).start(scan="10ms")
+    vm.scan()   # no iteration: a NULL reference is never dereferenced
+    with pytest.raises(stvm.RuntimeFault) as info:
+        vm.scan()
+    assert info.value.message == "dereference of a NULL reference"
+    assert info.value.span.line == 6 and vm["Main.x"] == 1
+
+
+FAULT_MID_LOOP = """
+PROGRAM Main
+VAR a : DINT; r : REF_TO DINT; i : INT; d : DINT := 3; q : DINT; END_VAR
+r := REF(a);
+FOR i := 1 TO 10 DO
+    r^ := r^ + 1;
+    d := d - 1;
+    q := 10 / d;
+END_FOR;
+END_PROGRAM
+"""
+
+
+@pytest.mark.parametrize("options", [DEFAULT_OPTIONS, DEFAULT_OPTIONS.without(OPTION)], ids=["on", "off"])
+def test_a_fault_inside_the_loop_sees_the_target_as_written(options):
+    vm = load_with(FAULT_MID_LOOP, options).start(scan="10ms")
+    with pytest.raises(stvm.RuntimeFault) as info:
+        vm.scan()
+    assert info.value.span.line == 8
+    assert vm["Main.a"] == 3
+
+
+NOT_HELD = """
+TYPE Pt : STRUCT x : DINT; END_STRUCT; END_TYPE
+FUNCTION Id : DINT
+VAR_INPUT v : DINT; END_VAR
+Id := v;
+END_FUNCTION
+PROGRAM Main
+VAR a, b : DINT; p : Pt; arr : ARRAY[1..2] OF DINT; i : INT; r, r2 : REF_TO DINT; rp : REF_TO Pt; END_VAR
+r := REF(p.x); r2 := REF(a); rp := REF(p);
+FOR i := 1 TO 2 DO r^ := r^ + 1; p.x := p.x + 1; END_FOR;      (* p.x is r^ *)
+FOR i := 1 TO 2 DO r^ := r^ + 1; rp^.x := rp^.x + 1; END_FOR;  (* so is rp^.x *)
+FOR i := 1 TO 2 DO r^ := r^ + 1; r2^ := r2^ + 1; END_FOR;      (* two references *)
+FOR i := 1 TO 2 DO r^ := Id(r^); END_FOR;                      (* a call *)
+FOR i := 1 TO 2 DO r^ := r^ + arr[i]; END_FOR;                 (* an array element *)
+FOR i := 1 TO 2 DO r^ := r^ + 1; r := REF(a); END_FOR;         (* r changes *)
+FOR i := 1 TO 2 DO r^ := r^ + 1; b := a; END_FOR;              (* a is referenced: not a local *)
+FOR i := 1 TO 2 DO r2^ := r2^ + i; END_FOR;                    (* held *)
+END_PROGRAM
+"""
+
+
+def test_the_plan_refuses_loops_where_the_target_may_be_reached_otherwise():
+    path = write_st(NOT_HELD)
+    settings = project_settings([path])
+    analysis, diags, _ = check([path], settings, use_cache=False)
+    assert analysis is not None, diags
+    fors = [s for s in analysis.pou_nodes["main"].body if s.__class__.__name__ == "For"]
+    held = plan_project(analysis, settings, DEFAULT_OPTIONS).held_derefs
+    assert [s.nid in held for s in fors] == [False] * 7 + [True]
+    assert held[fors[-1].nid].ref.key == "r2" and held[fors[-1].nid].written
+    assert not plan_project(analysis, settings, DEFAULT_OPTIONS.without(OPTION)).held_derefs
+    assert not plan_project(analysis, settings, DEFAULT_OPTIONS.without("cache_locals")).held_derefs
+    paths = ["Main.a", "Main.b", "Main.p.x"]
+    run_both(NOT_HELD, OPTION, 2, lambda k: {}, paths)
