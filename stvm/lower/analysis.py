@@ -67,6 +67,9 @@ class HeldDeref:
     through it (the local is written back after the loop)."""
     ref: Variable
     written: bool
+    # objects whose scalar fields the loop reads or writes (`p`, `p.q`, `rp^`): the held copy of
+    # the loop runs only when `ref` refers to a field of none of them
+    bases: tuple[n.Expr, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -341,17 +344,28 @@ class _Planner:
 
         Only when nothing else in the loop can read or write its target: every variable the loop
         names is a Python local of this call (a variable whose reference is taken is never one), the
-        only dereferences are of one reference `r` to a scalar, which the loop never assigns, and
-        there are no calls (a callee could reach anything), member or index accesses (a struct
-        field or array element may be the target). Faults inside the loop still see the value
+        only dereferences of scalars are of one reference `r`, which the loop never assigns, and
+        there are no calls (a callee could reach anything), no index accesses (an array element may
+        be the target) and no whole-aggregate assignments. Scalar fields of structs and FB
+        instances (`p.x`, `p.q.x`, `rp^.x`; `p` need not be a local: an aggregate is never rebound)
+        may be read and written: `HeldDeref.bases` are the
+        objects whose fields the loop touches, and the held copy of the loop runs only when `r`
+        refers to none of their fields (checked before the loop; not in a project with UNIONs,
+        whose members overlay the bytes of others). Faults inside the loop still see the value
         written so far: it is written back in a `finally`."""
+        facts = self.facts
         ref: Variable | None = None
         written = False
+        bases: list[n.Expr] = []       # the objects whose fields the loop reads or writes
+        in_bases: set[int] = set()     # nodes of those base expressions (already checked)
+        base_refs: set[str] = set()    # references dereferenced to reach a base (`rp` in `rp^.x`)
         for node in walk((loop,)):
             cls = node.__class__
+            if node.nid in in_bases:
+                continue
             if cls is n.Name:
-                name = self.facts.names.get(node.nid)
-                if name is None or node.nid in self.facts.auto_deref or (self.facts.props and node.nid in self.facts.props):
+                name = facts.names.get(node.nid)
+                if name is None or node.nid in facts.auto_deref or (facts.props and node.nid in facts.props):
                     return None
                 if name.kind in ("enum", "null", "result"):
                     continue
@@ -360,16 +374,17 @@ class _Planner:
                 if t.is_aggregate(name.variable.type):
                     return None   # a whole-struct or array assignment writes the fields and elements
             elif cls is n.Deref:
-                base = node.base
-                name = self.facts.names.get(base.nid) if isinstance(base, n.Name) else None
-                if name is None or name.kind != "var" or name.variable is None:
+                var = self.cached_ref(node.base, cached)
+                if var is None or t.is_aggregate(var.type.target):   # type: ignore[union-attr]
                     return None
-                ty = name.variable.type
-                if not isinstance(ty, t.RefType) or ty.is_null or t.is_aggregate(ty.target):
-                    return None
-                if ref is not None and ref.key != name.variable.key:
+                if ref is not None and ref.key != var.key:
                     return None   # two references may name the same variable
-                ref = name.variable
+                ref = var
+            elif cls is n.Member:
+                base = self.field_base(node, cached, in_bases, base_refs)
+                if base is None:
+                    return None
+                bases.append(base)
             elif cls in (n.Assign, n.RefAssign):
                 if cls is n.RefAssign:
                     return None
@@ -378,14 +393,74 @@ class _Planner:
                     written = True
             elif cls not in _HELD_OK:
                 return None
-        if ref is None:
+        if ref is None or ref.key in base_refs:
             return None
+        fixed = base_refs | {ref.key}
         for node in walk((loop,)):
-            if isinstance(node, n.Assign) and isinstance(node.target, n.Name) and root_name(node.target) == ref.key:
+            if isinstance(node, n.Assign) and isinstance(node.target, n.Name) and root_name(node.target) in fixed:
                 return None
-            if isinstance(node, n.For) and root_name(node.variable) == ref.key:
+            if isinstance(node, n.For) and root_name(node.variable) in fixed:
                 return None
-        return HeldDeref(ref, written)
+        unique: dict[object, n.Expr] = {}
+        for base in bases:
+            unique.setdefault(_path_key(base), base)
+        return HeldDeref(ref, written, tuple(unique.values()))
+
+    def cached_ref(self, e: n.Expr, cached: Mapping[str, Variable]) -> Variable | None:
+        """The variable of `e` when it is a Python-local reference (not NULL's type), else None."""
+        name = self.facts.names.get(e.nid) if isinstance(e, n.Name) else None
+        if name is None or name.kind != "var" or name.variable is None or name.variable.key not in cached:
+            return None
+        ty = name.variable.type
+        if not isinstance(ty, t.RefType) or ty.is_null or e.nid in self.facts.auto_deref:
+            return None
+        return name.variable
+
+    def field_base(self, member: n.Member, cached: Mapping[str, Variable], in_bases: set[int],
+                   base_refs: set[str]) -> n.Expr | None:
+        """For a scalar field access in a held loop: its base (`p`, `p.q` or `rp^`) when it is an
+        object the loop cannot rebind and that can be named before the loop without a fault."""
+        if self.has_unions() or t.is_aggregate(self.facts.types.get(member.nid)):
+            return None
+        if self.facts.props and member.nid in self.facts.props:
+            return None
+        base = member.base
+        chain = base
+        while True:
+            if self.facts.props and chain.nid in self.facts.props:
+                return None
+            if not isinstance(self.facts.types.get(chain.nid), (t.StructType, t.FBType)):
+                return None
+            if not isinstance(chain, n.Member):
+                break
+            chain = chain.base
+        if isinstance(chain, n.Name):
+            # a struct or FB variable, a Python local or not, is never rebound during a call
+            name = self.facts.names.get(chain.nid)
+            if name is None or name.kind not in ("var", "global", "field") or name.variable is None:
+                return None
+            if chain.nid in self.facts.auto_deref:
+                return None
+        elif isinstance(chain, n.Deref) and chain is base:
+            var = self.cached_ref(chain.base, cached)
+            if var is None:
+                return None
+            base_refs.add(var.key)
+            in_bases.add(chain.base.nid)
+        else:
+            return None   # `rp^.q.x`: `rp^.q` cannot be named before the loop when rp is NULL
+        node = base
+        while True:
+            in_bases.add(node.nid)
+            if not isinstance(node, n.Member):
+                break
+            node = node.base
+        return base
+
+    def has_unions(self) -> bool:
+        if not hasattr(self, "_unions"):
+            self._unions = any(isinstance(st, t.UnionType) for st in self.model.structs.values())
+        return self._unions
 
     # ---- range_for, hoist_bounds
     def range_for(self, s: n.For, cached: Mapping[str, Variable]) -> RangeFor | None:
@@ -550,6 +625,16 @@ class _Planner:
                 lo = vtype.dims[0][0]
             return ArrayRefReuse(value, 0, lo)
         return None
+
+
+def _path_key(e: n.Expr) -> object:
+    """The same access path written twice gives the same key (`p` and `p` in `p.x`, `p.y`)."""
+    if isinstance(e, n.Name):
+        return ("name", tuple(part.lower() for part in e.parts))
+    if isinstance(e, n.Member):
+        return ("member", _path_key(e.base), e.name.lower())
+    assert isinstance(e, n.Deref)
+    return ("deref", _path_key(e.base))
 
 
 def _through_deref(target: n.Expr) -> bool:

@@ -258,7 +258,15 @@ class StatementGenerator:
         emit = getattr(self, "st_" + type(s).__name__)
         ref, value = self.new_tmp("ref"), self.new_tmp("held")
         self.w.line(f"{ref} = {self.var_place(hold.ref, False)}")
-        self.w.line(f"if {ref} is None:")
+        if hold.bases:
+            # the loop also touches fields of these objects: r^ must be none of them (an
+            # `ItemRef` is an array element, never a field; other references are not held)
+            objects = [self.var_place(self.facts.names[b.base.nid].variable, False) if isinstance(b, n.Deref)
+                       else self.expr(b) for b in hold.bases]
+            distinct = " and ".join(f"{ref}.obj is not {code}" for code in objects)
+            self.w.line(f"if not (type({ref}) is _ItemRef or type({ref}) is _AttrRef and {distinct}):")
+        else:
+            self.w.line(f"if {ref} is None:")
         self.w.indent += 1
         emit(s)
         self.w.indent -= 1

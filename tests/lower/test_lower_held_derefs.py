@@ -5,6 +5,8 @@ which something else could read or write the target."""
 
 from __future__ import annotations
 
+import re
+
 import pytest
 
 import stvm
@@ -124,8 +126,8 @@ END_FUNCTION
 PROGRAM Main
 VAR a, b : DINT; p : Pt; arr : ARRAY[1..2] OF DINT; i : INT; r, r2 : REF_TO DINT; rp : REF_TO Pt; END_VAR
 r := REF(p.x); r2 := REF(a); rp := REF(p);
-FOR i := 1 TO 2 DO r^ := r^ + 1; p.x := p.x + 1; END_FOR;      (* p.x is r^ *)
-FOR i := 1 TO 2 DO r^ := r^ + 1; rp^.x := rp^.x + 1; END_FOR;  (* so is rp^.x *)
+FOR i := 1 TO 2 DO r^ := r^ + 1; p.x := p.x + 1; END_FOR;      (* held; p.x is r^: run time *)
+FOR i := 1 TO 2 DO r^ := r^ + 1; rp^.x := rp^.x + 1; END_FOR;  (* held; rp^.x is r^: run time *)
 FOR i := 1 TO 2 DO r^ := r^ + 1; r2^ := r2^ + 1; END_FOR;      (* two references *)
 FOR i := 1 TO 2 DO r^ := Id(r^); END_FOR;                      (* a call *)
 FOR i := 1 TO 2 DO r^ := r^ + arr[i]; END_FOR;                 (* an array element *)
@@ -143,9 +145,87 @@ def test_the_plan_refuses_loops_where_the_target_may_be_reached_otherwise():
     assert analysis is not None, diags
     fors = [s for s in analysis.pou_nodes["main"].body if s.__class__.__name__ == "For"]
     held = plan_project(analysis, settings, DEFAULT_OPTIONS).held_derefs
-    assert [s.nid in held for s in fors] == [False] * 7 + [True]
+    assert [s.nid in held for s in fors] == [True, True] + [False] * 5 + [True]
+    assert [b.__class__.__name__ for b in held[fors[0].nid].bases] == ["Name"]
     assert held[fors[-1].nid].ref.key == "r2" and held[fors[-1].nid].written
+    assert [b.__class__.__name__ for b in held[fors[1].nid].bases] == ["Deref"]
     assert not plan_project(analysis, settings, DEFAULT_OPTIONS.without(OPTION)).held_derefs
     assert not plan_project(analysis, settings, DEFAULT_OPTIONS.without("cache_locals")).held_derefs
     paths = ["Main.a", "Main.b", "Main.p.x"]
     run_both(NOT_HELD, OPTION, 2, lambda k: {}, paths)
+
+
+FIELDS = """
+TYPE In : STRUCT x : DINT; y : DINT; END_STRUCT; END_TYPE
+TYPE Pt : STRUCT x : DINT; q : In; END_STRUCT; END_TYPE
+FUNCTION_BLOCK Acc
+VAR_INPUT step : DINT; END_VAR
+VAR_OUTPUT total : DINT; END_VAR
+total := total + step;
+END_FUNCTION_BLOCK
+PROGRAM Main
+VAR a, seen : DINT; p, p2 : Pt; acc : Acc; n, i : INT; r : REF_TO DINT; rp : REF_TO Pt; END_VAR
+n := n + 1;
+CASE n MOD 5 OF
+  0: r := REF(a);
+  1: r := REF(p.x);
+  2: r := REF(p.q.x);
+  3: r := REF(acc.total); acc(step := 2);
+  4: r := REF(p2.q.y);
+END_CASE;
+IF n MOD 3 = 0 THEN rp := REF(p); ELSE rp := REF(p2); END_IF;
+FOR i := 1 TO 4 DO
+    r^ := r^ + i;
+    p.x := p.x + r^;
+    p.q.x := p.q.x + 1;
+    rp^.x := rp^.x - 1;
+    seen := seen + acc.total + r^;
+END_FOR;
+END_PROGRAM
+"""
+
+
+def test_fields_in_the_loop_are_checked_against_the_target_at_run_time():
+    paths = ["Main.a", "Main.p.x", "Main.p.q.x", "Main.p2.x", "Main.p2.q.y", "Main.acc.total", "Main.seen"]
+    on, off, seen = run_both(FIELDS, OPTION, 12, lambda k: {}, paths)
+    assert re.search(r"_ref\d+\.obj is not self\.v_acc and _ref\d+\.obj is not v_rp", on) and "_held" not in off
+    assert seen[-1]["Main.acc.total"] != 0 and seen[-1]["Main.p.x"] != 0
+
+
+def planned(source: str):
+    path = write_st(source)
+    settings = project_settings([path])
+    analysis, diags, _ = check([path], settings, use_cache=False)
+    assert analysis is not None, diags
+    fors = [s for s in analysis.pou_nodes["main"].body if s.__class__.__name__ == "For"]
+    held = plan_project(analysis, settings, DEFAULT_OPTIONS).held_derefs
+    return [s.nid in held for s in fors]
+
+
+def test_fields_that_cannot_be_named_before_the_loop_or_whole_aggregates_are_refused():
+    src = """
+TYPE In : STRUCT x : DINT; END_STRUCT; END_TYPE
+TYPE Pt : STRUCT x : DINT; q : In; END_STRUCT; END_TYPE
+PROGRAM Main
+VAR p : Pt; s : In; i : INT; r : REF_TO DINT; rp : REF_TO Pt; END_VAR
+FOR i := 1 TO 2 DO r^ := r^ + 1; rp^.q.x := 1; END_FOR;  (* rp^.q: rp may be NULL *)
+FOR i := 1 TO 2 DO r^ := r^ + 1; p.q := s; END_FOR;      (* writes every field of p.q *)
+FOR i := 1 TO 2 DO r^ := r^ + 1; rp := REF(p); END_FOR;  (* rp changes *)
+FOR i := 1 TO 2 DO r^ := r^ + 1; p.q.x := 1; END_FOR;    (* held *)
+END_PROGRAM
+"""
+    assert planned(src) == [False, False, False, True]
+
+
+def test_no_fields_in_a_project_with_unions():
+    src = """
+TYPE U : UNION a : DINT; b : REAL; END_UNION; END_TYPE
+TYPE Pt : STRUCT x : DINT; END_STRUCT; END_TYPE
+PROGRAM Main
+VAR p : Pt; u : U; i : INT; r : REF_TO DINT; END_VAR
+r := REF(u.a);
+FOR i := 1 TO 2 DO r^ := r^ + 1; p.x := 1; END_FOR;
+FOR i := 1 TO 2 DO r^ := r^ + 1; END_FOR;
+END_PROGRAM
+"""
+    assert planned(src) == [False, True]
