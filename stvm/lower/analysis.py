@@ -67,9 +67,11 @@ class HeldDeref:
     through it (the local is written back after the loop)."""
     ref: Variable
     written: bool
-    # objects whose scalar fields the loop reads or writes (`p`, `p.q`, `rp^`): the held copy of
-    # the loop runs only when `ref` refers to a field of none of them
+    # objects whose scalar fields the loop reads or writes (`p`, `p.q`, `rp^`) and arrays whose
+    # elements it reads or writes: the held copy of the loop runs only when `ref` refers to none
+    # of those fields and elements
     bases: tuple[n.Expr, ...] = ()
+    arrays: tuple[n.Name, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -345,13 +347,13 @@ class _Planner:
         Only when nothing else in the loop can read or write its target: every variable the loop
         names is a Python local of this call (a variable whose reference is taken is never one), the
         only dereferences of scalars are of one reference `r`, which the loop never assigns, and
-        there are no calls (a callee could reach anything), no index accesses (an array element may
-        be the target) and no whole-aggregate assignments. Scalar fields of structs and FB
+        there are no calls (a callee could reach anything) and no whole-aggregate assignments.
+        Elements of fixed one-dimensional arrays (`arr[i]`) and scalar fields of structs and FB
         instances (`p.x`, `p.q.x`, `rp^.x`; `p` need not be a local: an aggregate is never rebound)
-        may be read and written: `HeldDeref.bases` are the
-        objects whose fields the loop touches, and the held copy of the loop runs only when `r`
-        refers to none of their fields (checked before the loop; not in a project with UNIONs,
-        whose members overlay the bytes of others). Faults inside the loop still see the value
+        may be read and written: `HeldDeref.bases` and `.arrays` are the objects whose fields and
+        elements the loop touches, and the held copy of the loop runs only when `r` refers to none
+        of them (checked before the loop; no fields in a project with UNIONs, whose members
+        overlay the bytes of others). Faults inside the loop still see the value
         written so far: it is written back in a `finally`."""
         facts = self.facts
         ref: Variable | None = None
@@ -359,6 +361,7 @@ class _Planner:
         bases: list[n.Expr] = []       # the objects whose fields the loop reads or writes
         in_bases: set[int] = set()     # nodes of those base expressions (already checked)
         base_refs: set[str] = set()    # references dereferenced to reach a base (`rp` in `rp^.x`)
+        lists: list[n.Name] = []        # the arrays whose elements the loop reads or writes
         for node in walk((loop,)):
             cls = node.__class__
             if node.nid in in_bases:
@@ -385,6 +388,12 @@ class _Planner:
                 if base is None:
                     return None
                 bases.append(base)
+            elif cls is n.Index:
+                array = self.element_base(node)
+                if array is None:
+                    return None
+                in_bases.add(array.nid)
+                lists.append(array)
             elif cls in (n.Assign, n.RefAssign):
                 if cls is n.RefAssign:
                     return None
@@ -404,7 +413,24 @@ class _Planner:
         unique: dict[object, n.Expr] = {}
         for base in bases:
             unique.setdefault(_path_key(base), base)
-        return HeldDeref(ref, written, tuple(unique.values()))
+        arrays: dict[object, n.Name] = {}
+        for array in lists:
+            arrays.setdefault(_path_key(array), array)
+        return HeldDeref(ref, written, tuple(unique.values()), tuple(arrays.values()))
+
+    def element_base(self, index: n.Index) -> n.Name | None:
+        """For an element access in a held loop: the array variable, when it is a fixed
+        one-dimensional array of scalars named by a variable (its list is never replaced)."""
+        base = index.base
+        ty = self.facts.types.get(base.nid)
+        if not isinstance(base, n.Name) or not isinstance(ty, t.ArrayType) or ty.dims is None or len(ty.dims) != 1:
+            return None
+        if t.is_aggregate(ty.element) or len(index.indices) != 1 or base.nid in self.facts.auto_deref:
+            return None
+        name = self.facts.names.get(base.nid)
+        if name is None or name.kind not in ("var", "global", "field") or name.variable is None:
+            return None
+        return base
 
     def cached_ref(self, e: n.Expr, cached: Mapping[str, Variable]) -> Variable | None:
         """The variable of `e` when it is a Python-local reference (not NULL's type), else None."""

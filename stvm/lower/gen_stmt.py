@@ -258,13 +258,18 @@ class StatementGenerator:
         emit = getattr(self, "st_" + type(s).__name__)
         ref, value = self.new_tmp("ref"), self.new_tmp("held")
         self.w.line(f"{ref} = {self.var_place(hold.ref, False)}")
-        if hold.bases:
-            # the loop also touches fields of these objects: r^ must be none of them (an
-            # `ItemRef` is an array element, never a field; other references are not held)
+        if hold.bases or hold.arrays:
+            # the loop also touches fields of these objects and elements of these arrays: r^
+            # must be none of them (an `AttrRef` is a field or variable, never an element; an
+            # `ItemRef` an element, never a field; other references are not held)
             objects = [self.var_place(self.facts.names[b.base.nid].variable, False) if isinstance(b, n.Deref)
                        else self.expr(b) for b in hold.bases]
-            distinct = " and ".join(f"{ref}.obj is not {code}" for code in objects)
-            self.w.line(f"if not (type({ref}) is _ItemRef or type({ref}) is _AttrRef and {distinct}):")
+            attr_ok = " and ".join([f"type({ref}) is _AttrRef"] + [f"{ref}.obj is not {code}" for code in objects])
+            # an element of an ARRAY[*] argument is an `ItemRef` of an `ArrayRef`: not held
+            lists = [self.expr(a) for a in hold.arrays]
+            item_ok = " and ".join([f"type({ref}) is _ItemRef"] + ([f"type({ref}.lst) is list"] if lists else [])
+                                   + [f"{ref}.lst is not {code}" for code in lists])
+            self.w.line(f"if not ({attr_ok} or {item_ok}):")
         else:
             self.w.line(f"if {ref} is None:")
         self.w.indent += 1

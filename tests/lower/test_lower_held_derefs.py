@@ -130,7 +130,7 @@ FOR i := 1 TO 2 DO r^ := r^ + 1; p.x := p.x + 1; END_FOR;      (* held; p.x is r
 FOR i := 1 TO 2 DO r^ := r^ + 1; rp^.x := rp^.x + 1; END_FOR;  (* held; rp^.x is r^: run time *)
 FOR i := 1 TO 2 DO r^ := r^ + 1; r2^ := r2^ + 1; END_FOR;      (* two references *)
 FOR i := 1 TO 2 DO r^ := Id(r^); END_FOR;                      (* a call *)
-FOR i := 1 TO 2 DO r^ := r^ + arr[i]; END_FOR;                 (* an array element *)
+FOR i := 1 TO 2 DO r^ := r^ + arr[i]; END_FOR;                 (* held; checked at run time *)
 FOR i := 1 TO 2 DO r^ := r^ + 1; r := REF(a); END_FOR;         (* r changes *)
 FOR i := 1 TO 2 DO r^ := r^ + 1; b := a; END_FOR;              (* a is referenced: not a local *)
 FOR i := 1 TO 2 DO r2^ := r2^ + i; END_FOR;                    (* held *)
@@ -145,7 +145,7 @@ def test_the_plan_refuses_loops_where_the_target_may_be_reached_otherwise():
     assert analysis is not None, diags
     fors = [s for s in analysis.pou_nodes["main"].body if s.__class__.__name__ == "For"]
     held = plan_project(analysis, settings, DEFAULT_OPTIONS).held_derefs
-    assert [s.nid in held for s in fors] == [True, True] + [False] * 5 + [True]
+    assert [s.nid in held for s in fors] == [True, True, False, False, True, False, False, True]
     assert [b.__class__.__name__ for b in held[fors[0].nid].bases] == ["Name"]
     assert held[fors[-1].nid].ref.key == "r2" and held[fors[-1].nid].written
     assert [b.__class__.__name__ for b in held[fors[1].nid].bases] == ["Deref"]
@@ -229,3 +229,57 @@ FOR i := 1 TO 2 DO r^ := r^ + 1; END_FOR;
 END_PROGRAM
 """
     assert planned(src) == [False, True]
+
+
+ELEMENTS = """
+FUNCTION Walk : DINT
+VAR_IN_OUT xs : ARRAY[*] OF DINT; END_VAR
+VAR_INPUT k : INT; END_VAR
+VAR r : REF_TO DINT; own : ARRAY[0..3] OF DINT; i : INT; END_VAR
+r := REF(xs[k]);     (* an ItemRef of the ArrayRef: an element of the caller's arr *)
+FOR i := 0 TO 3 DO r^ := r^ + 1; own[i] := r^; END_FOR;
+Walk := own[3];
+END_FUNCTION
+PROGRAM Main
+VAR a, res : DINT; arr, other : ARRAY[1..4] OF DINT; n, i : INT; r : REF_TO DINT; END_VAR
+n := n + 1;
+CASE n MOD 3 OF
+  0: r := REF(a);
+  1: r := REF(arr[2]);
+  2: r := REF(other[3]);
+END_CASE;
+FOR i := 1 TO 4 DO
+    r^ := r^ + i;
+    arr[i] := arr[i] + r^;
+END_FOR;
+FOR i := 1 TO 4 DO
+    r := REF(arr[1]);
+END_FOR;
+r := REF(arr[3]);
+FOR i := 1 TO 4 DO
+    arr[i] := arr[i] + 1;
+    res := res + Walk(xs := arr, k := 2) + r^;
+END_FOR;
+END_PROGRAM
+"""
+
+
+def test_array_elements_in_the_loop_are_checked_against_the_target_at_run_time():
+    paths = ["Main.a", "Main.arr[1]", "Main.arr[2]", "Main.arr[3]", "Main.arr[4]", "Main.other[3]", "Main.res"]
+    on, off, seen = run_both(ELEMENTS, OPTION, 9, lambda k: {}, paths)
+    assert "type(_ref" in on and ".lst) is list" in on and "_held" not in off
+    assert seen[-1]["Main.arr[2]"] != 0 and seen[-1]["Main.other[3]"] != 0
+
+
+def test_element_accesses_that_cannot_be_checked_are_refused():
+    src = """
+PROGRAM Main
+VAR m : ARRAY[1..2, 1..2] OF DINT; aa : ARRAY[1..2] OF ARRAY[1..2] OF DINT; ra : REF_TO ARRAY[1..2] OF DINT;
+    v : ARRAY[1..2] OF DINT; i : INT; r : REF_TO DINT; END_VAR
+FOR i := 1 TO 2 DO r^ := r^ + m[i, 1]; END_FOR;    (* a row of m: not named before the loop *)
+FOR i := 1 TO 2 DO r^ := r^ + aa[i][1]; END_FOR;   (* the same *)
+FOR i := 1 TO 2 DO r^ := r^ + ra^[i]; END_FOR;     (* ra may be NULL *)
+FOR i := 1 TO 2 DO r^ := r^ + v[i]; END_FOR;       (* held *)
+END_PROGRAM
+"""
+    assert planned(src) == [False, False, False, True]
