@@ -61,6 +61,20 @@ class ArrayRefReuse:
 
 
 @dataclass(frozen=True)
+class HeldDeref:
+    """`hold_derefs_in_loops`: a loop during which the scalar target of the reference `ref` (a
+    Python local never assigned in the loop) is kept in a Python local; `written`: the loop stores
+    through it (the local is written back after the loop)."""
+    ref: Variable
+    written: bool
+    # objects whose scalar fields the loop reads or writes (`p`, `p.q`, `rp^`) and arrays whose
+    # elements it reads or writes: the held copy of the loop runs only when `ref` refers to none
+    # of those fields and elements
+    bases: tuple[n.Expr, ...] = ()
+    arrays: tuple[n.Name, ...] = ()
+
+
+@dataclass(frozen=True)
 class PouPlan:
     """What the code of one call body (FB/PROGRAM `__call__`, FUNCTION, METHOD, accessor) needs."""
     key: str
@@ -80,6 +94,7 @@ class ProjectPlan:
     inlined_fbs: Mapping[int, n.POU] = field(default_factory=dict)         # Call nid → the FB inlined
     direct_native: frozenset[int] = frozenset()             # Call nids of native FBs called directly
     array_refs: Mapping[int, ArrayRefReuse] = field(default_factory=dict)  # argument value nid → kept ArrayRef
+    held_derefs: Mapping[int, HeldDeref] = field(default_factory=dict)     # loop nid → the dereference held
 
 
 EMPTY_PLAN = ProjectPlan()
@@ -103,6 +118,7 @@ class _Planner:
     inlined: dict[int, n.POU] = field(default_factory=dict)
     direct: set[int] = field(default_factory=set)
     array_refs: dict[int, ArrayRefReuse] = field(default_factory=dict)
+    held: dict[int, HeldDeref] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         self.model = self.a.model   # type: ignore[attr-defined]
@@ -126,7 +142,7 @@ class _Planner:
         return ProjectPlan(MappingProxyType(self.pous), frozenset(self.function_errors),
                            frozenset(self.indexed), MappingProxyType(self.range_fors),
                            MappingProxyType(self.inlined), frozenset(self.direct),
-                           MappingProxyType(self.array_refs))
+                           MappingProxyType(self.array_refs), MappingProxyType(self.held))
 
     # ---- one body
     def plan_body(self, pou: POUInfo, node, method: bool) -> None:
@@ -151,6 +167,8 @@ class _Planner:
             info = self.facts.calls.get(s.call.nid)
             if info is not None and info.is_fb and info.oo != "super_body":
                 self.fb_call(s.call, info)
+        if self.options.hold_derefs_in_loops and self.options.cache_locals:
+            self.held_derefs(body, cached)
 
     def by_reference(self, pou: POUInfo, calls: list[n.Call]) -> set[str]:
         """Variables of the POU that code other than the body's own may read or write during a
@@ -309,6 +327,166 @@ class _Planner:
         guarded = (n.Assign, n.CallStatement)
         self.function_errors.update(nid for nid, cls in native.items() if cls in guarded)
         return uses, calls, fors, call_statements, assigned
+
+    # ---- hold_derefs_in_loops
+    def held_derefs(self, body, cached: Mapping[str, Variable]) -> None:
+        """The outermost loops of a body for which `held_deref` holds."""
+        inner: set[int] = set()
+        found: dict[int, HeldDeref] = {}
+        for node in walk(body):
+            if node.__class__ in _LOOPS and node.nid not in inner:
+                decision = self.held_deref(node, cached)
+                if decision is not None:
+                    found[node.nid] = decision
+                    inner.update(x.nid for x in walk((node,)) if x is not node and x.__class__ in _LOOPS)
+        self.held.update((nid, d) for nid, d in found.items() if nid not in inner)
+
+    def held_deref(self, loop, cached: Mapping[str, Variable]) -> HeldDeref | None:
+        """`hold_derefs_in_loops`: can `r^` be kept in a Python local for the whole loop?
+
+        Only when nothing else in the loop can read or write its target: every variable the loop
+        names is a Python local of this call (a variable whose reference is taken is never one), the
+        only dereferences of scalars are of one reference `r`, which the loop never assigns, and
+        there are no calls (a callee could reach anything) and no whole-aggregate assignments.
+        Elements of fixed one-dimensional arrays (`arr[i]`) and scalar fields of structs and FB
+        instances (`p.x`, `p.q.x`, `rp^.x`; `p` need not be a local: an aggregate is never rebound)
+        may be read and written: `HeldDeref.bases` and `.arrays` are the objects whose fields and
+        elements the loop touches, and the held copy of the loop runs only when `r` refers to none
+        of them (checked before the loop; no fields in a project with UNIONs, whose members
+        overlay the bytes of others). Faults inside the loop still see the value
+        written so far: it is written back in a `finally`."""
+        facts = self.facts
+        ref: Variable | None = None
+        written = False
+        bases: list[n.Expr] = []       # the objects whose fields the loop reads or writes
+        in_bases: set[int] = set()     # nodes of those base expressions (already checked)
+        base_refs: set[str] = set()    # references dereferenced to reach a base (`rp` in `rp^.x`)
+        lists: list[n.Name] = []        # the arrays whose elements the loop reads or writes
+        for node in walk((loop,)):
+            cls = node.__class__
+            if node.nid in in_bases:
+                continue
+            if cls is n.Name:
+                name = facts.names.get(node.nid)
+                if name is None or node.nid in facts.auto_deref or (facts.props and node.nid in facts.props):
+                    return None
+                if name.kind in ("enum", "null", "result"):
+                    continue
+                if name.kind != "var" or name.variable is None or name.variable.key not in cached:
+                    return None
+                if t.is_aggregate(name.variable.type):
+                    return None   # a whole-struct or array assignment writes the fields and elements
+            elif cls is n.Deref:
+                var = self.cached_ref(node.base, cached)
+                if var is None or t.is_aggregate(var.type.target):   # type: ignore[union-attr]
+                    return None
+                if ref is not None and ref.key != var.key:
+                    return None   # two references may name the same variable
+                ref = var
+            elif cls is n.Member:
+                base = self.field_base(node, cached, in_bases, base_refs)
+                if base is None:
+                    return None
+                bases.append(base)
+            elif cls is n.Index:
+                array = self.element_base(node)
+                if array is None:
+                    return None
+                in_bases.add(array.nid)
+                lists.append(array)
+            elif cls in (n.Assign, n.RefAssign):
+                if cls is n.RefAssign:
+                    return None
+                if isinstance(node.target, n.Deref) or (isinstance(node.target, n.BitAccess)
+                                                        and _through_deref(node.target)):
+                    written = True
+            elif cls not in _HELD_OK:
+                return None
+        if ref is None or ref.key in base_refs:
+            return None
+        fixed = base_refs | {ref.key}
+        for node in walk((loop,)):
+            if isinstance(node, n.Assign) and isinstance(node.target, n.Name) and root_name(node.target) in fixed:
+                return None
+            if isinstance(node, n.For) and root_name(node.variable) in fixed:
+                return None
+        unique: dict[object, n.Expr] = {}
+        for base in bases:
+            unique.setdefault(_path_key(base), base)
+        arrays: dict[object, n.Name] = {}
+        for array in lists:
+            arrays.setdefault(_path_key(array), array)
+        return HeldDeref(ref, written, tuple(unique.values()), tuple(arrays.values()))
+
+    def element_base(self, index: n.Index) -> n.Name | None:
+        """For an element access in a held loop: the array variable, when it is a fixed
+        one-dimensional array of scalars named by a variable (its list is never replaced)."""
+        base = index.base
+        ty = self.facts.types.get(base.nid)
+        if not isinstance(base, n.Name) or not isinstance(ty, t.ArrayType) or ty.dims is None or len(ty.dims) != 1:
+            return None
+        if t.is_aggregate(ty.element) or len(index.indices) != 1 or base.nid in self.facts.auto_deref:
+            return None
+        name = self.facts.names.get(base.nid)
+        if name is None or name.kind not in ("var", "global", "field") or name.variable is None:
+            return None
+        return base
+
+    def cached_ref(self, e: n.Expr, cached: Mapping[str, Variable]) -> Variable | None:
+        """The variable of `e` when it is a Python-local reference (not NULL's type), else None."""
+        name = self.facts.names.get(e.nid) if isinstance(e, n.Name) else None
+        if name is None or name.kind != "var" or name.variable is None or name.variable.key not in cached:
+            return None
+        ty = name.variable.type
+        if not isinstance(ty, t.RefType) or ty.is_null or e.nid in self.facts.auto_deref:
+            return None
+        return name.variable
+
+    def field_base(self, member: n.Member, cached: Mapping[str, Variable], in_bases: set[int],
+                   base_refs: set[str]) -> n.Expr | None:
+        """For a scalar field access in a held loop: its base (`p`, `p.q` or `rp^`) when it is an
+        object the loop cannot rebind and that can be named before the loop without a fault."""
+        if self.has_unions() or t.is_aggregate(self.facts.types.get(member.nid)):
+            return None
+        if self.facts.props and member.nid in self.facts.props:
+            return None
+        base = member.base
+        chain = base
+        while True:
+            if self.facts.props and chain.nid in self.facts.props:
+                return None
+            if not isinstance(self.facts.types.get(chain.nid), (t.StructType, t.FBType)):
+                return None
+            if not isinstance(chain, n.Member):
+                break
+            chain = chain.base
+        if isinstance(chain, n.Name):
+            # a struct or FB variable, a Python local or not, is never rebound during a call
+            name = self.facts.names.get(chain.nid)
+            if name is None or name.kind not in ("var", "global", "field") or name.variable is None:
+                return None
+            if chain.nid in self.facts.auto_deref:
+                return None
+        elif isinstance(chain, n.Deref) and chain is base:
+            var = self.cached_ref(chain.base, cached)
+            if var is None:
+                return None
+            base_refs.add(var.key)
+            in_bases.add(chain.base.nid)
+        else:
+            return None   # `rp^.q.x`: `rp^.q` cannot be named before the loop when rp is NULL
+        node = base
+        while True:
+            in_bases.add(node.nid)
+            if not isinstance(node, n.Member):
+                break
+            node = node.base
+        return base
+
+    def has_unions(self) -> bool:
+        if not hasattr(self, "_unions"):
+            self._unions = any(isinstance(st, t.UnionType) for st in self.model.structs.values())
+        return self._unions
 
     # ---- range_for, hoist_bounds
     def range_for(self, s: n.For, cached: Mapping[str, Variable]) -> RangeFor | None:
@@ -475,6 +653,23 @@ class _Planner:
         return None
 
 
+def _path_key(e: n.Expr) -> object:
+    """The same access path written twice gives the same key (`p` and `p` in `p.x`, `p.y`)."""
+    if isinstance(e, n.Name):
+        return ("name", tuple(part.lower() for part in e.parts))
+    if isinstance(e, n.Member):
+        return ("member", _path_key(e.base), e.name.lower())
+    assert isinstance(e, n.Deref)
+    return ("deref", _path_key(e.base))
+
+
+def _through_deref(target: n.Expr) -> bool:
+    """A bit or part of a dereference (`r^.3 := TRUE` stores through `r`)."""
+    while isinstance(target, n.BitAccess):
+        target = target.base
+    return isinstance(target, n.Deref)
+
+
 def hot_enough(var: Variable, hot: tuple[dict[str, float], set[str]]) -> bool:
     """`hot_path_cache`: is a local worth its load on entry (and store on exit) on a typical
     call? Yes for a FOR variable (a range-FOR needs it in a local), or when the uses one call
@@ -520,6 +715,10 @@ _CHILD_FIELDS: dict[type, tuple[str, ...] | None] = {}
 
 _LOOPS = frozenset({n.For, n.While, n.Repeat})
 _STATEMENTS = frozenset(cls for cls in vars(n).values() if isinstance(cls, type) and issubclass(cls, n.Statement))
+# what a loop with a held dereference may contain besides names, dereferences and assignments
+_HELD_OK = frozenset({n.IntLiteral, n.RealLiteral, n.BoolLiteral, n.StringLiteral, n.TimeLiteral,
+                      n.HashLiteral, n.Unary, n.Binary, n.BitAccess, n.PartialAccess, n.If, n.Case,
+                      n.CaseLabel, n.For, n.While, n.Repeat, n.Exit, n.Continue, n.Return, n.Empty})
 _SCALARS = {"str", "int", "bool", "float", "bytes", "None", "Span", "n.Span"}
 
 

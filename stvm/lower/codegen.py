@@ -67,6 +67,9 @@ class Lowerer(PouGenerator, StatementGenerator, ExpressionGenerator):
         # loop variables of range-FORs in scope: key → (step, constant start or None, type)
         self.range_vars: dict[str, tuple[int, int | None, t.IntType]] = {}
         self.unchecked: set[str] = set()   # range-FOR variables whose array accesses were hoisted
+        # references whose scalar target a loop keeps in a Python local (hold_derefs_in_loops):
+        # the reference variable's key → the local
+        self.held: dict[str, str] = {}
 
     def assign_names(self) -> None:
         for i, (key, st) in enumerate(sorted(self.model.structs.items())):

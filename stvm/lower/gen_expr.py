@@ -159,6 +159,9 @@ class ExpressionGenerator:
     def ex_Deref(self, e: n.Deref) -> str:
         if isinstance(e.base, n.Name) and getattr(self.facts.names.get(e.base.nid), "kind", None) in ("this", "super"):
             return "self"   # THIS^ / SUPER^: the instance itself, never NULL
+        held = self.held_local(e.base)  # type: ignore[attr-defined]
+        if held is not None:
+            return held
         return self.deref_code(self.expr(e.base), self.facts.types[e.nid])
 
     def raw_place(self, target: n.Expr) -> str:

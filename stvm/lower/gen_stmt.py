@@ -39,7 +39,10 @@ class StatementGenerator:
         if guarded or skippable:
             self.w.line("try:")
             self.w.indent += 1
-        getattr(self, "st_" + type(s).__name__)(s)
+        if s.nid in self.plan.held_derefs:
+            self.held_deref_loop(s)
+        else:
+            getattr(self, "st_" + type(s).__name__)(s)
         if guarded or skippable:
             self.w.indent -= 1
             self.w.span = s.span
@@ -246,6 +249,59 @@ class StatementGenerator:
         """c when `ix` is `key`, `key + c` or `key - c` (constant c), else None."""
         return loop_offset(self.facts, ix, key)
 
+    def held_deref_loop(self, s: n.Statement) -> None:
+        """A loop that keeps `r^` in a Python local (the plan's `HeldDeref`): read once before the
+        loop and, when the loop stores through `r`, written back in a `finally` (RETURN, EXIT and
+        faults leave the target as the loop left it). A NULL `r` runs the loop as written, so its
+        first dereference faults at its own line."""
+        hold = self.plan.held_derefs[s.nid]
+        emit = getattr(self, "st_" + type(s).__name__)
+        ref, value = self.new_tmp("ref"), self.new_tmp("held")
+        self.w.line(f"{ref} = {self.var_place(hold.ref, False)}")
+        if hold.bases or hold.arrays:
+            # the loop also touches fields of these objects and elements of these arrays: r^
+            # must be none of them (an `AttrRef` is a field or variable, never an element; an
+            # `ItemRef` an element, never a field; other references are not held)
+            objects = [self.var_place(self.facts.names[b.base.nid].variable, False) if isinstance(b, n.Deref)
+                       else self.expr(b) for b in hold.bases]
+            attr_ok = " and ".join([f"type({ref}) is _AttrRef"] + [f"{ref}.obj is not {code}" for code in objects])
+            # an element of an ARRAY[*] argument is an `ItemRef` of an `ArrayRef`: not held
+            lists = [self.expr(a) for a in hold.arrays]
+            item_ok = " and ".join([f"type({ref}) is _ItemRef"] + ([f"type({ref}.lst) is list"] if lists else [])
+                                   + [f"{ref}.lst is not {code}" for code in lists])
+            self.w.line(f"if not ({attr_ok} or {item_ok}):")
+        else:
+            self.w.line(f"if {ref} is None:")
+        self.w.indent += 1
+        emit(s)
+        self.w.indent -= 1
+        self.w.span = s.span
+        self.w.line("else:")
+        self.w.indent += 1
+        self.w.line(f"{value} = {ref}.get()")
+        if hold.written:
+            self.w.line("try:")
+            self.w.indent += 1
+        self.held[hold.ref.key] = value
+        emit(s)
+        del self.held[hold.ref.key]
+        if hold.written:
+            self.w.indent -= 1
+            self.w.span = s.span
+            self.w.line("finally:")
+            self.w.indent += 1
+            self.w.line(f"{ref}.set({value})")
+            self.w.indent -= 1
+        self.w.indent -= 1
+
+    def held_local(self, e: n.Expr) -> str | None:
+        """The local holding `e`'s target when `e` names a reference a loop holds (see above)."""
+        if self.held and isinstance(e, n.Name):
+            ref = self.facts.names.get(e.nid)
+            if ref is not None and ref.variable is not None:
+                return self.held.get(ref.variable.key)
+        return None
+
     def st_While(self, s: n.While) -> None:
         self.w.line(f"while {self.expr(s.condition)}:")
         self.w.indent += 1
@@ -310,6 +366,9 @@ class StatementGenerator:
                 return [f"{place}.set({value})"]
             return [self.assign_into(place, value, ty)]
         if isinstance(target, n.Deref):
+            held = self.held_local(target.base)
+            if held is not None:
+                return [f"{held} = {value}"]
             return self.store_through(self.expr(target.base), value, ty)
         if isinstance(target, n.Member):
             base = self.expr(target.base)

@@ -4,7 +4,7 @@ Every optimisation keeps the ST semantics exactly (tests/lower/test_lower_option
 runs the core and thesis suites with all of them off, and with each alone off, and compares); they
 only change how fast the generated code runs. Whether one applies is decided by a named function of
 the analysis pass (stvm/lower/analysis.py: `cached_vars`, `range_for_ok`, `hoistable_accesses`,
-`inlinable_fb`, `direct_native_call`, `reused_array_ref`, frameless METHODs in `plan_body`); the
+`inlinable_fb`, `direct_native_call`, `reused_array_ref`, `held_deref`, frameless METHODs in `plan_body`); the
 ones that only change how an expression is written are read by their generator (`ring_chain`,
 `no_wrap_in_range` in gen_expr.py, `inline_struct_assign` in gen_pou.py, `inline_input_copy` in
 gen_stmt.py). The
@@ -65,6 +65,12 @@ class LowerOptions:
     # instance; not for FBs with methods, a base, temporaries or in-outs, nor FBs some POU extends.
     # The debug build switches it off (breakpoints in the FB's body must hit).
     inline_small_fbs: bool = True
+    # A loop whose only storage is Python locals and one reference's scalar target (`r^ := r^ + i`
+    # with nothing else that could alias it: no calls, no member, index or other dereference)
+    # reads `r^` into a local before the loop and writes it back in a `finally` after it (a NULL
+    # `r` runs the loop as written, so the dereference faults at its line). Needs `cache_locals`
+    # (`r` and the other variables must be Python locals).
+    hold_derefs_in_loops: bool = True
 
     @classmethod
     def none(cls) -> "LowerOptions":
