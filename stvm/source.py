@@ -19,7 +19,7 @@ class _Slotted:
 _MEMBER = type(_Slotted.x)   # a slot's descriptor (types.MemberDescriptorType)
 
 
-def fast_frozen_init(cls: type) -> type:
+def fast_frozen_init(cls: type, stamp: tuple | None = None) -> type:
     """Give a frozen, slotted dataclass an `__init__` that stores each field through its slot.
 
     The generated frozen `__init__` calls `object.__setattr__(self, 'name', value)` per field,
@@ -31,7 +31,10 @@ def fast_frozen_init(cls: type) -> type:
     It also pickles (and copies) as its constructor arguments, unless it has its own `__reduce__`:
     the slotted dataclass's `__getstate__`/`__setstate__` run `fields()` and a Python loop per
     object, a third of a 100,000-line first load's cache write (the parsed unit) and most of
-    reading it back."""
+    reading it back.
+
+    `stamp`, a (slot, source) pair, makes the `__init__` also store `source()` in that slot (the
+    syntax nodes' ids: stvm/syntax/nodes.py); a class it leaves alone keeps its own `__init__`."""
     fields = dataclasses.fields(cls)
     if "__slots__" not in cls.__dict__ or hasattr(cls, "__post_init__") or any(
             not f.init or f.kw_only or f.default_factory is not dataclasses.MISSING for f in fields):
@@ -49,6 +52,9 @@ def fast_frozen_init(cls: type) -> type:
             scope[f"_default{i}"] = f.default
             params.append(f"{f.name}=_default{i}")
         body.append(f"    _set{i}(self, {f.name})")
+    if stamp is not None:
+        scope["_stamp_set"], scope["_stamp_next"] = stamp[0].__set__, stamp[1]
+        body.append("    _stamp_set(self, _stamp_next())")
     source = f"def __init__(self, {', '.join(params)}):\n" + "\n".join(body or ["    pass"]) + "\n"
     exec(source, scope)   # noqa: S102 (field names of our own classes, no outside text)
     init = scope["__init__"]

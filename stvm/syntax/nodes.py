@@ -21,25 +21,18 @@ _next_node_id = itertools.count(1).__next__
 
 
 class Node:
-    # The node classes are slotted dataclasses: no per-node __dict__ (memory). `_nid` is the
-    # node's identity for the facts later stages keep about it (see `nid`).
-    __slots__ = ("_nid",)
+    """A syntax node. `nid` is its stable identity, for the facts later stages keep about it.
+
+    Nodes compare by value (two `x := 1;` are equal), so facts about one node cannot be keyed by
+    the node itself; `id(node)` is reused once a node is freed, which forced holders of such maps
+    to keep the nodes alive. Every node draws a number from one counter when it is made (in its
+    `__init__`, see the end of this module) and keeps it for its life. It is not pickled: a node
+    read back from a cache, a copy or a `dataclasses.replace` is a new node with a new number."""
+
+    # The node classes are slotted dataclasses: no per-node __dict__ (memory).
+    __slots__ = ("nid",)
     span: Span
-
-    @property
-    def nid(self) -> int:
-        """This node's stable identity: a number drawn on first use and kept for the node's life.
-
-        Nodes compare by value (two `x := 1;` are equal), so facts about one node cannot be keyed
-        by the node itself; `id(node)` is reused once a node is freed, which forced holders of
-        such maps to keep the nodes alive. The number is not pickled: a node read back from a
-        cache is a new node and draws a new one."""
-        try:
-            return self._nid
-        except AttributeError:
-            nid = _next_node_id()
-            object.__setattr__(self, "_nid", nid)
-            return nid
+    nid: int
 
 
 # ---- expressions ---------------------------------------------------------------------------
@@ -507,8 +500,37 @@ class CompilationUnit:
     member_bases: frozenset[str] = frozenset()   # lower-cased X of every `X.y` (semantics/qualified.py)
 
 
+_set_node_id = Node.nid.__set__   # type: ignore[attr-defined]   # the slot's own setter
+
+
+def _stamped_init(init):
+    """`init`, then a new node id (for the node classes `fast_frozen_init` leaves alone)."""
+    def __init__(self, *args, **kwargs):
+        init(self, *args, **kwargs)
+        _set_node_id(self, _next_node_id())
+    __init__.__qualname__, __init__.__doc__ = init.__qualname__, init.__doc__
+    return __init__
+
+
+def _rebuilt(cls: type, state: tuple) -> Node:
+    """A node of `cls` with these field values and a new id (unpickling, copying)."""
+    node = object.__new__(cls)
+    for name, value in state:
+        object.__setattr__(node, name, value)
+    _set_node_id(node, _next_node_id())
+    return node
+
+
+def _reduce_by_fields(self):
+    return (_rebuilt, (type(self), tuple((f.name, getattr(self, f.name)) for f in dataclasses.fields(self))))
+
+
 for _cls in list(globals().values()):
     if isinstance(_cls, type) and dataclasses.is_dataclass(_cls) and _cls.__module__ == __name__ \
             and _cls.__dataclass_params__.frozen:
-        fast_frozen_init(_cls)
-del _cls
+        _init = _cls.__init__
+        fast_frozen_init(_cls, stamp=(Node.nid, _next_node_id) if issubclass(_cls, Node) else None)
+        if issubclass(_cls, Node) and _cls.__init__ is _init:
+            _cls.__init__ = _stamped_init(_init)
+            _cls.__reduce__ = _reduce_by_fields   # the id is not pickled (nor copied)
+del _cls, _init

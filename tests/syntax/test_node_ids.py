@@ -16,6 +16,7 @@ FACT_KEEPERS = [*sorted((ROOT / "stvm" / "semantics").glob("*.py")), *sorted((RO
 
 def test_equal_nodes_have_distinct_ids_that_stay():
     a, b = n.IntLiteral(1), n.IntLiteral(1)
+    assert b.nid == a.nid + 1   # drawn when made, in order
     assert a == b and a.nid != b.nid
     assert a.nid == a.nid
 
@@ -25,6 +26,19 @@ def test_a_node_read_back_from_a_pickle_is_a_new_node():
     first = a.nid
     b = pickle.loads(pickle.dumps(a))
     assert b == a and b.nid != first and a.nid == first
+
+
+def test_every_node_class_draws_an_id_when_made_and_when_read_back():
+    import copy
+    import dataclasses
+    from stvm.source import NO_SPAN
+    # Method, Accessor and Property are plain (unslotted) frozen dataclasses: their own path
+    method = n.Method("M", (), None, (), (), (), NO_SPAN, NO_SPAN)
+    for node in (method, n.Name(("x",))):
+        again, copied = pickle.loads(pickle.dumps(node)), copy.deepcopy(node)
+        replaced = dataclasses.replace(node)
+        assert again == node == copied == replaced
+        assert len({node.nid, again.nid, copied.nid, replaced.nid}) == 4
 
 
 def test_ids_are_not_reused_after_a_node_is_freed():
