@@ -240,8 +240,9 @@ class _Planner:
         return out
 
     def hot_path_uses(self, node, fors: list[n.For]) -> tuple[dict[str, float], set[str]]:
-        """`hot_path_cache`: `hot_uses` of a body (loops already weigh their uses) and its FOR
-        variables (as `hot_uses.for_variables`)."""
+        """`hot_path_cache`: `hot_uses` of a body (loops already weigh their uses) and the names of
+        its FOR variables (a range-FOR needs its variable in a Python local, so the hot-path rule
+        always caches them)."""
         return hot_uses(node.body), {s.variable.parts[0].lower() for s in fors if len(s.variable.parts) == 1}
 
     # ---- one walk over a body: uses, calls, loops, assignments, statements that catch errors

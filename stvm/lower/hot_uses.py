@@ -14,7 +14,7 @@ never changes what the program computes, only how fast it runs.
 from __future__ import annotations
 
 from stvm.syntax import nodes as n
-from stvm.syntax.walk import LOOP_WEIGHT, walk
+from stvm.syntax.walk import LOOP_WEIGHT
 
 
 def hot_uses(body) -> dict[str, float]:
@@ -65,9 +65,3 @@ def hot_uses(body) -> dict[str, float]:
     del visit   # the closure refers to itself: break the cycle (no garbage for the collector)
     return counts
 
-
-def for_variables(body) -> set[str]:
-    """Lower-case names of the FOR loop variables in a body (a range-FOR needs its variable in a
-    Python local, so the hot-path rule always caches them)."""
-    return {node.variable.parts[0].lower() for node in walk(tuple(body))
-            if isinstance(node, n.For) and len(node.variable.parts) == 1}
