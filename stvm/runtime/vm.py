@@ -169,18 +169,11 @@ class VM:
             for obj, calls in pending:
                 for method, args in calls:
                     method(obj, *args)
-        except RecursionError as exc:
-            self._fault_at_init(f"stack overflow ({exc})", exc)
-        except STFault as exc:
-            self._fault_at_init(str(exc) if str(exc) else type(exc).__doc__ or type(exc).__name__, exc)
-        except FunctionError as exc:
-            self._fault_at_init(f"instruction error: {exc}", exc)
-
-    def _fault_at_init(self, message: str, exc: BaseException) -> None:
-        try:
-            self._raise_fault(message, exc.__traceback__, "FB_init")
-        except RuntimeFault:
-            pass   # kept in self.fault: the first scan raises it
+        except Exception as exc:
+            try:
+                self._raise_fault(fault_message(exc), exc.__traceback__, "FB_init")
+            except RuntimeFault:
+                pass   # kept in self.fault: the first scan raises it
 
     def _build_tasks(self, scan_ns: int) -> None:
         if self.model.tasks:
@@ -262,15 +255,8 @@ class VM:
                 ctx.task = task_name
                 for program in programs:
                     program()
-        except RecursionError as exc:
-            self._raise_fault(f"stack overflow ({exc})", exc.__traceback__, ctx.task)
-        except STFault as exc:
-            message = str(exc) if str(exc) else type(exc).__doc__ or type(exc).__name__
-            self._raise_fault(message, exc.__traceback__, ctx.task)
-        except FunctionError as exc:
-            self._raise_fault(f"instruction error: {exc}", exc.__traceback__, ctx.task)
-        except Exception as exc:  # an stvm bug: still report the ST location, not a traceback
-            self._raise_fault(f"internal error in stvm ({type(exc).__name__}: {exc})", exc.__traceback__, ctx.task)
+        except Exception as exc:
+            self._raise_fault(fault_message(exc), exc.__traceback__, ctx.task)
         if started:
             self.scan_durations_ns.add(time.perf_counter_ns() - started)
         if self.on_scan_end:
@@ -453,6 +439,19 @@ class Accessor:
         if isinstance(key, int):
             return lambda value: container.__setitem__(key, value)
         return lambda value: setattr(container, key, value)
+
+
+def fault_message(exc: Exception) -> str:
+    """What a fault raised by generated code says: the ST fault's own text, or what the
+    Python exception means for the program (an stvm bug is still reported at its ST location,
+    not as a traceback)."""
+    if isinstance(exc, RecursionError):
+        return f"stack overflow ({exc})"
+    if isinstance(exc, STFault):
+        return str(exc) if str(exc) else type(exc).__doc__ or type(exc).__name__
+    if isinstance(exc, FunctionError):
+        return f"instruction error: {exc}"
+    return f"internal error in stvm ({type(exc).__name__}: {exc})"
 
 
 def coerce_python_value(value: Any, ty: t.Type) -> Any:
