@@ -401,6 +401,10 @@ def cmd_run(args) -> int:
             status = status or EXIT_USAGE
     if args.stats:
         _print_stats(vm)
+        service = demo.socket_service_us() if demo is not None else None
+        if service is not None:
+            print(f"socket service us (between scans, not in the scan time): mean {service[0]:.1f}  "
+                  f"p50 {service[1]:.1f}  p99 {service[2]:.1f}  max {service[3]:.1f}")
     elif vm.realtime and vm.scan_count:
         _print_realtime(vm)
     if interrupted:

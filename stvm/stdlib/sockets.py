@@ -23,6 +23,7 @@ import errno
 import ipaddress
 import select
 import socket
+import time
 from dataclasses import dataclass, field
 from typing import Callable, Protocol
 
@@ -108,6 +109,9 @@ def resolve_ipv4(host: str) -> str:
 
 _IN_PROGRESS = {0, errno.EINPROGRESS, errno.EWOULDBLOCK, errno.EALREADY, errno.EAGAIN}
 _READ_LIMIT_PER_POLL = 1 << 20  # bytes read from the OS per poll; beyond 9,000 they are discarded
+# one receive buffer for every TcpLink (recv_into, then a bytes copy of what came: no 64 KiB
+# allocation per recv). Polls run in one thread at a time (the VM's), so sharing it is safe.
+_RECV_CHUNK = memoryview(bytearray(65_536))
 
 
 def _failure_kind(code: int) -> str:
@@ -115,10 +119,15 @@ def _failure_kind(code: int) -> str:
 
 
 class TcpLink:
-    """A non-blocking client socket, advanced by `poll`."""
+    """A non-blocking client socket, advanced by `poll`.
 
-    def __init__(self, src_port: int, host: str, port: int, now_ns: int) -> None:
+    `flush_later` True (set by the socket service between scans): `send` only queues, `flush`
+    sends; False: `send` sends at once."""
+
+    def __init__(self, src_port: int, host: str, port: int, now_ns: int,
+                 flush_later: bool = False) -> None:
         address = resolve_ipv4(host)
+        self.flush_later = flush_later
         self.state = CONNECTING
         self.failure: str | None = None
         self.local_address = ("", 0)
@@ -184,20 +193,25 @@ class TcpLink:
         self._flush()
         if self.state != ESTABLISHED:
             return b""  # after FIN nothing more arrives; after RST nothing is kept
-        received = bytearray()
+        received = b""
+        chunk = _RECV_CHUNK
         while len(received) < _READ_LIMIT_PER_POLL:
             try:
-                chunk = self._sock.recv(65_536)
+                count = self._sock.recv_into(chunk)
             except (BlockingIOError, InterruptedError):
                 break
             except OSError:
                 self._reset()
                 return b""
-            if not chunk:
+            if not count:
                 self.state = PEER_CLOSED
                 break
-            received += chunk
-        return bytes(received)
+            received = received + chunk[:count] if received else bytes(chunk[:count])
+            if count < len(chunk):
+                # the kernel had no more at this instant: what comes later is read at the next
+                # poll (saves the recv that would only raise BlockingIOError)
+                break
+        return received
 
     def _flush(self) -> None:
         while self._unsent and self._sock is not None:
@@ -215,9 +229,24 @@ class TcpLink:
             raise SocketError("wrong_state", f"send while {self.state}")
         # Choice: the send buffer is unbounded; Omron's fills up and keeps SktTCPSend Busy
         self._unsent += data
+        if self.flush_later:
+            return      # the socket service sends it at the end of the scan (`flush`)
         self._flush()
         if self.state == RESET:
             raise SocketError("wrong_state", "connection reset by peer")
+
+    @property
+    def unsent(self) -> int:
+        return len(self._unsent)
+
+    def flush(self) -> None:
+        """Send what is queued, as far as the OS takes it now (never blocks)."""
+        if self.state in (ESTABLISHED, PEER_CLOSED):
+            self._flush()
+
+    def fileno(self) -> int:
+        """The OS socket's descriptor; -1 once released."""
+        return self._sock.fileno() if self._sock is not None else -1
 
     def close(self) -> None:
         if self._sock is None:
@@ -282,6 +311,9 @@ class SocketTable:
         self._sockets: dict[int, _OpenSocket] = {}
         self._closed: set[int] = set()
         self._next_handle = 1
+        # True once a socket service runs between the scans (`RealTcpTransport.serve_between_scans`):
+        # `poll` then reports the state that service left and does no I/O itself
+        self.between_scans = False
 
     def _get(self, handle: int) -> _OpenSocket:
         entry = self._sockets.get(handle)
@@ -305,6 +337,13 @@ class SocketTable:
 
     def poll(self, handle: int, now_ns: int) -> str:
         entry = self._get(handle)
+        if self.between_scans:
+            return entry.link.state   # the service polled every socket before this scan
+        self._pull(entry, now_ns)
+        return entry.link.state
+
+    def _pull(self, entry: _OpenSocket, now_ns: int) -> None:
+        """Advance one link and move what it received into the handle's buffer."""
         data = entry.link.poll(now_ns)
         if entry.link.state == RESET:
             entry.received.clear()  # RFC 793: a reset flushes the queues
@@ -312,7 +351,6 @@ class SocketTable:
             room = self.receive_buffer_bytes - len(entry.received)
             entry.received += data[:max(room, 0)]
             entry.discarded_bytes += max(len(data) - max(room, 0), 0)  # sysmac.md 5: discarded
-        return entry.link.state
 
     def failure(self, handle: int) -> str | None:
         return self._get(handle).link.failure
@@ -355,9 +393,9 @@ class SocketTable:
         return handle in self._closed
 
     def poll_all(self, now_ns: int) -> None:
-        """Advance every socket (the VM may call this once per scan; the FBs poll on their own)."""
-        for handle in list(self._sockets):
-            self.poll(handle, now_ns)
+        """Advance every socket (the FBs poll on their own unless a service runs between scans)."""
+        for entry in list(self._sockets.values()):
+            self._pull(entry, now_ns)
 
     def close_all(self) -> None:
         for handle in list(self._sockets):
@@ -365,11 +403,114 @@ class SocketTable:
 
 
 class RealTcpTransport(SocketTable):
-    """The socket service on the host's TCP stack."""
+    """The socket service on the host's TCP stack.
+
+    Alone, every FB call polls its socket (a recv, a select while connecting). Wired to a VM by
+    `serve_between_scans(vm)`, it works as the controller's system service does (sysmac.md 1:
+    "socket requests run in system services and progress between calls"): before each scan one
+    `poll(0)` over all sockets, and a read or a connect check only for those it reports ready;
+    after each scan, the sends the FBs queued. The programs then make no system call for a
+    socket that is just waiting (most scans), and the scan never blocks either way.
+    """
 
     def __init__(self, max_sockets: int = MAX_SOCKETS,
                  receive_buffer_bytes: int = RECEIVE_BUFFER_BYTES) -> None:
-        super().__init__(TcpLink, max_sockets, receive_buffer_bytes)
+        super().__init__(self._open_tcp_link, max_sockets, receive_buffer_bytes)
+        self._poller = select.poll()
+        self._watched: dict[int, int] = {}      # fd -> handle, as registered in `_poller`
+        self._watch_stale = True                # a socket opened, closed or changed state
+        self._to_flush: set[int] = set()        # handles with queued sends
+        self.service_ns = None                  # TimingStats of the service's time per scan
+        self._before_ns = 0                     # this scan's receive part of it
+
+    def _open_tcp_link(self, src_port: int, host: str, port: int, now_ns: int) -> TcpLink:
+        link = TcpLink(src_port, host, port, now_ns, flush_later=self.between_scans)
+        self._watch_stale = True
+        return link
+
+    # --- the service between scans
+
+    def serve_between_scans(self, vm) -> None:
+        """Run the socket service in `vm`'s scan hooks: receive before each scan (its last
+        `on_scan_start` hook, after the run control's), send right after the programs (the first
+        `on_scan_end` hook). Its time per scan goes to `service_ns`, apart from the ST time."""
+        from stvm.runtime.stats import TimingStats   # lazy: start-up
+        self.between_scans = True
+        for entry in self._sockets.values():
+            entry.link.flush_later = True
+        self.service_ns = TimingStats()
+        vm.on_scan_start.append(self._before_scan)
+        vm.on_scan_end.insert(0, self._after_scan)
+
+    def _before_scan(self, vm) -> None:
+        started = time.perf_counter_ns()
+        if self._sockets:
+            if self._watch_stale:
+                self._rewatch()
+            sockets, watched = self._sockets, self._watched
+            for fd, _events in self._poller.poll(0):
+                entry = sockets.get(watched.get(fd, 0))
+                if entry is None:
+                    continue
+                state = entry.link.state
+                self._pull(entry, vm.now_ns)
+                if entry.link.state != state:
+                    self._watch_stale = True
+        self._before_ns = time.perf_counter_ns() - started
+
+    def _after_scan(self, vm) -> None:
+        started = time.perf_counter_ns()
+        if self._to_flush:
+            for handle in list(self._to_flush):
+                entry = self._sockets.get(handle)
+                if entry is None:
+                    self._to_flush.discard(handle)
+                    continue
+                link = entry.link
+                link.flush()
+                if link.state == RESET:
+                    entry.received.clear()   # RFC 793: a reset flushes the queues
+                    self._watch_stale = True
+                if not link.unsent or link.state not in (ESTABLISHED, PEER_CLOSED):
+                    self._to_flush.discard(handle)   # else: the rest after the next scan
+        self.service_ns.add(self._before_ns + time.perf_counter_ns() - started)
+        self._before_ns = 0
+
+    def _rewatch(self) -> None:
+        """Register exactly the sockets that can become ready: connecting ones for writability
+        (connected or failed), established ones for reading. A new poll object each time, so a
+        descriptor number reused by a new socket never keeps an old registration."""
+        poller = select.poll()
+        watched: dict[int, int] = {}
+        for handle, entry in self._sockets.items():
+            link = entry.link
+            if link.state == CONNECTING:
+                mask = select.POLLOUT
+            elif link.state == ESTABLISHED:
+                mask = select.POLLIN
+            else:
+                continue   # after FIN nothing more is read; failed and reset links are released
+            fd = link.fileno()
+            if fd >= 0:
+                poller.register(fd, mask)
+                watched[fd] = handle
+        self._poller, self._watched = poller, watched
+        self._watch_stale = False
+
+    # --- requests that change what is watched or queued
+
+    def send(self, handle: int, data: bytes) -> None:
+        super().send(handle, data)
+        if self.between_scans:
+            self._to_flush.add(handle)
+
+    def close(self, handle: int) -> None:
+        super().close(handle)
+        self._watch_stale = True
+
+    def release(self, handle: int) -> None:
+        super().release(handle)
+        self._watch_stale = True
 
 
 def make_default_transport() -> Transport:

@@ -47,11 +47,41 @@ FB_VARIABLES = {
 
 
 class Plc:
-    """A RunContext advanced one scan (1 ms) at a time, and socket FB instances on it."""
+    """A RunContext advanced one scan (1 ms) at a time, and socket FB instances on it.
 
-    def __init__(self, transport=None, **settings) -> None:
+    `between_scans`: the transport's socket service runs at the scan boundaries (the hooks
+    `RealTcpTransport.serve_between_scans` gives a VM, run by `next_scan` and `end_scan`), as in
+    `stvm run` of the demo; else every FB call polls its socket itself."""
+
+    def __init__(self, transport=None, between_scans: bool = False, **settings) -> None:
         self.ctx = make_ctx(**settings)
         self.ctx.transport = transport
+        self.vm = None
+        self._in_scan = False
+        if between_scans:
+            self.vm = SimpleNamespace(on_scan_start=[], on_scan_end=[], now_ns=0)
+            transport.serve_between_scans(self.vm)
+            self._start_scan()
+
+    def _start_scan(self) -> None:
+        self.vm.now_ns = self.ctx.now_ns
+        for hook in self.vm.on_scan_start:
+            hook(self.vm)
+        self._in_scan = True
+
+    def end_scan(self) -> None:
+        """The end of the scan in progress (its queued sends go out)."""
+        if self._in_scan:
+            for hook in self.vm.on_scan_end:
+                hook(self.vm)
+            self._in_scan = False
+
+    def refresh(self, handle: int) -> str:
+        """The handle's state after the network was looked at once more."""
+        if self.vm is None:
+            return self.ctx.transport.poll(handle, self.ctx.now_ns)
+        self.next_scan()
+        return self.ctx.transport.poll(handle, self.ctx.now_ns)
 
     def fb(self, name: str, **inputs) -> FBRunner:
         variables = dict(Execute=False, Done=False, Busy=False, Error=False, ErrorID=0,
@@ -60,8 +90,12 @@ class Plc:
         return FBRunner(name, self.ctx, **variables)
 
     def next_scan(self, ms: int = 1) -> None:
+        if self.vm is not None:
+            self.end_scan()
         self.ctx.scan += 1
         self.ctx.now_ns += ms * MS
+        if self.vm is not None:
+            self._start_scan()
 
     def execute(self, runner: FBRunner, wall_timeout_s: float = 3.0, scan_ms: int = 1, **inputs):
         """Start a request and call once per scan until it completes (the thesis pattern with
@@ -74,6 +108,8 @@ class Plc:
             runner.step()
             if runner.Busy:
                 time.sleep(0.0005)
+        if self.vm is not None:
+            self.end_scan()
         return runner.inst
 
     def finish(self, runner: FBRunner) -> None:
@@ -130,7 +166,7 @@ def reset(connection: socket.socket) -> None:
 
 def wait_for_state(plc: Plc, handle: int, state: str) -> None:
     deadline = time.monotonic() + 3.0
-    while plc.ctx.transport.poll(handle, plc.ctx.now_ns) != state:
+    while plc.refresh(handle) != state:
         assert time.monotonic() < deadline, f"socket never became {state}"
         time.sleep(0.001)
 
@@ -142,9 +178,9 @@ def peer():
     server.close()
 
 
-@pytest.fixture
-def plc():
-    controller = Plc(RealTcpTransport())
+@pytest.fixture(params=["per_call", "between_scans"])
+def plc(request):
+    controller = Plc(RealTcpTransport(), between_scans=request.param == "between_scans")
     yield controller
     controller.ctx.transport.close_all()
 
@@ -550,7 +586,7 @@ def test_partial_receives_and_untouched_elements(plc, peer):
     server_side.sendall(b"ABCDEFGHIJ")
     wait = time.monotonic() + 2
     while plc.ctx.transport.pending(sock.v_handle) < 10 and time.monotonic() < wait:
-        plc.ctx.transport.poll(sock.v_handle, 0)
+        plc.refresh(sock.v_handle)
         time.sleep(0.001)
     data = [0xEE] * 8
     sizes = []
@@ -709,7 +745,7 @@ def test_clear_discards_unread_and_keeps_later_bytes(plc, peer):
     server_side.sendall(b"stale reply")
     deadline = time.monotonic() + 2
     while plc.ctx.transport.pending(sock.v_handle) < 11 and time.monotonic() < deadline:
-        plc.ctx.transport.poll(sock.v_handle, 0)
+        plc.refresh(sock.v_handle)
         time.sleep(0.001)
     clear = plc.fb("SktClearBuf", Socket=sock)
     plc.execute(clear)
@@ -857,3 +893,112 @@ def test_error_codes_table_setting(plc):
         controller.execute(send)
         assert send.Error and send.ErrorID == expected
     custom.ctx.transport.close_all()
+
+
+# --- the socket service between scans (RealTcpTransport.serve_between_scans) ----------------------
+
+class CountingSocket:
+    """A socket proxy counting the calls that reach the OS (receives and sends)."""
+
+    def __init__(self, sock: socket.socket) -> None:
+        self._sock = sock
+        self.calls = 0
+
+    def __getattr__(self, name):
+        attribute = getattr(self._sock, name)
+        if name in ("recv", "recv_into", "send"):
+            def counted(*args):
+                self.calls += 1
+                return attribute(*args)
+            return counted
+        return attribute
+
+
+def serviced_plc() -> Plc:
+    return Plc(RealTcpTransport(), between_scans=True)
+
+
+def test_a_waiting_receive_makes_no_system_call_in_the_scan(peer):
+    plc = serviced_plc()
+    sock = plc.connect(peer.port)
+    server_side = peer.accept()
+    link = plc.ctx.transport._sockets[sock.v_handle].link
+    counting = link._sock = CountingSocket(link._sock)
+    rcv = plc.fb("SktTCPRcv", Socket=sock, Size=10, RcvDat=[0] * 10, TimeOut=0)
+    rcv.step(Execute=True)
+    for _ in range(20):
+        plc.next_scan()
+        rcv.step()
+    assert rcv.Busy and counting.calls == 0     # nothing readable: no recv, in or between scans
+    server_side.sendall(b"ok")
+    deadline = time.monotonic() + 2
+    while rcv.Busy and time.monotonic() < deadline:
+        plc.next_scan()
+        rcv.step()
+        time.sleep(0.001)
+    assert rcv.Done and bytes(rcv.RcvDat[:2]) == b"ok"
+    plc.ctx.transport.close_all()
+
+
+def test_fbs_see_what_arrived_before_the_scan_and_sends_leave_after_it(peer):
+    plc = serviced_plc()
+    sock = plc.connect(peer.port)
+    server_side = peer.accept()
+    server_side.sendall(b"late")
+    time.sleep(0.05)                                    # in the OS buffer, not yet serviced
+    status_now = plc.fb("SktGetTCPStatus", Socket=sock)
+    status_now.step(Execute=True)
+    plc.ctx.transport.poll(sock.v_handle, plc.ctx.now_ns)   # an FB's poll does no I/O
+    assert plc.ctx.transport.pending(sock.v_handle) == 0
+    plc.next_scan()                                     # the service reads before this scan
+    status_now.step()
+    assert status_now.Done and status_now.DatRcvFlag
+    send = plc.fb("SktTCPSend", Socket=sock, SendDat=list(b"ping"), Size=4)
+    send.step(Execute=True)
+    server_side.settimeout(0.05)
+    with pytest.raises(socket.timeout):
+        server_side.recv(4)                             # queued until the scan ends
+    plc.end_scan()
+    server_side.settimeout(2.0)
+    assert read_exactly(server_side, 4) == b"ping"
+    plc.ctx.transport.close_all()
+
+
+def test_a_new_socket_on_a_reused_descriptor_is_watched_afresh(peer):
+    plc = serviced_plc()
+    first = plc.connect(peer.port)
+    peer.accept()
+    plc.execute(plc.fb("SktClose", Socket=first))
+    second = plc.connect(peer.port)                     # the OS may give it the same descriptor
+    server_side = peer.accept()
+    server_side.sendall(b"new")
+    rcv = receive(plc, second, 10, [0] * 10)
+    assert rcv.Done and bytes(rcv.RcvDat[:rcv.RcvSize]) == b"new"[:rcv.RcvSize]
+    plc.ctx.transport.close_all()
+
+
+def test_a_reset_found_when_sending_after_the_scan_clears_the_buffer(peer):
+    plc = serviced_plc()
+    sock = plc.connect(peer.port)
+    server_side = peer.accept()
+    reset(server_side)
+    time.sleep(0.05)
+    link = plc.ctx.transport._sockets[sock.v_handle].link
+    plc.ctx.transport._sockets[sock.v_handle].received += b"old"
+    link.send(b"x")                                     # queued; the reset shows at the flush
+    plc.ctx.transport._to_flush.add(sock.v_handle)
+    plc.end_scan()
+    assert link.state == RESET and plc.ctx.transport.pending(sock.v_handle) == 0
+    plc.next_scan()
+    assert status(plc, sock).TcpStatus == STATES["_CLOSED"]
+
+
+def test_the_service_time_is_kept_per_scan(peer):
+    plc = serviced_plc()
+    plc.connect(peer.port)
+    scans = plc.ctx.transport.service_ns
+    before = len(scans)
+    for _ in range(5):
+        plc.next_scan()
+    assert len(scans) == before + 5
+    plc.ctx.transport.close_all()
