@@ -15,6 +15,7 @@
     python bench/bench_trace.py --runs 10 --repeat 3
     python bench/bench_trace.py --scan-only      # 3. alone
     python bench/bench_trace.py --sockets        # 3. with real sockets: `stvm run` of the demo
+    python bench/bench_trace.py --sockets --repeat 3 --baseline /tmp/base   # and an older tree
 """
 
 from __future__ import annotations
@@ -177,27 +178,94 @@ def scan_time(project, repeat: int, cycles: int, warm: int = 1000) -> None:
     print(f"  every run (ST / loop / yardstick us): {spread}")
 
 
-def socket_scan_time(cycles: int = 10000) -> None:
-    """The thesis demo over real loopback sockets to the bundled emulator (`stvm run … --stats`,
-    a fresh process), on the real-time clock (the demo's default) and on the virtual clock; the
-    VM's median ST time per scan, between two yardstick measurements."""
+def _demo_run(extra: list[str], cycles: int, root: Path = ROOT) -> dict[str, tuple[float, ...]] | None:
+    """One `stvm run` of the demo in a fresh process from the tree at `root`: the scan-time and
+    socket-service figures of `--stats` (mean, p50, p99 µs), or None if it printed none."""
     import re
     import subprocess
+    done = subprocess.run([sys.executable, "-m", "stvm", "run", str(root / FILES[0].relative_to(ROOT)), "--scan",
+                           "1ms", "--stats", "--cycles", str(cycles), *extra], capture_output=True, text=True,
+                          cwd=root, timeout=300)
+    text = done.stdout + done.stderr
+    found = re.search(r"scan time us: mean ([\d.]+)\s+p50 ([\d.]+)\s+p99 ([\d.]+)", text)
+    if found is None:
+        print(f"    no statistics (exit {done.returncode}): {text.strip()[-300:]}")
+        return None
+    figures = {"st": tuple(float(x) for x in found.groups())}
+    service = re.search(r"socket service us \(between scans[^)]*\): mean ([\d.]+)\s+p50 ([\d.]+)\s+p99 ([\d.]+)", text)
+    if service is not None:
+        figures["service"] = tuple(float(x) for x in service.groups())
+    return figures
+
+
+def paced_lockstep(cycles: int, warm: int = 1000) -> float:
+    """Median ST µs of the same programs in lockstep (no sockets, no threads) with each scan
+    released at its 1 ms deadline by the real-time pacer: what waking up for every scan costs
+    the programs on this machine, whatever the sockets do."""
+    from stvm.runtime.realtime import Pacer
+    from stvm.runtime.stats import TimingStats
+    from stvm.runtime.vm import timing_us
+    project = load(FILES)
+    prepared = Prepared(TraceSpec(FILES, scenario=SCENARIO, cycles=cycles + warm), project)
+    prepared.wire()
+    vm = prepared.vm
+    vm.run(cycles=warm)
+    vm.scan_durations_ns = TimingStats()
+    pacer = Pacer()
+    pacer.take_gc()
+    try:
+        release = time.perf_counter_ns()
+        for _ in range(cycles):
+            vm.scan()
+            release += 1_000_000
+            pacer.wait_until(release)
+    finally:
+        pacer.release_gc()
+    p50 = timing_us(vm.scan_durations_ns)[1]
+    vm.close()
+    return p50
+
+
+def socket_scan_time(cycles: int = 10000, repeat: int = 3, baseline: Path | None = None) -> None:
+    """The thesis demo over real loopback sockets to the bundled emulator (`stvm run … --stats`,
+    a fresh process each time), on the real-time clock (the demo's default) and on the virtual
+    clock, `repeat` times alternating; each run between two yardstick measurements. Prints the
+    VM's median ST time per scan and the socket service's time per scan (between scans, not in
+    the ST time). `baseline`: another tree (e.g. a `git archive` of an older commit) run
+    alternately with this one."""
     from bench_core import HandForSum, best_of
-    for label, extra in (("real-time clock (the demo's default)", []), ("virtual clock", ["--virtual-clock"])):
-        before = best_of(HandForSum(), repeat=3, number=1000) * 1e6
-        done = subprocess.run([sys.executable, "-m", "stvm", "run", str(FILES[0]), "--scan", "1ms", "--stats",
-                               "--cycles", str(cycles), *extra], capture_output=True, text=True, cwd=ROOT,
-                              timeout=300)
-        after = best_of(HandForSum(), repeat=3, number=1000) * 1e6
-        hand = min(before, after)
-        found = re.search(r"scan time us: mean ([\d.]+)\s+p50 ([\d.]+)\s+p99 ([\d.]+)", done.stdout + done.stderr)
-        if found is None:
-            print(f"  real sockets, {label}: no statistics (exit {done.returncode})")
-            continue
-        mean, p50, p99 = (float(x) for x in found.groups())
-        print(f"  real sockets, {label}, {cycles} scans: ST median {p50:.1f} us = {p50 / hand:.2f}x the yardstick "
-              f"({hand:.2f} us; target <= 20 us), mean {mean:.1f}, p99 {p99:.1f} us")
+    import os
+    trees = [("this tree", ROOT)] + ([("baseline", baseline)] if baseline else [])
+    results: dict[tuple[str, str], list] = {}
+    clocks = (("real-time clock", []), ("virtual clock", ["--virtual-clock"]))
+    print(f"real sockets: `stvm run {FILES[0].relative_to(ROOT)} --scan 1ms --stats --cycles {cycles}` "
+          f"(bundled emulator, loopback TCP), {repeat} runs each, load average {os.getloadavg()[0]:.2f}")
+    for _ in range(repeat):
+        for label, extra in clocks:
+            for tree, root in trees:
+                before = best_of(HandForSum(), repeat=3, number=1000) * 1e6
+                figures = _demo_run(extra, cycles, root)
+                after = best_of(HandForSum(), repeat=3, number=1000) * 1e6
+                if figures is not None:
+                    results.setdefault((tree, label), []).append((figures, min(before, after)))
+    paced = [paced_lockstep(min(cycles, 5000)) for _ in range(repeat)]
+    hand = best_of(HandForSum(), repeat=3, number=1000) * 1e6
+    for (tree, label), rows in results.items():
+        st_p50 = [figures["st"][1] for figures, _ in rows]
+        ratios = [figures["st"][1] / yard for figures, yard in rows]
+        service = [figures["service"][1] for figures, _ in rows if "service" in figures]
+        best = min(range(len(rows)), key=lambda i: st_p50[i])
+        yard = rows[best][1]
+        print(f"  {tree}, {label}: ST median per scan, best {st_p50[best]:.1f} us = {ratios[best]:.2f}x the "
+              f"yardstick ({yard:.2f} us; target <= 20 us); every run "
+              + ", ".join(f"{v:.1f}" for v in st_p50) + " us; p99 "
+              + ", ".join(f"{figures['st'][2]:.0f}" for figures, _ in rows) + " us")
+        if service:
+            print(f"      socket service between scans, median per scan: " + ", ".join(f"{v:.1f}" for v in service) + " us")
+    print(f"  no sockets: the same programs in lockstep, each scan released at its 1 ms deadline by the "
+          f"real-time pacer: ST median " + ", ".join(f"{v:.1f}" for v in paced) + f" us "
+          f"(= {min(paced) / hand:.2f}x the yardstick {hand:.2f} us at best)")
+    print(f"  load average after: {os.getloadavg()[0]:.2f}")
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -207,9 +275,11 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--cycles", type=int, default=9200, help="scans per overhead run (default: the scenario's)")
     parser.add_argument("--scan-only", action="store_true", help="only the scan-time figures (3.)")
     parser.add_argument("--sockets", action="store_true", help="only the scan time over real sockets (3.)")
+    parser.add_argument("--baseline", type=Path, default=None,
+                        help="with --sockets: also run the demo from this tree, alternately")
     args = parser.parse_args(argv)
     if args.sockets:
-        socket_scan_time()
+        socket_scan_time(repeat=min(args.repeat, 3), baseline=args.baseline)
         return 0
     project = load(FILES)
     if args.scan_only:
