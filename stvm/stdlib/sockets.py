@@ -36,6 +36,19 @@ from stvm.settings import (
     SktSendCopy, SktSendSize0, SktSocketAfterClose, SktStatusClosedHandle,
 )
 
+# The setting values the FBs compare with, as module constants: reading an Enum member through
+# its class costs ~170 ns on Python 3.11 (a descriptor), a global ~15 ns, and some of these
+# comparisons run at every call of an FB, every scan.
+_CANCEL = SktProgressWithoutCall.CANCEL
+_START_AND_CLEAR = SktErrorIdReset.START_AND_CLEAR
+_ZEROED = SktSocketAfterClose.ZEROED
+_SRCPORT0_ERROR = SktConnectSrcport0.ERROR
+_STATUS_CLOSED_ERROR = SktStatusClosedHandle.ERROR
+_SIZE0_ERROR = SktSendSize0.ERROR
+_COPY_AT_START = SktSendCopy.AT_START
+_PEER_CLOSED_ERROR = SktRcvPeerClosed.ERROR
+_TIMEOUT0_ERROR_IF_EMPTY = SktRcvTimeout0.ERROR_IF_EMPTY
+
 MAX_SOCKETS = 16                       # sysmac.md 5, CONFIRMED
 RECEIVE_BUFFER_BYTES = 9_000           # per socket, overflow discarded (CONFIRMED)
 RECEIVE_MAX_BYTES = 2_000              # per SktTCPRcv (CONFIRMED)
@@ -563,7 +576,7 @@ class SocketRequestFB:
         self._previous_execute = execute
         if (self._phase == HELD and not execute) or self._phase == SHOWN_ONCE:
             self._clear_outputs(inst, settings)
-        if (self._phase == BUSY and settings.skt_progress_without_call is SktProgressWithoutCall.CANCEL
+        if (self._phase == BUSY and settings.skt_progress_without_call is _CANCEL
                 and self._last_scan is not None and ctx.scan > self._last_scan + 1):
             # `skt_progress_without_call = cancel`: a request not called in some scan is dropped
             self._guarded(self._cancel, inst, ctx)
@@ -607,7 +620,7 @@ class SocketRequestFB:
 
     def _clear_outputs(self, inst, settings) -> None:
         inst.Done = False
-        if inst.Error and settings.skt_errorid_reset is SktErrorIdReset.START_AND_CLEAR:
+        if inst.Error and settings.skt_errorid_reset is _START_AND_CLEAR:
             inst.ErrorID = 0
         inst.Error = False
         self._phase = IDLE
@@ -651,12 +664,13 @@ class SktTCPConnect(SocketRequestFB):
         super().__init__()
         self._handle = 0
         self._start_ns = 0
+        # the handle this FB wrote to Socket, kept only under `skt_socket_after_close = zeroed`
+        # (0 otherwise: then a connected FB's call, every scan, checks nothing more)
         self._published_handle = 0
 
     def call(self, inst, ctx) -> None:
-        super().call(inst, ctx)
-        if (ctx.settings.skt_socket_after_close is SktSocketAfterClose.ZEROED and self._published_handle
-                and inst.Socket.Handle == self._published_handle
+        SocketRequestFB.call(self, inst, ctx)   # not super(): this runs every scan
+        if (self._published_handle and inst.Socket.Handle == self._published_handle
                 and self._transport_closed(ctx, self._published_handle)):
             _write_socket(inst.Socket, 0, ("", 0), ("", 0))
             self._published_handle = 0
@@ -670,7 +684,7 @@ class SktTCPConnect(SocketRequestFB):
         self._start_ns = ctx.now_ns
         if inst.DstTcpPort == 0:
             raise SocketError("out_of_range", "DstTcpPort 0")
-        if inst.SrcTcpPort == 0 and ctx.settings.skt_connect_srcport0 is SktConnectSrcport0.ERROR:
+        if inst.SrcTcpPort == 0 and ctx.settings.skt_connect_srcport0 is _SRCPORT0_ERROR:
             raise SocketError("out_of_range", "SrcTcpPort 0")
         host = inst.DstAdr.decode("latin-1").strip()
         self._handle = transport.open_connection(inst.SrcTcpPort, host, inst.DstTcpPort,
@@ -681,7 +695,8 @@ class SktTCPConnect(SocketRequestFB):
         if state in (ESTABLISHED, PEER_CLOSED):
             local, remote = transport.addresses(self._handle)
             _write_socket(inst.Socket, self._handle, local, remote)
-            self._published_handle = self._handle
+            if ctx.settings.skt_socket_after_close is _ZEROED:
+                self._published_handle = self._handle
             return DONE
         if state == CONNECTING and ctx.now_ns - self._start_ns < CONNECT_TIMEOUT_NS:
             return None
@@ -743,7 +758,7 @@ class SktGetTCPStatus(SocketRequestFB):
         names = ctx.settings.connection_state_values
         if transport.was_closed(self._handle):
             # a handle once valid, now closed (`skt_status_closed_handle`)
-            if ctx.settings.skt_status_closed_handle is SktStatusClosedHandle.ERROR:
+            if ctx.settings.skt_status_closed_handle is _STATUS_CLOSED_ERROR:
                 return "bad_handle"
             inst.TcpStatus = names.get("_CLOSED", 0)
             inst.DatRcvFlag = False
@@ -767,13 +782,13 @@ class SktTCPSend(SocketRequestFB):
         self._data: bytes | None = None
         if self._size > settings.skt_send_max:
             raise SocketError("out_of_range", f"Size {self._size} > {settings.skt_send_max}")
-        if self._size == 0 and settings.skt_send_size0 is SktSendSize0.ERROR:
+        if self._size == 0 and settings.skt_send_size0 is _SIZE0_ERROR:
             raise SocketError("out_of_range", "Size 0")
         source = as_array_ref(inst.SendDat)
         if self._size > len(source):
             raise SocketError("too_few_elements", f"Size {self._size} > {len(source)} elements")
         _require_connected(transport, self._handle, ctx.now_ns)
-        if settings.skt_send_copy is SktSendCopy.AT_START:
+        if settings.skt_send_copy is _COPY_AT_START:
             self._data = bytes(source.read(self._size))
             self._send(transport)
 
@@ -821,14 +836,14 @@ class SktTCPRcv(SocketRequestFB):
             inst.RcvSize = count
             return DONE
         if state == PEER_CLOSED:
-            if settings.skt_rcv_peer_closed is SktRcvPeerClosed.ERROR:
+            if settings.skt_rcv_peer_closed is _PEER_CLOSED_ERROR:
                 return "wrong_state"
             inst.RcvSize = 0  # `skt_rcv_peer_closed = done_zero`
             return DONE
         if state in (RESET, FAILED):
             return "wrong_state"
         if self._timeout_ns == 0:
-            return "timeout" if settings.skt_rcv_timeout0 is SktRcvTimeout0.ERROR_IF_EMPTY else None
+            return "timeout" if settings.skt_rcv_timeout0 is _TIMEOUT0_ERROR_IF_EMPTY else None
         if ctx.now_ns - self._start_ns >= self._timeout_ns:
             return "timeout"
         return None
