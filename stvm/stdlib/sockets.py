@@ -12,6 +12,10 @@ Three layers:
   `SktClose`) with the Execute/Done/Busy/Error protocol of section 4, one poll per call: a scan never
   blocks. Every failure becomes Error + ErrorID (`skt_error_codes`), never a Python exception.
 
+`RealTcpTransport.serve_between_scans(vm)` (what `stvm run` of a demo does) moves the network I/O
+out of the FB calls into the VM's scan hooks: one `poll(0)` of all sockets before each scan, the
+queued sends after it; an FB's `poll` then reads the state the service left.
+
 The FBs use `ctx.transport`, creating `make_default_transport()` there when it is None; the VM calls
 `ctx.transport.close_all()` at the end of a run. The 75 s connect limit and receive timeouts run on
 the VM clock (`ctx.now_ns`).
