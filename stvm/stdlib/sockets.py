@@ -522,6 +522,11 @@ class RealTcpTransport(SocketTable):
             self._to_flush.add(handle)
 
     def close(self, handle: int) -> None:
+        entry = self._sockets.get(handle)
+        if entry is not None and self.between_scans:
+            # what an FB of this scan queued goes out before the FIN, as it would have had it
+            # been sent at once (per-call mode)
+            entry.link.flush()
         super().close(handle)
         self._watch_stale = True
 

@@ -1002,3 +1002,15 @@ def test_the_service_time_is_kept_per_scan(peer):
         plc.next_scan()
     assert len(scans) == before + 5
     plc.ctx.transport.close_all()
+
+
+def test_a_send_queued_in_the_scan_of_the_close_still_goes_out_before_the_fin(peer):
+    plc = serviced_plc()
+    sock = plc.connect(peer.port)
+    server_side = peer.accept()
+    plc.next_scan()
+    send = plc.fb("SktTCPSend", Socket=sock, SendDat=list(b"last"), Size=4)
+    send.step(Execute=True)                             # queued, not sent yet
+    plc.fb("SktClose", Socket=sock).step(Execute=True)  # the same scan
+    assert read_exactly(server_side, 4) == b"last"
+    assert server_side.recv(1) == b""
