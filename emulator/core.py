@@ -65,6 +65,7 @@ class EmulatorCore:
         sends its first frame MS ms later, and a `drop:MS` given while a motion runs drops the
         connections MS ms later (given while idle, MS ms after the next motion starts)."""
         robot = self.robot
+        robot.forget_deadline()
         self.faults = plan
         robot.faults = plan
         robot.executor.stalled = plan.stay_busy
@@ -78,6 +79,7 @@ class EmulatorCore:
     def clear_faults(self) -> None:
         """Back to a robot without faults (timers armed by faults are disarmed)."""
         robot = self.robot
+        robot.forget_deadline()
         self.faults = robot.faults = NO_FAULTS
         robot.executor.stalled = False
         robot.next_unsolicited_ns = None
@@ -173,7 +175,7 @@ class EmulatorCore:
         if actions:
             self._absorb(actions)
         self.now_ns = now_ns
-        moving = self.robot.executor.moving
+        moving = True if self.robot.executor.active else False   # executor.moving, without a call
         if moving and not self._was_moving and self.faults.drop_after_motion_ms is not None:
             self._drop_at_ns = now_ns + self.faults.drop_after_motion_ms * NS_PER_MS
         self._was_moving = moving
