@@ -48,6 +48,7 @@ class EmulatorCore:
         self._was_moving = False
         self._drop_at_ns: int | None = None
         self.now_ns = now_ns
+        self._ticked_ns: int | None = None   # the instant of the last `_tick` (see there)
 
     # ------------------------------------------------------------------ connections
 
@@ -66,6 +67,7 @@ class EmulatorCore:
         connections MS ms later (given while idle, MS ms after the next motion starts)."""
         robot = self.robot
         robot.forget_deadline()
+        self._ticked_ns = None
         self.faults = plan
         robot.faults = plan
         robot.executor.stalled = plan.stay_busy
@@ -80,6 +82,7 @@ class EmulatorCore:
         """Back to a robot without faults (timers armed by faults are disarmed)."""
         robot = self.robot
         robot.forget_deadline()
+        self._ticked_ns = None
         self.faults = robot.faults = NO_FAULTS
         robot.executor.stalled = False
         robot.next_unsolicited_ns = None
@@ -89,6 +92,7 @@ class EmulatorCore:
     def open(self, now_ns: int) -> int | None:
         """A client connects; return its connection id, or None if refused."""
         self._tick(now_ns)
+        self._ticked_ns = None   # what follows changes the state
         refuse = self.faults.refuse_connections
         if not self.robot.accepting or refuse == -1 or self._refused < refuse:
             self._refused += 1
@@ -103,6 +107,7 @@ class EmulatorCore:
     def close(self, conn: int, now_ns: int) -> None:
         """The client closed (or lost) the connection."""
         self._tick(now_ns)
+        self._ticked_ns = None   # what follows changes the state
         self.framers.pop(conn, None)
         self.rx_buffers.pop(conn, None)
         self._absorb(self.robot.disconnect(conn, now_ns))
@@ -110,6 +115,7 @@ class EmulatorCore:
     def receive(self, conn: int, data: bytes, now_ns: int) -> None:
         """Bytes arrived from ``conn``: decode every complete frame and answer it."""
         self._tick(now_ns)
+        self._ticked_ns = None   # what follows changes the state
         framer = self.framers.get(conn)
         if framer is None:
             return
@@ -167,6 +173,11 @@ class EmulatorCore:
     def _tick(self, now_ns: int) -> None:
         if now_ns < self.now_ns:
             now_ns = self.now_ns
+        if now_ns == self._ticked_ns and self.robot._settled_ns == now_ns:
+            # ticked at this instant already, with no call since that changes the state (those
+            # forget `_ticked_ns`; a direct robot call forgets its `_settled_ns`): this tick
+            # would change nothing. In lockstep `pop_ready` ticks right after `advance`.
+            return
         if self._drop_at_ns is not None and now_ns >= self._drop_at_ns:
             self._absorb(self.robot.advance(self._drop_at_ns))
             self._drop_all(self._drop_at_ns)
@@ -182,6 +193,7 @@ class EmulatorCore:
         if self._drop_at_ns is not None and now_ns >= self._drop_at_ns:
             self._drop_all(now_ns)
             self._drop_at_ns = None
+        self._ticked_ns = now_ns
 
     def _drop_all(self, at_ns: int) -> None:
         """Fault ``drop``: close every connection in the middle of a motion."""
