@@ -11,6 +11,7 @@ largest first — the table issue 16 asks to publish before changing the lowerin
     python bench/profile_scan.py --scans 5000 --top 15
     python bench/profile_scan.py --opcodes       # bytecodes and Python calls per scan instead
     python bench/profile_scan.py --opcodes --phase moving   # only scans while the robot moves
+    python bench/profile_scan.py --run-only 4300  # load and run, nothing else (for valgrind)
 
 The scenario alternates two phases of about 2 s: the robot waiting at a pick or place point
 (the program's TON runs) and a motion running (CBT_MoveAbsolute polls its receive FB for the
@@ -160,9 +161,16 @@ def main() -> None:
     ap.add_argument("--opcodes", action="store_true", help="bytecodes and calls per scan (exact, no timing)")
     ap.add_argument("--phase", choices=("all", "moving", "waiting"), default="all",
                     help="--opcodes: count only the scans while the robot moves, or while it waits")
+    ap.add_argument("--run-only", type=int, metavar="N",
+                    help="only load and run N scans, then exit: under an instruction counter the "
+                         "difference of two N is what the scans between cost (see the README)")
     args = ap.parse_args()
     project = load([str(THESIS)], use_cache=False)
     vm = thesis_vm(project)
+    if args.run_only is not None:
+        vm.run(cycles=args.run_only)
+        vm.close()
+        return
     vm.run(cycles=2000)                        # connected and moving before anything is timed
     if args.opcodes:
         opcode_table(project, vm, 500, args.top, args.phase)
