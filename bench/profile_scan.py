@@ -10,6 +10,12 @@ largest first — the table issue 16 asks to publish before changing the lowerin
     python bench/profile_scan.py                 # 20,000 scans timed, 10,000 profiled
     python bench/profile_scan.py --scans 5000 --top 15
     python bench/profile_scan.py --opcodes       # bytecodes and Python calls per scan instead
+    python bench/profile_scan.py --opcodes --phase moving   # only scans while the robot moves
+    python bench/profile_scan.py --run-only 4300  # load and run, nothing else (for valgrind)
+
+The scenario alternates two phases of about 2 s: the robot waiting at a pick or place point
+(the program's TON runs) and a motion running (CBT_MoveAbsolute polls its receive FB for the
+motion's TMSTA every scan); the timing line is printed for each phase apart as well.
 
 `--opcodes` counts what the interpreter executes (sys.settrace opcode events) over 500 scans:
 exact and the same on every run, so it compares two builds on a loaded machine where timings
@@ -94,8 +100,14 @@ def where_of(file: str, name: str, owner) -> str:
     return "other (Python, builtins)"
 
 
-def opcode_table(project, vm, scans: int, top: int) -> None:
-    """Bytecodes and Python calls per scan, by POU (see the module docstring)."""
+def robot_moving(vm) -> bool:
+    """Whether the emulated robot runs a motion (the phase the next scan belongs to)."""
+    return bool(vm.ctx.transport.link.core.robot.executor.active)
+
+
+def opcode_table(project, vm, scans: int, top: int, phase: str = "all") -> None:
+    """Bytecodes and Python calls per scan, by POU (see the module docstring); with `phase`
+    "moving" or "waiting" only scans of that phase are counted (`scans` of them)."""
     owner = pou_of_line(project)
     ops: dict[str, int] = {}
     calls: dict[str, int] = {}
@@ -113,13 +125,29 @@ def opcode_table(project, vm, scans: int, top: int) -> None:
                 ops[where] = ops.get(where, 0) + 1
             return local
         return local
-    sys.settrace(tracer)
-    try:
-        vm.run(cycles=scans)
-    finally:
-        sys.settrace(None)
+    if phase == "all":
+        sys.settrace(tracer)
+        try:
+            vm.run(cycles=scans)
+        finally:
+            sys.settrace(None)
+    else:
+        counted, scan = 0, vm.scan
+        for _ in range(100 * scans):          # the phases alternate every ~2,000 scans
+            if robot_moving(vm) != (phase == "moving"):
+                scan()
+                continue
+            sys.settrace(tracer)
+            try:
+                scan()
+            finally:
+                sys.settrace(None)
+            counted += 1
+            if counted == scans:
+                break
+        scans = max(counted, 1)
     total_ops, total_calls = sum(ops.values()), sum(calls.values())
-    print(f"\nbytecodes per scan over {scans} scans: {total_ops / scans:.0f}, Python calls per scan: "
+    print(f"\nbytecodes per scan over {scans} scans ({phase}): {total_ops / scans:.0f}, Python calls per scan: "
           f"{total_calls / scans:.1f}")
     print(f"{'where':58} {'bytecodes':>9} {'calls':>6} {'share':>6}")
     for where, count in sorted(ops.items(), key=lambda kv: -kv[1])[:top]:
@@ -131,20 +159,31 @@ def main() -> None:
     ap.add_argument("--scans", type=int, default=20000)
     ap.add_argument("--top", type=int, default=25)
     ap.add_argument("--opcodes", action="store_true", help="bytecodes and calls per scan (exact, no timing)")
+    ap.add_argument("--phase", choices=("all", "moving", "waiting"), default="all",
+                    help="--opcodes: count only the scans while the robot moves, or while it waits")
+    ap.add_argument("--run-only", type=int, metavar="N",
+                    help="only load and run N scans, then exit: under an instruction counter the "
+                         "difference of two N is what the scans between cost (see the README)")
     args = ap.parse_args()
     project = load([str(THESIS)], use_cache=False)
     vm = thesis_vm(project)
-    vm.run(cycles=2000)                        # connected and moving before anything is timed
-    if args.opcodes:
-        opcode_table(project, vm, 500, args.top)
+    if args.run_only is not None:
+        vm.run(cycles=args.run_only)
         vm.close()
         return
-    vm.scan_durations_ns = TimingStats()
-    loop, clock, scan = [], time.perf_counter_ns, vm.scan
+    vm.run(cycles=2000)                        # connected and moving before anything is timed
+    if args.opcodes:
+        opcode_table(project, vm, 500, args.top, args.phase)
+        vm.close()
+        return
+    vm.scan_durations_ns = TimingStats(window=args.scans)   # every scan's ST time kept, in order
+    loop, moving, clock, scan = [], [], time.perf_counter_ns, vm.scan
     for _ in range(args.scans):
+        moving.append(robot_moving(vm))
         started = clock()
         scan()
         loop.append(clock() - started)
+    st_each = vm.scan_durations_ns.recent()
     loop_us = statistics.median(loop) / 1000
     loop_mean = sum(loop) / len(loop) / 1000
     st_us = timing_us(vm.scan_durations_ns)[1]
@@ -154,6 +193,11 @@ def main() -> None:
           f"build a command and the robot's motion planning)")
     print(f"yardstick: hand-written Python FOR-100 loop {hand:.1f} µs; ST scan / yardstick = {st_us / hand:.2f}× "
           f"(issue 16 target: ≤ 15 µs, ≤ 2.3×); whole loop / yardstick = {loop_us / hand:.2f}× (target ≤ 20 µs)")
+    for name, want in (("motion running", True), ("robot waiting", False)):
+        picked = [i for i, m in enumerate(moving) if m == want]
+        if picked:
+            print(f"  {name:14} ({len(picked):5} scans): median ST {statistics.median(st_each[i] for i in picked) / 1000:.1f} µs, "
+                  f"whole loop {statistics.median(loop[i] for i in picked) / 1000:.1f} µs")
 
     profiled = max(args.scans // 2, 1)
     profile = cProfile.Profile()

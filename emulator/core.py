@@ -48,6 +48,7 @@ class EmulatorCore:
         self._was_moving = False
         self._drop_at_ns: int | None = None
         self.now_ns = now_ns
+        self._ticked_ns: int | None = None   # the instant of the last `_tick` (see there)
 
     # ------------------------------------------------------------------ connections
 
@@ -65,6 +66,8 @@ class EmulatorCore:
         sends its first frame MS ms later, and a `drop:MS` given while a motion runs drops the
         connections MS ms later (given while idle, MS ms after the next motion starts)."""
         robot = self.robot
+        robot.forget_deadline()
+        self._ticked_ns = None
         self.faults = plan
         robot.faults = plan
         robot.executor.stalled = plan.stay_busy
@@ -78,6 +81,8 @@ class EmulatorCore:
     def clear_faults(self) -> None:
         """Back to a robot without faults (timers armed by faults are disarmed)."""
         robot = self.robot
+        robot.forget_deadline()
+        self._ticked_ns = None
         self.faults = robot.faults = NO_FAULTS
         robot.executor.stalled = False
         robot.next_unsolicited_ns = None
@@ -87,6 +92,7 @@ class EmulatorCore:
     def open(self, now_ns: int) -> int | None:
         """A client connects; return its connection id, or None if refused."""
         self._tick(now_ns)
+        self._ticked_ns = None   # what follows changes the state
         refuse = self.faults.refuse_connections
         if not self.robot.accepting or refuse == -1 or self._refused < refuse:
             self._refused += 1
@@ -101,6 +107,7 @@ class EmulatorCore:
     def close(self, conn: int, now_ns: int) -> None:
         """The client closed (or lost) the connection."""
         self._tick(now_ns)
+        self._ticked_ns = None   # what follows changes the state
         self.framers.pop(conn, None)
         self.rx_buffers.pop(conn, None)
         self._absorb(self.robot.disconnect(conn, now_ns))
@@ -108,6 +115,7 @@ class EmulatorCore:
     def receive(self, conn: int, data: bytes, now_ns: int) -> None:
         """Bytes arrived from ``conn``: decode every complete frame and answer it."""
         self._tick(now_ns)
+        self._ticked_ns = None   # what follows changes the state
         framer = self.framers.get(conn)
         if framer is None:
             return
@@ -165,6 +173,11 @@ class EmulatorCore:
     def _tick(self, now_ns: int) -> None:
         if now_ns < self.now_ns:
             now_ns = self.now_ns
+        if now_ns == self._ticked_ns and self.robot._settled_ns == now_ns:
+            # ticked at this instant already, with no call since that changes the state (those
+            # forget `_ticked_ns`; a direct robot call forgets its `_settled_ns`): this tick
+            # would change nothing. In lockstep `pop_ready` ticks right after `advance`.
+            return
         if self._drop_at_ns is not None and now_ns >= self._drop_at_ns:
             self._absorb(self.robot.advance(self._drop_at_ns))
             self._drop_all(self._drop_at_ns)
@@ -173,13 +186,14 @@ class EmulatorCore:
         if actions:
             self._absorb(actions)
         self.now_ns = now_ns
-        moving = self.robot.executor.moving
+        moving = True if self.robot.executor.active else False   # executor.moving, without a call
         if moving and not self._was_moving and self.faults.drop_after_motion_ms is not None:
             self._drop_at_ns = now_ns + self.faults.drop_after_motion_ms * NS_PER_MS
         self._was_moving = moving
         if self._drop_at_ns is not None and now_ns >= self._drop_at_ns:
             self._drop_all(now_ns)
             self._drop_at_ns = None
+        self._ticked_ns = now_ns
 
     def _drop_all(self, at_ns: int) -> None:
         """Fault ``drop``: close every connection in the middle of a motion."""

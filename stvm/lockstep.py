@@ -92,6 +92,11 @@ class EmulatorLink:
         self.state = state
 
     def poll(self, now_ns: int) -> bytes:
+        endpoint = self._endpoint
+        if self.state == ESTABLISHED and endpoint.status == "connected":
+            # the steady state, where `_update` changes nothing (a closed link is RESET): a
+            # receive FB polls here every scan while it waits for the robot's answer
+            return endpoint.recv(1 << 20)
         self._update()
         if self.state in (ESTABLISHED, PEER_CLOSED):
             # after the robot's FIN the bytes it sent before are still readable
@@ -191,6 +196,24 @@ class LockstepTransport(SocketTable):
     @property
     def latency_ns(self) -> int:
         return self.link.latency_ns
+
+    # --- a receive FB waiting for the robot polls these every scan ----------------------------
+
+    def poll(self, handle: int, now_ns: int) -> str:
+        # `SocketTable.poll` when the link is established and nothing arrived (it would change
+        # nothing and return ESTABLISHED), without its three calls; anything else takes it
+        entry = self._sockets.get(handle)
+        if entry is not None:
+            link = entry.link
+            if link.state == ESTABLISHED:
+                endpoint = link._endpoint
+                if endpoint.status == "connected" and not endpoint.available:
+                    return ESTABLISHED
+        return super().poll(handle, now_ns)
+
+    def pending(self, handle: int) -> int:
+        entry = self._sockets.get(handle)
+        return len(entry.received) if entry is not None else super().pending(handle)
 
     def _next_ephemeral(self) -> int:
         port = self._ephemeral

@@ -326,6 +326,18 @@ def _make_converter(what: str, source_name: str, target_name: str):
     if isinstance(target, StringType):
         def convert(ctx, value):
             return to_text(ctx, value, source)
+    elif isinstance(source, StringType) and isinstance(target, IntType) and not target.bitstring:
+        low, high = target.lo, target.hi
+
+        def convert(ctx, text):
+            # plain ASCII digits in range: text_to_integer's own fast path, without its three
+            # calls (from_text, the lo/hi properties); the thesis converts its command id every
+            # scan while it waits for a motion to end. Anything else takes the full reading.
+            if type(text) is bytes and text.isdigit():
+                value = int(text)
+                if low <= value <= high:
+                    return value
+            return text_to_integer(ctx, text, target, what)
     elif isinstance(source, StringType):
         def convert(ctx, text):
             return from_text(ctx, text, target, what)

@@ -83,6 +83,22 @@ def test_string_to_uint_plain_digits(digits):
             call("STRING_TO_UINT", make_ctx(), text)
 
 
+@pytest.mark.parametrize(("name", "digits"), [("STRING_TO_SINT", "127"), ("STRING_TO_SINT", "128"),
+                                             ("STRING_TO_USINT", "255"), ("STRING_TO_USINT", "0256"),
+                                             ("STRING_TO_DINT", "2147483648"), ("STRING_TO_ULINT", "0")])
+def test_string_to_integer_plain_digits_each_type(name, digits):
+    """The converters' digits-only path gives what the full reading gives, in and out of range."""
+    padded = b"  " + digits.encode()       # blanks: never the digits-only path
+    try:
+        expected = call(name, make_ctx(), padded)
+    except FunctionError as error:
+        with pytest.raises(FunctionError, match="outside"):
+            call(name, make_ctx(), digits.encode())
+        assert "outside" in str(error)
+    else:
+        assert call(name, make_ctx(), digits.encode()) == expected == int(digits)
+
+
 @pytest.mark.parametrize("text", [b"", b" ", b"abc", b"12a", b"12 ", b"-1", b"65536", b"1.5",
                                   b"_", b"- 1", b"16#10"])
 def test_string_to_uint_errors(text):

@@ -100,3 +100,31 @@ def test_several_robots_each_reached_at_its_own_address():
     by_robot = {(f.robot, f.direction) for f in transport.frames}
     assert by_robot == {(0, "rx"), (0, "tx"), (1, "rx"), (1, "tx")}
     assert vm.get("Main.replies") == 2
+
+
+def test_polling_shortcut_matches_the_socket_table():
+    """`LockstepTransport.poll`/`pending` (a shortcut while nothing arrives) give what
+    `SocketTable`'s own give, scan by scan: connecting, established and idle, a reply arriving,
+    the robot's project stopping (its sockets closed)."""
+    from emulator import encode
+    from stvm.stdlib.sockets import SocketTable
+    fast, plain = LockstepTransport(), LockstepTransport()
+    seen = {id(fast): [], id(plain): []}
+    for transport, poll, pending in ((fast, fast.poll, fast.pending),
+                                     (plain, lambda h, t: SocketTable.poll(plain, h, t),
+                                      lambda h: SocketTable.pending(plain, h))):
+        handle = transport.open_connection(0, "127.0.0.1", 5890, 0)
+        for scan in range(40):
+            now = scan * 1_000_000
+            if scan == 8:
+                transport.send(handle, encode("TMSTA", "00"))
+            if scan == 20:
+                transport.inject_fault("stop:3")
+            seen[id(transport)].append((poll(handle, now), pending(handle)))
+            if scan == 12:
+                transport.receive(handle, 100)
+            transport.link.advance_to(now + 1_000_000)
+    assert seen[id(fast)] == seen[id(plain)]
+    states = [state for state, _ in seen[id(fast)]]
+    assert {"connecting", "established", "peer_closed"} <= set(states)
+    assert any(count for _, count in seen[id(fast)])      # the reply was buffered
