@@ -14,64 +14,54 @@ never changes what the program computes, only how fast it runs.
 from __future__ import annotations
 
 from stvm.syntax import nodes as n
-from stvm.syntax.walk import _FIELDS, _KIND, _LOOPS, LOOP_WEIGHT, _kind
+from stvm.syntax.walk import LOOP_WEIGHT
 
 
 def hot_uses(body) -> dict[str, float]:
-    """Weighted uses by lower-case single-part name.
-
-    A walk with a stack of (node, weight) in the order of a recursive visit (each node before
-    the nodes inside it, fields in their declared order), so every count adds up its weights
-    in the same order and comes out the same float: no Python call per node (this ran per POU
-    on every load, a sixth of lowering a 100,000-line program)."""
+    """Weighted uses by lower-case single-part name."""
     counts: dict[str, float] = {}
-    get = counts.get
-    stack: list = [(tuple(body), 1.0)]
-    pop, push = stack.pop, stack.append
-    fields_of, kind_of = _FIELDS, _KIND
-    name_cls, if_cls, case_cls, call_cls = n.Name, n.If, n.Case, n.Call
-    while stack:
-        node, weight = pop()
-        cls = node.__class__
-        kind = kind_of.get(cls)
-        if kind is None:
-            kind = _kind(cls)
-        if kind == 1:      # a tuple: its items, the first on top
-            for i in range(len(node) - 1, -1, -1):
-                push((node[i], weight))
-            continue
-        if kind == 0:
-            continue
-        if cls is name_cls:
+
+    def visit(node, weight: float) -> None:
+        if isinstance(node, tuple):
+            for item in node:
+                visit(item, weight)
+            return
+        if isinstance(node, n.Name):
             if len(node.parts) == 1:
                 key = node.parts[0].lower()
-                counts[key] = get(key, 0.0) + weight
-            continue
-        if cls is if_cls:
+                counts[key] = counts.get(key, 0.0) + weight
+            return
+        if isinstance(node, n.If):
             # each condition is tested on most calls; each branch runs on one of len + 1 ways
             share = weight / (len(node.branches) + 1)
+            for cond, stmts in node.branches:
+                visit(cond, weight)
+                visit(stmts, share)
             if node.else_body is not None:
-                push((node.else_body, share))
-            for cond, stmts in reversed(node.branches):
-                push((stmts, share))
-                push((cond, weight))
-            continue
-        if cls is case_cls:
+                visit(node.else_body, share)
+            return
+        if isinstance(node, n.Case):
+            visit(node.selector, weight)
             share = weight / (len(node.elements) + 1)
+            for _, stmts in node.elements:   # the labels are constants
+                visit(stmts, share)
             if node.else_body is not None:
-                push((node.else_body, share))
-            for _, stmts in reversed(node.elements):   # the labels are constants
-                push((stmts, share))
-            push((node.selector, weight))
-            continue
-        if cls is call_cls and node.callee.__class__ is name_cls and len(node.callee.parts) == 1:
+                visit(node.else_body, share)
+            return
+        if isinstance(node, n.Call) and isinstance(node.callee, n.Name) and len(node.callee.parts) == 1:
             # an FB call names its instance once per argument it passes or reads back, and once
             # to call it (a FUNCTION's name is no variable: counting it changes nothing)
             key = node.callee.parts[0].lower()
-            counts[key] = get(key, 0.0) + weight * len(node.args)
-        elif cls in _LOOPS:
+            counts[key] = counts.get(key, 0.0) + weight * len(node.args)
+        if isinstance(node, (n.For, n.While, n.Repeat)):
             weight *= LOOP_WEIGHT
-        names = fields_of[cls]
-        for i in range(len(names) - 1, -1, -1):
-            push((getattr(node, names[i]), weight))
+        for name in getattr(node, "__dataclass_fields__", ()):
+            if name != "span":
+                value = getattr(node, name)
+                if isinstance(value, tuple) or hasattr(value, "__dataclass_fields__"):
+                    visit(value, weight)
+
+    visit(tuple(body), 1.0)
+    del visit   # the closure refers to itself: break the cycle (no garbage for the collector)
     return counts
+
