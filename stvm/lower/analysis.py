@@ -332,6 +332,8 @@ class _Planner:
     # ---- hold_derefs_in_loops
     def held_derefs(self, body, cached: Mapping[str, Variable]) -> None:
         """The outermost loops of a body for which `held_deref` holds."""
+        if not any(isinstance(var.type, t.RefType) for var in cached.values()):
+            return   # `held_deref` needs a Python-local reference to hold: no walk over the body
         inner: set[int] = set()
         found: dict[int, HeldDeref] = {}
         for node in walk(body):

@@ -19,7 +19,19 @@ def _checked(st_name: str) -> str:
 
 def var_attr(st_name: str) -> str:
     """Attribute holding variable/field/pin `st_name` on an instance, struct or frame."""
-    return "v_" + _checked(st_name)
+    attr = _VAR_ATTRS.get(st_name)
+    if attr is None:
+        attr = "v_" + _checked(st_name)
+        if len(_VAR_ATTRS) < _VAR_ATTRS_MAX:
+            _VAR_ATTRS[st_name] = attr
+    return attr
+
+
+# var_attr's results: the generator asks for the same few names hundreds of thousands of times
+# (each use of a variable), each a regex match and a lower(); bounded, as a long-lived process
+# (the DAP server, the HMI) lowers program after program
+_VAR_ATTRS: dict[str, str] = {}
+_VAR_ATTRS_MAX = 100_000
 
 
 _VAR_ATTR = re.compile(r"v_[a-z_][a-z0-9_]*")

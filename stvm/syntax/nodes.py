@@ -534,3 +534,48 @@ for _cls in list(globals().values()):
             _cls.__init__ = _stamped_init(_init)
             _cls.__reduce__ = _reduce_by_fields   # the id is not pickled (nor copied)
 del _cls, _init
+
+
+def _inline_span_pickling(cls: type) -> None:
+    """Pickle a node of `cls` as its fields with its `span` spelled out as five values, rebuilt
+    by a module-level `_unpickled_<Class>`, instead of as its constructor arguments with a Span
+    object among them. A node's span is its own (half a million spans for a 100,000-line unit):
+    as objects each cost a Python `__reduce__` call, a memo entry and its argument tuple, which
+    was 40 % of pickling the parsed unit (the unit's cache entry, first load) and a third of
+    reading it back. A span that is not a Span object (none is, today) pickles as before."""
+    names = [f.name for f in dataclasses.fields(cls)]
+    if "span" not in names:
+        return
+    at = names.index("span")
+    scope = {"_cls": cls, "Span": Span}
+    fields = [f"a{i}" for i in range(len(names))]
+    ctor_args = [("Span(span_file, span_line, span_column, span_end_line, span_end_column)" if i == at else a)
+                 for i, a in enumerate(fields)]
+    params = [a for i, a in enumerate(fields) if i != at] + \
+        ["span_file", "span_line", "span_column", "span_end_line", "span_end_column"]
+    name = f"_unpickled_{cls.__name__}"
+    exec(f"def {name}({', '.join(params)}):\n    return _cls({', '.join(ctor_args)})\n", scope)   # noqa: S102 (field names of our own classes)
+    rebuild = scope[name]
+    rebuild.__module__, rebuild.__qualname__ = __name__, name   # pickled by reference: stvm.syntax.nodes.<name>
+    globals()[name] = rebuild
+    plain = cls.__reduce__
+    own = "".join(f"self.{f}, " for i, f in enumerate(names) if i != at)
+    scope.update(_rebuild=rebuild, _plain=plain, _span_cls=Span)
+    exec("def __reduce__(self):\n"
+         "    span = self.span\n"
+         "    if span.__class__ is not _span_cls:\n"
+         "        return _plain(self)\n"
+         f"    return (_rebuild, ({own}span.file, span.line, span.column, span.end_line, span.end_column))\n",
+         scope)   # noqa: S102 (as above)
+    reduce = scope["__reduce__"]
+    reduce.__qualname__ = f"{cls.__qualname__}.__reduce__"
+    cls.__reduce__ = reduce
+
+
+for _cls in list(globals().values()):
+    # only the classes whose pickled form is their constructor arguments (fast_frozen_init's):
+    # those left with `_reduce_by_fields` rebuild through their fields (and a new id) as before
+    if isinstance(_cls, type) and issubclass(_cls, Node) and dataclasses.is_dataclass(_cls) \
+            and _cls.__module__ == __name__ and _cls.__dict__.get("__reduce__") not in (None, _reduce_by_fields):
+        _inline_span_pickling(_cls)
+del _cls

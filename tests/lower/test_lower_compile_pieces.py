@@ -47,3 +47,33 @@ def test_a_program_compiled_in_many_pieces_runs_and_faults_at_its_st_line(monkey
     lines = MANY_FBS.splitlines()
     fault_line = next(i for i, line in enumerate(lines, 1) if line.startswith("q := total / zero"))
     assert rc == 3 and f"{path}:{fault_line}:1: fault: integer division by zero" in err, err
+
+
+def _functions(code, out):
+    for const in code.co_consts:
+        if hasattr(const, "co_positions"):
+            out.append((const.co_name, const.co_firstlineno, list(const.co_positions())))
+            _functions(const, out)
+    return out
+
+
+def test_pieces_have_the_line_tables_of_the_whole_module(monkeypatch):
+    # every class and function body (what faults, breakpoints and traces read) at the lines and
+    # columns compiling the module at once gives them
+    monkeypatch.setattr(product, "CHUNK_LINES", 4)
+    source = "".join(f"class C{i}:\n    def f(self):\n        x = {i}\n        return (x +\n            1)\n"
+                     for i in range(6))
+    pieces = compile_module(source, "<t>")
+    assert len(pieces) > 2
+    moved: list = []
+    for piece in pieces:
+        _functions(piece, moved)
+    assert len(moved) == 12 and moved == _functions(compile(source, "<t>", "exec"), [])
+
+
+def test_a_syntax_error_in_a_later_piece_is_at_its_module_line(monkeypatch):
+    monkeypatch.setattr(product, "CHUNK_LINES", 2)
+    source = "class A:\n    a = 1\nclass B:\n    b = (\n"
+    with pytest.raises(SyntaxError) as info:
+        compile_module(source, "<t>")
+    assert info.value.lineno == 4

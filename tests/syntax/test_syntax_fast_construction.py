@@ -115,8 +115,18 @@ def test_fast_nodes_pickle_and_copy_as_constructor_arguments():
     span = Span("a.st", 1, 2, 3, 4)
     call = n.Call(n.Name(("f",), False, span), (n.Argument("positional", None, n.IntLiteral(7, span), span),), span)
     assert n.Call.__reduce__.__qualname__ == "Call.__reduce__"
-    cls, args = call.__reduce__()
-    assert cls is n.Call and cls(*args) == call
+    # the constructor arguments with the span spelled out (no Span object to reduce and memoise)
+    rebuild, args = call.__reduce__()
+    assert rebuild is n._unpickled_Call and args == (call.callee, call.args, "a.st", 1, 2, 3, 4)
+    assert rebuild(*args) == call and rebuild(*args).span == span and rebuild(*args).nid != call.nid
+    # a span field elsewhere than last (POU has name_span after it) lands in its own place
+    pou = parse_text("PROGRAM P\nEND_PROGRAM\n", "p.st")[0].pous[0]
+    back = pickle.loads(pickle.dumps(pou, protocol=pickle.HIGHEST_PROTOCOL))
+    assert back == pou and back.span == pou.span and back.name_span == pou.name_span
+    # something other than a Span in the span slot pickles as plain constructor arguments
+    odd = n.IntLiteral(1, None)
+    assert odd.__reduce__() == (n.IntLiteral, (1, None))
+    assert pickle.loads(pickle.dumps(odd)).span is None
     for back in (pickle.loads(pickle.dumps(call, protocol=pickle.HIGHEST_PROTOCOL)), copy.deepcopy(call),
                  copy.copy(call)):
         assert back == call and back.span == span and back.args[0].value.span == span
