@@ -107,7 +107,6 @@ class Demo:
                     if exc.errno != errno.EADDRINUSE or attempt == 4:
                         raise
             self.robot_address = ("127.0.0.1", self.server.port)
-        self._serve_sockets()
         overrides: dict[str, Any] = {}
         if scenario is not None:
             if scenario.robot_address:
@@ -118,23 +117,6 @@ class Demo:
             driver.apply_initial(overrides)
             self.vm.on_scan_end.append(driver.after_scan)
         self.vm.on_scan_end.append(self.after_scan)
-
-    def _serve_sockets(self) -> None:
-        """The socket FBs' service between scans, as on the controller (sysmac.md 1): one poll of
-        all sockets before each scan, the queued sends after it; the programs make no system call
-        for a socket that is only waiting (stvm/stdlib/sockets.py, RealTcpTransport)."""
-        from stvm.stdlib.sockets import RealTcpTransport   # lazy: start-up
-        if self.vm.ctx.transport is None:
-            self.vm.ctx.transport = RealTcpTransport()
-        transport = self.vm.ctx.transport
-        if isinstance(transport, RealTcpTransport) and not transport.between_scans:
-            transport.serve_between_scans(self.vm)
-
-    def socket_service_us(self):
-        """(mean, p50, p99, max) µs of the socket service per scan, or None (not measured)."""
-        from stvm.runtime.vm import timing_us   # lazy: start-up
-        stats = getattr(self.vm.ctx.transport, "service_ns", None)
-        return timing_us(stats) if stats is not None else None
 
     def stop(self) -> None:
         if self.server is not None:
@@ -192,7 +174,8 @@ class Demo:
         scan = timing_us(self.vm.scan_durations_ns)
         if scan is not None:
             rows.append(("scan time", f"mean {scan[0]:.0f} µs, p99 {scan[2]:.0f} µs, max {scan[3]:.0f} µs"))
-        service = self.socket_service_us()
+        from stvm.stdlib.sockets import socket_service_us   # lazy: start-up
+        service = socket_service_us(self.vm)
         if service is not None:
             rows.append(("socket service", f"between scans, mean {service[0]:.0f} µs, p99 {service[2]:.0f} µs"))
         if self.vm.realtime:

@@ -305,6 +305,9 @@ def cmd_run(args) -> int:
     # the demo talks to a robot that moves in wall-clock time: run on the real-time clock
     realtime = args.realtime or (demo_mode and not args.virtual_clock)
     vm = project.start(scan=scan_ns, realtime=realtime)
+    # real sockets get the controller's socket service between scans (stvm/stdlib/sockets.py:
+    # one poll of all sockets before each scan, the queued sends after it), made at the first call
+    vm.ctx.socket_service_vm = vm
     # validate --print names and --until before running, so a typo is a usage error, not a lost run
     for name in args.print or []:
         try:
@@ -401,7 +404,10 @@ def cmd_run(args) -> int:
             status = status or EXIT_USAGE
     if args.stats:
         _print_stats(vm)
-        service = demo.socket_service_us() if demo is not None else None
+        service = None
+        if vm.ctx.transport is not None:
+            from stvm.stdlib.sockets import socket_service_us   # lazy: start-up
+            service = socket_service_us(vm)
         if service is not None:
             print(f"socket service us (between scans, not in the scan time): mean {service[0]:.1f}  "
                   f"p50 {service[1]:.1f}  p99 {service[2]:.1f}  max {service[3]:.1f}")

@@ -26,6 +26,9 @@ class RunContext:
     start_dt_ns: int = 0
     realtime: bool = False
     transport: Any = None
+    # the VM between whose scans a real socket service runs (set by `stvm run`: reads before each
+    # scan, sends after it, as the controller's system service); None: every socket FB call polls
+    socket_service_vm: Any = None
     warn_sink: Callable[[str], None] | None = None
     _warned: set = field(default_factory=set)
 

@@ -12,9 +12,9 @@ Three layers:
   `SktClose`) with the Execute/Done/Busy/Error protocol of section 4, one poll per call: a scan never
   blocks. Every failure becomes Error + ErrorID (`skt_error_codes`), never a Python exception.
 
-`RealTcpTransport.serve_between_scans(vm)` (what `stvm run` of a demo does) moves the network I/O
-out of the FB calls into the VM's scan hooks: one `poll(0)` of all sockets before each scan, the
-queued sends after it; an FB's `poll` then reads the state the service left.
+`RealTcpTransport.serve_between_scans(vm)` moves the network I/O out of the FB calls into the VM's
+scan hooks: one `poll(0)` of all sockets before each scan, the queued sends after it; an FB's
+`poll` then reads the state the service left. Every `stvm run` asks for it (`ctx.socket_service_vm`).
 
 The FBs use `ctx.transport`, creating `make_default_transport()` there when it is None; the VM calls
 `ctx.transport.close_all()` at the end of a run. The 75 s connect limit and receive timeouts run on
@@ -539,9 +539,21 @@ def make_default_transport() -> Transport:
     return RealTcpTransport()
 
 
+def socket_service_us(vm):
+    """(mean, p50, p99, max) µs of `vm`'s socket service per scan, or None (none runs between scans)."""
+    from stvm.runtime.vm import timing_us   # lazy: start-up
+    stats = getattr(vm.ctx.transport, "service_ns", None)
+    return timing_us(stats) if stats is not None else None
+
+
 def transport_of(ctx) -> Transport:
+    """The run's socket service, made at the first socket FB call that needs it; in a run that
+    names a VM to serve (`ctx.socket_service_vm`, what `stvm run` does) it runs between that VM's
+    scans, as on the controller, so a program without socket FBs pays nothing a scan."""
     if ctx.transport is None:
-        ctx.transport = make_default_transport()
+        transport = ctx.transport = make_default_transport()
+        if ctx.socket_service_vm is not None:
+            transport.serve_between_scans(ctx.socket_service_vm)
     return ctx.transport
 
 
