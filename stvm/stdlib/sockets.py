@@ -247,7 +247,10 @@ class TcpLink:
         # Choice: the send buffer is unbounded; Omron's fills up and keeps SktTCPSend Busy
         self._unsent += data
         if self.flush_later:
-            return      # the socket service sends it at the end of the scan (`flush`)
+            # the socket service sends it at the end of the scan (`flush`). Choice: a reset found
+            # then shows from the next scan on (status _CLOSED, later requests fail); this send is
+            # Done already, as on the controller, where Done means "in the send buffer"
+            return
         self._flush()
         if self.state == RESET:
             raise SocketError("wrong_state", "connection reset by peer")
