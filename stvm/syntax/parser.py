@@ -25,24 +25,40 @@ from stvm.folders import content_name, private_file
 from stvm.settings import DEFAULT_SETTINGS, Dialect, DoubleQuoteStrings, SysmacSettings
 from stvm.source import read_source
 from stvm.syntax import nodes as n
-from stvm.syntax import lalr
+from stvm.syntax import lalr, tables
 from stvm.syntax.lalr import Meta2 as _Meta2
 
 _GRAMMAR_FILE = "st.lark"
 
 
+def parser_options() -> dict:
+    """The options stvm's Lark parser is built with (also the key of the shipped tables)."""
+    return dict(parser="lalr", lexer="contextual", propagate_positions=True,
+                start=["start", "expression"], maybe_placeholders=True,
+                lexer_callbacks={"PRAGMA": _pragma_seen})
+
+
 @lru_cache(maxsize=None)
 def _parser(start: str = "start") -> Lark:
-    grammar = resources.files("stvm.syntax").joinpath(_GRAMMAR_FILE).read_text(encoding="utf-8")
-    # Building the LALR tables takes most of a second, so Lark keeps them in a file (it checks a
-    # hash of the grammar, the options and its version at load). Not Lark's default place
-    # (`cache=True`: a predictable name in the shared temp dir, which another user could plant
-    # a pickle under) but a file in stvm's own private cache folder; none if that is not safe.
-    tables = private_file(content_name("lark-tables", grammar, lark.__version__, _GRAMMAR_FILE, suffix=".pickle"))
-    return Lark(grammar, parser="lalr", lexer="contextual", propagate_positions=True,
-                start=["start", "expression"], maybe_placeholders=True,
-                cache=str(tables) if tables is not None else False,
-                lexer_callbacks={"PRAGMA": _pragma_seen})
+    grammar = grammar_text()
+    options = parser_options()
+    # Building the LALR tables takes about a second: stvm ships them (syntax/tables.py, checked
+    # against the grammar, the options and Lark's version)
+    shipped = tables.load(grammar, options)
+    if shipped is not None:
+        return shipped
+    # A stale shipped file (an edited grammar, another Lark): Lark builds the tables and keeps
+    # them in a file (it checks a hash of the grammar, the options and its version at load). Not
+    # Lark's default place (`cache=True`: a predictable name in the shared temp dir, which
+    # another user could plant a pickle under) but a file in stvm's own private cache folder;
+    # none if that is not safe.
+    cached = private_file(content_name("lark-tables", grammar, lark.__version__, _GRAMMAR_FILE, suffix=".pickle"))
+    return Lark(grammar, cache=str(cached) if cached is not None else False, **options)
+
+
+def build_shipped_tables() -> Path:
+    """Write the shipped tables for this grammar and these options (`python -m stvm.stdlib.prebuilt`)."""
+    return tables.build(grammar_text(), parser_options())
 
 
 _PRAGMAS = threading.local()   # the `{…}` tokens the lexer dropped during the current parse_text
