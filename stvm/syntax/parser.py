@@ -125,7 +125,8 @@ class _ToNodes:
             if start < 0:
                 return n.Span(self.file, 0, 0, 0, 0)
             li = bisect_right(lines, start)
-            lj = bisect_right(lines, end)
+            # most spans end on the line they start on (lines[li] exists: the last entry is past the text)
+            lj = li if end < lines[li] else bisect_right(lines, end, li)
             try:   # one int object per line number, shared by all spans (memory; see _intern_lines)
                 li, lj = _INTS[li], _INTS[lj]
             except IndexError:
@@ -138,7 +139,7 @@ class _ToNodes:
             lines = tok._lines
             start, end = tok.start_pos, tok.end_pos
             li = bisect_right(lines, start)
-            lj = bisect_right(lines, end)
+            lj = li if end < lines[li] else bisect_right(lines, end, li)
             return n.Span(self.file, li, start - lines[li - 1] + 1, lj, end - lines[lj - 1] + 1)
         return _tok_span(self.file, tok)
 
@@ -395,7 +396,7 @@ class _ToNodes:
 
     # -- statements
     def statement_list(self, meta, items):
-        return tuple(s for s in items if not isinstance(s, n.Empty))
+        return tuple([s for s in items if not isinstance(s, n.Empty)])
 
     def assignment(self, meta, items):
         return n.Assign(items[0], items[1], self._s(meta))
@@ -489,6 +490,10 @@ class _ToNodes:
 
     def expression(self, meta, items):
         """Precedence climbing over the flat chain [operand, op, operand, …]."""
+        if len(items) == 3:   # the common case, one operator: what climb() below makes of it
+            left, op, right = items
+            span = n.Span(self.file, left.span.line, left.span.column, right.span.end_line, right.span.end_column)
+            return n.Binary(str(op.type), left, right, span)
         operands = items[0::2]
         ops = items[1::2]
         pos = 0
@@ -574,7 +579,9 @@ class _ToNodes:
         self.diagnostics.append(Diagnostic.error(message, span))
 
     def int_literal(self, meta, items):
-        return n.IntLiteral(decode_int(str(items[0])), self._s(meta))
+        text = str(items[0])
+        # INTEGER is /[0-9][0-9_]*/: int() takes it as it is unless it has a `_`
+        return n.IntLiteral(int(text) if "_" not in text else decode_int(text), self._s(meta))
 
     def based_literal(self, meta, items):
         return n.IntLiteral(decode_int(str(items[0])), self._s(meta))
