@@ -277,6 +277,23 @@ def _compiled(terminals, tail: str, flags: int):
     return match
 
 
+_IGNORED = object()   # a dropped terminal without a callback (see Driver._scanner)
+
+
+class _Retype(dict):
+    """Text -> the keyword type Lark gives it (its UnlessCallback's scanner), or None; memoised."""
+
+    __slots__ = ("fullmatch",)
+
+    def __init__(self, fullmatch) -> None:
+        super().__init__()
+        self.fullmatch = fullmatch
+
+    def __missing__(self, text: str):
+        new = self[text] = self.fullmatch(text)
+        return new
+
+
 class _ByFirstChar(dict):
     """One scanner's match function per first character of the text to scan: Lark's alternation
     of that scanner's terminals, in Lark's order, without the terminals that cannot start with
@@ -420,24 +437,30 @@ class Driver:
 
     @staticmethod
     def _scanner(basic, skip, user_callbacks):
-        """(match, ignored types, retype, notify) for one of Lark's per-state lexers: one regex,
+        """(match, special) for one of Lark's per-state lexers. `match[first character]` is one regex,
         Lark's alternatives in Lark's order (the skip terminal left out, its runs matched after
         the token, possessively: `m.end(m.lastindex)` is the token's end, `m.end()` the next one's
         start)."""
-        retype = {}
-        notify = {}   # ignored terminals with a user callback (the pragmas): seen, dropped
+        terminals = tuple(t for t in basic.scanner.terminals if skip is None or t.name != skip.name)
+        # `special[type]`: None for most terminals; _IGNORED for a dropped one; the user callback
+        # of a dropped one that has one (the pragmas: seen, then dropped); a _Retype for one that
+        # Lark retypes when its text is a keyword's (an UnlessCallback)
+        special = {t.name: None for t in terminals}
         for type_, cb in basic.callback.items():
             if type_ in user_callbacks and type_ in basic.ignore_types:
-                notify[type_] = user_callbacks[type_]
+                special[type_] = user_callbacks[type_]
                 continue
             if not isinstance(cb, UnlessCallback) or not callable(getattr(cb.scanner, "fullmatch", None)):
                 raise Unsupported(f"lexer callback for {type_} is not an UnlessCallback with fullmatch")
-            retype[type_] = (cb.scanner, {})
-        terminals = tuple(t for t in basic.scanner.terminals if skip is None or t.name != skip.name)
+            if type_ not in basic.ignore_types:
+                special[type_] = _Retype(cb.scanner.fullmatch)
+        for type_ in basic.ignore_types:
+            if special.get(type_, 0) is None:
+                special[type_] = _IGNORED
         tail = f"(?:{skip.pattern.to_regexp()})?+" if skip is not None else ""
         by_char = _ByFirstChar(terminals, tail, basic.g_regex_flags)
         by_char.full   # compiled now: a regex Python cannot compile is found here, not mid-parse
-        return (by_char, frozenset(basic.ignore_types), retype, notify)
+        return (by_char, special)
 
     def _chain(self, key):
         """(final state, [(callback, name)] of the one-child trees) of the run of one-child
@@ -581,6 +604,8 @@ class Driver:
         dict_ = dict
         tuple_ = tuple
         chains = self._chains
+        retype_cls = _Retype
+        ignored = _IGNORED
         pass_ = _PASS
         m = None
         end = 0
@@ -589,7 +614,7 @@ class Driver:
         while True:
             state = states[-1]
             # ---- next token, with the scanner of the current state
-            match, ignore, retype, notify = scanners[state]
+            match, special = scanners[state]
             while True:
                 if pos >= n:
                     ttype = "$END"
@@ -599,26 +624,24 @@ class Driver:
                     raise Fallback
                 ttype = m.lastgroup
                 end = m.end(m.lastindex)
-                if ttype in ignore:
-                    if notify and ttype in notify:   # what Lark's lexer does for an ignored token
-                        line = bisect(lines, pos)
-                        notify[ttype](token_cls(ttype, text[pos:end], pos, line, pos - lines[line - 1] + 1))
-                    pos = m.end()
-                    continue
-                if retype:
-                    rt = retype.get(ttype)
-                    if rt is not None:
-                        value = text[pos:end]
-                        memo = rt[1]
-                        new = memo.get(value, 0)
-                        if new == 0:
-                            new = memo[value] = rt[0].fullmatch(value)
-                        if new is not None:
-                            ttype = new
-                break
+                how = special[ttype]
+                if how is None:                  # most tokens
+                    break
+                if how.__class__ is retype_cls:  # a keyword-shaped name becomes the keyword
+                    new = how[text[pos:end]]
+                    if new is not None:
+                        ttype = new
+                    break
+                if how is not ignored:           # what Lark's lexer does for an ignored token with a callback
+                    line = bisect(lines, pos)
+                    how(token_cls(ttype, text[pos:end], pos, line, pos - lines[line - 1] + 1))
+                pos = m.end()
             # ---- reduce while the table says so, then shift
             while True:
-                act = actions[state].get(ttype)
+                try:
+                    act = actions[state][ttype]
+                except KeyError:   # no action: a syntax error (Lark reports it)
+                    raise Fallback from None
                 cls = act.__class__
                 if cls is int_:                                         # shift
                     states.append(act)
@@ -641,8 +664,9 @@ class Driver:
                     # only changes the top of the stack; its course depends on the state below
                     # and the lookahead, so it is worked out once and replayed
                     key = (states[-2], state, ttype)
-                    chain = chains.get(key)
-                    if chain is None:
+                    try:
+                        chain = chains[key]
+                    except KeyError:
                         chain = self._chain(key)
                     final, steps = chain
                     if steps:
