@@ -19,9 +19,18 @@ byte. `tests/syntax/test_syntax_fast_parser.py` checks both paths give equal res
 Lark internals used (pinned in pyproject.toml; `check_lark_internals` fails loudly if they
 change): `Lark.parser.parser.parser.parse_table` (an IntParseTable: `states`, `start_states`,
 `end_states`, actions `(Shift, state)` / `(Reduce, rule)`), `Lark.parser.lexer` (a
-ContextualLexer: `lexers` per state, each BasicLexer with `scanner._mres`, `callback`,
-`ignore_types`), `lark.lexer.UnlessCallback.scanner`, and the rule options (`expand1`,
-`keep_all_tokens`, `empty_indices`, `template_source`) and terminals' `filter_out`.
+ContextualLexer: `lexers` per state, each BasicLexer with `scanner.terminals` in Lark's order,
+`callback`, `ignore_types`, `g_regex_flags`), `lark.lexer.UnlessCallback.scanner`, and the rule
+options (`expand1`, `keep_all_tokens`, `empty_indices`, `template_source`) and terminals'
+`filter_out` and `pattern.to_regexp()`.
+
+Scanning: each state's terminals are matched as Lark matches them (one alternation, Lark's
+order, first alternative wins), with two changes that cannot change a result: the alternation
+is split by the text's first character (`_ByFirstChar`: the terminals that cannot start with it,
+worked out from the regex's parse by `_may_start_with`, are left out), and the whitespace
+terminal's runs are matched as the tail of the token before them (`_skip_terminal`: only when
+every scanner drops it and no terminal can start with one of its characters), so a token costs
+one regex match instead of two.
 """
 
 from __future__ import annotations
