@@ -267,12 +267,12 @@ def _terminal_may_start_with(terminal, chars: frozenset) -> bool:
 
 
 _FIRST_CHARS: dict[tuple[str, str], frozenset] = {}   # (name, regex) -> ASCII chars it may start with
-_COMPILED: dict[tuple, Any] = {}                        # (names, tail, flags) -> compiled match
+_COMPILED: dict[tuple, Any] = {}   # ((name, regex) of each terminal, tail, flags) -> compiled match
 
 
 def _compiled(terminals, tail: str, flags: int):
     """The match function of Lark's alternation of `terminals` (in that order) then `tail`."""
-    key = (tuple(t.name for t in terminals), tail, flags)
+    key = (tuple((t.name, t.pattern.to_regexp()) for t in terminals), tail, flags)
     match = _COMPILED.get(key)
     if match is None:
         alternatives = "|".join(f"(?P<{t.name}>{t.pattern.to_regexp()})" for t in terminals)
@@ -320,7 +320,7 @@ class _ByFirstChar(dict):
         return _compiled(self.terminals, self.tail, self.flags)
 
     def __missing__(self, char: str):
-        if ord(char) >= 128:
+        if ord(char) >= 128 or self.flags:   # (global flags would change how the regexes read)
             match = self.full
         else:
             match = _compiled(tuple(t for t in self.terminals if char in _first_chars(t)), self.tail, self.flags)
@@ -429,6 +429,8 @@ class Driver:
         """The ignored `[…]+` terminal (WS) that every scanner drops and no other terminal of any
         scanner can start like: its runs can then be matched as the tail of the token before
         them, one regex match per token instead of two. None if there is none such."""
+        if any(basic.g_regex_flags for basic in basics):   # they would change how the regexes read
+            return None
         candidates = None
         for basic in basics:
             names = {t.name: t for t in basic.scanner.terminals}
