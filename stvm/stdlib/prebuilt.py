@@ -11,7 +11,8 @@ before, so a stale file costs time, never correctness.
 Trust: the file is part of the installed package, like its `.py` files (whoever can replace it
 can replace those); it is only read from this folder, never from a cache folder.
 
-Rebuild it after changing the grammar, the parser, the nodes or the stdlib:
+Rebuild it after changing the grammar, the parser, the nodes or the stdlib (this also rebuilds
+the parser's shipped Lark tables, stvm/syntax/tables.py):
 
     python -m stvm.stdlib.prebuilt          (tests/stdlib/test_prebuilt.py says when it is stale)
 """
@@ -89,4 +90,6 @@ def build() -> Path:
 
 
 if __name__ == "__main__":
+    from stvm.syntax.parser import build_shipped_tables   # first: the stdlib parse below uses them
+    print(f"wrote {build_shipped_tables()}")
     print(f"wrote {build()}")

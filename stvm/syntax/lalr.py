@@ -19,13 +19,25 @@ byte. `tests/syntax/test_syntax_fast_parser.py` checks both paths give equal res
 Lark internals used (pinned in pyproject.toml; `check_lark_internals` fails loudly if they
 change): `Lark.parser.parser.parser.parse_table` (an IntParseTable: `states`, `start_states`,
 `end_states`, actions `(Shift, state)` / `(Reduce, rule)`), `Lark.parser.lexer` (a
-ContextualLexer: `lexers` per state, each BasicLexer with `scanner._mres`, `callback`,
-`ignore_types`), `lark.lexer.UnlessCallback.scanner`, and the rule options (`expand1`,
-`keep_all_tokens`, `empty_indices`, `template_source`) and terminals' `filter_out`.
+ContextualLexer: `lexers` per state, each BasicLexer with `scanner.terminals` in Lark's order,
+`callback`, `ignore_types`, `g_regex_flags`), `lark.lexer.UnlessCallback.scanner`, and the rule
+options (`expand1`, `keep_all_tokens`, `empty_indices`, `template_source`) and terminals'
+`filter_out` and `pattern.to_regexp()`.
+
+Scanning: each state's terminals are matched as Lark matches them (one alternation, Lark's
+order, first alternative wins), with two changes that cannot change a result: the alternation
+is split by the text's first character (`_ByFirstChar`: the terminals that cannot start with it,
+worked out from the regex's parse by `_may_start_with`, are left out), and the whitespace
+terminal's runs are matched as the tail of the token before them (`_skip_terminal`: only when
+every scanner drops it and no terminal can start with one of its characters), so a token costs
+one regex match instead of two.
 """
 
 from __future__ import annotations
 
+import re
+import re._constants as _C
+import re._parser as _sre_parse
 from bisect import bisect_right
 from itertools import accumulate
 from operator import itemgetter
@@ -163,15 +175,170 @@ def _lark_meta(meta: Meta2) -> Meta:
     return out
 
 
-def _multi_match(mres):
-    """One scanner split over several compiled patterns (Python's group limit): first match wins."""
-    def match(text, pos):
-        for mre in mres:
-            m = mre.match(text, pos)
-            if m is not None:
-                return m
+def _skip_chars(terminal) -> frozenset | None:
+    """The characters of an ignored terminal of the form `[…]+` (a run of one class, as WS), or
+    None. Such a run can be skipped as the tail of the token before it (see `_scanner`)."""
+    try:
+        parsed = list(_sre_parse.parse(terminal.pattern.to_regexp()))
+    except Exception:
         return None
+    while len(parsed) == 1 and parsed[0][0] is _C.SUBPATTERN and not parsed[0][1][1] and not parsed[0][1][2]:
+        parsed = list(parsed[0][1][3])
+    if len(parsed) != 1 or parsed[0][0] is not _C.MAX_REPEAT:
+        return None
+    lo, hi, body = parsed[0][1]
+    if lo != 1 or hi != _C.MAXREPEAT or len(body) != 1:
+        return None
+    op, arg = body[0]
+    if op is _C.LITERAL:
+        return frozenset(chr(arg))
+    if op is _C.IN and all(o is _C.LITERAL for o, _a in arg):
+        return frozenset(chr(a) for _o, a in arg)
+    return None
+
+
+def _may_start_with(items, chars: frozenset, ignorecase: bool = False) -> tuple[bool, bool]:
+    """(could the parsed pattern's first character be one of `chars`, can it match empty): a
+    superset answer (anything not understood here says yes)."""
+    for op, arg in items:
+        if op is _C.LITERAL:
+            c = chr(arg)
+            return (c in chars or (ignorecase and any(re.match(re.escape(c), x, re.IGNORECASE) for x in chars))), False
+        if op is _C.NOT_LITERAL:
+            return bool(chars - {chr(arg)}), False
+        if op is _C.IN:
+            if any(o is _C.NEGATE for o, _a in arg):
+                return True, False
+            for o, a in arg:
+                if o is _C.LITERAL:
+                    c = chr(a)
+                    if c in chars or (ignorecase and any(re.match(re.escape(c), x, re.IGNORECASE) for x in chars)):
+                        return True, False
+                elif o is _C.RANGE:
+                    if any(a[0] <= ord(c) <= a[1] for c in chars):
+                        return True, False
+                    if ignorecase:   # case folding as the regex engine does it: ask the engine
+                        one = re.compile(f"[{re.escape(chr(a[0]))}-{re.escape(chr(a[1]))}]", re.IGNORECASE)
+                        if any(one.match(c) for c in chars):
+                            return True, False
+                elif o is _C.CATEGORY:
+                    if a not in (_C.CATEGORY_DIGIT, _C.CATEGORY_WORD) or any(c.isalnum() or c == "_" for c in chars):
+                        return True, False
+                else:
+                    return True, False
+            return False, False
+        if op is _C.SUBPATTERN or op is _C.ATOMIC_GROUP:
+            if op is _C.SUBPATTERN:
+                _g, add, _del, sub = arg
+                inner = ignorecase or bool(add & _C.SRE_FLAG_IGNORECASE)
+            else:
+                sub, inner = arg, ignorecase
+            may, empty = _may_start_with(sub, chars, inner)
+            if may or not empty:
+                return may, False
+            continue
+        if op is _C.BRANCH:
+            results = [_may_start_with(alt, chars, ignorecase) for alt in arg[1]]
+            if any(may for may, _e in results):
+                return True, False
+            if not any(empty for _m, empty in results):
+                return False, False
+            continue
+        if op in (_C.MAX_REPEAT, _C.MIN_REPEAT, _C.POSSESSIVE_REPEAT):
+            lo, _hi, sub = arg
+            may, empty = _may_start_with(sub, chars, ignorecase)
+            if may:
+                return True, False
+            if lo and not empty:
+                return False, False
+            continue
+        if op in (_C.AT, _C.ASSERT, _C.ASSERT_NOT):   # zero width: the next item decides
+            continue
+        return True, False
+    return False, True
+
+
+def _terminal_may_start_with(terminal, chars: frozenset) -> bool:
+    try:
+        parsed = _sre_parse.parse(terminal.pattern.to_regexp())
+    except Exception:
+        return True
+    return _may_start_with(list(parsed), chars)[0]
+
+
+_FIRST_CHARS: dict[tuple[str, str], frozenset] = {}   # (name, regex) -> ASCII chars it may start with
+_COMPILED: dict[tuple, Any] = {}   # ((name, regex) of each terminal, tail, flags) -> compiled match
+
+
+def _compiled(terminals, tail: str, flags: int):
+    """The match function of Lark's alternation of `terminals` (in that order) then `tail`."""
+    key = (tuple((t.name, t.pattern.to_regexp()) for t in terminals), tail, flags)
+    match = _COMPILED.get(key)
+    if match is None:
+        alternatives = "|".join(f"(?P<{t.name}>{t.pattern.to_regexp()})" for t in terminals)
+        try:
+            compiled = re.compile(f"(?:{alternatives}){tail}" if terminals else "(?!)", flags)
+        except (re.error, AssertionError, OverflowError, RecursionError) as exc:
+            raise Unsupported(f"a scanner regex does not compile: {exc!r}") from exc
+        if any(compiled.groupindex.get(t.name) is None for t in terminals):
+            raise Unsupported("a terminal is not a group of its scanner's regex")
+        match = _COMPILED[key] = compiled.match
     return match
+
+
+_IGNORED = object()   # a dropped terminal without a callback (see Driver._scanner)
+
+
+class _Retype(dict):
+    """Text -> the keyword type Lark gives it (its UnlessCallback's scanner), or None; memoised."""
+
+    __slots__ = ("fullmatch",)
+
+    def __init__(self, fullmatch) -> None:
+        super().__init__()
+        self.fullmatch = fullmatch
+
+    def __missing__(self, text: str):
+        new = self[text] = self.fullmatch(text)
+        return new
+
+
+class _ByFirstChar(dict):
+    """One scanner's match function per first character of the text to scan: Lark's alternation
+    of that scanner's terminals, in Lark's order, without the terminals that cannot start with
+    that character (the regex engine tries the alternatives one by one: most fail at the first
+    character). Built on first use; a character beyond ASCII gets all the terminals."""
+
+    def __init__(self, terminals, tail: str, flags: int) -> None:
+        super().__init__()
+        self.terminals = terminals
+        self.tail = tail
+        self.flags = flags
+
+    @property
+    def full(self):
+        return _compiled(self.terminals, self.tail, self.flags)
+
+    def __missing__(self, char: str):
+        if ord(char) >= 128 or self.flags:   # (global flags would change how the regexes read)
+            match = self.full
+        else:
+            match = _compiled(tuple(t for t in self.terminals if char in _first_chars(t)), self.tail, self.flags)
+        self[char] = match
+        return match
+
+
+def _first_chars(terminal) -> frozenset:
+    key = (terminal.name, terminal.pattern.to_regexp())
+    chars = _FIRST_CHARS.get(key)
+    if chars is None:
+        try:
+            parsed = list(_sre_parse.parse(key[1]))
+        except Exception:
+            parsed = None
+        chars = _FIRST_CHARS[key] = frozenset(
+            chr(i) for i in range(128) if parsed is None or _may_start_with(parsed, frozenset(chr(i)))[0])
+    return chars
 
 
 class Driver:
@@ -236,32 +403,75 @@ class Driver:
             self.actions.append(row)
 
         # per-state scanners: Lark's BasicLexer for that state
+        if options.use_bytes or options.regex:
+            raise Unsupported("use_bytes and the regex module are not supported")
         try:
             lexers = contextual.lexers
+            basics = {id(lexers[s]): lexers[s] for s in range(n_states)}
+            skip = self._skip_terminal(list(basics.values()), user_callbacks)
             scanners = []
             by_lexer: dict[int, tuple] = {}
             for s in range(n_states):
                 basic = lexers[s]
                 entry = by_lexer.get(id(basic))
                 if entry is None:
-                    mres = basic.scanner._mres
-                    retype = {}
-                    notify = {}   # ignored terminals with a user callback (the pragmas): seen, dropped
-                    for type_, cb in basic.callback.items():
-                        if type_ in user_callbacks and type_ in basic.ignore_types:
-                            notify[type_] = user_callbacks[type_]
-                            continue
-                        if not isinstance(cb, UnlessCallback) or not callable(getattr(cb.scanner, "fullmatch", None)):
-                            raise Unsupported(f"lexer callback for {type_} is not an UnlessCallback with fullmatch")
-                        retype[type_] = (cb.scanner, {})
-                    match = mres[0].match if len(mres) == 1 else _multi_match(mres)
-                    entry = (match, frozenset(basic.ignore_types), retype, notify)
-                    by_lexer[id(basic)] = entry
+                    entry = by_lexer[id(basic)] = self._scanner(basic, skip, user_callbacks)
                 scanners.append(entry)
         except AttributeError as exc:
             raise Unsupported(f"Lark's lexer internals changed: {exc!r}") from exc
+        # a skip run at the start of the text (later ones are matched as the tail of a token)
+        self.skip_leading = re.compile(f"(?:{skip.pattern.to_regexp()})?+").match if skip is not None else None
         self.scanners = scanners
         self._chains: dict[tuple, tuple] = {}
+
+    @staticmethod
+    def _skip_terminal(basics, user_callbacks):
+        """The ignored `[…]+` terminal (WS) that every scanner drops and no other terminal of any
+        scanner can start like: its runs can then be matched as the tail of the token before
+        them, one regex match per token instead of two. None if there is none such."""
+        if any(basic.g_regex_flags for basic in basics):   # they would change how the regexes read
+            return None
+        candidates = None
+        for basic in basics:
+            names = {t.name: t for t in basic.scanner.terminals}
+            here = {name for name in basic.ignore_types if name in names and name not in user_callbacks
+                    and _skip_chars(names[name]) is not None}
+            candidates = here if candidates is None else candidates & here
+        for name in sorted(candidates or ()):
+            terminal = next(t for t in basics[0].scanner.terminals if t.name == name)
+            chars = _skip_chars(terminal)
+            if all(_skip_chars(t) == chars for b in basics for t in b.scanner.terminals if t.name == name) and \
+                    not any(t.name != name and _terminal_may_start_with(t, chars)
+                            for b in basics for t in b.scanner.terminals):
+                return terminal
+        return None
+
+    @staticmethod
+    def _scanner(basic, skip, user_callbacks):
+        """(match, special) for one of Lark's per-state lexers. `match[first character]` is one regex,
+        Lark's alternatives in Lark's order (the skip terminal left out, its runs matched after
+        the token, possessively: `m.end(m.lastindex)` is the token's end, `m.end()` the next one's
+        start)."""
+        terminals = tuple(t for t in basic.scanner.terminals if skip is None or t.name != skip.name)
+        # `special[type]`: None for most terminals; _IGNORED for a dropped one; the user callback
+        # of a dropped one that has one (the pragmas: seen, then dropped); a _Retype for one that
+        # Lark retypes when its text is a keyword's (an UnlessCallback)
+        special = {t.name: None for t in terminals}
+        for type_, cb in basic.callback.items():
+            if type_ in user_callbacks and type_ in basic.ignore_types:
+                special[type_] = user_callbacks[type_]
+                continue
+            if not isinstance(cb, UnlessCallback) or not callable(getattr(cb.scanner, "fullmatch", None)):
+                raise Unsupported(f"lexer callback for {type_} is not an UnlessCallback with fullmatch")
+            if type_ not in basic.ignore_types:
+                special[type_] = _Retype(cb.scanner.fullmatch)
+        for type_ in basic.ignore_types:
+            if special.get(type_, 0) is None:
+                special[type_] = _IGNORED
+        tail = f"(?:{skip.pattern.to_regexp()})?+" if skip is not None else ""
+        by_char = _ByFirstChar(terminals, tail, basic.g_regex_flags)
+        by_char.full   # compiled now: a regex Python cannot compile is found here, not mid-parse
+        return (by_char, special)
 
     def _chain(self, key):
         """(final state, [(callback, name)] of the one-child trees) of the run of one-child
@@ -405,47 +615,49 @@ class Driver:
         dict_ = dict
         tuple_ = tuple
         chains = self._chains
+        retype_cls = _Retype
+        ignored = _IGNORED
         pass_ = _PASS
         m = None
         end = 0
+        if self.skip_leading is not None:
+            pos = self.skip_leading(text, 0).end()
         while True:
             state = states[-1]
             # ---- next token, with the scanner of the current state
-            match, ignore, retype, notify = scanners[state]
+            match, special = scanners[state]
             while True:
                 if pos >= n:
                     ttype = "$END"
                     break
-                m = match(text, pos)
+                m = match[text[pos]](text, pos)
                 if m is None:
                     raise Fallback
                 ttype = m.lastgroup
-                end = m.end()
-                if ttype in ignore:
-                    if notify and ttype in notify:   # what Lark's lexer does for an ignored token
-                        line = bisect(lines, pos)
-                        notify[ttype](token_cls(ttype, m.group(), pos, line, pos - lines[line - 1] + 1))
-                    pos = end
-                    continue
-                if retype:
-                    rt = retype.get(ttype)
-                    if rt is not None:
-                        value = m.group()
-                        memo = rt[1]
-                        new = memo.get(value, 0)
-                        if new == 0:
-                            new = memo[value] = rt[0].fullmatch(value)
-                        if new is not None:
-                            ttype = new
-                break
+                end = m.end(m.lastindex)
+                how = special[ttype]
+                if how is None:                  # most tokens
+                    break
+                if how.__class__ is retype_cls:  # a keyword-shaped name becomes the keyword
+                    new = how[text[pos:end]]
+                    if new is not None:
+                        ttype = new
+                    break
+                if how is not ignored:           # what Lark's lexer does for an ignored token with a callback
+                    line = bisect(lines, pos)
+                    how(token_cls(ttype, text[pos:end], pos, line, pos - lines[line - 1] + 1))
+                pos = m.end()
             # ---- reduce while the table says so, then shift
             while True:
-                act = actions[state].get(ttype)
+                try:
+                    act = actions[state][ttype]
+                except KeyError:   # no action: a syntax error (Lark reports it)
+                    raise Fallback from None
                 cls = act.__class__
                 if cls is int_:                                         # shift
                     states.append(act)
                     if ttype in kept:
-                        value = m.group()
+                        value = text[pos:end]
                         tok = new_str(lazy_cls, value)
                         tok.type = ttype
                         tok.value = value
@@ -456,15 +668,16 @@ class Driver:
                     else:
                         values.append(None)
                     spans.append((pos, end, 0))
-                    pos = end
+                    pos = m.end()
                     break
                 if cls is dict_ or (cls is tuple_ and act[0] == _ONE):
                     # a run of one-child reductions (`?rule` pass-throughs and one-child trees)
                     # only changes the top of the stack; its course depends on the state below
                     # and the lookahead, so it is worked out once and replayed
                     key = (states[-2], state, ttype)
-                    chain = chains.get(key)
-                    if chain is None:
+                    try:
+                        chain = chains[key]
+                    except KeyError:
                         chain = self._chain(key)
                     final, steps = chain
                     if steps:

@@ -9,6 +9,7 @@ from __future__ import annotations
 import calendar
 import re
 from fractions import Fraction
+from functools import lru_cache
 
 from stvm.settings import DollarN, InvalidDollarEscape, SysmacSettings
 
@@ -109,6 +110,7 @@ def decode_int(text: str) -> int:
     return int(text)
 
 
+@lru_cache(maxsize=4096)   # the same few durations recur in a program (PT := T#100ms); Fractions are slow
 def decode_time(text: str) -> int:
     """`T#1h2m3s4ms5us6ns` → nanoseconds. Raises LiteralError."""
     body = text.split("#", 1)[1].replace("_", "")

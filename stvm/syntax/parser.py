@@ -25,24 +25,40 @@ from stvm.folders import content_name, private_file
 from stvm.settings import DEFAULT_SETTINGS, Dialect, DoubleQuoteStrings, SysmacSettings
 from stvm.source import read_source
 from stvm.syntax import nodes as n
-from stvm.syntax import lalr
+from stvm.syntax import lalr, tables
 from stvm.syntax.lalr import Meta2 as _Meta2
 
 _GRAMMAR_FILE = "st.lark"
 
 
+def parser_options() -> dict:
+    """The options stvm's Lark parser is built with (also the key of the shipped tables)."""
+    return dict(parser="lalr", lexer="contextual", propagate_positions=True,
+                start=["start", "expression"], maybe_placeholders=True,
+                lexer_callbacks={"PRAGMA": _pragma_seen})
+
+
 @lru_cache(maxsize=None)
 def _parser(start: str = "start") -> Lark:
-    grammar = resources.files("stvm.syntax").joinpath(_GRAMMAR_FILE).read_text(encoding="utf-8")
-    # Building the LALR tables takes most of a second, so Lark keeps them in a file (it checks a
-    # hash of the grammar, the options and its version at load). Not Lark's default place
-    # (`cache=True`: a predictable name in the shared temp dir, which another user could plant
-    # a pickle under) but a file in stvm's own private cache folder; none if that is not safe.
-    tables = private_file(content_name("lark-tables", grammar, lark.__version__, _GRAMMAR_FILE, suffix=".pickle"))
-    return Lark(grammar, parser="lalr", lexer="contextual", propagate_positions=True,
-                start=["start", "expression"], maybe_placeholders=True,
-                cache=str(tables) if tables is not None else False,
-                lexer_callbacks={"PRAGMA": _pragma_seen})
+    grammar = grammar_text()
+    options = parser_options()
+    # Building the LALR tables takes about a second: stvm ships them (syntax/tables.py, checked
+    # against the grammar, the options and Lark's version)
+    shipped = tables.load(grammar, options)
+    if shipped is not None:
+        return shipped
+    # A stale shipped file (an edited grammar, another Lark): Lark builds the tables and keeps
+    # them in a file (it checks a hash of the grammar, the options and its version at load). Not
+    # Lark's default place (`cache=True`: a predictable name in the shared temp dir, which
+    # another user could plant a pickle under) but a file in stvm's own private cache folder;
+    # none if that is not safe.
+    cached = private_file(content_name("lark-tables", grammar, lark.__version__, _GRAMMAR_FILE, suffix=".pickle"))
+    return Lark(grammar, cache=str(cached) if cached is not None else False, **options)
+
+
+def build_shipped_tables() -> Path:
+    """Write the shipped tables for this grammar and these options (`python -m stvm.stdlib.prebuilt`)."""
+    return tables.build(grammar_text(), parser_options())
 
 
 _PRAGMAS = threading.local()   # the `{…}` tokens the lexer dropped during the current parse_text
@@ -109,7 +125,8 @@ class _ToNodes:
             if start < 0:
                 return n.Span(self.file, 0, 0, 0, 0)
             li = bisect_right(lines, start)
-            lj = bisect_right(lines, end)
+            # most spans end on the line they start on (lines[li] exists: the last entry is past the text)
+            lj = li if end < lines[li] else bisect_right(lines, end, li)
             try:   # one int object per line number, shared by all spans (memory; see _intern_lines)
                 li, lj = _INTS[li], _INTS[lj]
             except IndexError:
@@ -122,7 +139,7 @@ class _ToNodes:
             lines = tok._lines
             start, end = tok.start_pos, tok.end_pos
             li = bisect_right(lines, start)
-            lj = bisect_right(lines, end)
+            lj = li if end < lines[li] else bisect_right(lines, end, li)
             return n.Span(self.file, li, start - lines[li - 1] + 1, lj, end - lines[lj - 1] + 1)
         return _tok_span(self.file, tok)
 
@@ -379,7 +396,7 @@ class _ToNodes:
 
     # -- statements
     def statement_list(self, meta, items):
-        return tuple(s for s in items if not isinstance(s, n.Empty))
+        return tuple([s for s in items if not isinstance(s, n.Empty)])
 
     def assignment(self, meta, items):
         return n.Assign(items[0], items[1], self._s(meta))
@@ -473,6 +490,10 @@ class _ToNodes:
 
     def expression(self, meta, items):
         """Precedence climbing over the flat chain [operand, op, operand, …]."""
+        if len(items) == 3:   # the common case, one operator: what climb() below makes of it
+            left, op, right = items
+            span = n.Span(self.file, left.span.line, left.span.column, right.span.end_line, right.span.end_column)
+            return n.Binary(str(op.type), left, right, span)
         operands = items[0::2]
         ops = items[1::2]
         pos = 0
@@ -558,7 +579,9 @@ class _ToNodes:
         self.diagnostics.append(Diagnostic.error(message, span))
 
     def int_literal(self, meta, items):
-        return n.IntLiteral(decode_int(str(items[0])), self._s(meta))
+        text = str(items[0])
+        # INTEGER is /[0-9][0-9_]*/: int() takes it as it is unless it has a `_`
+        return n.IntLiteral(int(text) if "_" not in text else decode_int(text), self._s(meta))
 
     def based_literal(self, meta, items):
         return n.IntLiteral(decode_int(str(items[0])), self._s(meta))
