@@ -38,6 +38,7 @@ from __future__ import annotations
 import re
 import re._constants as _C
 import re._parser as _sre_parse
+import functools
 from bisect import bisect_right
 from itertools import accumulate
 from operator import itemgetter
@@ -175,13 +176,24 @@ def _lark_meta(meta: Meta2) -> Meta:
     return out
 
 
+@functools.lru_cache(maxsize=4096)
+def _parsed_regex(regex: str) -> tuple | None:
+    """Python's own parse of a terminal's regex, or None; memoised: the same terminals stand in
+    most of the ~170 per-state scanners, and parsing them again each time doubled the Driver's
+    build (a cost every process that parses pays once)."""
+    try:
+        return tuple(_sre_parse.parse(regex))
+    except Exception:
+        return None
+
+
 def _skip_chars(terminal) -> frozenset | None:
     """The characters of an ignored terminal of the form `[…]+` (a run of one class, as WS), or
     None. Such a run can be skipped as the tail of the token before it (see `_scanner`)."""
-    try:
-        parsed = list(_sre_parse.parse(terminal.pattern.to_regexp()))
-    except Exception:
+    parsed = _parsed_regex(terminal.pattern.to_regexp())
+    if parsed is None:
         return None
+    parsed = list(parsed)
     while len(parsed) == 1 and parsed[0][0] is _C.SUBPATTERN and not parsed[0][1][1] and not parsed[0][1][2]:
         parsed = list(parsed[0][1][3])
     if len(parsed) != 1 or parsed[0][0] is not _C.MAX_REPEAT:
@@ -258,12 +270,14 @@ def _may_start_with(items, chars: frozenset, ignorecase: bool = False) -> tuple[
     return False, True
 
 
+@functools.lru_cache(maxsize=4096)
+def _regex_may_start_with(regex: str, chars: frozenset) -> bool:
+    parsed = _parsed_regex(regex)
+    return True if parsed is None else _may_start_with(list(parsed), chars)[0]
+
+
 def _terminal_may_start_with(terminal, chars: frozenset) -> bool:
-    try:
-        parsed = _sre_parse.parse(terminal.pattern.to_regexp())
-    except Exception:
-        return True
-    return _may_start_with(list(parsed), chars)[0]
+    return _regex_may_start_with(terminal.pattern.to_regexp(), chars)
 
 
 _FIRST_CHARS: dict[tuple[str, str], frozenset] = {}   # (name, regex) -> ASCII chars it may start with
@@ -332,10 +346,8 @@ def _first_chars(terminal) -> frozenset:
     key = (terminal.name, terminal.pattern.to_regexp())
     chars = _FIRST_CHARS.get(key)
     if chars is None:
-        try:
-            parsed = list(_sre_parse.parse(key[1]))
-        except Exception:
-            parsed = None
+        parsed = _parsed_regex(key[1])
+        parsed = list(parsed) if parsed is not None else None
         chars = _FIRST_CHARS[key] = frozenset(
             chr(i) for i in range(128) if parsed is None or _may_start_with(parsed, frozenset(chr(i)))[0])
     return chars
@@ -469,9 +481,10 @@ class Driver:
             if special.get(type_, 0) is None:
                 special[type_] = _IGNORED
         tail = f"(?:{skip.pattern.to_regexp()})?+" if skip is not None else ""
-        by_char = _ByFirstChar(terminals, tail, basic.g_regex_flags)
-        by_char.full   # compiled now: a regex Python cannot compile is found here, not mid-parse
-        return (by_char, special)
+        # the regexes compile on first use (per first character): compiling every state's whole
+        # alternation here cost a third of the Driver's build; one that fails to compile
+        # mid-parse raises Unsupported there, and that text goes to Lark's parser (parser.py)
+        return (_ByFirstChar(terminals, tail, basic.g_regex_flags), special)
 
     def _chain(self, key):
         """(final state, [(callback, name)] of the one-child trees) of the run of one-child
