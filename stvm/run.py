@@ -276,7 +276,6 @@ _DEMO_FLAGS = (("robot", "--robot"), ("emulator_log", "--emulator-log"), ("no_de
 def cmd_run(args) -> int:
     from stvm.project import LoadError, load, nothing_to_run, parse_duration   # lazy: start-up
     from stvm.runtime.vm import PathError, RuntimeFault, UnboundInOut   # lazy: start-up
-    from stvm.semantics.literals import literal_value   # lazy: start-up
     require_files(args.files)
     settings = run_settings(args)
     try:
@@ -317,6 +316,10 @@ def cmd_run(args) -> int:
         except PathError as exc:
             raise UsageError(str(exc)) from exc
     until = Until(args.until, vm) if getattr(args, "until", None) is not None else None
+    if args.set:
+        # lazy: start-up (the literal parser brings the syntax nodes, ~50 ms, which a run from
+        # the cache never needs otherwise)
+        from stvm.semantics.literals import literal_value
     for item in args.set or []:
         name, text = parse_assignment(item)
         try:

@@ -18,7 +18,6 @@ from typing import TYPE_CHECKING
 
 from stvm.diagnostics import Diagnostic
 from stvm.settings import DEFAULT_SETTINGS, SysmacSettings
-from stvm.lint.context import ProjectContext
 
 if TYPE_CHECKING:
     from stvm.lint.config import LintConfig
@@ -60,6 +59,7 @@ def lint_analysis(analysis, settings: SysmacSettings, rules: Iterable[Rule], inc
                   files: set[str] | None = None) -> list[Finding]:
     """Every finding of `rules` on the checked project (user POUs; the stdlib with
     `include_stdlib`; only POUs of `files` when given), sorted by place."""
+    from stvm.lint.context import ProjectContext   # lazy: start-up (see __getattr__)
     project = ProjectContext(analysis, settings)
     rules = list(rules)
     findings: list[Finding] = []

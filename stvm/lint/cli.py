@@ -13,9 +13,6 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 from stvm.settings import DEFAULT_SETTINGS
-from stvm.lint.config import ConfigError
-from stvm.lint.registry import SelectionError, select_rules
-from stvm.lint import lint
 
 EXIT_CLEAN, EXIT_FINDINGS, EXIT_USAGE = 0, 1, 2
 
@@ -65,6 +62,10 @@ def _vendor_dialect(files) -> str | None:
 
 
 def cmd_lint(args) -> int:
+    # lazy: start-up (`stvm.cli` imports this module on every call to register `stvm lint`)
+    from stvm.lint import lint
+    from stvm.lint.config import ConfigError
+    from stvm.lint.registry import SelectionError, select_rules
     from stvm.lint.report import explain   # lazy: start-up
     if args.explain:
         try:

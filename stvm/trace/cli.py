@@ -11,10 +11,6 @@ from __future__ import annotations
 
 import sys
 from pathlib import Path
-from stvm.trace.golden import compare, locate_writer, render_report
-from stvm.trace.run import TraceSpec, run_trace
-from stvm.trace.signals import WatchError
-from stvm.trace.writers import SUFFIXES, TraceFormatError, read_trace, write_trace
 
 EXIT_OK, EXIT_COMPILE, EXIT_USAGE, EXIT_FAULT, EXIT_MISMATCH = 0, 1, 2, 3, 4
 
@@ -53,6 +49,11 @@ def _usage(message: str) -> int:
 
 
 def cmd_trace(args) -> int:
+    # lazy: start-up (`stvm.cli` imports this module on every call to register `stvm trace`)
+    from stvm.trace.golden import compare, locate_writer, render_report
+    from stvm.trace.run import TraceSpec, run_trace
+    from stvm.trace.signals import WatchError
+    from stvm.trace.writers import SUFFIXES, TraceFormatError, read_trace, write_trace
     from stvm.project import LoadError, load, project_settings   # lazy: start-up
     from stvm.scenario import ScenarioError   # lazy: start-up
 
