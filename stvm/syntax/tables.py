@@ -61,7 +61,11 @@ def load(grammar: str, options: dict) -> Lark | None:
 
 
 def build(grammar: str, options: dict, file: Path = FILE) -> Path:
-    """Build the tables with Lark and write the file."""
+    """Build the tables with Lark and write the file, unless it already holds tables that load for
+    exactly this key: Lark numbers its states differently on every build (string hashing), so a
+    rebuild of unchanged tables would rewrite the file with a new binary for nothing."""
+    if file == FILE and load(grammar, options) is not None:
+        return file
     parser = Lark(grammar, **options)
     out = io.BytesIO()
     parser.save(out, exclude_options=_CALLER_OPTIONS)
