@@ -19,8 +19,9 @@ byte. `tests/syntax/test_syntax_fast_parser.py` checks both paths give equal res
 Lark internals used (pinned in pyproject.toml; `check_lark_internals` fails loudly if they
 change): `Lark.parser.parser.parser.parse_table` (an IntParseTable: `states`, `start_states`,
 `end_states`, actions `(Shift, state)` / `(Reduce, rule)`), `Lark.parser.lexer` (a
-ContextualLexer: `lexers` per state, each BasicLexer with `scanner.terminals` in Lark's order,
-`callback`, `ignore_types`, `g_regex_flags`), `lark.lexer.UnlessCallback.scanner`, and the rule
+ContextualLexer: `lexers` per state, each BasicLexer with `terminals`, `user_callbacks`, `re`,
+`use_bytes`, `ignore_types`, `g_regex_flags`, `_scanner`), `lark.lexer._create_unless` (what
+its `scanner` would hold, without compiling it), `lark.lexer.UnlessCallback.scanner`, and the rule
 options (`expand1`, `keep_all_tokens`, `empty_indices`, `template_source`) and terminals'
 `filter_out` and `pattern.to_regexp()`.
 
@@ -45,7 +46,7 @@ from operator import itemgetter
 from typing import Any
 
 from lark import Lark, Token, Tree
-from lark.lexer import UnlessCallback
+from lark.lexer import CallChain, UnlessCallback, _create_unless
 from lark.parsers.lalr_analysis import Reduce, Shift
 from lark.tree import Meta
 
@@ -303,6 +304,22 @@ def _compiled(terminals, tail: str, flags: int):
 _IGNORED = object()   # a dropped terminal without a callback (see Driver._scanner)
 
 
+def _lexer_parts(basic) -> tuple[list, dict]:
+    """(terminals in Lark's order, callbacks) of one of Lark's BasicLexers, exactly as its
+    `scanner` would hold them (`BasicLexer._build_scanner`), without building that scanner:
+    Lark compiles each state's whole alternation there, ~40 % of the Driver's build, and this
+    driver compiles its own (`_ByFirstChar`). A scanner Lark already built is read as it is."""
+    if basic._scanner is not None:
+        return basic._scanner.terminals, basic.callback
+    terminals, callback = _create_unless(basic.terminals, basic.g_regex_flags, basic.re, basic.use_bytes)
+    for type_, f in basic.user_callbacks.items():
+        if type_ in callback:
+            callback[type_] = CallChain(callback[type_], f, lambda t, type_=type_: t.type == type_)
+        else:
+            callback[type_] = f
+    return terminals, callback
+
+
 class _Retype(dict):
     """Text -> the keyword type Lark gives it (its UnlessCallback's scanner), or None; memoised."""
 
@@ -419,15 +436,16 @@ class Driver:
             raise Unsupported("use_bytes and the regex module are not supported")
         try:
             lexers = contextual.lexers
-            basics = {id(lexers[s]): lexers[s] for s in range(n_states)}
-            skip = self._skip_terminal(list(basics.values()), user_callbacks)
+            parts = {id(lexers[s]): (lexers[s], _lexer_parts(lexers[s])) for s in range(n_states)}
+            skip = self._skip_terminal([terms for _b, (terms, _c) in parts.values()], user_callbacks,
+                                       [b for b, _p in parts.values()])
             scanners = []
             by_lexer: dict[int, tuple] = {}
             for s in range(n_states):
                 basic = lexers[s]
                 entry = by_lexer.get(id(basic))
                 if entry is None:
-                    entry = by_lexer[id(basic)] = self._scanner(basic, skip, user_callbacks)
+                    entry = by_lexer[id(basic)] = self._scanner(basic, *parts[id(basic)][1], skip, user_callbacks)
                 scanners.append(entry)
         except AttributeError as exc:
             raise Unsupported(f"Lark's lexer internals changed: {exc!r}") from exc
@@ -437,39 +455,39 @@ class Driver:
         self._chains: dict[tuple, tuple] = {}
 
     @staticmethod
-    def _skip_terminal(basics, user_callbacks):
+    def _skip_terminal(terminal_lists, user_callbacks, basics):
         """The ignored `[…]+` terminal (WS) that every scanner drops and no other terminal of any
         scanner can start like: its runs can then be matched as the tail of the token before
         them, one regex match per token instead of two. None if there is none such."""
         if any(basic.g_regex_flags for basic in basics):   # they would change how the regexes read
             return None
         candidates = None
-        for basic in basics:
-            names = {t.name: t for t in basic.scanner.terminals}
+        for basic, terminals in zip(basics, terminal_lists):
+            names = {t.name: t for t in terminals}
             here = {name for name in basic.ignore_types if name in names and name not in user_callbacks
                     and _skip_chars(names[name]) is not None}
             candidates = here if candidates is None else candidates & here
         for name in sorted(candidates or ()):
-            terminal = next(t for t in basics[0].scanner.terminals if t.name == name)
+            terminal = next(t for t in terminal_lists[0] if t.name == name)
             chars = _skip_chars(terminal)
-            if all(_skip_chars(t) == chars for b in basics for t in b.scanner.terminals if t.name == name) and \
+            if all(_skip_chars(t) == chars for ts in terminal_lists for t in ts if t.name == name) and \
                     not any(t.name != name and _terminal_may_start_with(t, chars)
-                            for b in basics for t in b.scanner.terminals):
+                            for ts in terminal_lists for t in ts):
                 return terminal
         return None
 
     @staticmethod
-    def _scanner(basic, skip, user_callbacks):
+    def _scanner(basic, lark_terminals, callbacks, skip, user_callbacks):
         """(match, special) for one of Lark's per-state lexers. `match[first character]` is one regex,
         Lark's alternatives in Lark's order (the skip terminal left out, its runs matched after
         the token, possessively: `m.end(m.lastindex)` is the token's end, `m.end()` the next one's
         start)."""
-        terminals = tuple(t for t in basic.scanner.terminals if skip is None or t.name != skip.name)
+        terminals = tuple(t for t in lark_terminals if skip is None or t.name != skip.name)
         # `special[type]`: None for most terminals; _IGNORED for a dropped one; the user callback
         # of a dropped one that has one (the pragmas: seen, then dropped); a _Retype for one that
         # Lark retypes when its text is a keyword's (an UnlessCallback)
         special = {t.name: None for t in terminals}
-        for type_, cb in basic.callback.items():
+        for type_, cb in callbacks.items():
             if type_ in user_callbacks and type_ in basic.ignore_types:
                 special[type_] = user_callbacks[type_]
                 continue

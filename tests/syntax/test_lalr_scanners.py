@@ -58,3 +58,23 @@ def test_whitespace_is_folded_for_st_and_not_where_a_terminal_starts_with_a_spac
     assert driver.skip_leading is None
     tree = driver.parse("a b a", object())
     assert [str(t) for t in tree.children] == ["a", " b", "a"]
+
+
+def test_lexer_parts_are_what_larks_own_scanner_holds():
+    """`_lexer_parts` gives every state's terminals and callbacks without compiling Lark's scanner;
+    they must be exactly what that scanner, built afterwards, holds (same terminals, same order,
+    same callback kinds, the keyword retyping equal)."""
+    grammar = P.grammar_text()
+    lark = Lark(grammar, **P.parser_options())       # a fresh one: no scanner built yet
+    lexers = {id(b): b for b in lark.parser.lexer.lexers.values()}.values()
+    for basic in lexers:
+        assert basic._scanner is None
+        terminals, callbacks = lalr._lexer_parts(basic)
+        built = basic.scanner                           # Lark builds it now
+        assert [t.name for t in terminals] == [t.name for t in built.terminals]
+        assert sorted(callbacks) == sorted(basic.callback)
+        for name, cb in callbacks.items():
+            assert type(cb) is type(basic.callback[name])
+            if isinstance(cb, lalr.UnlessCallback):
+                for word in ("IF", "if", "END_IF", "x", "TRUE", "REAL", "FOR"):
+                    assert cb.scanner.fullmatch(word) == basic.callback[name].scanner.fullmatch(word)
