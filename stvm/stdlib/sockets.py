@@ -589,11 +589,11 @@ class SocketRequestFB:
 
     def call(self, inst, ctx) -> None:
         execute = True if inst.Execute else False   # bool() without a call: ~30 calls a scan
-        if self._phase == IDLE and (not execute or self._previous_execute):
+        if self._phase is IDLE and (not execute or self._previous_execute):
             # idle and no rising edge: nothing changes but the memory of this call (most calls
-            # of the thesis's FBs: they call their socket FBs every scan)
+            # of the thesis's FBs: they call their socket FBs every scan). `_last_scan` is read
+            # only while BUSY, and the call that makes a request BUSY sets it: not stored here
             self._previous_execute = execute
-            self._last_scan = ctx.scan
             return
         settings = ctx.settings
         edge = execute and not self._previous_execute
