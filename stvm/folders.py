@@ -73,3 +73,24 @@ def content_name(prefix: str, *parts: str, suffix: str = ".bin") -> str:
     """A file name keyed by the content it was built from (`prefix-<sha256 prefix>suffix`)."""
     digest = hashlib.sha256("\0".join(parts).encode("utf-8", "replace")).hexdigest()[:24]
     return f"{prefix}-{digest}{suffix}"
+
+
+# --- files shipped inside the package (the prebuilt stdlib units, the parser's Lark tables): each
+# built by `python -m stvm.stdlib.prebuilt`, trusted like the code, and headed by one ASCII line,
+# the key of what it was built from, so a stale file is recognised and not used
+
+def read_keyed(file: Path, key: str) -> bytes | None:
+    """The body of `file` when its first line is `key`, else None (missing, stale or damaged)."""
+    try:
+        data = file.read_bytes()
+    except OSError:
+        return None
+    stored_key, _, body = data.partition(b"\n")
+    return body if stored_key.decode("ascii", "replace") == key else None
+
+
+def write_keyed(file: Path, key: str, body: bytes) -> None:
+    """Write `key` and `body` as `read_keyed` reads them, replacing `file` at once."""
+    tmp = file.with_suffix(".tmp")
+    tmp.write_bytes(key.encode("ascii") + b"\n" + body)
+    tmp.replace(file)

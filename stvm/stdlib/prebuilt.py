@@ -24,6 +24,7 @@ import pickle
 import zlib
 from pathlib import Path
 
+from stvm.folders import read_keyed, write_keyed
 from stvm.settings import DEFAULT_SETTINGS
 from stvm.version import __version__
 
@@ -58,12 +59,8 @@ def key(texts: list[tuple[str, str]], settings) -> str:
 def load(texts: list[tuple[str, str]], settings):
     """(units, diagnostics) of the shipped stdlib parse when it matches `texts` and `settings`
     exactly, else None."""
-    try:
-        data = FILE.read_bytes()
-    except OSError:
-        return None
-    stored_key, _, body = data.partition(b"\n")
-    if stored_key.decode("ascii", "replace") != key(texts, settings):
+    body = read_keyed(FILE, key(texts, settings))
+    if body is None:
         return None
     try:
         units, diags = pickle.loads(zlib.decompress(body))
@@ -83,9 +80,7 @@ def build() -> Path:
         units.append(unit)
         diags += d
     body = zlib.compress(pickle.dumps((units, diags), protocol=pickle.HIGHEST_PROTOCOL), 9)
-    tmp = FILE.with_suffix(".tmp")
-    tmp.write_bytes(key(texts, DEFAULT_SETTINGS).encode("ascii") + b"\n" + body)
-    tmp.replace(FILE)
+    write_keyed(FILE, key(texts, DEFAULT_SETTINGS), body)
     return FILE
 
 

@@ -27,6 +27,8 @@ from pathlib import Path
 import lark
 from lark import Lark
 
+from stvm.folders import read_keyed, write_keyed
+
 FILE = Path(__file__).with_name("st_tables.pickle")
 
 # what Lark's save() leaves out and load() takes again (functions and objects of the caller)
@@ -45,12 +47,8 @@ def key(grammar: str, options: dict) -> str:
 def load(grammar: str, options: dict) -> Lark | None:
     """The Lark parser from the shipped tables when they were built from exactly this grammar and
     these options, else None."""
-    try:
-        data = FILE.read_bytes()
-    except OSError:
-        return None
-    stored_key, _, body = data.partition(b"\n")
-    if stored_key.decode("ascii", "replace") != key(grammar, options):
+    body = read_keyed(FILE, key(grammar, options))
+    if body is None:
         return None
     try:
         # what Lark's own `cache=` does with its file (`Lark.load` takes no options; the lexer
@@ -69,7 +67,5 @@ def build(grammar: str, options: dict, file: Path = FILE) -> Path:
     parser = Lark(grammar, **options)
     out = io.BytesIO()
     parser.save(out, exclude_options=_CALLER_OPTIONS)
-    tmp = file.with_suffix(".tmp")
-    tmp.write_bytes(key(grammar, options).encode("ascii") + b"\n" + out.getvalue())
-    tmp.replace(file)
+    write_keyed(file, key(grammar, options), out.getvalue())
     return file
