@@ -53,18 +53,10 @@ class CodeWriter:
         self.span: n.Span | None = None
 
     def line(self, text: str) -> None:
-        lines = self.lines
-        lines.append("    " * self.indent + text)
-        span = self.span
+        self.lines.append("    " * self.indent + text)
         spans = self.line_map.spans
-        if span is not None or (spans and spans[-1] is not None):
-            # LineMap.add, inline (once per generated line: 200,000 for a 100,000-line program)
-            at = self.line_map.lines
-            if at and at[-1] == len(lines):
-                spans[-1] = span
-            else:
-                at.append(len(lines))
-                spans.append(span)
+        if self.span is not None or (spans and spans[-1] is not None):
+            self.line_map.add(len(self.lines), self.span)
 
     def blank_span(self) -> None:
         self.span = None
@@ -73,11 +65,5 @@ class CodeWriter:
         """Append a body generated separately, shifting its line map."""
         offset = len(self.lines)
         self.lines.extend(other.lines)
-        at, spans = self.line_map.lines, self.line_map.spans
         for line, span in zip(other.line_map.lines, other.line_map.spans):
-            line += offset   # LineMap.add, inline
-            if at and at[-1] == line:
-                spans[-1] = span
-            else:
-                at.append(line)
-                spans.append(span)
+            self.line_map.add(line + offset, span)
