@@ -36,10 +36,10 @@ one regex match instead of two.
 
 from __future__ import annotations
 
+import functools
 import re
 import re._constants as _C
 import re._parser as _sre_parse
-import functools
 from bisect import bisect_right
 from itertools import accumulate
 from operator import itemgetter
@@ -281,7 +281,6 @@ def _terminal_may_start_with(terminal, chars: frozenset) -> bool:
     return _regex_may_start_with(terminal.pattern.to_regexp(), chars)
 
 
-_FIRST_CHARS: dict[tuple[str, str], frozenset] = {}   # (name, regex) -> ASCII chars it may start with
 _COMPILED: dict[tuple, Any] = {}   # ((name, regex) of each terminal, tail, flags) -> compiled match
 
 
@@ -360,14 +359,15 @@ class _ByFirstChar(dict):
 
 
 def _first_chars(terminal) -> frozenset:
-    key = (terminal.name, terminal.pattern.to_regexp())
-    chars = _FIRST_CHARS.get(key)
-    if chars is None:
-        parsed = _parsed_regex(key[1])
-        parsed = list(parsed) if parsed is not None else None
-        chars = _FIRST_CHARS[key] = frozenset(
-            chr(i) for i in range(128) if parsed is None or _may_start_with(parsed, frozenset(chr(i)))[0])
-    return chars
+    """The ASCII characters a match of `terminal` may start with."""
+    return _regex_first_chars(terminal.pattern.to_regexp())
+
+
+@functools.lru_cache(maxsize=4096)
+def _regex_first_chars(regex: str) -> frozenset:
+    parsed = _parsed_regex(regex)
+    parsed = list(parsed) if parsed is not None else None
+    return frozenset(chr(i) for i in range(128) if parsed is None or _may_start_with(parsed, frozenset(chr(i)))[0])
 
 
 class Driver:
@@ -437,8 +437,7 @@ class Driver:
         try:
             lexers = contextual.lexers
             parts = {id(lexers[s]): (lexers[s], _lexer_parts(lexers[s])) for s in range(n_states)}
-            skip = self._skip_terminal([terms for _b, (terms, _c) in parts.values()], user_callbacks,
-                                       [b for b, _p in parts.values()])
+            skip = self._skip_terminal([(basic, terms) for basic, (terms, _c) in parts.values()], user_callbacks)
             scanners = []
             by_lexer: dict[int, tuple] = {}
             for s in range(n_states):
@@ -455,14 +454,16 @@ class Driver:
         self._chains: dict[tuple, tuple] = {}
 
     @staticmethod
-    def _skip_terminal(terminal_lists, user_callbacks, basics):
+    def _skip_terminal(lexers, user_callbacks):
         """The ignored `[…]+` terminal (WS) that every scanner drops and no other terminal of any
         scanner can start like: its runs can then be matched as the tail of the token before
-        them, one regex match per token instead of two. None if there is none such."""
-        if any(basic.g_regex_flags for basic in basics):   # they would change how the regexes read
+        them, one regex match per token instead of two. None if there is none such. `lexers`:
+        (BasicLexer, its terminals as `_lexer_parts` gives them) per distinct lexer."""
+        if any(basic.g_regex_flags for basic, _t in lexers):   # they would change how the regexes read
             return None
+        terminal_lists = [terminals for _b, terminals in lexers]
         candidates = None
-        for basic, terminals in zip(basics, terminal_lists):
+        for basic, terminals in lexers:
             names = {t.name: t for t in terminals}
             here = {name for name in basic.ignore_types if name in names and name not in user_callbacks
                     and _skip_chars(names[name]) is not None}
