@@ -101,6 +101,11 @@ class Plc:
         """Start a request and call once per scan until it completes (the thesis pattern with
         Execute held TRUE); returns the instance at completion."""
         runner.step(Execute=True, **inputs)
+        return self.complete(runner, wall_timeout_s, scan_ms)
+
+    def complete(self, runner: FBRunner, wall_timeout_s: float = 3.0, scan_ms: int = 1):
+        """Call a started request once per scan (Execute held) until it completes; returns the
+        instance at completion."""
         deadline = time.monotonic() + wall_timeout_s
         while runner.Busy:
             assert time.monotonic() < deadline, "request did not complete"
@@ -619,11 +624,7 @@ def test_receive_waits_for_data_then_takes_what_is_there(plc, peer):
         rcv.step()
         assert rcv.Busy
     server_side.sendall(b"true")
-    deadline = time.monotonic() + 2
-    while rcv.Busy and time.monotonic() < deadline:
-        plc.next_scan()
-        rcv.step()
-        time.sleep(0.001)
+    plc.complete(rcv)
     assert rcv.Done and rcv.RcvSize == 4 and bytes(rcv.RcvDat[:4]) == b"true"
 
 
@@ -685,11 +686,7 @@ def test_peer_reset_mid_receive(plc, peer):
     rcv.step()
     assert rcv.Busy
     reset(server_side)
-    deadline = time.monotonic() + 2
-    while rcv.Busy and time.monotonic() < deadline:
-        plc.next_scan()
-        rcv.step()
-        time.sleep(0.001)
+    plc.complete(rcv)
     assert rcv.Error and rcv.ErrorID == CODES["wrong_state"]
 
 
@@ -931,11 +928,7 @@ def test_a_waiting_receive_makes_no_system_call_in_the_scan(peer):
         rcv.step()
     assert rcv.Busy and counting.calls == 0     # nothing readable: no recv, in or between scans
     server_side.sendall(b"ok")
-    deadline = time.monotonic() + 2
-    while rcv.Busy and time.monotonic() < deadline:
-        plc.next_scan()
-        rcv.step()
-        time.sleep(0.001)
+    plc.complete(rcv)
     assert rcv.Done and bytes(rcv.RcvDat[:2]) == b"ok"
     plc.ctx.transport.close_all()
 
