@@ -184,8 +184,7 @@ class Robot:
         return self.state != NodeState.STOPPED
 
     def connect(self, conn: int, now_ns: int) -> list[Action]:
-        self._settled_ns = None
-        self._deadline_known = False
+        self.forget_deadline()
         self._run_until(now_ns)
         self.connections.append(conn)
         if self.settings.entry_message_on_connect and self.state == NodeState.IN_NODE:
@@ -195,8 +194,7 @@ class Robot:
     def disconnect(self, conn: int, now_ns: int) -> list[Action]:
         """Forget a connection.  Choice: its scripts already received still run (their replies
         are dropped) and its motions continue, as nothing in the spec aborts them."""
-        self._settled_ns = None
-        self._deadline_known = False
+        self.forget_deadline()
         self._run_until(now_ns)
         if conn in self.connections:
             self.connections.remove(conn)
@@ -242,14 +240,14 @@ class Robot:
         return self._next_internal_ns()
 
     def forget_deadline(self) -> None:
-        """The state was changed from outside (a fault plan applied): compute the deadline again."""
+        """The state is about to change (a public call, a fault plan applied from outside): the
+        next `advance` runs in full and the next deadline is computed again."""
         self._deadline_known = False
         self._settled_ns = None
 
     def start_project(self, now_ns: int) -> list[Action]:
         """Start the project again after a stop (flow enters the node after the entry delay)."""
-        self._settled_ns = None
-        self._deadline_known = False
+        self.forget_deadline()
         self._run_until(now_ns)
         if self.state == NodeState.STOPPED:
             self.state = NodeState.RUNNING
@@ -259,16 +257,14 @@ class Robot:
 
     def stop_project(self, now_ns: int) -> list[Action]:
         """Project stop (operator, fault): motion stops, every socket closed (spec §1.2, §8)."""
-        self._settled_ns = None
-        self._deadline_known = False
+        self.forget_deadline()
         self._run_until(now_ns)
         self._stop_project()
         return self._take()
 
     def enter_node(self, now_ns: int) -> list[Action]:
         """Make the flow reach the Listen node now (if the project runs and it is not in it)."""
-        self._settled_ns = None
-        self._deadline_known = False
+        self.forget_deadline()
         self._run_until(now_ns)
         if self.state == NodeState.RUNNING:
             self._enter_node()
