@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from stvm.semantics import types as t
 from stvm.semantics.facts import CallInfo
-from stvm.semantics.model import IN_OUT, Variable
+from stvm.semantics.model import IN_OUT, POUInfo, Variable
 from stvm.lower.analysis import loop_offset
 from stvm.lower.names import var_attr
 from stvm.lower.pycode import py_literal, wrap_int
@@ -428,7 +428,7 @@ class StatementGenerator:
         if inlined is not None:
             self.inline_fb_body(inst, info.pou, inlined)
         else:
-            self.w.line(self.direct_native_call(inst, e) or f"{inst}()")
+            self.w.line(self.direct_native_call(inst, e, info.pou) or f"{inst}()")
         for var, target, negate in info.outputs:
             target_type = self.facts.types.get(target.nid)
             value = f"{inst}.{var_attr(var.name)}"
@@ -452,12 +452,25 @@ class StatementGenerator:
         self.struct_assign_body("_sd", "_ss", st, 0)
         return True
 
-    def direct_native_call(self, inst: str, call: n.Call) -> str | None:
+    def direct_native_call(self, inst: str, call: n.Call, pou: POUInfo) -> str | None:
         """`direct_native_calls` (decided by the analysis): a native FB called straight through
-        its implementation, `inst._impl.call(inst, _ctx)`."""
+        its implementation, `inst._impl.call(inst, _ctx)`; with `skip_quiet_native_calls` and a
+        quiet pin declared, only while that pin is not `inst._impl.quiet`."""
         if call.nid not in self.plan.direct_native:
             return None
-        return f"{inst}._impl.call({inst}, _ctx)"
+        native = f"{inst}._impl.call({inst}, _ctx)"
+        pin = self.quiet_pin(pou) if self.options.skip_quiet_native_calls else None
+        return native if pin is None else f"if {inst}.{pin} is not {inst}._impl.quiet: {native}"
+
+    def quiet_pin(self, pou: POUInfo) -> str | None:
+        """The storage name of the pin a native FB declares quiet (`{native quiet:Execute}`,
+        stdlib/registry.py), None without one."""
+        node = self.a.pou_nodes.get(pou.qualname.lower())
+        for word in " ".join(node.pragmas if node is not None else ()).split():
+            if word.lower().startswith("quiet:"):
+                var = pou.variables[word[len("quiet:"):].lower()]   # the stdlib's own pin
+                return var_attr(var.name)
+        return None
 
     def reused_array_ref(self, place: str, var: Variable, value: n.Expr) -> bool:
         """`reuse_array_refs` (decided by the analysis, `ArrayRefReuse`): keep the `ArrayRef` the

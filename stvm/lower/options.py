@@ -54,6 +54,12 @@ class LowerOptions:
     # makes ~30 socket and timer FB calls a scan). Safe: the same call, and the instance is of
     # exactly that class (the checker lets no POU EXTEND a native FB).
     direct_native_calls: bool = True
+    # A native FB whose declaration names a quiet pin (`{native quiet:Execute}`: the socket FBs)
+    # is called only when that pin is not `impl.quiet`, the value for which its implementation
+    # says the call would change nothing (the thesis makes ~28 socket FB calls a scan, nearly all
+    # idle). Safe: a skipped call is one that would have stored nothing. Needs
+    # `direct_native_calls`.
+    skip_quiet_native_calls: bool = True
     # A fixed array passed to an FB's ARRAY[*] parameter (`SendDat := Data[0]`) reuses the
     # `ArrayRef` the instance holds from the previous call when it names the same list and element
     # (no object built per call). Safe: an `ArrayRef` is immutable and a fixed array's list is never

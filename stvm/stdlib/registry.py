@@ -28,6 +28,12 @@ references/objects) under the storage names of the lowering's layout. The implem
 them as ST does, `inst.Q`, and declares them with `@st_names("IN", "PT", "Q", "ET")`
 (`stvm.lower.bind`), which binds those attributes to the storage names once, when the class is
 defined; it writes outputs into `inst` and keeps private state on itself.
+
+`{native quiet:PIN}` (the socket FBs, `quiet:Execute`): the implementation keeps `impl.quiet`, a
+value of the input PIN for which its next call would change nothing (None when any call may), and
+the generated call site calls only while `inst.PIN is not impl.quiet` (lowering option
+`skip_quiet_native_calls`). The implementation must keep it exact after every call: a call that
+is skipped must be one that would have stored nothing, in `inst` or on itself.
 """
 
 from __future__ import annotations

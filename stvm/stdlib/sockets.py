@@ -578,6 +578,13 @@ class SocketRequestFB:
 
     Subclasses implement `_start` (latch inputs, start the work; raise SocketError for errors found
     at once, reported at completion) and `_progress` (None while waiting, DONE, or an error kind).
+
+    `quiet` (the `{native quiet:Execute}` of sockets.st): the value of Execute for which the next
+    call would change nothing, None when any call may. Idle, a call changes only the memory of
+    Execute, so that value is the remembered one; with Done or Error held, it is TRUE. The
+    generated call site skips the call while `inst.Execute is impl.quiet` (most calls of the
+    thesis's FBs: they call their socket FBs every scan). A skipped call would have kept `quiet`
+    as it is.
     """
 
     def __init__(self) -> None:
@@ -586,14 +593,15 @@ class SocketRequestFB:
         self._calls_since_start = 0
         self._start_error: str | None = None
         self._last_scan: int | None = None
+        self.quiet: bool | None = False
 
     def call(self, inst, ctx) -> None:
         execute = True if inst.Execute else False   # bool() without a call: ~30 calls a scan
         if self._phase is IDLE and (not execute or self._previous_execute):
-            # idle and no rising edge: nothing changes but the memory of this call (most calls
-            # of the thesis's FBs: they call their socket FBs every scan). `_last_scan` is read
-            # only while BUSY, and the call that makes a request BUSY sets it: not stored here
-            self._previous_execute = execute
+            # idle and no rising edge: nothing changes but the memory of this call. `_last_scan`
+            # is read only while BUSY, and the call that makes a request BUSY sets it: not
+            # stored here
+            self._previous_execute = self.quiet = execute
             return
         settings = ctx.settings
         edge = execute and not self._previous_execute
@@ -606,20 +614,23 @@ class SocketRequestFB:
             self._guarded(self._cancel, inst, ctx)
             inst.Busy = False
             self._phase = IDLE
-        self._last_scan = ctx.scan
         if self._phase == IDLE and edge:
             inst.Busy = True
             inst.Done = inst.Error = False
             inst.ErrorID = 0
             self._phase = BUSY
+            self._last_scan = ctx.scan
             self._calls_since_start = 0
             self._start_error = self._guarded(self._start, inst, ctx)
         elif self._phase == BUSY:
+            self._last_scan = ctx.scan   # read by the next call only while BUSY
             self._calls_since_start += 1
         if self._phase == BUSY and self._calls_since_start >= settings.skt_min_latency_calls:
             outcome = self._start_error or self._guarded(self._progress, inst, ctx)
             if outcome is not None:
                 self._complete(inst, ctx, outcome, execute)
+        # HELD (Done or Error shown, Execute TRUE): a call with Execute TRUE changes nothing
+        self.quiet = execute if self._phase is IDLE or self._phase is HELD else None
 
     def _guarded(self, step, inst, ctx) -> str | None:
         """Run a step; a failure becomes an error kind, never an exception out of the FB."""
@@ -694,10 +705,13 @@ class SktTCPConnect(SocketRequestFB):
 
     def call(self, inst, ctx) -> None:
         SocketRequestFB.call(self, inst, ctx)   # not super(): this runs every scan
-        if (self._published_handle and inst.Socket.Handle == self._published_handle
-                and self._transport_closed(ctx, self._published_handle)):
-            _write_socket(inst.Socket, 0, ("", 0), ("", 0))
-            self._published_handle = 0
+        if self._published_handle:
+            if inst.Socket.Handle == self._published_handle \
+                    and self._transport_closed(ctx, self._published_handle):
+                _write_socket(inst.Socket, 0, ("", 0), ("", 0))
+                self._published_handle = 0
+            else:
+                self.quiet = None   # every call checks whether the transport closed the socket
 
     @staticmethod
     def _transport_closed(ctx, handle: int) -> bool:

@@ -21,8 +21,8 @@ from core_helpers import load_st
 from stvm.lower import codegen
 from stvm.lower.options import DEFAULT_OPTIONS, LowerOptions
 
-SCAN_OPTIONS = ("hot_path_cache", "inline_input_copy", "direct_native_calls", "reuse_array_refs",
-                "inline_small_fbs")
+SCAN_OPTIONS = ("hot_path_cache", "inline_input_copy", "direct_native_calls", "skip_quiet_native_calls",
+                "reuse_array_refs", "inline_small_fbs")
 
 
 @contextlib.contextmanager
@@ -164,6 +164,24 @@ def test_direct_native_calls_skip_the_forwarding_call():
     assert "v_t._impl.call(v_t, _ctx)" in on.replace("self.", "")
     assert "_impl.call(" not in off[off.index("class P"):].replace("self._impl.call(self, _ctx)", "")
     assert [row["Main.q"] for row in seen] == [False, False, False, False, True, True, True, False]
+
+
+def test_skip_quiet_native_calls_calls_a_socket_fb_only_when_execute_is_not_quiet():
+    """SktClose on handle 0 fails at once (no network): Busy, then Error held while Execute
+    stays TRUE, cleared by the call with Execute FALSE; the skipped calls change none of it."""
+    source = """
+PROGRAM Main
+VAR c : SktClose; s : _sSOCKET; go : BOOL; busy : BOOL; err : BOOL; id : WORD; END_VAR
+c(Execute := go, Socket := s, Busy => busy, Error => err, ErrorID => id);
+END_PROGRAM
+"""
+    pattern = [False, True, True, True, False, False, True, False, False, True, True]
+    on, off, seen = run_both(source, "skip_quiet_native_calls", len(pattern),
+                             lambda k: {"Main.go": pattern[k]}, ["Main.busy", "Main.err", "Main.id"])
+    assert "if v_c.v_execute is not v_c._impl.quiet: v_c._impl.call(v_c, _ctx)" in on.replace("self.", "")
+    assert "._impl.quiet" not in off
+    assert [row["Main.err"] for row in seen] == [False, False, True, True, False, False, False, True,
+                                                 False, False, True]
 
 
 def test_inline_small_fbs_not_used_when_a_pou_extends_the_fb():

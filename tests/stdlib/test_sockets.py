@@ -7,6 +7,8 @@ polled with short waits between scans only while a request is still busy.
 
 from __future__ import annotations
 
+import copy
+import random
 import socket
 import struct
 import time
@@ -412,6 +414,48 @@ def test_transports_are_created_lazily_on_the_context():
     close.step()
     assert isinstance(ctx.transport, RealTcpTransport)
     ctx.transport.close_all()
+
+
+# --- `quiet`: the calls the generated code may skip (`{native quiet:Execute}`) ---------------
+
+def state_of(runner: FBRunner):
+    """Everything a call could change: the instance's variables and the implementation's state."""
+    return copy.deepcopy((vars(runner.inst), {k: v for k, v in vars(runner.impl).items() if k != "preset"}))
+
+
+@pytest.mark.parametrize("after_close", ["unchanged", "zeroed"])
+@pytest.mark.parametrize("name", sorted(FB_VARIABLES))
+def test_a_call_with_execute_equal_to_quiet_changes_nothing(name, after_close):
+    """The contract the call-site skip relies on, over random Execute sequences with the link
+    connecting, receiving, closed by the peer and reset: whenever `Execute is impl.quiet`, the
+    call leaves the instance and the implementation exactly as they were."""
+    skipped = 0
+    for seed in range(12):
+        rng = random.Random(seed)
+        plc = Plc(SocketTable(ScriptedLink), skt_socket_after_close=after_close)
+        ScriptedLink.opened = []
+        sock = scripted_socket(plc) if name != "SktTCPConnect" else socket_value()
+        inputs = dict(DstTcpPort=6000) if name == "SktTCPConnect" else dict(Socket=sock)
+        runner = plc.fb(name, **inputs, **{"SktTCPSend": dict(Size=2, SendDat=[1, 2]),
+                                           "SktTCPRcv": dict(Size=4, RcvDat=[0] * 4)}.get(name, {}))
+        for _ in range(80):
+            plc.next_scan()
+            link = ScriptedLink.opened[-1] if ScriptedLink.opened else None
+            event = rng.random()
+            if link is not None and event < 0.15:
+                link.state = rng.choice([ESTABLISHED, PEER_CLOSED, RESET])
+            elif link is not None and event < 0.3:
+                link.incoming += b"xy"
+            if rng.random() < 0.3:   # Execute held for a few scans, as the thesis's FBs hold it
+                runner.inst.v_execute = not runner.inst.v_execute
+            if runner.inst.v_execute is runner.impl.quiet:
+                before = state_of(runner)
+                runner.step()
+                assert state_of(runner) == before
+                skipped += 1
+            else:
+                runner.step()
+    assert skipped > 10
 
 
 # --- SktTCPConnect ---------------------------------------------------------------------------
