@@ -468,7 +468,9 @@ class InProcessLink:
                     break  # nothing consumed the deadline; do not spin
         self.now_ns = target
         self.core.advance(target)
-        self._collect(target)
+        ready = self.core.pop_ready(target)
+        if ready:   # (`_collect` without its call on the scans when nothing is sent)
+            self._deliver(ready)
 
     def close(self) -> None:
         self.frame_log.close()
@@ -512,7 +514,10 @@ class InProcessLink:
         self._collect(t)
 
     def _collect(self, t: int) -> None:
-        for delivery in self.core.pop_ready(t):
+        self._deliver(self.core.pop_ready(t))
+
+    def _deliver(self, ready: list[Delivery]) -> None:
+        for delivery in ready:
             ep = self._by_conn.get(delivery.conn)
             if ep is None:
                 continue
