@@ -436,6 +436,9 @@ class StatementGenerator:
                 value = f"(not {value})"
             elif target_type is not None:
                 value = self.coerce(value, var.type, target_type, target.span)
+            if not negate and isinstance(var.type, t.StructType) and target_type == var.type \
+                    and self.inline_output_copy(target, value, var.type):
+                continue
             self.store(target, value, target_type)
 
     def inline_input_copy(self, dst: str, src: str, st: t.StructType) -> bool:
@@ -451,6 +454,16 @@ class StatementGenerator:
         self.w.line(f"_sd = {dst}; _ss = {src}")
         self.struct_assign_body("_sd", "_ss", st, 0)
         return True
+
+    def inline_output_copy(self, target: n.Expr, value: str, st: t.StructType) -> bool:
+        """`inline_input_copy` for a STRUCT output (`Socket => CBT.Socket`, every scan in the
+        thesis's CBT_Connect): the store `place._assign(value)` written as the field-by-field copy
+        into `place`. False when not applied (the store is something else, or not inlined)."""
+        lines = self.store_code(target, value, st)
+        call = f"._assign({value})"
+        if len(lines) != 1 or not lines[0].endswith(call):
+            return False
+        return self.inline_input_copy(lines[0][:-len(call)], value, st)
 
     def direct_native_call(self, inst: str, call: n.Call, pou: POUInfo) -> str | None:
         """`direct_native_calls` (decided by the analysis): a native FB called straight through

@@ -45,9 +45,10 @@ class LowerOptions:
     hot_path_cache: bool = True
     # A STRUCT assignment copies nested STRUCT fields inline (one Python call per assignment).
     inline_struct_assign: bool = True
-    # A STRUCT input of an FB call (`fb(Socket := x)`) is copied field by field at the call site
-    # instead of through the struct's `_assign` (one Python call less per input and call). Safe:
-    # the same stores in the same order; a struct of more than 32 leaf fields keeps the call.
+    # A STRUCT input or output of an FB call (`fb(Socket := x)`, `fb(Socket => x)`) is copied
+    # field by field at the call site instead of through the struct's `_assign` (one Python call
+    # less per input and call). Safe: the same stores in the same order; a struct of more than 32
+    # leaf fields keeps the call.
     inline_input_copy: bool = True
     # A native FB's call site calls its implementation (`fb._impl.call(fb, _ctx)`) instead of the
     # generated `__call__` that only forwards to it: one Python frame less per call (the thesis

@@ -131,6 +131,31 @@ def test_inline_input_copy_copies_field_by_field_at_the_call():
     assert seen[-1]["Main.h"] == 5 and seen[-1]["Main.u.s.dst.port"] == 10
 
 
+def test_inline_input_copy_copies_a_struct_output_field_by_field():
+    source = """
+TYPE Addr : STRUCT port : UINT; ip : STRING[16]; END_STRUCT; END_TYPE
+TYPE Sock : STRUCT handle : UDINT; src : Addr; dst : Addr; END_STRUCT; END_TYPE
+FUNCTION_BLOCK Maker
+VAR_OUTPUT s : Sock; END_VAR
+s.handle := s.handle + 1; s.dst.port := s.dst.port + 2; s.src.ip := 'h';
+END_FUNCTION_BLOCK
+PROGRAM Main
+VAR m : Maker; mine : Sock; socks : ARRAY[0..1] OF Sock; k : INT; END_VAR
+m(s => mine);
+k := 1 - k;
+m(s => socks[k]);
+END_PROGRAM
+"""
+    paths = ["Main.mine.handle", "Main.mine.dst.port", "Main.mine.src.ip", "Main.socks[0].handle", "Main.socks[1].dst.port"]
+    on, off, seen = run_both(source, "inline_input_copy", 5, lambda k: {}, paths)
+    main_on, main_off = on[on.index("class P"):], off[off.index("class P"):]
+    assert "._assign(v_m.v_s)" not in main_on.replace("self.", "") and "_ss = v_m.v_s" in main_on
+    assert "._assign(v_m.v_s)" in main_off.replace("self.", "")
+    # calls 1, 3, ... 9 into mine, 2, 6, 10 into socks[1], 4, 8 into socks[0]
+    assert seen[-1] == {"Main.mine.handle": 9, "Main.mine.dst.port": 18, "Main.mine.src.ip": b"h",
+                        "Main.socks[0].handle": 8, "Main.socks[1].dst.port": 20}
+
+
 def test_inline_input_copy_keeps_the_call_for_large_structs():
     fields = " ".join(f"f{i} : INT;" for i in range(40))
     source = f"""
