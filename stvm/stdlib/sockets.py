@@ -634,8 +634,9 @@ class SocketRequestFB:
 
     def _guarded(self, step, inst, ctx) -> str | None:
         """Run a step; a failure becomes an error kind, never an exception out of the FB."""
+        transport = ctx.transport   # `transport_of` without its call once made (a busy FB: every scan)
         try:
-            return step(inst, ctx, transport_of(ctx))
+            return step(inst, ctx, transport if transport is not None else transport_of(ctx))
         except SocketError as error:
             return error.kind
         except FunctionError:
