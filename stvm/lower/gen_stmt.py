@@ -497,7 +497,9 @@ class StatementGenerator:
             return False   # only a plain variable path is evaluated twice
         actual = self.settings.open_array_bounds is OpenArrayBounds.ACTUAL
         # under `open_array_bounds=actual` the kept one may come from a call site passing `lo`
-        same = f"_ar.data is not {base} or _ar.start != {start}" + (f" or _ar.lo != {lo}" if actual else "")
+        # (`_ar.start` for `_ar.start != 0`: an int's truth, two bytecodes less on every call)
+        moved = f"_ar.start != {start}" if start else "_ar.start"
+        same = f"_ar.data is not {base} or {moved}" + (f" or _ar.lo != {lo}" if actual else "")
         made = f"_ArrayRef({base}, {start}, {lo})" if lo else f"_ArrayRef({base}, {start})"
         self.w.line(f"if (_ar := {place}) is None or {same}: {place} = {made}")
         return True
