@@ -101,6 +101,13 @@ class NodeState(str, Enum):
     EXITING = "EXITING"    # ScriptExit() waiting for the motion queue to drain
 
 
+# The states the clock code compares with at every advance, as module constants: an Enum member
+# read through its class costs ~50 ns on Python 3.11 (the enum's class-attribute lookup), a
+# global ~5 ns, and in lockstep the robot's clock moves every scan.
+_STOPPED = NodeState.STOPPED
+_IN_NODE = NodeState.IN_NODE
+_RUNNING = NodeState.RUNNING
+
 # Immutable records, as named tuples: several are made per frame and a tuple is far cheaper to
 # build than a frozen dataclass.
 class Send(NamedTuple):
@@ -307,7 +314,7 @@ class Robot:
         # it runs several times per received frame.
         best: int | None = None
         executor = self.executor
-        if not self.paused and self.state != NodeState.STOPPED and (executor.queue or executor.active):
+        if not self.paused and self.state != _STOPPED and (executor.queue or executor.active):
             ev = executor.next_event_ns()
             if ev is not None:
                 best = self._motion_to_wall(ev)
@@ -326,7 +333,7 @@ class Robot:
         if t is not None and (best is None or t < best):
             best = t
         settings = self.settings
-        if (settings.data_timeout_ms > 0 or settings.connection_timeout_ms > 0) and self.state == NodeState.IN_NODE:
+        if (settings.data_timeout_ms > 0 or settings.connection_timeout_ms > 0) and self.state == _IN_NODE:
             if settings.data_timeout_ms > 0:
                 t = max(self.last_packet_ns, self.node_entered_ns) + settings.data_timeout_ms * NS_PER_MS
                 if best is None or t < best:
@@ -340,7 +347,7 @@ class Robot:
     def _set_clock(self, t_ns: int) -> None:
         if t_ns <= self.now_ns:
             return
-        if not self.paused and self.state != NodeState.STOPPED:
+        if not self.paused and self.state != _STOPPED:
             self.motion_ns += t_ns - self.now_ns
         self.now_ns = t_ns
 
@@ -349,7 +356,7 @@ class Robot:
         later than ``self.now_ns`` and earlier than the known deadline): the clocks move on, the
         executor's too (its `advance` with nothing due only moves its clock, and not while the
         motion is stalled)."""
-        running = not self.paused and self.state != NodeState.STOPPED
+        running = not self.paused and self.state != _STOPPED
         if running:
             self.motion_ns += now_ns - self.now_ns
         self.now_ns = now_ns
@@ -374,7 +381,7 @@ class Robot:
         if now_ns > self.now_ns:
             self._set_clock(now_ns)
         executor = self.executor
-        if not self.paused and self.state != NodeState.STOPPED and (executor.queue or executor.active):
+        if not self.paused and self.state != _STOPPED and (executor.queue or executor.active):
             for event in self.executor.advance(self.motion_ns):  # none due: see the loop above
                 self._marker_reached(event.marker)
 
@@ -392,7 +399,7 @@ class Robot:
                 changed = True
             if self.enter_at_ns is not None and self.now_ns >= self.enter_at_ns:
                 self.enter_at_ns = None
-                if self.state == NodeState.RUNNING:
+                if self.state == _RUNNING:
                     self._enter_node()
                 changed = True
             if self.next_unsolicited_ns is not None and self.now_ns >= self.next_unsolicited_ns:
@@ -401,10 +408,10 @@ class Robot:
                     self.send(conn, encode("TMSTA", "90,unsolicited"))
                 changed = True
             state = self.state
-            if timeouts and state == NodeState.IN_NODE and self._timed_out():
+            if timeouts and state == _IN_NODE and self._timed_out():
                 changed = True
                 state = self.state
-            if not self.paused and state != NodeState.STOPPED:
+            if not self.paused and state != _STOPPED:
                 for event in executor.advance(self.motion_ns):
                     self._marker_reached(event.marker)
                     changed = True
