@@ -136,8 +136,9 @@ def program() -> int:
     the collector's reach (`gc.freeze`): the collections of interpreter shutdown over that heap,
     and the freeing of its cycles one object at a time, cost 0.6 s of a 100,000-line program's
     `stvm run` (bench/bench_large.py); the system reclaims the memory at once. Exit handlers,
-    `finally` blocks and the flushing of open files run as before (every file stvm writes is
-    closed when its command returns). Not in `main`, which tests and tools call in-process."""
+    `finally` blocks and the flushing of sys.stdout/stderr run as before; the files a command
+    writes are closed when it returns (the emulator's frame log and the DAP log, open for a
+    whole run, flush every line). Not in `main`, which tests and tools call in-process."""
     code = main()
     gc.freeze()
     return code
