@@ -5,12 +5,12 @@ Run: nice python bench/bench_large.py [--lines 100000] [--repeat 3]
 
 Each figure is measured in fresh processes (`/usr/bin/time`-like: wall time, CPU time and peak
 RSS from `resource`; min / median of `--repeat`), with the compile cache off (`--no-cache`) and
-with a new, empty cache folder (what a first `stvm run` does: Lark's tables built, the parsed
-unit and the compiled project pickled and written), next to a yardstick measured in the same run:
+with a new, empty cache folder (what a first `stvm run` does: Lark's tables built, the
+compiled project pickled and written; a one-file project writes no unit entry), next to a yardstick measured in the same run:
 the same program at a tenth of the size (the ratio shows whether the cost grows linearly). On a
 shared machine the CPU time is the steadier figure.
 Phases (one process, the steps of `project.load`): read, parse to nodes (the fast LALR driver, no
-Lark tree), the unit's cache entry, check, lower + compile, the project (native modules), the
+Lark tree), check, lower + compile, the project (native modules), the
 load's cache entry, instances, one scan; each with the time spent in the cyclic collector.
 Targets: <= 10 s and <= 400 MB for the 100,000-line first load.
 """
@@ -100,9 +100,7 @@ PHASES = textwrap.dedent("""
     texts, _ = P.read_files([Path(sys.argv[1])]); mark("read")
     with P._collector_paused():
         unit, diags = P.parse_unit(texts[0][0], texts[0][1], S, False); mark("parse to nodes")
-        if "--cache" in sys.argv:
-            import pickle
-            pickle.dumps((unit, diags), protocol=pickle.HIGHEST_PROTOCOL); mark("unit cache entry (pickle)")
+        # no unit cache entry: the load of a one-file project writes none (project.load)
         units, _, sources = P.stdlib_units(S)
         analysis = analyze(list(units) + [unit], S, NATIVE_FUNCTIONS); mark("check")
         del unit
@@ -117,7 +115,7 @@ PHASES = textwrap.dedent("""
     project = P.Project(model, lowered, code, dict(texts), S, [], False, {}, None, P._native_modules(lowered))
     mark("project (native modules)")
     if "--cache" in sys.argv:
-        import marshal
+        import marshal, pickle
         with P._collector_paused():
             pickle.dumps((model, lowered, [], marshal.dumps(code), dict(texts), project.native_modules),
                          protocol=pickle.HIGHEST_PROTOCOL)
@@ -176,7 +174,7 @@ def main() -> None:
     print(f"  yardstick, empty cache       {repeated(run + [str(small)], args.repeat, fresh_cache=True)}")
     print(f"  first load + 1 scan, empty cache {repeated(run + [str(big)], args.repeat, fresh_cache=True)}")
     print("where it goes (one process, the steps of project.load, collector paused as there; "
-          "with the two cache entries pickled, not written):")
+          "with the load's cache entry pickled, not written):")
     subprocess.run([sys.executable, "-c", PHASES, str(big), "--cache"], cwd=ROOT)
     huge = work / "huge.st"
     with huge.open("w") as fh:

@@ -1,9 +1,9 @@
 import sys
 
 try:
-    from stvm.cli import main
+    from stvm.cli import program
 except KeyboardInterrupt:  # Ctrl-C while Python imports stvm itself
     print("stvm: interrupted", file=sys.stderr)
     raise SystemExit(130)
 
-raise SystemExit(main())
+raise SystemExit(program())

@@ -418,9 +418,10 @@ def _age_survivors() -> None:
         gc.unfreeze()   # the permanent generation back as the oldest
 
 
-def parse_unit(name: str, text: str, settings: SysmacSettings, use_cache: bool = True):
+def parse_unit(name: str, text: str, settings: SysmacSettings, use_cache: bool = True, write: bool = True):
     """(unit, parse diagnostics) of one file, from the cache when its text, the settings and
-    stvm are unchanged: an edit re-parses only the file edited."""
+    stvm are unchanged: an edit re-parses only the file edited. Without `write`, a unit parsed
+    is not stored (an entry found is still used)."""
     from stvm.syntax.parser import parse_text   # lazy: start-up (a cached project never parses)
     if not use_cache:
         return parse_text(text, name, settings)
@@ -433,6 +434,8 @@ def parse_unit(name: str, text: str, settings: SysmacSettings, use_cache: bool =
         except Exception:  # a stale entry is parsed again, never fatal
             pass
     unit, diags = parse_text(text, name, settings)
+    if not write:
+        return unit, diags
     try:
         payload = pickle.dumps((unit, diags), protocol=pickle.HIGHEST_PROTOCOL)
     except (pickle.PicklingError, RecursionError, TypeError):
@@ -448,12 +451,12 @@ def parse_unit(name: str, text: str, settings: SysmacSettings, use_cache: bool =
 _PRUNED: set[str] = set()
 
 
-def _check_texts(texts, diags, settings, use_cache: bool = True):
+def _check_texts(texts, diags, settings, use_cache: bool = True, unit_entries: bool = True):
     with _collector_paused():
-        return _check_texts_unpaused(texts, diags, settings, use_cache)
+        return _check_texts_unpaused(texts, diags, settings, use_cache, unit_entries)
 
 
-def _check_texts_unpaused(texts, diags, settings, use_cache: bool = True):
+def _check_texts_unpaused(texts, diags, settings, use_cache: bool = True, unit_entries: bool = True):
     from stvm.semantics import analyze   # lazy: start-up
     from stvm.stdlib import NATIVE_FUNCTIONS   # lazy: start-up
     sources = source_texts(texts)
@@ -462,7 +465,7 @@ def _check_texts_unpaused(texts, diags, settings, use_cache: bool = True):
     diags += stdlib_diags
     sources.update(stdlib_sources)
     for name, text in texts:
-        unit, d = parse_unit(name, text, settings, use_cache)
+        unit, d = parse_unit(name, text, settings, use_cache, unit_entries)
         units.append(unit)
         diags += d
     analysis = None
@@ -536,7 +539,12 @@ def load(paths: Sequence[str | Path], settings: SysmacSettings | None = None, us
                            native_modules, True)
         except Exception:  # a stale entry (an older stvm's classes) is rebuilt, never fatal
             pass
-    analysis, diags, sources = _check_texts(texts, [], settings, use_cache)
+    # A one-file project writes no unit entry: the load entry written below serves every run of
+    # the unchanged file, and an edit makes both stale, so the unit's entry would only spare a
+    # later `stvm check` of the unchanged file its parse. Pickling it is a tenth of a first load
+    # (1.0-1.4 s of a 100,000-line file, bench/bench_large.py). A file of a larger project keeps
+    # its entry: an edit of another file re-parses only that one.
+    analysis, diags, sources = _check_texts(texts, [], settings, use_cache, unit_entries=len(texts) > 1)
     if analysis is None:
         raise LoadError(diags, sources)
     model = analysis.model

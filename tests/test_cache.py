@@ -190,6 +190,22 @@ def test_an_edit_reparses_only_the_file_edited_and_the_verdict_follows(private_c
     assert "x + y" in again[2][str(source)]
 
 
+def test_a_one_file_load_writes_no_unit_entry_a_project_one_per_file(private_cache, tmp_path, monkeypatch):
+    """A one-file project's unit entry could only spare a later `stvm check` its parse (an edit
+    makes it stale with the load entry), so its first load does not pickle it; a project's
+    files keep theirs (an edit re-parses only the file edited)."""
+    folder, key, source = private_cache
+    stvm.load([source])
+    assert list(folder.glob("*.bin")) and not list(folder.glob("unit-*.ast"))
+    other = tmp_path / "lib.st"
+    other.write_text(OTHER)
+    stvm.load([source, other])
+    assert len(list(folder.glob("unit-*.ast"))) == 2
+    parsed = _counting_parser(monkeypatch)
+    other.write_text(OTHER + "\n")
+    assert not stvm.load([source, other]).from_cache and parsed == [str(other)]
+
+
 def test_other_settings_are_another_cache_entry(private_cache, monkeypatch):
     from stvm.settings import DEFAULT_SETTINGS
     folder, key, source = private_cache

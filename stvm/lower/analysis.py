@@ -18,13 +18,11 @@ The checker's facts (`Analysis.facts`) and what this pass adds are both keyed by
 
 from __future__ import annotations
 
-import re
-
 from dataclasses import dataclass, field
 from types import MappingProxyType
 from typing import Mapping
 
-from stvm.lower.hot_uses import hot_uses
+from stvm.lower.hot_uses import CHILD_FIELDS, child_fields, hot_uses
 from stvm.lower.options import LowerOptions
 from stvm.semantics import types as t
 from stvm.semantics.facts import CallInfo
@@ -269,7 +267,7 @@ class _Planner:
         indexed = self.indexed
         open_statements: list = []
         weight = 1                     # LOOP_WEIGHT ** the loops open around the node
-        leave, unknown, fields_of = _LEAVE, _UNKNOWN, _CHILD_FIELDS
+        leave, unknown, fields_of = _LEAVE, _UNKNOWN, CHILD_FIELDS
         name_cls, call_cls, index_cls, argument_cls = n.Name, n.Call, n.Index, n.Argument
         assign_classes, loops, statements = (n.Assign, n.RefAssign), _LOOPS, _STATEMENTS
         get = uses.get
@@ -284,7 +282,7 @@ class _Planner:
             cls = node.__class__
             names = fields_of.get(cls, unknown)
             if names is unknown:
-                names = _child_fields(cls)
+                names = child_fields(cls)
             if names is None:
                 if isinstance(node, tuple):
                     stack.extend(node)
@@ -713,7 +711,6 @@ def _mark(open_statements: list, marked) -> None:
 
 _LEAVE = object()            # on the walk's stack: the statement opened last is left
 _UNKNOWN = object()
-_CHILD_FIELDS: dict[type, tuple[str, ...] | None] = {}
 
 
 _LOOPS = frozenset({n.For, n.While, n.Repeat})
@@ -722,28 +719,6 @@ _STATEMENTS = frozenset(cls for cls in vars(n).values() if isinstance(cls, type)
 _HELD_OK = frozenset({n.IntLiteral, n.RealLiteral, n.BoolLiteral, n.StringLiteral, n.TimeLiteral,
                       n.HashLiteral, n.Unary, n.Binary, n.BitAccess, n.PartialAccess, n.If, n.Case,
                       n.CaseLabel, n.For, n.While, n.Repeat, n.Exit, n.Continue, n.Return, n.Empty})
-_SCALARS = {"str", "int", "bool", "float", "bytes", "None", "Span", "n.Span"}
-
-
-def _child_fields(cls) -> tuple[str, ...] | None:
-    """The fields of a node class that may hold nodes: not `span`, and not declared as only
-    scalars (str, int, tuples of str, …), as `stvm.syntax.walk` reads them; None for tuples and
-    scalars."""
-    fields_ = getattr(cls, "__dataclass_fields__", None)
-    if fields_ is None:
-        names = None
-    else:
-        out = []
-        for name, f in fields_.items():
-            kind = f.type if isinstance(f.type, str) else getattr(f.type, "__name__", "?")
-            atoms = set(re.findall(r"[A-Za-z_][A-Za-z0-9_.]*", kind)) - {"tuple"}
-            if name != "span" and not (atoms and atoms <= _SCALARS):
-                out.append(name)
-        names = tuple(out)
-    _CHILD_FIELDS[cls] = names
-    return names
-
-
 _CACHE_MIN_USES = 3          # uses of a variable in a body (a use inside a loop counts as many)
 # `hot_path_cache`: expected uses per call (see stvm/lower/hot_uses.py) from which a local pays:
 # a cached scalar costs ~6 bytecodes (load on entry, store back on exit) and saves ~1.5 per use

@@ -34,8 +34,9 @@ class ExpressionGenerator:
     def var_place(self, var: Variable, is_global: bool) -> str:
         if is_global or var.section in (GLOBAL, EXTERNAL):
             return f"_G.{var_attr(var.name)}"
-        if var.key in self.cached:
-            self.used.add(var.key)
+        key = var.key
+        if key in self.cached:
+            self.used.add(key)
             return var_attr(var.name)
         return f"{self.owner}.{var_attr(var.name)}"
 

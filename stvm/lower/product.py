@@ -57,8 +57,11 @@ class LoweredProject:
     layouts: ProjectLayout | None = None
 
 
-CHUNK_LINES = 4000
-"""About how many generated lines `compile_module` compiles at once."""
+CHUNK_LINES = 1500
+"""About how many generated lines `compile_module` compiles at once. Smaller pieces compile
+faster per line (the compiler's syntax tree and tables of a piece stay in the CPU caches):
+the 208,000-line module of a 100,000-line program compiles in ~10 % less time in pieces of
+1,500 lines than of 4,000 (bench/bench_large.py), with a lower peak."""
 
 
 def compile_module(source: str, filename: str) -> tuple[CodeType, ...]:

@@ -53,10 +53,15 @@ class CodeWriter:
         self.span: n.Span | None = None
 
     def line(self, text: str) -> None:
-        self.lines.append("    " * self.indent + text)
+        lines = self.lines
+        lines.append("    " * self.indent + text)
+        span = self.span
         spans = self.line_map.spans
-        if self.span is not None or (spans and spans[-1] is not None):
-            self.line_map.add(len(self.lines), self.span)
+        if span is not None or (spans and spans[-1] is not None):
+            # what `LineMap.add` does for a line after every line mapped so far (each entry
+            # names a line already written): one call less per generated line
+            self.line_map.lines.append(len(lines))
+            spans.append(span)
 
     def blank_span(self) -> None:
         self.span = None
@@ -65,5 +70,11 @@ class CodeWriter:
         """Append a body generated separately, shifting its line map."""
         offset = len(self.lines)
         self.lines.extend(other.lines)
-        for line, span in zip(other.line_map.lines, other.line_map.spans):
-            self.line_map.add(line + offset, span)
+        theirs = other.line_map
+        if not theirs.lines:
+            return
+        # only the first entry can meet the last one here (at the same line); the others follow
+        # one another at increasing lines, as `add` would keep them
+        self.line_map.add(theirs.lines[0] + offset, theirs.spans[0])
+        self.line_map.lines.extend([line + offset for line in theirs.lines[1:]])
+        self.line_map.spans.extend(theirs.spans[1:])
