@@ -96,7 +96,7 @@ def test_pause_and_resume_during_motion(bench):
     assert b.emulator.snapshot()["paused"] is True
     assert b.runner.trace[-1]["AbsBusy"] and b.runner.trace[-1]["WaitingReturn"]
     s1 = b.start_with(params(6, "Resume"))
-    b.until(lambda s: s["AbsDone"], "move Done", max_scans=20000)
+    b.until(lambda s: s["AbsDone"], "move Done")
     r = b.runner
     assert b.emulator.snapshot()["paused"] is False
     assert r.states(OUTPUTS, s0)[:3] == [(False, False, False, 0), (True, False, False, 0), (False, True, False, 0)]

@@ -156,7 +156,7 @@ def test_cycle_hangs_on_a_one_digit_checksum_segment(pnp):
     bad = segment_frame(segments[2])
     assert frame_checksum(bad) < 0x10 and bad[-5:-3] == b",*" and bad[-2:] == b"\r\n"   # ",*H\r\n"
     r, s0 = start_pnp(em, vm, segments)
-    r.run_until(lambda s: s["Step"] == 15 and s["FB_step"] == 80, max_scans=20000, what="third segment sent")
+    r.run_until(lambda s: s["Step"] == 15 and s["FB_step"] == 80, what="third segment sent")
     r.run_for(3000)
     assert em.rx() == [CHECK_LISTEN] + [segment_frame(p) for p in segments[:3]]
     assert em.tx()[-1] == tm_frame("CPERR", "01")

@@ -241,6 +241,14 @@ class Sample:
         return self.values[key]
 
 
+# The default bound of `Runner.run_until`: in effect the wall-clock timeout alone. The emulator's
+# motions take wall-clock time while the VM's clock is virtual, so how many scans a motion spans
+# depends on how fast this machine scans (a faster VM needs more of them), not on the ST; a test
+# that asserts a scan count passes its own `max_scans`. (20,000 was too few once a scan took
+# ~8 µs.) The cap keeps a failing wait's trace to a bounded size.
+WALL_BOUND_SCANS = 1_000_000
+
+
 class Runner:
     """Scans a VM and records, after every scan, the listed variables."""
 
@@ -276,8 +284,9 @@ class Runner:
                 time.sleep(0)   # let the robot's server thread run (the VM clock is virtual)
         return self.trace[-1]
 
-    def run_until(self, predicate: Callable[[Sample], bool], max_scans: int = 20000,
+    def run_until(self, predicate: Callable[[Sample], bool], max_scans: int = WALL_BOUND_SCANS,
                   what: str = "condition", timeout_s: float = 20.0) -> Sample:
+        """Scan until `predicate` holds, at most `max_scans` scans and `timeout_s` of wall time."""
         deadline = time.monotonic() + timeout_s
         for _ in range(max_scans):
             sample = self.step()
@@ -630,10 +639,10 @@ class Bench:
         self.vm.set(f"T.{FB_PINS[inst or self.inst][0]}", value)
         return self.vm.scan_count
 
-    def until(self, predicate, what: str = "condition", max_scans: int = 20000) -> Sample:
+    def until(self, predicate, what: str = "condition", max_scans: int = WALL_BOUND_SCANS) -> Sample:
         return self.runner.run_until(predicate, max_scans=max_scans, what=what)
 
-    def until_end(self, max_scans: int = 20000) -> Sample:
+    def until_end(self, max_scans: int = WALL_BOUND_SCANS) -> Sample:
         return self.until(lambda s: s["Done"] or s["Error"], "Done or Error", max_scans)
 
     def scans(self, n: int) -> Sample:
