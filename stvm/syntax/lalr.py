@@ -549,6 +549,23 @@ def _chain_plan(steps):
     return _generated("\n".join(lines) + "\n", constants)
 
 
+class _OneChildRun(dict):
+    """The action of a one-child reduction (`plan`: a `?rule` pass-through's goto dict or an
+    `_ONE` plan) in `state` on lookahead `ttype`: a run of such reductions only changes the top
+    of the stack, and its course depends on the state below it, so this maps that state to the
+    run's (final state, function or None) (Driver._chain), worked out on first use."""
+
+    __slots__ = ("driver", "state", "ttype", "plan")
+
+    def __init__(self, driver, state: int, ttype: str, plan) -> None:
+        super().__init__()
+        self.driver, self.state, self.ttype, self.plan = driver, state, ttype, plan
+
+    def __missing__(self, below: int) -> tuple:
+        run = self[below] = self.driver._chain(below, self.state, self.ttype)
+        return run
+
+
 class Driver:
     """Built once per Lark object, start symbol and callback class; `parse(text, handler)`
     runs it. `handler_type` has one function per rule name (or alias) taking
@@ -612,7 +629,9 @@ class Driver:
                     if sym.isupper() and sym != "$END":   # Lark never shifts $END: no entry, Fallback
                         row[sym] = arg
                 else:
-                    row[sym] = plans[id(arg)]
+                    plan = plans[id(arg)]
+                    one_child = plan.__class__ is dict or (plan.__class__ is tuple and plan[0] == _ONE)
+                    row[sym] = _OneChildRun(self, s, sym, plan) if one_child else plan
             self.actions.append(row)
 
         # per-state scanners: Lark's BasicLexer for that state
@@ -635,7 +654,6 @@ class Driver:
         # a skip run at the start of the text (later ones are matched as the tail of a token)
         self.skip_leading = re.compile(f"(?:{skip.pattern.to_regexp()})?+").match if skip is not None else None
         self.scanners = scanners
-        self._chains: dict[tuple, tuple] = {}
 
     @staticmethod
     def _skip_terminal(lexers, user_callbacks):
@@ -689,13 +707,16 @@ class Driver:
         # mid-parse raises Unsupported there, and that text goes to Lark's parser (parser.py)
         return (_ByFirstChar(terminals, tail, basic.g_regex_flags), special)
 
-    def _chain(self, key):
+    def _chain(self, below: int, state: int, ttype: str) -> tuple:
         """(final state, its reductions as a function or None) of the run of one-child reductions
-        from `key` = (state below, top state, lookahead); memoised."""
-        below, state, ttype = key
+        in `state` on lookahead `ttype` with `below` the state under it."""
         steps = []
         while True:
             act = self.actions[state].get(ttype)
+            if act.__class__ is _OneChildRun:
+                act = act.plan
+            else:
+                break
             if act.__class__ is dict:
                 nxt = act.get(below)
             elif act.__class__ is tuple and act[0] == _ONE:
@@ -709,8 +730,7 @@ class Driver:
             state = nxt
             if state == self.end_state:
                 break
-        chain = self._chains[key] = (state, _chain_plan(steps))
-        return chain
+        return state, _chain_plan(steps)
 
     # ---- build time --------------------------------------------------------------------------
 
@@ -827,15 +847,14 @@ class Driver:
         bisect = bisect_right
         int_ = int
         function_ = FunctionType
-        chains = self._chains
         retype_cls = _Retype
         ignored = _IGNORED
         m = None
         end = 0
         if self.skip_leading is not None:
             pos = self.skip_leading(text, 0).end()
+        state = self.start_state
         while True:
-            state = states[-1]
             # ---- next token, with the scanner of the current state
             match, special = scanners[state]
             while True:
@@ -868,6 +887,7 @@ class Driver:
                 cls = act.__class__
                 if cls is int_:                                         # shift
                     states.append(act)
+                    state = act
                     if ttype in kept:
                         value = text[pos:end]
                         tok = new_str(lazy_cls, value)
@@ -887,14 +907,8 @@ class Driver:
                     if state == end_state:
                         return values[-1]
                     continue
-                # a run of one-child reductions (`?rule` pass-throughs and one-child trees) only
-                # changes the top of the stack; its course depends on the state below and the
-                # lookahead, so it is worked out once and replayed
-                key = (states[-2], state, ttype)
-                try:
-                    final, run = chains[key]
-                except KeyError:
-                    final, run = self._chain(key)
+                # a run of one-child reductions (an _OneChildRun): worked out once per state below
+                final, run = act[states[-2]]
                 if run is not None:
                     run(states, values, spans, lines, handler)
                 states[-1] = state = final
