@@ -172,9 +172,9 @@ class _ToNodes:
                      methods=methods, properties=properties, name_span=self._ts(name))
 
     def pou_body(self, meta, items):
-        statements = tuple(s for s in items if isinstance(s, n.Statement) and not isinstance(s, n.Empty))
-        methods = tuple(m for m in items if isinstance(m, n.Method))
-        properties = tuple(m for m in items if isinstance(m, n.Property))
+        statements = tuple([s for s in items if isinstance(s, n.Statement) and not isinstance(s, n.Empty)])
+        methods = tuple([m for m in items if isinstance(m, n.Method)])
+        properties = tuple([m for m in items if isinstance(m, n.Property)])
         return statements, methods, properties
 
     def extends_clause(self, meta, items):
@@ -235,8 +235,8 @@ class _ToNodes:
 
     def var_block(self, meta, items):
         kind = items[0]
-        quals = tuple(q for q in items[1:] if isinstance(q, str))
-        decls = tuple(d for d in items[1:] if isinstance(d, n.VarDecl))
+        quals = tuple([q for q in items[1:] if isinstance(q, str)])
+        decls = tuple([d for d in items[1:] if isinstance(d, n.VarDecl)])
         return n.VarBlock(kind, quals, decls, self._s(meta))
 
     def var_kind(self, meta, items):
@@ -262,7 +262,7 @@ class _ToNodes:
         return n.VarDecl(names, type_spec, init, self._s(meta), args)
 
     def ident_list(self, meta, items):
-        return tuple((str(t), self._ts(t)) for t in items)
+        return tuple([(str(t), self._ts(t)) for t in items])
 
     def location(self, meta, items):
         return ("location", str(items[0]))
@@ -542,7 +542,7 @@ class _ToNodes:
         return n.Index(items[0], tuple(items[1:]), self._s(meta))
 
     def call(self, meta, items):
-        args = tuple(a for a in items[1:] if a is not None)
+        args = tuple([a for a in items[1:] if a is not None])
         return n.Call(items[0], args, self._s(meta))
 
     def partial_access(self, meta, items):
@@ -557,7 +557,7 @@ class _ToNodes:
         # MOD(a, b), AND(a, b, …): the operators' function forms call the stdlib's `__MOD`, `__AND`
         word = items[0]
         callee = n.Name(("__" + str(word).upper(),), False, _tok_span(self.file, word))
-        return n.Call(callee, tuple(a for a in items[1:] if a is not None), self._s(meta))
+        return n.Call(callee, tuple([a for a in items[1:] if a is not None]), self._s(meta))
 
     def deref(self, meta, items):
         return n.Deref(items[0], self._s(meta))
