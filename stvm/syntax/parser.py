@@ -118,20 +118,28 @@ class _ToNodes:
         self.file = file
         self.settings = settings
         self.diagnostics = diagnostics
+        self._line: tuple = (None, 0, 0, 0)   # (line starts, offsets lo, hi, line number) of _s's last line
 
     def _s(self, meta) -> n.Span:
         if meta.__class__ is _Meta2:
             start, end, lines = meta
             if start < 0:
                 return n.Span(self.file, 0, 0, 0, 0)
-            li = bisect_right(lines, start)
-            # most spans end on the line they start on (lines[li] exists: the last entry is past the text)
-            lj = li if end < lines[li] else bisect_right(lines, end, li)
-            try:   # one int object per line number, shared by all spans (memory; see _intern_lines)
-                li, lj = _INTS[li], _INTS[lj]
-            except IndexError:
-                pass
-            return n.Span(self.file, li, start - lines[li - 1] + 1, lj, end - lines[lj - 1] + 1)
+            # the line the previous span started on, offsets lo..hi-1: most nodes start on the
+            # line the one before them started on, so most spans need no search
+            known, lo, hi, li = self._line
+            if start >= hi or start < lo or known is not lines:
+                li = bisect_right(lines, start)   # (lines[li] exists: the last entry is past the text)
+                lo, hi = lines[li - 1], lines[li]
+                if li < len(_INTS):   # one int object per line number, shared by all spans (memory; see _intern_lines)
+                    li = _INTS[li]
+                self._line = (lines, lo, hi, li)
+            if end < hi:   # most spans end on the line they start on
+                return n.Span(self.file, li, start - lo + 1, li, end - lo + 1)
+            lj = bisect_right(lines, end, li)
+            if lj < len(_INTS):
+                lj = _INTS[lj]
+            return n.Span(self.file, li, start - lo + 1, lj, end - lines[lj - 1] + 1)
         return _span_of(self.file, meta)
 
     def _ts(self, tok: Token) -> n.Span:
