@@ -611,7 +611,7 @@ class Driver:
                     gotos.setdefault(sym, {})[s] = arg
 
         inline_min = self._min_inline_children(rule_list)
-        carry = self._inlines_needing_spans(rule_list)
+        carry = self._inlines_needing_spans(rule_list, inline_min)
         self.kept_terminals: set[str] = set()
         plans = {id(r): self._plan(r, gotos.get(r.origin.name, {}), inline_min, carry, handler_type)
                  for r in rule_list}
@@ -772,15 +772,22 @@ class Driver:
                     changed = True
         return best
 
-    def _inlines_needing_spans(self, rules) -> set[str]:
+    def _fewest_children(self, rule, inline_min) -> float:
+        """Fewest children a rule's callback can get (its `_rule` children spliced in)."""
+        keep, tail = self._keep(rule)
+        return tail + sum(nb + (inline_min.get(rule.expansion[i].name, 0) if inl else 1) for i, inl, nb in keep)
+
+    def _inlines_needing_spans(self, rules, inline_min) -> set[str]:
         """`_rules` whose children may become a `?rule`'s only child, which then needs each
-        child's position (token, tree or None)."""
+        child's position (token, tree or None). A `?rule` that always has more than one child
+        (`expression`: an operand, then operators and operands) never needs them."""
         need: set[str] = set()
         changed = True
         while changed:
             changed = False
             for r in rules:
-                if not (r.options.expand1 and not r.alias) and r.origin.name not in need:
+                if r.origin.name not in need and not (r.options.expand1 and not r.alias
+                                                      and self._fewest_children(r, inline_min) <= 1):
                     continue
                 for i, inl, _nb in self._keep(r)[0]:
                     name = r.expansion[i].name
@@ -821,10 +828,7 @@ class Driver:
         else:
             keep_idx = tuple(keep)
         # can this ?rule end up with a single child (then the child's position kind matters)?
-        single = False
-        if expand1:
-            lo = tail + sum(nb + (inline_min.get(expansion[i].name, 0) if inl else 1) for i, inl, nb in keep)
-            single = lo <= 1
+        single = expand1 and self._fewest_children(rule, inline_min) <= 1
         return (_GENERAL, goto, size, name, simple, keep_idx, single, inline, tail, carry, fn, nts)
 
     # ---- run time ----------------------------------------------------------------------------
