@@ -549,6 +549,19 @@ def _chain_plan(steps):
     return _generated("\n".join(lines) + "\n", constants)
 
 
+def _on_first_use(plan: tuple, rows: list):
+    """A stand-in for the function of a `_GENERAL` or `_APPEND` plan: makes it, puts it in
+    its place in the action `rows` it stands in and runs it."""
+    def first_use(states, values, spans, lines, handler):
+        fn = _general_plan(*plan[1:]) if plan[0] == _GENERAL else _append_plan(*plan[1:])
+        for row in rows:
+            for sym, act in row.items():
+                if act is first_use:
+                    row[sym] = fn
+        return fn(states, values, spans, lines, handler)
+    return first_use
+
+
 class _OneChildRun(dict):
     """The action of a one-child reduction (`plan`: a `?rule` pass-through's goto dict or an
     `_ONE` plan) in `state` on lookahead `ttype`: a run of such reductions only changes the top
@@ -615,12 +628,13 @@ class Driver:
         self.kept_terminals: set[str] = set()
         plans = {id(r): self._plan(r, gotos.get(r.origin.name, {}), inline_min, carry, handler_type)
                  for r in rule_list}
-        for key, plan in plans.items():   # the reductions of more than one child, as functions
-            if plan.__class__ is tuple and plan[0] == _GENERAL:
-                plans[key] = _general_plan(*plan[1:])
-            elif plan.__class__ is tuple and plan[0] == _APPEND:
-                plans[key] = _append_plan(*plan[1:])
-        # one row per state: terminal -> shift target (int), PASS goto (dict) or a plan (tuple)
+        # the reductions of more than one child: functions made on first use (making all of
+        # them here doubled the Driver's build, and a parse meets a fraction of the rules)
+        uses: dict[int, list] = {}   # plan id -> the rows it stands in
+        stand_ins = {key: _on_first_use(plan, uses.setdefault(key, [])) for key, plan in plans.items()
+                     if plan.__class__ is tuple and plan[0] in (_GENERAL, _APPEND)}
+        # one row per state: terminal -> shift target (int), a reduction (function) or a run of
+        # one-child reductions (_OneChildRun)
         self.actions = []
         for s in range(n_states):
             row = {}
@@ -628,10 +642,13 @@ class Driver:
                 if action is Shift:
                     if sym.isupper() and sym != "$END":   # Lark never shifts $END: no entry, Fallback
                         row[sym] = arg
+                elif id(arg) in stand_ins:
+                    row[sym] = stand_ins[id(arg)]
+                    rows = uses[id(arg)]
+                    if not rows or rows[-1] is not row:
+                        rows.append(row)
                 else:
-                    plan = plans[id(arg)]
-                    one_child = plan.__class__ is dict or (plan.__class__ is tuple and plan[0] == _ONE)
-                    row[sym] = _OneChildRun(self, s, sym, plan) if one_child else plan
+                    row[sym] = _OneChildRun(self, s, sym, plans[id(arg)])
             self.actions.append(row)
 
         # per-state scanners: Lark's BasicLexer for that state
@@ -782,12 +799,13 @@ class Driver:
         child's position (token, tree or None). A `?rule` that always has more than one child
         (`expression`: an operand, then operators and operands) never needs them."""
         need: set[str] = set()
+        may_be_single = {id(r) for r in rules if r.options.expand1 and not r.alias
+                         and self._fewest_children(r, inline_min) <= 1}
         changed = True
         while changed:
             changed = False
             for r in rules:
-                if r.origin.name not in need and not (r.options.expand1 and not r.alias
-                                                      and self._fewest_children(r, inline_min) <= 1):
+                if r.origin.name not in need and id(r) not in may_be_single:
                     continue
                 for i, inl, _nb in self._keep(r)[0]:
                     name = r.expansion[i].name
