@@ -372,10 +372,11 @@ def _regex_first_chars(regex: str) -> frozenset:
 
 
 # ---- reductions as generated functions -----------------------------------------------------------
-# Each rule's reduction is a small function made from its plan (Driver._plan) when the Driver is
-# built: the child filter, the positions and the tree depth written out for that rule's shape, so a
-# reduction runs only the steps its rule needs instead of testing every option of every rule (the
-# plan interpreter this replaces was a third of the parse). Rules of one shape share one code object.
+# Each rule's reduction is a small function made from its plan (Driver._plan) on its first use
+# (_on_first_use): the child filter, the positions and the tree depth written out for that rule's
+# shape, so a reduction runs only the steps its rule needs instead of testing every option of every
+# rule (the plan interpreter this replaces was a third of the parse). Rules of one shape share one
+# code object.
 
 _PLAN_CODE: dict[str, Any] = {}   # source of a generated reduction -> its compiled code
 _GENERATED_NAMES = {"Fallback": Fallback, "MAX_DEPTH": MAX_DEPTH, "Meta2": Meta2, "new_meta": tuple.__new__,
