@@ -133,6 +133,19 @@ class BodyChecker:
     # `checker`: the Checker that runs this body check (stvm.semantics.checker imports this module)
     # calls whose result rule rejected the arguments (reported once: no "cannot infer" after it)
     rejected_calls: frozenset[int] = frozenset()
+    # per checker class (a subclass gets its own): node class -> its stmt_… / expr_… function,
+    # looked up once instead of building the name and a bound method per node
+    _stmt_methods: dict[type, Any] = {}
+    _expr_methods: dict[type, Any] = {}
+
+    def __init_subclass__(cls, **kwargs) -> None:
+        super().__init_subclass__(**kwargs)
+        cls._stmt_methods, cls._expr_methods = {}, {}
+
+    @classmethod
+    def _method(cls, table: dict[type, Any], prefix: str, node_cls: type):
+        method = table[node_cls] = getattr(cls, prefix + node_cls.__name__)
+        return method
 
     def __init__(self, checker: Any, pou: POUInfo, node, fb: POUInfo | None = None,
                  fb_node: n.POU | None = None) -> None:
@@ -166,8 +179,10 @@ class BodyChecker:
             self.statement(stmt)
 
     def statement(self, s: n.Statement) -> None:
-        method = getattr(self, "stmt_" + type(s).__name__)
-        method(s)
+        method = self._stmt_methods.get(s.__class__)
+        if method is None:
+            method = self._method(self._stmt_methods, "stmt_", s.__class__)
+        method(self, s)
 
     def stmt_Assign(self, s: n.Assign) -> None:
         self.en_call = s.value   # EN/ENO are allowed on this call (bind_en_eno)
@@ -545,8 +560,10 @@ class BodyChecker:
 
     # ---- expressions
     def expr(self, e: n.Expr, expected: t.Type | None = None, statement: bool = False) -> t.Type | None:
-        method = getattr(self, "expr_" + type(e).__name__)
-        ty = method(e, expected) if not isinstance(e, n.Call) else self.expr_Call(e, expected, statement)
+        method = self._expr_methods.get(e.__class__)
+        if method is None:
+            method = self._method(self._expr_methods, "expr_", e.__class__)
+        ty = method(self, e, expected) if not isinstance(e, n.Call) else self.expr_Call(e, expected, statement)
         if ty is not None:
             self.facts.types[e.nid] = ty
         return ty

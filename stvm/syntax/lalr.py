@@ -43,6 +43,7 @@ import re._parser as _sre_parse
 from bisect import bisect_right
 from itertools import accumulate
 from operator import itemgetter
+from types import FunctionType
 from typing import Any
 
 from lark import Lark, Token, Tree
@@ -370,6 +371,215 @@ def _regex_first_chars(regex: str) -> frozenset:
     return frozenset(chr(i) for i in range(128) if parsed is None or _may_start_with(parsed, frozenset(chr(i)))[0])
 
 
+# ---- reductions as generated functions -----------------------------------------------------------
+# Each rule's reduction is a small function made from its plan (Driver._plan) on its first use
+# (_on_first_use): the child filter, the positions and the tree depth written out for that rule's
+# shape, so a reduction runs only the steps its rule needs instead of testing every option of every
+# rule (the plan interpreter this replaces was a third of the parse). Rules of one shape share one
+# code object.
+
+_PLAN_CODE: dict[str, Any] = {}   # source of a generated reduction -> its compiled code
+_GENERATED_NAMES = {"Fallback": Fallback, "MAX_DEPTH": MAX_DEPTH, "Meta2": Meta2, "new_meta": tuple.__new__,
+                    "Inline": Inline, "Tree": Tree, "_lark_meta": _lark_meta}
+
+
+def _generated(source: str, constants: dict):
+    """The function `plan` that `source` defines, its free names bound to `constants`."""
+    code = _PLAN_CODE.get(source)
+    if code is None:
+        code = _PLAN_CODE[source] = compile(source, "<stvm.syntax.lalr reduction>", "exec")
+    scope = dict(_GENERATED_NAMES, **constants)
+    exec(code, scope)   # noqa: S102 (source made here from the grammar's rule shapes)
+    return scope["plan"]
+
+
+def _first_with_position(indices, nts) -> str:
+    """`s_i or s_j or …`: the first span of the children at `indices` that has a position; a
+    token always has one, so the chain stops at the first terminal."""
+    out = []
+    for i in indices:
+        out.append(f"s{i}")
+        if i not in nts:
+            break
+    return " or ".join(out)
+
+
+def _children_source(pieces, tail: int, value: str, inlined: str, placeholder: str) -> str:
+    """A list display of the kept children (`value` % i), the spliced children of inlined ones
+    (`inlined` % i) and the placeholders of `[ ]` (Lark's ChildFilter)."""
+    items = []
+    for i, to_expand, add_none in pieces:
+        items += [placeholder] * add_none
+        items.append(("*" + inlined if to_expand else value) % i)
+    items += [placeholder] * tail
+    return "[" + ", ".join(items) + "]"
+
+
+def _take_children(size: int, lines: list[str]) -> None:
+    """Read the top `size` values and spans into v0… and s0…"""
+    if size == 1:
+        lines += ["    v0 = values[-1]", "    s0 = spans[-1]"]
+    elif size:
+        names = ", ".join(f"v{i}" for i in range(size))
+        spans = ", ".join(f"s{i}" for i in range(size))
+        lines += [f"    {names}, = values[-{size}:]", f"    {spans}, = spans[-{size}:]"]
+
+
+def _push_source(size: int, value: str, span: str, lines: list[str]) -> None:
+    """Replace the top `size` entries of the stacks by the reduction's (goto state, value, span)."""
+    if size:
+        lines.append(f"    state = goto[states[-{size + 1}]]")
+        if size > 1:
+            lines.append(f"    del states[-{size - 1}:], values[-{size - 1}:], spans[-{size - 1}:]")
+        lines += ["    states[-1] = state", f"    values[-1] = {value}", f"    spans[-1] = {span}"]
+    else:
+        lines += ["    state = goto[states[-1]]", "    states.append(state)", f"    values.append({value})",
+                  f"    spans.append({span})"]
+    lines.append("    return state")
+
+
+def _depth_source(nts, lines: list[str]) -> bool:
+    """`d = ` the deepest child tree's depth (tokens have depth 0); False when it is always 0."""
+    if not nts:
+        lines.append("    d = 0")
+        return False
+    first, *others = nts
+    lines.append(f"    d = s{first}[2] if s{first} else 0")
+    for i in others:
+        lines.append(f"    if s{i} and s{i}[2] > d: d = s{i}[2]")
+    return True
+
+
+def _positions_source(size: int, nts, lines: list[str]) -> bool:
+    """`a`, `b`: the first and last child spans with a position (Lark's PropagatePositions), or
+    falsy; True when some child is a token (then they always have one)."""
+    if not size:
+        lines.append("    a = b = None")
+        return False
+    lines.append(f"    a = {_first_with_position(range(size), nts)}")
+    lines.append(f"    b = {_first_with_position(range(size - 1, -1, -1), nts)}")
+    return len(nts) < size
+
+
+def _general_plan(goto, size, name, simple, keep_idx, single, inline, tail, carry, fn, nts):
+    """The reduction of a rule (`_GENERAL` plan) as a function of the parse stacks."""
+    nts = frozenset(nts)
+    pieces = [(i, False, 0) for i in (range(size) if keep_idx is None else keep_idx)] if simple else list(keep_idx)
+    lines = ["def plan(states, values, spans, lines, handler):"]
+    _take_children(size, lines)
+    certain = _positions_source(size, nts, lines)
+    deep = _depth_source(sorted(nts), lines)
+    if len(pieces) == 1 and pieces[0][1] and not pieces[0][2] and not tail:
+        lines.append(f"    children = v{pieces[0][0]}.children")       # one inlined rule's children as they are
+    else:
+        lines.append(f"    children = {_children_source(pieces, tail, 'v%d', 'v%d.children', 'None')}")
+    expanded = any(to_expand for _i, to_expand, _n in pieces)
+    ones = len(pieces) + tail + sum(n for _i, _e, n in pieces) == 1   # always one child
+    if carry or (single and (expanded or ones)):
+        lines.append(f"    cspans = {_children_source(pieces, tail, 's%d', 'v%d.spans', 'False')}")
+    tree = []   # the rule's own node
+    if deep:
+        tree.append("if d >= MAX_DEPTH - 1: raise Fallback")
+    call = "fn(handler, meta, children)" if fn is not None else "Tree(name, children, _lark_meta(meta))"
+    if certain:
+        tree += ["meta = new_meta(Meta2, (a[0], b[1], lines))", "span = (a[0], b[1], d + 1)"]
+    else:
+        tree += ["if a:", "    meta = new_meta(Meta2, (a[0], b[1], lines))", "    span = (a[0], b[1], d + 1)",
+                 "else:", "    meta = new_meta(Meta2, (-1, -1, lines))", "    span = None"]
+    tree.append(f"value = {call}")
+    if inline:
+        tree = [f"value = Inline(children, {'cspans' if carry else 'None'})",
+                "span = (a[0], b[1], d)" + ("" if certain else " if a else None")]
+    # a ?rule with one child returns it; positions as Lark propagates them
+    one = ["value = children[0]", "csp = cspans[0]", "if csp is False or csp is None:",
+           "    if csp is None and a: raise Fallback   # Lark would give the empty child tree a position here",
+           "    span = csp", "elif csp[2] == 0:", "    span = csp       # a token keeps its own position",
+           "else:", "    span = (a[0], b[1], csp[2])"]
+    if single and expanded:
+        lines.append("    if len(children) == 1:")
+        lines += ["        " + line for line in one]
+        lines.append("    else:")
+        lines += ["        " + line for line in tree]
+    else:
+        lines += ["    " + line for line in (one if single and ones else tree)]
+    _push_source(size, "value", "span", lines)
+    return _generated("\n".join(lines) + "\n", {"goto": goto, "fn": fn, "name": name})
+
+
+def _append_plan(goto, rest, size, carry, nts):
+    """The reduction of an `_rule` that adds children to the inlined list it starts with (`_APPEND`)."""
+    nts = frozenset(nts)
+    lines = ["def plan(states, values, spans, lines, handler):"]
+    _take_children(size, lines)
+    lines.append("    children = v0.children")
+    lines += [f"    children.append(v{i})" for i in rest]
+    if carry:
+        lines.append("    cspans = v0.spans")
+        lines += [f"    cspans.append(s{i})" for i in rest]
+    certain = _positions_source(size, nts, lines)
+    _depth_source(sorted(nts), lines)
+    _push_source(size, "v0", "(a[0], b[1], d)" + ("" if certain else " if a else None"), lines)
+    return _generated("\n".join(lines) + "\n", {"goto": goto})
+
+
+def _chain_plan(steps):
+    """A run of one-child reductions ([(callback or _PASS, rule name)]) as a function of the top
+    of the stacks, or None when it changes nothing but the state."""
+    if not steps:
+        return None
+    k = len(steps)
+    calls = []
+    constants = {}
+    for j, (fn, name) in enumerate(steps):
+        if fn is _PASS:
+            continue
+        constants[f"fn{j}"], constants[f"name{j}"] = fn, name
+        calls.append(f"v = fn{j}(handler, meta, [v])" if fn is not None else
+                     f"v = Tree(name{j}, [v], _lark_meta(meta))")
+    lines = ["def plan(states, values, spans, lines, handler):", "    sp = spans[-1]", "    if sp:",
+             f"        d = sp[2] + {k}", "        if d >= MAX_DEPTH: raise Fallback"]
+    if calls:
+        lines += ["        meta = new_meta(Meta2, (sp[0], sp[1], lines))", "        v = values[-1]"]
+        lines += ["        " + c for c in calls]
+        lines.append("        values[-1] = v")
+    lines.append("        spans[-1] = (sp[0], sp[1], d)")
+    if calls:
+        lines += ["    else:", "        meta = new_meta(Meta2, (-1, -1, lines))", "        v = values[-1]"]
+        lines += ["        " + c for c in calls]
+        lines.append("        values[-1] = v")
+    return _generated("\n".join(lines) + "\n", constants)
+
+
+def _on_first_use(plan: tuple, rows: list):
+    """A stand-in for the function of a `_GENERAL` or `_APPEND` plan: makes it, puts it in
+    its place in the action `rows` it stands in and runs it."""
+    def first_use(states, values, spans, lines, handler):
+        fn = _general_plan(*plan[1:]) if plan[0] == _GENERAL else _append_plan(*plan[1:])
+        for row in rows:
+            for sym, act in row.items():
+                if act is first_use:
+                    row[sym] = fn
+        return fn(states, values, spans, lines, handler)
+    return first_use
+
+
+class _OneChildRun(dict):
+    """The action of a one-child reduction (`plan`: a `?rule` pass-through's goto dict or an
+    `_ONE` plan) in `state` on lookahead `ttype`: a run of such reductions only changes the top
+    of the stack, and its course depends on the state below it, so this maps that state to the
+    run's (final state, function or None) (Driver._chain), worked out on first use."""
+
+    __slots__ = ("driver", "state", "ttype", "plan")
+
+    def __init__(self, driver, state: int, ttype: str, plan) -> None:
+        super().__init__()
+        self.driver, self.state, self.ttype, self.plan = driver, state, ttype, plan
+
+    def __missing__(self, below: int) -> tuple:
+        run = self[below] = self.driver._chain(below, self.state, self.ttype)
+        return run
+
+
 class Driver:
     """Built once per Lark object, start symbol and callback class; `parse(text, handler)`
     runs it. `handler_type` has one function per rule name (or alias) taking
@@ -415,11 +625,17 @@ class Driver:
                     gotos.setdefault(sym, {})[s] = arg
 
         inline_min = self._min_inline_children(rule_list)
-        carry = self._inlines_needing_spans(rule_list)
+        carry = self._inlines_needing_spans(rule_list, inline_min)
         self.kept_terminals: set[str] = set()
         plans = {id(r): self._plan(r, gotos.get(r.origin.name, {}), inline_min, carry, handler_type)
                  for r in rule_list}
-        # one row per state: terminal -> shift target (int), PASS goto (dict) or a plan (tuple)
+        # the reductions of more than one child: functions made on first use (making all of
+        # them here doubled the Driver's build, and a parse meets a fraction of the rules)
+        uses: dict[int, list] = {}   # plan id -> the rows it stands in
+        stand_ins = {key: _on_first_use(plan, uses.setdefault(key, [])) for key, plan in plans.items()
+                     if plan.__class__ is tuple and plan[0] in (_GENERAL, _APPEND)}
+        # one row per state: terminal -> shift target (int), a reduction (function) or a run of
+        # one-child reductions (_OneChildRun)
         self.actions = []
         for s in range(n_states):
             row = {}
@@ -427,8 +643,13 @@ class Driver:
                 if action is Shift:
                     if sym.isupper() and sym != "$END":   # Lark never shifts $END: no entry, Fallback
                         row[sym] = arg
+                elif id(arg) in stand_ins:
+                    row[sym] = stand_ins[id(arg)]
+                    rows = uses[id(arg)]
+                    if not rows or rows[-1] is not row:
+                        rows.append(row)
                 else:
-                    row[sym] = plans[id(arg)]
+                    row[sym] = _OneChildRun(self, s, sym, plans[id(arg)])
             self.actions.append(row)
 
         # per-state scanners: Lark's BasicLexer for that state
@@ -451,7 +672,6 @@ class Driver:
         # a skip run at the start of the text (later ones are matched as the tail of a token)
         self.skip_leading = re.compile(f"(?:{skip.pattern.to_regexp()})?+").match if skip is not None else None
         self.scanners = scanners
-        self._chains: dict[tuple, tuple] = {}
 
     @staticmethod
     def _skip_terminal(lexers, user_callbacks):
@@ -505,13 +725,16 @@ class Driver:
         # mid-parse raises Unsupported there, and that text goes to Lark's parser (parser.py)
         return (_ByFirstChar(terminals, tail, basic.g_regex_flags), special)
 
-    def _chain(self, key):
-        """(final state, [(callback, name)] of the one-child trees) of the run of one-child
-        reductions from `key` = (state below, top state, lookahead); memoised."""
-        below, state, ttype = key
+    def _chain(self, below: int, state: int, ttype: str) -> tuple:
+        """(final state, its reductions as a function or None) of the run of one-child reductions
+        in `state` on lookahead `ttype` with `below` the state under it."""
         steps = []
         while True:
             act = self.actions[state].get(ttype)
+            if act.__class__ is _OneChildRun:
+                act = act.plan
+            else:
+                break
             if act.__class__ is dict:
                 nxt = act.get(below)
             elif act.__class__ is tuple and act[0] == _ONE:
@@ -525,8 +748,7 @@ class Driver:
             state = nxt
             if state == self.end_state:
                 break
-        chain = self._chains[key] = (state, tuple(steps))
-        return chain
+        return state, _chain_plan(steps)
 
     # ---- build time --------------------------------------------------------------------------
 
@@ -568,15 +790,23 @@ class Driver:
                     changed = True
         return best
 
-    def _inlines_needing_spans(self, rules) -> set[str]:
+    def _fewest_children(self, rule, inline_min) -> float:
+        """Fewest children a rule's callback can get (its `_rule` children spliced in)."""
+        keep, tail = self._keep(rule)
+        return tail + sum(nb + (inline_min.get(rule.expansion[i].name, 0) if inl else 1) for i, inl, nb in keep)
+
+    def _inlines_needing_spans(self, rules, inline_min) -> set[str]:
         """`_rules` whose children may become a `?rule`'s only child, which then needs each
-        child's position (token, tree or None)."""
+        child's position (token, tree or None). A `?rule` that always has more than one child
+        (`expression`: an operand, then operators and operands) never needs them."""
         need: set[str] = set()
+        may_be_single = {id(r) for r in rules if r.options.expand1 and not r.alias
+                         and self._fewest_children(r, inline_min) <= 1}
         changed = True
         while changed:
             changed = False
             for r in rules:
-                if not (r.options.expand1 and not r.alias) and r.origin.name not in need:
+                if r.origin.name not in need and id(r) not in may_be_single:
                     continue
                 for i, inl, _nb in self._keep(r)[0]:
                     name = r.expansion[i].name
@@ -617,10 +847,7 @@ class Driver:
         else:
             keep_idx = tuple(keep)
         # can this ?rule end up with a single child (then the child's position kind matters)?
-        single = False
-        if expand1:
-            lo = tail + sum(nb + (inline_min.get(expansion[i].name, 0) if inl else 1) for i, inl, nb in keep)
-            single = lo <= 1
+        single = expand1 and self._fewest_children(rule, inline_min) <= 1
         return (_GENERAL, goto, size, name, simple, keep_idx, single, inline, tail, carry, fn, nts)
 
     # ---- run time ----------------------------------------------------------------------------
@@ -638,24 +865,19 @@ class Driver:
         spans: list = []
         pos = 0
         new_str = _new_str
-        new_meta = tuple.__new__
         token_cls = Token
         lazy_cls = LazyToken
         bisect = bisect_right
-        max_depth = MAX_DEPTH
         int_ = int
-        dict_ = dict
-        tuple_ = tuple
-        chains = self._chains
+        function_ = FunctionType
         retype_cls = _Retype
         ignored = _IGNORED
-        pass_ = _PASS
         m = None
         end = 0
         if self.skip_leading is not None:
             pos = self.skip_leading(text, 0).end()
+        state = self.start_state
         while True:
-            state = states[-1]
             # ---- next token, with the scanner of the current state
             match, special = scanners[state]
             while True:
@@ -688,6 +910,7 @@ class Driver:
                 cls = act.__class__
                 if cls is int_:                                         # shift
                     states.append(act)
+                    state = act
                     if ttype in kept:
                         value = text[pos:end]
                         tok = new_str(lazy_cls, value)
@@ -702,184 +925,18 @@ class Driver:
                     spans.append((pos, end, 0))
                     pos = m.end()
                     break
-                if cls is dict_ or (cls is tuple_ and act[0] == _ONE):
-                    # a run of one-child reductions (`?rule` pass-throughs and one-child trees)
-                    # only changes the top of the stack; its course depends on the state below
-                    # and the lookahead, so it is worked out once and replayed
-                    key = (states[-2], state, ttype)
-                    try:
-                        chain = chains[key]
-                    except KeyError:
-                        chain = self._chain(key)
-                    final, steps = chain
-                    if steps:
-                        value = values[-1]
-                        sp = spans[-1]
-                        for fn, name in steps:
-                            if sp:
-                                depth = sp[2] + 1
-                                if depth >= max_depth:
-                                    raise Fallback
-                                if fn is pass_:
-                                    sp = (sp[0], sp[1], depth)
-                                    continue
-                                meta = new_meta(Meta2, (sp[0], sp[1], lines))
-                                sp = (sp[0], sp[1], depth)
-                            elif fn is pass_:
-                                continue
-                            else:
-                                meta = new_meta(Meta2, (-1, -1, lines))
-                            if fn is not None:
-                                value = fn(handler, meta, [value])
-                            else:
-                                value = Tree(name, [value], _lark_meta(meta))
-                        values[-1] = value
-                        spans[-1] = sp
-                    states[-1] = state = final
+                if cls is function_:                                    # reduce
+                    state = act(states, values, spans, lines, handler)
                     if state == end_state:
                         return values[-1]
                     continue
-                if act is None:
-                    raise Fallback
-                kind = act[0]
-                if kind == _APPEND:                                     # _rule: more children
-                    _k, goto, rest, size, carry, nts = act
-                    vals = values[-size:]
-                    sps = spans[-size:]
-                    del values[-size:], spans[-size:], states[-size:]
-                    inl = vals[0]
-                    children = inl.children
-                    for i in rest:
-                        children.append(vals[i])
-                    if carry:
-                        for i in rest:
-                            inl.spans.append(sps[i])
-                    a = sps[0]
-                    if not a:
-                        for a in sps:
-                            if a:
-                                break
-                    b = sps[-1]
-                    if not b:
-                        for b in reversed(sps):
-                            if b:
-                                break
-                    depth = 0
-                    for i in nts:
-                        sp = sps[i]
-                        if sp and sp[2] > depth:
-                            depth = sp[2]
-                    state = goto[states[-1]]
-                    states.append(state)
-                    values.append(inl)
-                    spans.append((a[0], b[1], depth) if a else None)
-                    continue
-                _k, goto, size, name, simple, keep_idx, single, inline, tail, carry, fn, nts = act
-                if size:
-                    vals = values[-size:]
-                    sps = spans[-size:]
-                    del values[-size:], spans[-size:], states[-size:]
-                    # Lark's PropagatePositions: first and last child with a position
-                    a = sps[0]
-                    if not a:
-                        for a in sps:
-                            if a:
-                                break
-                    b = sps[-1]
-                    if not b:
-                        for b in reversed(sps):
-                            if b:
-                                break
-                    depth = 0
-                    for i in nts:
-                        sp = sps[i]
-                        if sp and sp[2] > depth:
-                            depth = sp[2]
-                else:
-                    vals = []
-                    sps = ()
-                    a = b = None
-                    depth = 0
-                # ---- children (Lark's ChildFilter)
-                cspans = None
-                if simple:
-                    if keep_idx is None:
-                        children = vals
-                        if single or carry:
-                            cspans = sps
-                    else:
-                        children = [vals[i] for i in keep_idx]
-                        if single or carry:
-                            cspans = [sps[i] for i in keep_idx]
-                elif not (single or carry):
-                    children = []
-                    for i, to_expand, add_none in keep_idx:
-                        if add_none:
-                            children += [None] * add_none
-                        if to_expand:
-                            if children:
-                                children += vals[i].children
-                            else:
-                                children = vals[i].children
-                        else:
-                            children.append(vals[i])
-                    if tail:
-                        children += [None] * tail
-                else:
-                    children = []
-                    cspans = []
-                    for i, to_expand, add_none in keep_idx:
-                        if add_none:
-                            children += [None] * add_none
-                            cspans += [False] * add_none
-                        if to_expand:
-                            inl = vals[i]
-                            if children:
-                                children += inl.children
-                                cspans += inl.spans
-                            else:
-                                children = inl.children
-                                cspans = inl.spans
-                        else:
-                            children.append(vals[i])
-                            cspans.append(sps[i])
-                    if tail:
-                        children += [None] * tail
-                        cspans += [False] * tail
-                if single and len(children) == 1:
-                    # a ?rule with one child returns it; positions as Lark propagates them
-                    value = children[0]
-                    csp = cspans[0]
-                    if csp is False or csp is None:
-                        if csp is None and a:
-                            raise Fallback   # Lark would give the empty child tree a position here
-                        span = csp
-                    elif csp[2] == 0:
-                        span = csp       # a token keeps its own position
-                    else:
-                        span = (a[0], b[1], csp[2])
-                elif inline:
-                    value = Inline(children, cspans if carry else None)
-                    span = (a[0], b[1], depth) if a else None
-                else:
-                    if depth + 1 >= max_depth:
-                        raise Fallback
-                    if a:
-                        meta = new_meta(Meta2, (a[0], b[1], lines))
-                        span = (a[0], b[1], depth + 1)
-                    else:
-                        meta = new_meta(Meta2, (-1, -1, lines))
-                        span = None
-                    if fn is not None:
-                        value = fn(handler, meta, children)
-                    else:
-                        value = Tree(name, children, _lark_meta(meta))
-                state = goto[states[-1]]
-                states.append(state)
-                values.append(value)
-                spans.append(span)
+                # a run of one-child reductions (an _OneChildRun): worked out once per state below
+                final, run = act[states[-2]]
+                if run is not None:
+                    run(states, values, spans, lines, handler)
+                states[-1] = state = final
                 if state == end_state:
-                    return value
+                    return values[-1]
 
 
 def check_lark_internals(lark: Lark, handler_type: type = object) -> list[str]:

@@ -7,6 +7,7 @@ stages only see values.
 
 from __future__ import annotations
 
+import contextlib
 import gc
 import threading
 from bisect import bisect_right
@@ -118,20 +119,28 @@ class _ToNodes:
         self.file = file
         self.settings = settings
         self.diagnostics = diagnostics
+        self._line: tuple = (None, 0, 0, 0)   # (line starts, offsets lo, hi, line number) of _s's last line
 
     def _s(self, meta) -> n.Span:
         if meta.__class__ is _Meta2:
             start, end, lines = meta
             if start < 0:
                 return n.Span(self.file, 0, 0, 0, 0)
-            li = bisect_right(lines, start)
-            # most spans end on the line they start on (lines[li] exists: the last entry is past the text)
-            lj = li if end < lines[li] else bisect_right(lines, end, li)
-            try:   # one int object per line number, shared by all spans (memory; see _intern_lines)
-                li, lj = _INTS[li], _INTS[lj]
-            except IndexError:
-                pass
-            return n.Span(self.file, li, start - lines[li - 1] + 1, lj, end - lines[lj - 1] + 1)
+            # the line the previous span started on, offsets lo..hi-1: most nodes start on the
+            # line the one before them started on, so most spans need no search
+            known, lo, hi, li = self._line
+            if start >= hi or start < lo or known is not lines:
+                li = bisect_right(lines, start)   # (lines[li] exists: the last entry is past the text)
+                lo, hi = lines[li - 1], lines[li]
+                if li < len(_INTS):   # one int object per line number, shared by all spans (memory; see _intern_lines)
+                    li = _INTS[li]
+                self._line = (lines, lo, hi, li)
+            if end < hi:   # most spans end on the line they start on
+                return n.Span(self.file, li, start - lo + 1, li, end - lo + 1)
+            lj = bisect_right(lines, end, li)
+            if lj < len(_INTS):
+                lj = _INTS[lj]
+            return n.Span(self.file, li, start - lo + 1, lj, end - lines[lj - 1] + 1)
         return _span_of(self.file, meta)
 
     def _ts(self, tok: Token) -> n.Span:
@@ -172,9 +181,9 @@ class _ToNodes:
                      methods=methods, properties=properties, name_span=self._ts(name))
 
     def pou_body(self, meta, items):
-        statements = tuple(s for s in items if isinstance(s, n.Statement) and not isinstance(s, n.Empty))
-        methods = tuple(m for m in items if isinstance(m, n.Method))
-        properties = tuple(m for m in items if isinstance(m, n.Property))
+        statements = tuple([s for s in items if isinstance(s, n.Statement) and not isinstance(s, n.Empty)])
+        methods = tuple([m for m in items if isinstance(m, n.Method)])
+        properties = tuple([m for m in items if isinstance(m, n.Property)])
         return statements, methods, properties
 
     def extends_clause(self, meta, items):
@@ -235,8 +244,8 @@ class _ToNodes:
 
     def var_block(self, meta, items):
         kind = items[0]
-        quals = tuple(q for q in items[1:] if isinstance(q, str))
-        decls = tuple(d for d in items[1:] if isinstance(d, n.VarDecl))
+        quals = tuple([q for q in items[1:] if isinstance(q, str)])
+        decls = tuple([d for d in items[1:] if isinstance(d, n.VarDecl)])
         return n.VarBlock(kind, quals, decls, self._s(meta))
 
     def var_kind(self, meta, items):
@@ -262,7 +271,7 @@ class _ToNodes:
         return n.VarDecl(names, type_spec, init, self._s(meta), args)
 
     def ident_list(self, meta, items):
-        return tuple((str(t), self._ts(t)) for t in items)
+        return tuple([(str(t), self._ts(t)) for t in items])
 
     def location(self, meta, items):
         return ("location", str(items[0]))
@@ -542,7 +551,7 @@ class _ToNodes:
         return n.Index(items[0], tuple(items[1:]), self._s(meta))
 
     def call(self, meta, items):
-        args = tuple(a for a in items[1:] if a is not None)
+        args = tuple([a for a in items[1:] if a is not None])
         return n.Call(items[0], args, self._s(meta))
 
     def partial_access(self, meta, items):
@@ -557,7 +566,7 @@ class _ToNodes:
         # MOD(a, b), AND(a, b, …): the operators' function forms call the stdlib's `__MOD`, `__AND`
         word = items[0]
         callee = n.Name(("__" + str(word).upper(),), False, _tok_span(self.file, word))
-        return n.Call(callee, tuple(a for a in items[1:] if a is not None), self._s(meta))
+        return n.Call(callee, tuple([a for a in items[1:] if a is not None]), self._s(meta))
 
     def deref(self, meta, items):
         return n.Deref(items[0], self._s(meta))
@@ -798,12 +807,28 @@ def _intern_lines(text: str) -> None:
         _INTS.extend(range(len(_INTS), need))
 
 
+@contextlib.contextmanager
+def _collector_off():
+    """The cyclic collector off while the driver is built or builds nodes: thousands of small
+    objects, none of them garbage yet, and the collector's passes over the growing heap cost a
+    third of a parse (as in project._collector_paused) and a fifth of the Driver's build."""
+    if not gc.isenabled():   # paused already (project._collector_paused): left to its owner
+        yield
+        return
+    gc.disable()
+    try:
+        yield
+    finally:
+        gc.enable()
+
+
 @lru_cache(maxsize=None)
 def _driver(start: str) -> lalr.Driver | None:
     """The fast driver over the parser's tables, or None (then Lark parses everything) if this
     Lark version's internals are not what the driver knows."""
     try:
-        return lalr.Driver(_parser(), start, _ToNodes)
+        with _collector_off():
+            return lalr.Driver(_parser(), start, _ToNodes)
     except lalr.Unsupported:
         return None
 
@@ -816,17 +841,11 @@ def _fast(text: str, file: str, settings: SysmacSettings, start: str):
     _intern_lines(text)
     diagnostics: list[Diagnostic] = []
     nodes = _ToNodes(file, settings, diagnostics)
-    # the cyclic collector off while the nodes are built: none of them is garbage yet, and its
-    # passes over the growing heap cost a third of the parse (as in project._collector_paused)
-    was_enabled = gc.isenabled()
-    gc.disable()
     try:
-        return driver.parse(text, nodes), nodes, diagnostics
+        with _collector_off():
+            return driver.parse(text, nodes), nodes, diagnostics
     except Exception:   # lalr.Fallback, RecursionError, or anything unforeseen: Lark's path decides
         return None
-    finally:
-        if was_enabled:
-            gc.enable()
 
 
 def _unit(file: str, items: list, nodes: _ToNodes) -> n.CompilationUnit:

@@ -5,6 +5,7 @@ the variable at the root of an access path. The checker and the lowering both us
 from __future__ import annotations
 
 import re
+from operator import attrgetter
 
 from stvm.syntax import nodes as n
 
@@ -87,15 +88,19 @@ def _kind(cls) -> int:
     return kind
 
 
-_WALK_FIELDS: dict[type, tuple[str, ...]] = {}
-_WALK_KIND: dict[type, int] = {}   # 0: skip (no Call can be inside), 1: tuple (splice), 2: node (visit)
+_WALK_GETTERS: dict[type, object] = {}   # per node class: its fields that can hold a Call (attrgetter)
+_WALK_KIND: dict[type, int] = {}   # 0: skip (no Call can be inside), 1: tuple (splice), 2: node of
+                                   # several such fields (visit), 3: node of one (visit)
 
 
 def _walk_kind(cls) -> int:
     if issubclass(cls, tuple):
         return 1
-    if hasattr(cls, "__dataclass_fields__") and (issubclass(cls, n.Call) or _walk_fields(cls)):
-        return 2
+    if hasattr(cls, "__dataclass_fields__"):
+        names = _walk_fields(cls)
+        if issubclass(cls, n.Call) or names:
+            _WALK_GETTERS[cls] = attrgetter(*names) if names else (lambda node: ())
+            return 3 if len(names) == 1 else 2
     return 0
 
 
@@ -119,11 +124,13 @@ def _walk_fields(cls) -> tuple[str, ...]:
 
 def calls_in(body) -> list[n.Call]:
     """Every Call node under a statement list, in the order of `walk` (a stack: the last child
-    first), without its per-node reflection (the checker and the lowering call it per POU)."""
+    first), without its per-node reflection (the checker and the lowering call it per POU). A
+    node's fields are read by one `attrgetter` call and all pushed: those that cannot hold a
+    Call are dropped when popped, which keeps the order and saves a Python loop per node."""
     out: list[n.Call] = []
     stack: list = list(body)
     pop, push, extend = stack.pop, stack.append, stack.extend
-    fields_of, kind_of = _WALK_FIELDS, _WALK_KIND
+    getters, kind_of = _WALK_GETTERS, _WALK_KIND
     call_cls = n.Call
     while stack:
         node = pop()
@@ -138,15 +145,8 @@ def calls_in(body) -> list[n.Call]:
             continue
         if isinstance(node, call_cls):
             out.append(node)
-        names = fields_of.get(cls)
-        if names is None:
-            names = fields_of[cls] = _walk_fields(cls)
-        for name in names:
-            value = getattr(node, name)
-            vcls = value.__class__
-            vkind = kind_of.get(vcls)
-            if vkind is None:
-                vkind = kind_of[vcls] = _walk_kind(vcls)
-            if vkind:
-                push(value)
+        if kind == 3:
+            push(getters[cls](node))
+        else:
+            extend(getters[cls](node))
     return out
