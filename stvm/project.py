@@ -8,8 +8,6 @@ repeated load skips parsing, checking and code generation.
 
 from __future__ import annotations
 
-import contextlib
-import gc
 import hashlib
 import marshal
 import pickle
@@ -21,6 +19,7 @@ from typing import TYPE_CHECKING, Sequence
 from stvm.version import __version__
 from stvm.diagnostics import Diagnostic, has_errors, render, sort_key
 from stvm.manifest import MANIFEST, ManifestError, project_files, read_manifest  # noqa: F401 (API)
+from stvm.heap import collector_paused
 from stvm.settings import DEFAULT_SETTINGS, SysmacSettings
 from stvm.source import SourceError, Span, read_source
 
@@ -391,31 +390,10 @@ def stdlib_units(settings: SysmacSettings) -> tuple[list, list[Diagnostic], dict
     return units, list(diags), sources
 
 
-@contextlib.contextmanager
 def _collector_paused():
-    """The cyclic garbage collector off while the front end builds millions of small objects
-    (parse tree, nodes, facts): none of them is garbage yet, and the collector's passes over the
-    growing heap took more than half of a 100,000-line load (bench/bench_large.py)."""
-    was_enabled = gc.isenabled()
-    gc.disable()
-    try:
-        yield
-    finally:
-        if was_enabled:
-            _age_survivors()
-            gc.enable()
-
-
-def _age_survivors() -> None:
-    """Move every object the paused section built straight into the oldest generation, unscanned.
-    Left young, the first collections after a load would scan them all once a generation (a full
-    pass over a 300 MB heap each: a third of instance building on a 100,000-line program); in
-    the oldest generation only the usual full collections look at them (so cyclic garbage is
-    still freed). Not while someone else holds the heap frozen (a real-time scan loop): unfreezing
-    would hand its objects back to the collector."""
-    if gc.get_freeze_count() == 0:
-        gc.freeze()     # every generation into the permanent one, young count reset
-        gc.unfreeze()   # the permanent generation back as the oldest
+    """The collector paused while the front end builds the project's objects, and what it built
+    aged into the oldest generation after (they live as long as the project)."""
+    return collector_paused(age_survivors=True)
 
 
 def parse_unit(name: str, text: str, settings: SysmacSettings, use_cache: bool = True, write: bool = True):

@@ -45,7 +45,8 @@ LAYERS: list[tuple[str, ...]] = [
     ("emulator",),                       # the TM robot: knows nothing of stvm
     ("stvm.version", "stvm.settings"),
     ("stvm.numeric",),                   # REAL rounding, STRING fitting: checker, lowering, runtime
-    ("stvm.source", "stvm.folders"),     # spans, read_source, SourceError; the private cache folder
+    # spans, read_source, SourceError; the private cache folder; the collector's pause
+    ("stvm.source", "stvm.folders", "stvm.heap"),
     ("stvm.diagnostics",),               # FILE:LINE:COL: error: message + excerpt
     ("stvm.syntax",),                    # grammar, AST nodes, literals, tree walks
     ("stvm.semantics",),                 # index, types, checker

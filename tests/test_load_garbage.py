@@ -1,6 +1,7 @@
 """A load leaves no cyclic garbage behind that holds the syntax tree or the checker (issue 17,
 large inputs): with the collector paused during a load and the survivors moved to the oldest
-generation unscanned (project._age_survivors), such garbage would stay until a full collection."""
+generation unscanned (`stvm.heap.collector_paused(age_survivors=True)`), such garbage would stay
+until a full collection."""
 
 from __future__ import annotations
 

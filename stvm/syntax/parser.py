@@ -7,8 +7,6 @@ stages only see values.
 
 from __future__ import annotations
 
-import contextlib
-import gc
 import threading
 from bisect import bisect_right
 from dataclasses import replace
@@ -23,6 +21,7 @@ from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput
 
 from stvm.diagnostics import Diagnostic
 from stvm.folders import content_name, private_file
+from stvm.heap import collector_paused
 from stvm.settings import DEFAULT_SETTINGS, Dialect, DoubleQuoteStrings, SysmacSettings
 from stvm.source import read_source
 from stvm.syntax import nodes as n
@@ -807,27 +806,12 @@ def _intern_lines(text: str) -> None:
         _INTS.extend(range(len(_INTS), need))
 
 
-@contextlib.contextmanager
-def _collector_off():
-    """The cyclic collector off while the driver is built or builds nodes: thousands of small
-    objects, none of them garbage yet, and the collector's passes over the growing heap cost a
-    third of a parse (as in project._collector_paused) and a fifth of the Driver's build."""
-    if not gc.isenabled():   # paused already (project._collector_paused): left to its owner
-        yield
-        return
-    gc.disable()
-    try:
-        yield
-    finally:
-        gc.enable()
-
-
 @lru_cache(maxsize=None)
 def _driver(start: str) -> lalr.Driver | None:
     """The fast driver over the parser's tables, or None (then Lark parses everything) if this
     Lark version's internals are not what the driver knows."""
     try:
-        with _collector_off():
+        with collector_paused():   # (nested in a load's: left to it)
             return lalr.Driver(_parser(), start, _ToNodes)
     except lalr.Unsupported:
         return None
@@ -842,7 +826,7 @@ def _fast(text: str, file: str, settings: SysmacSettings, start: str):
     diagnostics: list[Diagnostic] = []
     nodes = _ToNodes(file, settings, diagnostics)
     try:
-        with _collector_off():
+        with collector_paused():   # (nested in a load's: left to it)
             return driver.parse(text, nodes), nodes, diagnostics
     except Exception:   # lalr.Fallback, RecursionError, or anything unforeseen: Lark's path decides
         return None
