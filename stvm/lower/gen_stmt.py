@@ -475,15 +475,11 @@ class StatementGenerator:
         pin = self.quiet_pin(pou) if self.options.skip_quiet_native_calls else None
         return native if pin is None else f"if {inst}.{pin} is not {inst}._impl.quiet: {native}"
 
-    def quiet_pin(self, pou: POUInfo) -> str | None:
+    @staticmethod
+    def quiet_pin(pou: POUInfo) -> str | None:
         """The storage name of the pin a native FB declares quiet (`{native quiet:Execute}`,
         stdlib/registry.py), None without one."""
-        node = self.a.pou_nodes.get(pou.qualname.lower())
-        for word in " ".join(node.pragmas if node is not None else ()).split():
-            if word.lower().startswith("quiet:"):
-                var = pou.variables[word[len("quiet:"):].lower()]   # the stdlib's own pin
-                return var_attr(var.name)
-        return None
+        return None if pou.quiet_pin is None else var_attr(pou.variables[pou.quiet_pin].name)
 
     def reused_array_ref(self, place: str, var: Variable, value: n.Expr) -> bool:
         """`reuse_array_refs` (decided by the analysis, `ArrayRefReuse`): keep the `ArrayRef` the

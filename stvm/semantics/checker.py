@@ -282,6 +282,8 @@ class Checker:
                        variadic="variadic" in words, typed="typed" in words, file=pou.span.file,
                        span=pou.span)
         for word in words:
+            if word.startswith("quiet:") and native:
+                info.quiet_pin = word[len("quiet:"):]
             if word.startswith("alias:") or (word.count("=") == 1 and "alias" in words):
                 alias, _, pin = word.split(":", 1)[-1].partition("=")
                 if alias and pin:

@@ -44,6 +44,9 @@ class POUInfo:
     variadic: bool = False
     typed: bool = False       # native wants the static argument types (`{native typed}`)
     aliases: dict[str, str] = field(default_factory=dict)         # pin alias key → pin key
+    # native: the key of the input pin whose value `impl.quiet` names (`{native quiet:Execute}`,
+    # stdlib/registry.py): a call with that pin at that value is skipped
+    quiet_pin: str | None = None
     file: str = ""
     span: Span = NO_SPAN
     # object orientation (IEC ed. 3 6.6.5-6.6.6): a METHOD is a POUInfo of kind METHOD whose
