@@ -13,10 +13,8 @@ never changes what the program computes, only how fast it runs.
 
 from __future__ import annotations
 
-import re
-
 from stvm.syntax import nodes as n
-from stvm.syntax.walk import LOOP_WEIGHT
+from stvm.syntax.walk import LOOP_WEIGHT, node_fields
 
 
 def hot_uses(body) -> dict[str, float]:
@@ -80,23 +78,12 @@ _UNKNOWN = object()
 _LOOPS = frozenset({n.For, n.While, n.Repeat})
 CHILD_FIELDS: dict[type, tuple[str, ...] | None] = {}
 """Per class met in a walk: `child_fields` of it (the lowering's walks over bodies read it)."""
-_SCALARS = {"str", "int", "bool", "float", "bytes", "None", "Span", "n.Span"}
 
 
 def child_fields(cls) -> tuple[str, ...] | None:
-    """The fields of a node class that may hold nodes: not `span`, and not declared as only
-    scalars (str, int, tuples of str, …), as `stvm.syntax.walk` reads them; None for tuples and
-    scalars."""
-    fields_ = getattr(cls, "__dataclass_fields__", None)
-    if fields_ is None:
-        names = None
-    else:
-        out = []
-        for name, f in fields_.items():
-            kind = f.type if isinstance(f.type, str) else getattr(f.type, "__name__", "?")
-            atoms = set(re.findall(r"[A-Za-z_][A-Za-z0-9_.]*", kind)) - {"tuple"}
-            if name != "span" and not (atoms and atoms <= _SCALARS):
-                out.append(name)
-        names = tuple(out)
+    """The fields of a node class that may hold nodes (`stvm.syntax.walk.node_fields`: not
+    `span`, not declared as only scalars); None for tuples and scalars. Remembered in
+    `CHILD_FIELDS`."""
+    names = node_fields(cls) if hasattr(cls, "__dataclass_fields__") else None
     CHILD_FIELDS[cls] = names
     return names

@@ -81,7 +81,7 @@ def _kind(cls) -> int:
         kind = 1
     elif hasattr(cls, "__dataclass_fields__"):
         kind = 2
-        _FIELDS[cls] = _walk_fields(cls)
+        _FIELDS[cls] = node_fields(cls)
     else:
         kind = 0
     _KIND[cls] = kind
@@ -97,7 +97,7 @@ def _walk_kind(cls) -> int:
     if issubclass(cls, tuple):
         return 1
     if hasattr(cls, "__dataclass_fields__"):
-        names = _walk_fields(cls)
+        names = node_fields(cls)
         if issubclass(cls, n.Call) or names:
             _WALK_GETTERS[cls] = attrgetter(*names) if names else (lambda node: ())
             return 3 if len(names) == 1 else 2
@@ -107,7 +107,7 @@ def _walk_kind(cls) -> int:
 _SCALARS = {"str", "int", "bool", "float", "bytes", "None", "Span", "n.Span"}
 
 
-def _walk_fields(cls) -> tuple[str, ...]:
+def node_fields(cls) -> tuple[str, ...]:
     """The fields of a node class that can hold nodes: not `span`, and not declared as only
     scalars (str, int, tuples of str, …), whose values never hold a Call."""
     out = []
