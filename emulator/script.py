@@ -182,10 +182,29 @@ _BINARY_PRECEDENCE = [
 ]
 
 
+# How deep one line may nest. The descent counts brackets, calls, array literals and unary
+# operators; the finished tree is measured too, since a chain (`1+1+…`, `a[0][0]…`) is parsed in a
+# loop but builds a tree as deep as it is long, which the checker and the evaluator then recurse
+# through. TM scripts written by people or by the thesis library stay below 10 levels; the limits
+# keep a hostile frame from exhausting Python's recursion (the line is refused as a syntax error,
+# ERROR;<line>, as any other malformed line is).
+MAX_NESTING = 64
+MAX_TREE_DEPTH = 160
+# The longest number literal taken: ~300 digits cover every float and integer a TM variable can
+# hold; Python refuses to convert over 4,300 digits (a ValueError, not a syntax error).
+MAX_NUMBER_CHARS = 400
+
+
 class _Parser:
     def __init__(self, tokens: list[Token]) -> None:
         self.tokens = tokens
         self.pos = 0
+        self.depth = 0   # the recursion depth of the descent now (see MAX_NESTING)
+
+    def nest(self) -> None:
+        self.depth += 1
+        if self.depth > MAX_NESTING:
+            raise ScriptSyntaxError(f"expression nested deeper than {MAX_NESTING} levels")
 
     def peek(self, offset: int = 0) -> Token | None:
         i = self.pos + offset
@@ -243,21 +262,34 @@ class _Parser:
             raise ScriptSyntaxError(f"unexpected {self.peek().text!r}")  # type: ignore[union-attr]
 
     def expression(self, level: int = 0) -> Expr:
+        if level == 0:
+            self.nest()
+            try:
+                return self._binary(0)
+            finally:
+                self.depth -= 1
+        return self._binary(level)
+
+    def _binary(self, level: int) -> Expr:
         if level == len(_BINARY_PRECEDENCE):
             return self.unary()
-        left = self.expression(level + 1)
+        left = self._binary(level + 1)
         while True:
             tok = self.peek()
             if tok is None or tok.kind != "op" or tok.text not in _BINARY_PRECEDENCE[level]:
                 return left
             self.pos += 1
-            left = Binary(tok.text, left, self.expression(level + 1))
+            left = Binary(tok.text, left, self._binary(level + 1))
 
     def unary(self) -> Expr:
         tok = self.peek()
         if tok is not None and tok.kind == "op" and tok.text in ("-", "+", "!"):
             self.pos += 1
-            return Unary(tok.text, self.unary())
+            self.nest()
+            try:
+                return Unary(tok.text, self.unary())
+            finally:
+                self.depth -= 1
         return self.postfix()
 
     def postfix(self) -> Expr:
@@ -324,6 +356,8 @@ class _Parser:
 
 def parse_number(text: str) -> int | float:
     """Numbers per spec §7: ``123``, ``34.567``, ``3.4e5``, ``0x1F``, ``0b101``."""
+    if len(text) > MAX_NUMBER_CHARS:
+        raise ScriptSyntaxError(f"number literal longer than {MAX_NUMBER_CHARS} characters")
     low = text.lower()
     if low.startswith("0x"):
         return int(low[2:], 16)
@@ -339,7 +373,26 @@ def _unescape(body: str) -> str:
 
 
 def parse_statement(line: str) -> Statement:
-    return _Parser(tokenize(line)).statement()
+    stmt = _Parser(tokenize(line)).statement()
+    if tree_depth(stmt) > MAX_TREE_DEPTH:
+        raise ScriptSyntaxError(f"expression nested deeper than {MAX_TREE_DEPTH} levels")
+    return stmt
+
+
+def tree_depth(node: object) -> int:
+    """How deep the tree under `node` is (walked with a stack, never recursively)."""
+    deepest = 0
+    stack = [(node, 1)]
+    while stack:
+        item, depth = stack.pop()
+        deepest = max(deepest, depth)
+        for name in getattr(item, "__dataclass_fields__", ()):
+            child = getattr(item, name)
+            if isinstance(child, tuple):
+                stack.extend((c, depth + 1) for c in child)
+            elif hasattr(child, "__dataclass_fields__"):
+                stack.append((child, depth + 1))
+    return deepest
 
 
 # ----------------------------------------------------------------------------- functions
