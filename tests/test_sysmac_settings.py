@@ -8,7 +8,7 @@ the code to the declarations:
   each (setting, alternative) to a probe below (run under the default and the alternative: the
   results must differ) or to the test that asserts the alternative's behaviour (it must exist
   and name the setting and the value);
-* the README's settings table is the declarations' table.
+* the settings table of docs/sysmac_behaviours.md is the declarations' table.
 """
 
 from __future__ import annotations
@@ -383,7 +383,7 @@ def test_each_referenced_test_exists_and_names_its_setting_and_value(key):
         assert re.search(rf"\b{re.escape(alternative)}\b", source), f"{OBSERVED[key]} never uses {alternative!r}"
 
 
-# ---- the README table ------------------------------------------------------------------------------
+# ---- the docs table --------------------------------------------------------------------------------
 
 def _shown(d: Declaration, value: Any) -> str:
     if isinstance(value, Enum):
@@ -407,8 +407,8 @@ def readme_rows() -> list[str]:
 
 
 def test_the_readme_settings_table_is_the_declarations():
-    readme = (ROOT / "README.md").read_text(encoding="utf-8").splitlines()
+    readme = (ROOT / "docs" / "sysmac_behaviours.md").read_text(encoding="utf-8").splitlines()
     start = readme.index("| setting | sysmac.md | decides | default | alternatives |")
     table = readme[start:start + len(DECLARED) + 2]
     expected = readme_rows()
-    assert table == expected, "README settings table is out of date; it should read:\n" + "\n".join(expected)
+    assert table == expected, "docs/sysmac_behaviours.md settings table is out of date; it should read:\n" + "\n".join(expected)
