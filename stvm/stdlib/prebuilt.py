@@ -11,10 +11,11 @@ before, so a stale file costs time, never correctness.
 Trust: the file is part of the installed package, like its `.py` files (whoever can replace it
 can replace those); it is only read from this folder, never from a cache folder.
 
-Rebuild it after changing the grammar, the parser, the nodes or the stdlib (this also rebuilds
-the parser's shipped Lark tables, stvm/syntax/tables.py):
+Rebuild it after changing the grammar, the parser, the nodes or the stdlib (this also regenerates
+the parser's shipped Lark tables, stvm/syntax/tables.py); each file is written only when its
+inputs changed, and the same inputs give the same bytes:
 
-    python -m stvm.stdlib.prebuilt          (tests/stdlib/test_prebuilt.py says when it is stale)
+    python -m stvm.stdlib.prebuilt [--check]   (tests/stdlib/test_prebuilt.py says when it is stale)
 """
 
 from __future__ import annotations
@@ -69,8 +70,10 @@ def load(texts: list[tuple[str, str]], settings):
     return units, diags
 
 
-def build() -> Path:
-    """Parse the stdlib with the default settings and write the file (what `python -m` does)."""
+def build(file: Path = FILE) -> bool:
+    """Parse the stdlib with the default settings and write `file`, unless it already holds exactly
+    these bytes; True when it was written. Reproducible: the same inputs give the same bytes (the
+    module's `__main__` runs under PYTHONHASHSEED=0, so no set is pickled in another order)."""
     from stvm.stdlib import stdlib_sources   # lazy: stvm.stdlib imports this module
     from stvm.syntax.parser import parse_text   # lazy: start-up (lark)
     texts = stdlib_sources(DEFAULT_SETTINGS)
@@ -80,11 +83,39 @@ def build() -> Path:
         units.append(unit)
         diags += d
     body = zlib.compress(pickle.dumps((units, diags), protocol=pickle.HIGHEST_PROTOCOL), 9)
-    write_keyed(FILE, key(texts, DEFAULT_SETTINGS), body)
-    return FILE
+    built_key = key(texts, DEFAULT_SETTINGS)
+    if read_keyed(file, built_key) == body:
+        return False
+    write_keyed(file, built_key, body)
+    return True
+
+
+def main(argv: list[str]) -> int:
+    """`python -m stvm.stdlib.prebuilt [--check]`: regenerate (or check) the parser tables and the
+    stdlib units, each only when its inputs changed."""
+    import os
+    import subprocess
+    import sys
+    if os.environ.get("PYTHONHASHSEED") != "0":   # reproducible: re-run with a fixed string hash
+        return subprocess.run([sys.executable, "-m", "stvm.stdlib.prebuilt", *argv],
+                              env={**os.environ, "PYTHONHASHSEED": "0"}).returncode
+    from stvm.syntax import tables   # first: the stdlib parse below uses them
+    if "--check" in argv:
+        stale = tables.main(["--check"]) != 0
+        import tempfile
+        with tempfile.TemporaryDirectory() as folder:
+            copy = Path(folder) / FILE.name
+            if FILE.exists():
+                copy.write_bytes(FILE.read_bytes())
+            if build(copy):
+                print(f"{FILE} is not what the build writes: run `python -m stvm.stdlib.prebuilt`", file=sys.stderr)
+                stale = True
+        return 1 if stale else 0
+    tables.main([])
+    print(f"{'wrote' if build() else 'unchanged:'} {FILE}")
+    return 0
 
 
 if __name__ == "__main__":
-    from stvm.syntax.parser import build_shipped_tables   # first: the stdlib parse below uses them
-    print(f"wrote {build_shipped_tables()}")
-    print(f"wrote {build()}")
+    import sys
+    raise SystemExit(main(sys.argv[1:]))

@@ -20,7 +20,7 @@ from lark import Lark, Token, Transformer, Tree
 from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken
 
 from stvm.diagnostics import Diagnostic
-from stvm.folders import content_name, private_file
+from stvm.folders import content_name
 from stvm.heap import collector_paused
 from stvm.settings import DEFAULT_SETTINGS, Dialect, DoubleQuoteStrings, SysmacSettings
 from stvm.source import read_source
@@ -47,18 +47,30 @@ def _parser(start: str = "start") -> Lark:
     shipped = tables.load(grammar, options)
     if shipped is not None:
         return shipped
-    # A stale shipped file (an edited grammar, another Lark): Lark builds the tables and keeps
-    # them in a file (it checks a hash of the grammar, the options and its version at load). Not
-    # Lark's default place (`cache=True`: a predictable name in the shared temp dir, which
-    # another user could plant a pickle under) but a file in stvm's own private cache folder;
-    # none if that is not safe.
-    cached = private_file(content_name("lark-tables", grammar, lark.__version__, _GRAMMAR_FILE, suffix=".pickle"))
-    return Lark(grammar, cache=str(cached) if cached is not None else False, **options)
+    return _built_parser(grammar, options)
+
+
+def _built_parser(grammar: str, options: dict) -> Lark:
+    """A stale shipped file (an edited grammar, another Lark): Lark builds the tables, kept for the
+    next run as the same JSON text in stvm's signed cache. Never Lark's own `cache=`: that file is
+    a pickle Lark partly unpickles before checking its hash, in a folder another user may write."""
+    from stvm.cache import SignedCache   # lazy: only a stale install gets here
+    cache = SignedCache()
+    name = content_name("lark-tables", grammar, lark.__version__, _GRAMMAR_FILE, suffix=".json")
+    held = cache.get(name)
+    if held is not None:
+        parser = tables.from_text(held.decode("ascii", "replace"), grammar, options)
+        if parser is not None:
+            return parser
+    parser = Lark(grammar, **options)
+    cache.put(name, tables.to_text(grammar, options, tables.serialise(parser)).encode("ascii"))
+    return parser
 
 
 def build_shipped_tables() -> Path:
     """Write the shipped tables for this grammar and these options (`python -m stvm.stdlib.prebuilt`)."""
-    return tables.build(grammar_text(), parser_options())
+    tables.main([])
+    return tables.FILE
 
 
 _PRAGMAS = threading.local()   # the `{…}` tokens the lexer dropped during the current parse_text

@@ -45,3 +45,14 @@ def test_other_settings_or_text_never_use_the_shipped_units():
     assert prebuilt.load(stdlib_sources(other), other) is None
     edited = [(name, text + "\n") for name, text in texts]
     assert prebuilt.load(edited, DEFAULT_SETTINGS) is None
+
+
+def test_the_shipped_stdlib_units_are_exactly_what_the_build_writes():
+    # reproducible: the same inputs give the same bytes, so a rebuild after an unrelated change
+    # is no change at all (and a stale file fails here with the command that fixes it)
+    import subprocess
+    import sys
+    from pathlib import Path
+    done = subprocess.run([sys.executable, "-m", "stvm.stdlib.prebuilt", "--check"],
+                          cwd=Path(__file__).resolve().parents[2], capture_output=True, text=True, timeout=600)
+    assert done.returncode == 0, done.stderr
