@@ -33,12 +33,9 @@ import gc
 import hashlib
 import hmac
 import logging
-import os
-import shutil
 import socket
 import threading
 import time
-from pathlib import Path
 from typing import Any
 
 from asyncua import Server, ua
@@ -47,6 +44,7 @@ from asyncua.crypto.permission_rules import User, UserRole
 from asyncua.server.internal_session import InternalSession
 
 from stvm.frontend import RunControl, Snapshot, VariableBridge, WriteRejected, catalog
+from stvm.opcua.aspace_cache import init_server
 from stvm.opcua.config import OpcUaConfig
 from stvm.opcua.datatypes import BadWrite, datetime_of
 from stvm.opcua.nodes import GLOBALS_ID, RUNTIME_ID, NodeBuilder, PublishedVariable, describe, select, \
@@ -200,7 +198,7 @@ class OpcUaServer:
         host = f"[{endpoint.host}]" if ":" in endpoint.host else endpoint.host
         self.url = f"opc.tcp://{host}:{port}{endpoint.path or ''}"
         server = Server(user_manager=_UserManager(config))
-        await _init_with_cached_address_space(server)
+        await init_server(server)   # the standard nodes from the signed cache (aspace_cache)
         server.set_endpoint(self.url + "/")
         server.set_server_name(f"stvm {config.project_name}")
         await server.set_application_uri(f"urn:stvm:{config.project_name}:server")
@@ -703,42 +701,3 @@ def _free_port(host: str) -> int:
     with socket.socket(family, socket.SOCK_STREAM) as probe:
         probe.bind((host, 0))
         return probe.getsockname()[1]
-
-
-def _cache_dir() -> Path:
-    base = os.environ.get("STVM_CACHE_DIR")
-    if base:
-        return Path(base)
-    return Path(os.environ.get("XDG_CACHE_HOME", Path.home() / ".cache")) / "stvm"
-
-
-async def _init_with_cached_address_space(server: Server) -> None:
-    """`server.init()` with asyncua's standard address space from a shelf in stvm's cache.
-
-    Building the ~6,000 standard nodes takes 2–3 s; a shelf loads them lazily in ~0.3 s. The shelf
-    is built once per asyncua version into a private folder renamed into place, so parallel
-    starts never see half a shelf. asyncua looks for the file named by the shelf path, which
-    Python's portable dbm does not create (it writes .dat/.dir), hence the marker file."""
-    import asyncua
-    folder = _cache_dir() / f"asyncua-{asyncua.__version__}-aspace"
-    shelf = folder / "aspace"
-    if shelf.is_file():
-        try:
-            await server.init(shelf_file=shelf)
-            return
-        except Exception:   # noqa: BLE001 - a damaged cache: rebuild it
-            shutil.rmtree(folder, ignore_errors=True)
-            server.iserver.aspace.clear()
-    building = folder.with_name(f"{folder.name}.tmp-{os.getpid()}-{threading.get_ident()}")
-    try:
-        building.mkdir(parents=True, exist_ok=True)
-        await server.init(shelf_file=building / "aspace")
-        (building / "aspace").touch()
-        try:
-            building.rename(folder)
-        except OSError:
-            shutil.rmtree(building, ignore_errors=True)   # another process was first
-    except OSError:
-        shutil.rmtree(building, ignore_errors=True)
-        if not server.iserver.aspace.keys():
-            await server.init()
