@@ -20,8 +20,9 @@ from starlette.staticfiles import StaticFiles
 from starlette.websockets import WebSocket, WebSocketDisconnect
 
 from stvm.frontend import WriteRejected
-from stvm.hmi.wire import (MAX_BODY_BYTES, MAX_WEBSOCKETS, SEND_TIMEOUT_S, TOKEN_COOKIE, Client, Refused,
-                          is_loopback, json_dumps, token_from)
+from starlette.requests import ClientDisconnect
+
+from stvm.hmi.wire import SEND_TIMEOUT_S, TOKEN_COOKIE, Client, Refused, is_loopback, json_dumps, token_from
 
 STATIC = Path(__file__).resolve().parent / "static"
 
@@ -35,10 +36,24 @@ def _error(status: int, reason: str, path: str | None = None) -> JSONResponse:
     return JSONResponse(body, status_code=status)
 
 
+SECURITY_HEADERS = [
+    # clickjacking (issue 34 item 3): no other site may show an HMI page in a frame, where one
+    # click of the operator on a disguised page would press a button of the cell
+    (b"x-frame-options", b"DENY"),
+    (b"content-security-policy", b"frame-ancestors 'none'; default-src 'self'; "
+                                 b"style-src 'self' 'unsafe-inline'; img-src 'self' data:; object-src 'none'; "
+                                 b"base-uri 'none'; form-action 'self'"),
+    (b"x-content-type-options", b"nosniff"),
+    (b"referrer-policy", b"no-referrer"),
+    (b"cache-control", b"no-store"),
+]
+
+
 class Gate:
     """ASGI middleware in front of every route: the token (when the server has one), the Host
     header of a loopback server (DNS rebinding) and the Origin of writes and WebSockets (another
-    site's page in the operator's browser must not drive the cell)."""
+    site's page in the operator's browser must not drive the cell). Every HTTP answer carries
+    `SECURITY_HEADERS`. A client that leaves mid-request ends its handler quietly."""
 
     def __init__(self, app, server: Any) -> None:
         self.app = app
@@ -48,6 +63,23 @@ class Gate:
         if scope["type"] not in ("http", "websocket"):
             await self.app(scope, receive, send)
             return
+        if scope["type"] == "http":
+            inner_send = send
+
+            async def send(message) -> None:   # noqa: F811 - the same send, with the headers
+                if message["type"] == "http.response.start":
+                    names = {k.lower() for k, _ in message.get("headers", [])}
+                    extra = [(k, v) for k, v in SECURITY_HEADERS if k not in names]
+                    message = dict(message, headers=list(message.get("headers", [])) + extra)
+                await inner_send(message)
+            try:
+                await self._gated(scope, receive, send)
+            except (OSError, ClientDisconnect):
+                pass   # the client went away mid-request: nobody to answer, nothing to log
+            return
+        await self._gated(scope, receive, send)
+
+    async def _gated(self, scope, receive, send) -> None:
         headers = {k.decode("latin-1").lower(): v.decode("latin-1") for k, v in scope.get("headers", [])}
         reason = self._refusal(scope, headers)
         if reason is None:
@@ -123,7 +155,7 @@ def build_app(server: Any) -> Starlette:
 
     async def post_vars(request: Request) -> Response:
         try:
-            body = await _json_body(request)
+            body = await _json_body(request, server.limits)
             values, literals = server.check_writes(body)
             scan = await server.submit(values)
         except Refused as exc:
@@ -137,7 +169,7 @@ def build_app(server: Any) -> Starlette:
     async def post_preset(request: Request) -> Response:
         name = request.path_params["name"]
         try:
-            await _json_body(request, allow_empty=True)
+            await _json_body(request, server.limits, allow_empty=True)
             steps = server.preset_steps(name)
             scan = None
             for values in steps:
@@ -161,7 +193,7 @@ def build_app(server: Any) -> Starlette:
 
     async def websocket(ws: WebSocket) -> None:
         found = hmi.pages.get(ws.query_params.get("page", hmi.start))
-        if found is None or len(server.clients) >= MAX_WEBSOCKETS:
+        if found is None or len(server.clients) >= server.limits.max_websockets:
             await ws.close(code=1008 if found is None else 1013)
             return
         await ws.accept()
@@ -240,21 +272,23 @@ def _popup_request(text: str | None):
     return popup if popup is None or isinstance(popup, str) else False
 
 
-async def _json_body(request: Request, allow_empty: bool = False):
-    """The request's JSON, refused with 415/413/400 (type, size, syntax) before anything runs."""
+async def _json_body(request: Request, limits, allow_empty: bool = False):
+    """The request's JSON, refused with 415/413/400 (type, size, syntax, nesting) before anything
+    runs. A client that leaves mid-body raises ClientDisconnect (the Gate ends the request)."""
+    max_body = limits.max_body_bytes
     ctype = request.headers.get("content-type", "").split(";")[0].strip().lower()
     length = request.headers.get("content-length")
     if length is not None:
         if not length.isdigit():
             raise Refused(400, "bad Content-Length")
-        if int(length) > MAX_BODY_BYTES:
-            raise Refused(413, f"body too large ({length} bytes > {MAX_BODY_BYTES})")
+        if int(length) > max_body:
+            raise Refused(413, f"body too large ({length} bytes > {max_body})")
     chunks = []
     size = 0
     async for chunk in request.stream():
         size += len(chunk)
-        if size > MAX_BODY_BYTES:
-            raise Refused(413, f"body too large (> {MAX_BODY_BYTES} bytes)")
+        if size > max_body:
+            raise Refused(413, f"body too large (> {max_body} bytes)")
         chunks.append(chunk)
     raw = b"".join(chunks)
     if not raw.strip():
@@ -263,10 +297,37 @@ async def _json_body(request: Request, allow_empty: bool = False):
         raise Refused(400, "empty body: send a JSON object {\"<variable path>\": \"<IEC literal>\"}")
     if ctype != "application/json":
         raise Refused(415, "send the body as Content-Type: application/json")
+    depth = _json_depth(raw)
+    if depth > limits.max_json_depth:
+        # refused before parsing: json.loads would recurse once per level (RecursionError)
+        raise Refused(400, f"JSON nested too deeply ({depth} levels > {limits.max_json_depth})")
     try:
         return json.loads(raw.decode("utf-8"))
-    except (UnicodeDecodeError, ValueError) as exc:
+    except (UnicodeDecodeError, ValueError, RecursionError) as exc:
         raise Refused(400, f"malformed JSON: {exc}") from None
+
+
+def _json_depth(raw: bytes) -> int:
+    """The deepest nesting of [ and { outside strings (a linear scan, no recursion)."""
+    depth = deepest = 0
+    in_string = escaped = False
+    for byte in raw:
+        if in_string:
+            if escaped:
+                escaped = False
+            elif byte == 0x5C:      # backslash
+                escaped = True
+            elif byte == 0x22:      # "
+                in_string = False
+        elif byte == 0x22:
+            in_string = True
+        elif byte in (0x5B, 0x7B):  # [ {
+            depth += 1
+            if depth > deepest:
+                deepest = depth
+        elif byte in (0x5D, 0x7D):
+            depth -= 1
+    return deepest
 
 
 def _remember_token(request: Request, response: Response) -> None:

@@ -14,6 +14,7 @@ from typing import Any
 from stvm.hmi.pages import HmiLoadError
 from stvm.frontend import VariableBridge
 from stvm.hmi.pages import load_pages
+from stvm.hmi.guard import ServerLimits
 from stvm.hmi.server import HmiServer
 
 HELP = ("serve the project's HMI pages (stvm.toml [hmi]) on [HOST:]PORT while the VM runs "
@@ -64,16 +65,25 @@ def start_hmi(project, vm, address: str, pose=None, run_parameters: dict[str, An
     Raises HmiUsageError or HmiLoadError (nothing is started then)."""
     host, port = parse_address(address)
     files, start = page_files(project)
+    table = (project.manifest or {}).get("hmi") or {}
+    try:
+        limits = ServerLimits.from_table(table.get("server"))
+    except ValueError as exc:
+        raise HmiUsageError(f"stvm.toml {exc}") from None
     bridge = VariableBridge(vm)
     hmi = load_pages(files, bridge.type_of, start)
-    server = HmiServer(hmi, bridge, host=host, port=port, pose=pose, run_parameters=run_parameters)
+    server = HmiServer(hmi, bridge, host=host, port=port, pose=pose, run_parameters=run_parameters,
+                       limits=limits)
     try:
         server.start()
     except OSError as exc:
         raise HmiUsageError(f"--hmi {address}: cannot listen on {host}:{port}: {exc.strerror or exc}") from None
     stream = stream or sys.stderr
-    print(f"HMI: {server.url}" + (f"  (token {server.token}: needed because {host} is not loopback)"
-                                  if server.token else ""), file=stream, flush=True)
+    urls = server.urls()
+    print(f"HMI: {urls[0]}" + (f"  (token {server.token}: needed because {host} is not loopback)"
+                               if server.token else ""), file=stream, flush=True)
+    for other in urls[1:]:
+        print(f"HMI: also {other}", file=stream, flush=True)
     return server
 
 

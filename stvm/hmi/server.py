@@ -46,7 +46,8 @@ from stvm.hmi.pages import Hmi, RunParameter, check_limits
 from stvm.hmi.robot import PoseSource, robot_state
 from stvm.hmi.app import build_app
 from stvm.hmi.render import PageRenderer
-from stvm.hmi.wire import WS_MAX_MESSAGE_BYTES, Client, Refused, is_loopback
+from stvm.hmi.guard import ServerLimits, guarded_protocol, quiet_exception_handler
+from stvm.hmi.wire import Client, Refused, is_loopback
 from stvm.semantics import types as t
 
 MAX_PATHS_PER_REQUEST = 512
@@ -55,14 +56,41 @@ UPDATE_NS = 50_000_000             # 20 updates per second (the issue asks for a
 
 
 
+def machine_addresses(ipv6: bool = False) -> list[str]:
+    """This machine's addresses another host can reach: the one its default route leaves by
+    (a UDP socket "connected" to a documentation address sends nothing), the addresses its name
+    resolves to, then its name; loopback addresses are left out."""
+    found: dict[str, None] = {}
+    probes = [(socket.AF_INET, "192.0.2.1")] + ([(socket.AF_INET6, "2001:db8::1")] if ipv6 else [])
+    for family, probe in probes:
+        try:
+            with socket.socket(family, socket.SOCK_DGRAM) as s:
+                s.connect((probe, 9))
+                found[s.getsockname()[0]] = None
+        except OSError:
+            pass
+    name = socket.gethostname()
+    try:
+        for info in socket.getaddrinfo(name, None, socket.AF_INET6 if ipv6 else socket.AF_INET):
+            found[info[4][0]] = None
+    except OSError:
+        pass
+    addresses = [a for a in found if not is_loopback(a.split("%")[0])]
+    if name and name != "localhost":
+        addresses.append(name)
+    return addresses
+
+
 class HmiServer:
     """Serve `hmi` for the VM behind `bridge`. `start()` binds (raises OSError if it cannot) and
     returns once the server accepts connections; `stop()` ends it and its thread."""
 
     def __init__(self, hmi: Hmi, bridge: VariableBridge, host: str = "127.0.0.1", port: int = 0,
                  token: str | None = None, pose: PoseSource | None = None,
-                 run_parameters: dict[str, Any] | None = None, update_ns: int = UPDATE_NS) -> None:
+                 run_parameters: dict[str, Any] | None = None, update_ns: int = UPDATE_NS,
+                 limits: ServerLimits | None = None) -> None:
         self.hmi = hmi
+        self.limits = limits or ServerLimits()
         self.bridge = bridge
         self.host = host
         self.requested_port = port
@@ -100,6 +128,15 @@ class HmiServer:
         base = f"http://{host}:{self.port}/"
         return base + (f"?token={self.token}" if self.token else "")
 
+    def urls(self) -> list[str]:
+        """Addresses an operator can open: for a server on every interface (0.0.0.0, ::) the
+        machine's own addresses and name instead of the unspecified address (issue 32 item 7)."""
+        if self.host not in ("0.0.0.0", "::", ""):
+            return [self.url]
+        suffix = f":{self.port}/" + (f"?token={self.token}" if self.token else "")
+        hosts = [h if ":" not in h else f"[{h}]" for h in machine_addresses(ipv6=self.host == "::")]
+        return [f"http://{h}{suffix}" for h in hosts] or [self.url]
+
     def start(self) -> "HmiServer":
         import uvicorn
         family = socket.AF_INET6 if ":" in self.host else socket.AF_INET
@@ -114,10 +151,16 @@ class HmiServer:
         sock.setblocking(False)
         self._socket = sock
         self.port = sock.getsockname()[1]
-        config = uvicorn.Config(self._app(), log_level="warning", access_log=False, lifespan="off",
-                                ws="websockets-sansio", ws_max_size=WS_MAX_MESSAGE_BYTES, ws_ping_interval=20.0,
-                                ws_ping_timeout=20.0, timeout_graceful_shutdown=1, server_header=False,
-                                h11_max_incomplete_event_size=16 * 1024)
+        lim = self.limits
+        # every bound is a ServerLimits field (docs/hmi.md "Server limits"); the connection cap
+        # and the header timeout are GuardedH11Protocol's, the rest uvicorn's own settings
+        config = uvicorn.Config(self._app(), http=guarded_protocol(lim), log_level="warning", access_log=False,
+                                lifespan="off", ws="websockets-sansio", ws_max_size=lim.ws_max_message_bytes,
+                                ws_ping_interval=20.0, ws_ping_timeout=20.0, timeout_graceful_shutdown=1,
+                                server_header=False, h11_max_incomplete_event_size=lim.max_header_bytes,
+                                timeout_keep_alive=lim.keep_alive_s,
+                                limit_concurrency=lim.max_connections + lim.max_websockets + 64,
+                                backlog=min(2048, lim.max_connections * 2))
         self._server = uvicorn.Server(config)
         self._thread = threading.Thread(target=self._serve, name=f"stvm-hmi:{self.port}", daemon=True)
         self._thread.start()
@@ -129,6 +172,7 @@ class HmiServer:
     def _serve(self) -> None:
         async def main() -> None:
             self.loop = asyncio.get_running_loop()
+            self.loop.set_exception_handler(quiet_exception_handler)
             self._ready.set()
             await self._server.serve(sockets=[self._socket])
         try:
