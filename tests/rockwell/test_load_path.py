@@ -318,12 +318,17 @@ def bad(**changes):
 
 
 @pytest.mark.parametrize(("start", "number", "points", "code", "exerr"), [
-    (-1, 1, None, 1012, -1),
-    (20, 1, None, 1012, 20),
-    (0, 0, None, 1010, 0),                                      # empty path
-    (0, -3, None, 1010, -3),
-    (15, 6, None, 1010, 6),                                     # longer than the array
-    (0, 21, None, 1010, 21),
+    (-1, 1, None, 1012, 0),                                     # EXERR >= 0 (seed 2.3): 0 for 1012
+    (20, 1, None, 1012, 0),
+    (-2147483648, 1, None, 1012, 0),
+    (2147483647, 1, None, 1012, 0),
+    (0, 0, None, 1010, 0),                                      # empty path; EXERR: the start index
+    (0, -3, None, 1010, 0),
+    (15, 6, None, 1010, 15),                                    # longer than the array
+    (0, 21, None, 1010, 0),
+    (5, 2147483647, None, 1010, 5),                             # issue 31 item 1: 5 + max wrapped, then faulted
+    (19, 2147483647, None, 1010, 19),
+    (0, -2147483648, None, 1010, 0),
     (0, 1, [bad(Speed=0.0)], 1013, 0),
     (0, 1, [bad(Deceleration=-1.0)], 1013, 0),
     (0, 1, [bad(AccelerationJerk=101.0)], 1014, 0),
@@ -353,7 +358,7 @@ def bad(**changes):
 ])
 def test_error_codes(bench, start, number, points, code, exerr):
     b = bench()
-    b.path(points or [pnp_point(0)], start=max(start, 0) if start < 20 else 0)
+    b.path(points or [pnp_point(0)], start=start if 0 <= start < 20 else 0)
     b.run("A", start, number)
     b.scan(1)
     out = b.outputs()
@@ -370,3 +375,25 @@ def test_incremental_move_wrt_tool_is_1035(bench):
     b.run("A", 0, 1)
     b.scan(1)
     assert b.get("R.A.Sts_ERR") == 1035
+
+
+def test_start_and_number_are_latched_on_the_rising_edge(bench):
+    """Issue 31 item 2: changing Cfg_StartIndex / Cfg_NumberOfMoves while In Process faulted the
+    controller (start 18: index 23 out of 0..19) or loaded points never validated; they are latched
+    when validated, so the path runs as it was started and the change waits for the next rising edge."""
+    b = bench()
+    b.path([pnp_point(i) for i in range(6)])
+    b.path([cartesian((2000.0, 0.0, 300.0, 180, 0, 90)), bad(Speed=0.0)], start=18)   # unreachable, invalid
+    b.run("A", 0, 6)
+    b.scan(5)
+    b.set("R.AStart", 18)
+    b.scan(3)
+    b.set("R.ANumber", 2147483647)
+    end = until_end(b)
+    assert end["Sts_PC"] and not end["Sts_ER"]
+    assert [args[1:4] for _, args in motion_commands(b.rx())] == [list(t[:3]) for t in PNP_TARGETS]
+    b.set("R.AEnable", False)
+    b.scan(1)
+    b.set("R.AEnable", True)                        # the new values count from this rising edge
+    b.scan(1)
+    assert b.get("R.A.Sts_ERR") == 1010 and b.get("R.A.Sts_EXERR") == 18
