@@ -234,3 +234,100 @@ def states(samples: list[dict], keys: Sequence[str]) -> list[tuple]:
         if not out or out[-1] != state:
             out.append(state)
     return out
+
+
+# ====================================================================== property tests (issue 31)
+#
+# Every library FB is driven over its whole input space against the emulator in lockstep: hypothesis
+# draws a schedule (steps of input assignments, the FB's Execute/Enable level and a number of
+# scans; one mode toggles Execute every scan) and the run asserts, after every scan, that the
+# controller did not fault (stvm's RuntimeFault ends the scan: on a real PLC a major fault),
+# that every error output is one of the seed's documented codes, and that Done and Error are
+# never TRUE together. The CI tests run a bounded, derandomized number of examples; the bench
+# (bench/bench_robotlibs_props.py) the same properties with many more.
+
+import math as _math
+
+INT_RANGES = {"SINT": (-128, 127), "INT": (-32768, 32767), "DINT": (-2147483648, 2147483647),
+              "USINT": (0, 255), "UINT": (0, 65535), "UDINT": (0, 4294967295), "WORD": (0, 65535)}
+REAL_EXTREMES = (0.0, -1.0, 1.0, _math.nan, _math.inf, -_math.inf, 3.4028234e38, -3.4028234e38, 1.0e-45)
+
+
+def value_strategy(kind):
+    """Values of an input of `kind`: an elementary type name, 'STRING[n]', or a tuple of the
+    allowed values (an enumeration); the type's extremes are drawn often."""
+    from hypothesis import strategies as st
+    if isinstance(kind, tuple):
+        return st.sampled_from(kind)
+    if kind == "BOOL":
+        return st.booleans()
+    if kind in INT_RANGES:
+        low, high = INT_RANGES[kind]
+        edges = sorted({0, 1, low, high} | ({-1} if low < 0 else set()))
+        return st.one_of(st.sampled_from(edges), st.integers(low, high), st.integers(max(low, -200), min(high, 200)))
+    if kind in ("REAL", "LREAL"):
+        return st.one_of(st.sampled_from(REAL_EXTREMES), st.floats(-2000.0, 2000.0, width=32))
+    if kind.startswith("STRING["):
+        size = int(kind[7:-1])
+        return st.one_of(st.sampled_from(["", "x" * size]), st.text(st.characters(min_codepoint=32, max_codepoint=126),
+                                                                         max_size=size))
+    raise ValueError(kind)
+
+
+def schedules(inputs: dict[str, Any], max_steps: int = 6, max_scans: int = 60):
+    """Lists of steps (assignments, execute level, scans); `inputs` maps a variable path to its kind.
+    A step with scans < 0 toggles Execute every scan for -scans scans."""
+    from hypothesis import strategies as st
+    names = sorted(inputs)
+    assignment = st.dictionaries(st.sampled_from(names), st.nothing(), max_size=0) if not names else \
+        st.lists(st.sampled_from(names), max_size=6, unique=True).flatmap(
+            lambda chosen: st.fixed_dictionaries({n: value_strategy(inputs[n]) for n in chosen}))
+    step = st.tuples(assignment, st.booleans(), st.one_of(st.integers(1, max_scans), st.integers(-20, -2)))
+    return st.lists(step, min_size=1, max_size=max_steps)
+
+
+class Probe:
+    """One FB's outputs: its Done and Error (paths; None when it has none), its error code path and
+    the codes its seed documents (`decode` maps the raw value first)."""
+
+    def __init__(self, name: str, done: str | None, error: str | None, code: str, codes: Iterable[int],
+                 error_when: Callable[[Any], bool] | None = None) -> None:
+        self.name, self.done, self.error, self.code, self.codes = name, done, error, code, frozenset(codes)
+        self.error_when = error_when
+        self.seen: set[int] = set()
+
+    def check(self, cell: Cell, where: str) -> None:
+        done = bool(cell.get(self.done)) if self.done else False
+        code = cell.get(self.code)
+        error = bool(cell.get(self.error)) if self.error else bool(self.error_when and self.error_when(cell))
+        assert not (done and error), f"{self.name}: Done and Error both TRUE ({where})"
+        if error:
+            self.seen.add(code)
+            assert code in self.codes, f"{self.name}: error code {code} is not one the seed documents ({where})"
+
+
+def run_schedule(cell: Cell, steps, execute: str, probes: Sequence[Probe]) -> int:
+    """Play `steps` on `cell`; returns the scans run. A runtime fault fails with the step that caused it."""
+    from stvm.runtime.vm import RuntimeFault
+    scans = 0
+    for index, (assignments, level, n) in enumerate(steps):
+        for path, value in assignments.items():
+            cell.set(path, value)
+        for k in range(abs(n)):
+            cell.set(execute, level if n > 0 else (level ^ (k % 2 == 1)))
+            where = f"step {index} {assignments!r}, scan {k}"
+            try:
+                cell.vm.scan()
+            except RuntimeFault as fault:
+                raise AssertionError(f"runtime fault at {where}: {fault}") from None
+            scans += 1
+            for probe in probes:
+                probe.check(cell, where)
+    return scans
+
+
+# the ErrorIDs of CBT_Commands: the thesis's (V1, 16#10..16#110, thesis section 5.3 tables) and the
+# ones V2 adds and documents in its file headers (st_src/cbt_v2/*.st)
+V1_ERROR_IDS = frozenset([0x10, 0x11, 0x15, 0x20, 0x21, 0x25, 0x26, 0x27, 0x28, 0x29, 0x30, 0x31, 0x32, 0x35, 0x36,
+                          0x40, 0x50, 0x60, 0x70, 0x80, 0x90, 0x99, 0x100, 0x110])
+V2_ERROR_IDS = V1_ERROR_IDS | frozenset([0x0F, 0x12, 0x16, 0x17, 0x2A, 0x2B, 0x2C, 0x2D, 0x2E, 0x39, 0x71, 0x72, 0x81, 0x120])

@@ -72,7 +72,9 @@ def test_pick_path_loads_in_one_scan_and_reports_each_point(bench):
     # MoveID reported when each point starts; active point, pending count
     starts = [(s["ActiveMoveID"], s["Active"], s["Pending"]) for s in b.samples if s["ActiveMoveID"]]
     runs = [v for i, v in enumerate(starts) if i == 0 or v != starts[i - 1]]
-    assert runs[:4] == [(101, 0, 3), (102, 1, 2), (103, 2, 1), (103, -1, 0)]
+    assert runs == [(101, 0, 3), (102, 1, 2), (103, 2, 1)]
+    # issue 31 item 3: once the path has ended no move is active (the last ID stayed before)
+    assert b.samples[-1]["ActiveMoveID"] == 0 and b.samples[-1]["Active"] == -1
     assert b.pose()[:3] == pytest.approx(list(PNP_TARGETS[2][:3]), abs=0.02)
 
 
@@ -318,12 +320,17 @@ def bad(**changes):
 
 
 @pytest.mark.parametrize(("start", "number", "points", "code", "exerr"), [
-    (-1, 1, None, 1012, -1),
-    (20, 1, None, 1012, 20),
-    (0, 0, None, 1010, 0),                                      # empty path
-    (0, -3, None, 1010, -3),
-    (15, 6, None, 1010, 6),                                     # longer than the array
-    (0, 21, None, 1010, 21),
+    (-1, 1, None, 1012, 0),                                     # EXERR >= 0 (seed 2.3): 0 for 1012
+    (20, 1, None, 1012, 0),
+    (-2147483648, 1, None, 1012, 0),
+    (2147483647, 1, None, 1012, 0),
+    (0, 0, None, 1010, 0),                                      # empty path; EXERR: the start index
+    (0, -3, None, 1010, 0),
+    (15, 6, None, 1010, 15),                                    # longer than the array
+    (0, 21, None, 1010, 0),
+    (5, 2147483647, None, 1010, 5),                             # issue 31 item 1: 5 + max wrapped, then faulted
+    (19, 2147483647, None, 1010, 19),
+    (0, -2147483648, None, 1010, 0),
     (0, 1, [bad(Speed=0.0)], 1013, 0),
     (0, 1, [bad(Deceleration=-1.0)], 1013, 0),
     (0, 1, [bad(AccelerationJerk=101.0)], 1014, 0),
@@ -353,7 +360,7 @@ def bad(**changes):
 ])
 def test_error_codes(bench, start, number, points, code, exerr):
     b = bench()
-    b.path(points or [pnp_point(0)], start=max(start, 0) if start < 20 else 0)
+    b.path(points or [pnp_point(0)], start=start if 0 <= start < 20 else 0)
     b.run("A", start, number)
     b.scan(1)
     out = b.outputs()
@@ -370,3 +377,101 @@ def test_incremental_move_wrt_tool_is_1035(bench):
     b.run("A", 0, 1)
     b.scan(1)
     assert b.get("R.A.Sts_ERR") == 1035
+
+
+def test_start_and_number_are_latched_on_the_rising_edge(bench):
+    """Issue 31 item 2: changing Cfg_StartIndex / Cfg_NumberOfMoves while In Process faulted the
+    controller (start 18: index 23 out of 0..19) or loaded points never validated; they are latched
+    when validated, so the path runs as it was started and the change waits for the next rising edge."""
+    b = bench()
+    b.path([pnp_point(i) for i in range(6)])
+    b.path([cartesian((2000.0, 0.0, 300.0, 180, 0, 90)), bad(Speed=0.0)], start=18)   # unreachable, invalid
+    b.run("A", 0, 6)
+    b.scan(5)
+    b.set("R.AStart", 18)
+    b.scan(3)
+    b.set("R.ANumber", 2147483647)
+    end = until_end(b)
+    assert end["Sts_PC"] and not end["Sts_ER"]
+    assert [args[1:4] for _, args in motion_commands(b.rx())] == [list(t[:3]) for t in PNP_TARGETS]
+    b.set("R.AEnable", False)
+    b.scan(1)
+    b.set("R.AEnable", True)                        # the new values count from this rising edge
+    b.scan(1)
+    assert b.get("R.A.Sts_ERR") == 1010 and b.get("R.A.Sts_EXERR") == 18
+
+
+def test_chained_instance_keeps_the_dynamics_and_blends_across_the_calls(bench):
+    """Seed 1.3 / 1.3.8 (issue 31 items 3 and 6): a second LoadPath started while the first one's
+    points are in the buffer continues the path: zero dynamics on its first point keep the last
+    values (no 1013), and a blended last point of the first call blends into the second call's."""
+    b = bench()
+    b.path([pnp_point(0, move_id=1), cartesian((400.0, -150.0, 250.0, 180, 0, 90), move_id=2, termination=6,
+                                              tolerance=40.0, speed=36.0, accel=180.0)])
+    second = cartesian((400.0, -100.0, 250.0, 180, 0, 90), move_id=3, speed=0.0, accel=0.0)
+    second["AccelerationJerk"] = second["DecelerationJerk"] = 0.0
+    b.path([second], start=5)
+    b.watch = {"Active": "R.Robot.Sts.ActiveMoveID", "Blending": "R.Robot.Sts.BlendingMoveID"}
+    b.run("A", 0, 2)
+    b.scan(1)
+    b.run("B", 5, 1)
+    b.scan(1)
+    assert b.get("R.B.Sts_IP") and not b.get("R.B.Sts_ER")
+    until_end(b, "A")
+    assert until_end(b, "B")["Sts_PC"]
+    commands = motion_commands(b.rx())
+    assert commands[1][1][-2:] == [40.0, True]                 # point 2 blends ...
+    assert commands[2][1][7:9] == [20.0, 200.0]                # ... into B's point with A's last dynamics
+    assert (2, 3) in {(s["Active"], s["Blending"]) for s in b.samples}
+
+
+def test_a_new_path_with_zero_dynamics_is_still_1013(bench):
+    b = bench()
+    b.path([pnp_point(0)])
+    b.run("A", 0, 1)
+    until_end(b)
+    b.path([bad(Speed=0.0)], start=3)
+    b.run("B", 3, 1)                                          # the buffer is empty: a new path
+    b.scan(1)
+    assert b.get("R.B.Sts_ERR") == 1013 and b.get("R.B.Sts_EXERR") == 3
+
+
+def test_tracking0_requested_is_1003(bench):
+    b = bench()
+    b.path([pnp_point(0)], start=4)
+    b.set("R.ATracking0", True)
+    b.run("A", 4, 1)
+    b.scan(1)
+    assert b.get("R.A.Sts_ERR") == 1003 and b.get("R.A.Sts_EXERR") == 4 and len(b.rx()) == 1
+
+
+def test_active_status_members_follow_the_executing_point(bench):
+    b = bench()
+    b.set_many("R.Robot.Cfg.ToolFrames[2]", {"Z": 100.0})
+    b.set("R.Robot.Cfg.ToolConfigured[2]", True)
+    b.set_many("R.Robot.Cfg.UserFrames[3]", {"X": 10.0})
+    b.set("R.Robot.Cfg.UserConfigured[3]", True)
+    b.path([pnp_point(0, move_id=11),
+            cartesian((400.0, -150.0, 150.0, 180, 0, 90), move_id=12, interpolation=1, frame_type=3, tool_id=2,
+                      ref_type=4, ref_id=3, speed=200.0, accel=1000.0)])
+    b.watch = {k: f"R.Robot.Sts.Active{k}" for k in ("MoveID", "Interpolation", "Type", "TypeID", "RefFrameType",
+                                                      "RefFrameID")}
+    b.run("A", 0, 2)
+    assert until_end(b)["Sts_PC"]
+    seen = {tuple(s[k] for k in ("MoveID", "Interpolation", "Type", "TypeID", "RefFrameType", "RefFrameID"))
+            for s in b.samples if s["MoveID"]}
+    assert seen == {(11, 0, 2, 0, 1, 0), (12, 1, 3, 2, 4, 3)}
+
+
+def test_handler_stopping_is_1003_for_a_new_path(bench):
+    """Seed 2.3 1003: the handler is not Available while its stop is going out."""
+    b = bench()
+    b.path([pnp_point(i) for i in range(3)])
+    b.run("A", 0, 3)
+    b.scan(100)
+    b.set("R.Stop", True)
+    b.scan(1)                                                 # the stop is requested, not yet answered
+    assert not b.get("R.Robot.Sts.Available") and b.get("R.Robot.Sts.Running")
+    b.run("B", 5, 1)
+    b.scan(1)
+    assert b.get("R.B.Sts_ERR") == 1003 and b.get("R.B.Sts_EXERR") == 0

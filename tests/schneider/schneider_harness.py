@@ -23,7 +23,7 @@ EXT = {"Ok": 0, "InterfaceInvalid": 3, "NoConnectedPathAvailable": 9, "CommandRe
 CS = {"Robot": 0, "User1": 1, "User2": 2, "User3": 3, "User4": 4, "LinearTracking1": 11, "LinearTracking2": 12}
 COMPONENT = {"Space": 0, "Tracking": 1, "Axes": 2}
 OPS = {"MoveL": 1, "MovePTP": 2, "ChangeCoordinateSystem2": 3, "SetCoordinateSystem": 4,
-       "SetMaxAccelerationResultant": 5, "Execute": 6, "SetMaxVelocity": 7, "SetMaxAcceleration": 8}
+       "SetMaxAccelerationResultant": 5, "Execute": 6, "SetMaxVelocity": 7, "SetMaxAcceleration": 8, "MoveC": 9}
 
 HARNESS = r"""
 (* Test harness (tests/schneider). Not part of the library. *)
@@ -35,6 +35,7 @@ TYPE ST_HarnessCmd :
         Offset : LREAL;
         Offset2 : LREAL;
         Target : ST_Vector3D;
+        Circ : ST_Vector3D;
         Orientation : ST_Orientation;
         Zone : LREAL;
         Cs : ET_CoordinateSystem;
@@ -78,6 +79,9 @@ FOR i := 0 TO 7 DO
                             q_etDiag => Cmds[i].Diag, q_etDiagExt => Cmds[i].DiagExt, q_sMsg => Cmds[i].Msg);
         8: FC_TmSetDynamics(Robot := Robot, i_etComponent := Cmds[i].Component, i_xAcceleration := TRUE, i_lrValue := Cmds[i].Value,
                             q_etDiag => Cmds[i].Diag, q_etDiagExt => Cmds[i].DiagExt, q_sMsg => Cmds[i].Msg);
+        9: FC_TmMoveC(Robot := Robot, i_stCircPoint := Cmds[i].Circ, i_stTarget := Cmds[i].Target,
+                      i_stOrientation := Cmds[i].Orientation, i_lrMaxZone := Cmds[i].Zone, i_udiSegmentId := Cmds[i].Id,
+                      q_etDiag => Cmds[i].Diag, q_etDiagExt => Cmds[i].DiagExt, q_sMsg => Cmds[i].Msg);
     END_CASE;
     IF Cmds[i].Op <> 0 THEN
         Cmds[i].Done := TRUE;
@@ -98,6 +102,13 @@ def move(op: str, segment_id: int, target, zone: float = 0.0) -> dict[str, Any]:
     x, y, z, rx, ry, rz = target
     return {"Op": OPS[op], "Id": segment_id, "Zone": zone, "Target.lrX": x, "Target.lrY": y, "Target.lrZ": z,
             "Orientation.lrRx": rx, "Orientation.lrRy": ry, "Orientation.lrRz": rz}
+
+
+def move_c(segment_id: int, circ, target, zone: float = 0.0) -> dict[str, Any]:
+    """A MoveC command through `circ` (x, y, z) to `target` (x, y, z, rx, ry, rz)."""
+    command = move("MovePTP", segment_id, target, zone)
+    command.update({"Op": OPS["MoveC"], "Circ.lrX": circ[0], "Circ.lrY": circ[1], "Circ.lrZ": circ[2]})
+    return command
 
 
 def change(start_id: int, start_offset: float, end_id: int, end_offset: float) -> dict[str, Any]:

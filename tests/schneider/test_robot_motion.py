@@ -15,7 +15,7 @@ import pytest
 import emulator
 from emulator.motion import matrix_to_pose
 from robotlibs_helpers import PNP_TARGETS, REPO, motion_commands, script_of, statements, tm_frame
-from schneider_harness import (PICK, SchneiderBench, change, execute, move, set_cs, set_value)
+from schneider_harness import (PICK, SchneiderBench, change, execute, move, move_c, set_cs, set_value)
 
 OK = ("Ok", "Ok", "")
 
@@ -187,6 +187,80 @@ def test_command_refused_when_a_move_is_issued_in_the_same_cycle(bench):
     d = b.issue(move("MovePTP", 1, PICK[0]), move("MovePTP", 2, PICK[1]), change(2, 0.0, 2, 0.0))
     assert d[2] == ("ExecutionAborted", "CommandRefused", "A move command was issued in the same cycle")
     assert b.issue(change(2, 0.0, 2, 0.0))[0][:2] == ("Ok", "Ok")      # one cycle later: accepted
+
+
+def test_command_refused_whatever_the_call_order(bench):
+    """Issue 31 item 4: change-then-move in one cycle was accepted on both sides, move-then-change
+    refused. Whichever comes second is refused now; a refused change does not refuse the move."""
+    b = bench()
+    pick_path(b, hold=True)
+    d = b.issue(change(2, 0.0, 2, 0.0), move("MovePTP", 4, PICK[0]))
+    assert d[0][:2] == ("Ok", "Ok")
+    assert d[1] == ("ExecutionAborted", "CommandRefused", "A coordinate-system change was issued in the same cycle")
+    assert b.issue(move("MovePTP", 4, PICK[0]))[0][:2] == ("Ok", "Ok")      # the next cycle: accepted
+    d = b.issue(change(99, 0.0, 2, 0.0), move("MovePTP", 5, PICK[1]))      # the change refused: the move stands
+    assert d[0][1] == "StartSegmentIdNotFound" and d[1][:2] == ("Ok", "Ok")
+
+
+@pytest.mark.parametrize(("start_offset", "end"), [(40.0, (3, 0.0)), (-10.0, (3, 0.0))])
+def test_change_inside_the_last_segment_is_sent_alone(bench, start_offset, end):
+    """Issue 31 item 4: a change starting inside the last segment answered Ok/Ok and was never sent
+    when no segment followed; the next path then ran in the old frame (410, 170 instead of 400, 150).
+    Its ChangeBase now goes alone once the segments are on the robot."""
+    b = bench()
+    user_frame(b, 1, (10.0, 20.0, 0.0, 0.0, 0.0, 0.0))
+    b.issue(set_cs("User1"))
+    pick_path(b)
+    b.issue(set_cs("Robot"))                         # a change to the robot frame, 40 mm into segment 3
+    assert b.issue(change(3, start_offset, *end))[0] == OK
+    b.until_path_end()
+    assert b.path_diag() == OK
+    alone = [script_of(f)[1] for f in b.rx() if f.startswith(b"$TMSCT")][-1]
+    assert statements(alone) == [("ChangeBase", ["RobotBase"])]
+    b.issue(move("MovePTP", 1, (400.0, 150.0, 300.0, 180.0, 0.0, 90.0)))
+    b.until_path_end()
+    assert robot_frame_tcp(b)[:3] == pytest.approx([400.0, 150.0, 300.0], abs=0.05)
+
+
+def test_change_after_segment_slot_15_is_sent(bench):
+    """Issue 31 item 4: a change in segment slot 15 has boundary 16, which no segment index matches."""
+    b = bench()
+    user_frame(b, 1, (10.0, 20.0, 0.0, 0.0, 0.0, 0.0))
+    b.issue(execute(False))
+    b.issue(*[move("MovePTP", i + 1, PICK[i % 3]) for i in range(8)])
+    b.issue(*[move("MovePTP", i + 9, PICK[(i + 8) % 3]) for i in range(7)], move("MovePTP", 16, PICK[1]))
+    assert b.issue(set_cs("User1"), change(16, 50.0, 16, 0.0), execute(True)) == [OK, OK, OK]   # 16: 100 mm
+    b.until_path_end(60000)
+    assert b.path_diag() == OK
+    assert statements(script_of([f for f in b.rx() if f.startswith(b"$TMSCT")][-1])[1])[0][0] == "ChangeBase"
+    b.issue(move("MovePTP", 1, PICK[0]))
+    b.until_path_end()
+    assert robot_frame_tcp(b)[:3] == pytest.approx([PICK[0][0] + 10.0, PICK[0][1] + 20.0, PICK[0][2]], abs=0.05)
+
+
+def test_move_c_is_a_tm_circle(bench):
+    """Issue 31 item 4: MoveC builds the TM Circle() as CBT_MoveCircle sends it (CAP, Space dynamics,
+    blend %, arc angle 0) and the robot goes round the arc to the target."""
+    b = bench()
+    start = (400.0, -150.0, 300.0, 180.0, 0.0, 90.0)
+    b.issue(move("MoveL", 1, start))
+    d = b.issue(move_c(2, (450.0, -100.0, 300.0), (400.0, -50.0, 300.0, 180.0, 0.0, 90.0)))
+    assert d == [OK]
+    b.until_path_end()
+    assert b.path_diag() == OK
+    circle = [args for name, args in motion_commands(b.rx()) if name == "Circle"]
+    assert circle == [["CAP", 450.0, -100.0, 300.0, 180.0, 0.0, 90.0, 400.0, -50.0, 300.0, 180.0, 0.0, 90.0,
+                       250.0, 200.0, 0.0, 0.0, False]]
+    assert robot_frame_tcp(b)[:3] == pytest.approx([400.0, -50.0, 300.0], abs=0.05)
+    # the segment length counts the arc's chords: 2 x 70.71 mm, a 100 mm offset is inside it
+    assert b.get("S.Robot.astSegment[1].lrLength") == pytest.approx(2 * 50 * 2 ** 0.5, abs=0.01)
+
+
+@pytest.mark.parametrize(("zone", "expected"), [(-1.0, "CommandRefused"), (100.5, "CommandRefused")])
+def test_move_c_zone_is_a_percentage(bench, zone, expected):
+    b = bench()
+    d = b.issue(move_c(1, (450.0, -100.0, 300.0), (400.0, -50.0, 300.0, 180.0, 0.0, 90.0), zone))
+    assert d[0][:2] == ("ExecutionAborted", expected)
 
 
 @pytest.mark.parametrize(("command", "expected"), [
