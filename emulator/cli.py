@@ -15,6 +15,7 @@ from typing import Any, Sequence
 
 from .faults import parse_faults
 from .settings import DEFAULT_SETTINGS, parse_setting_assignment
+from .terminal_text import plain, printable
 from .transport import TcpServer
 
 
@@ -118,23 +119,27 @@ def _render(snap: dict[str, Any]) -> Any:
     from rich.panel import Panel
     from rich.table import Table
 
+    # Every cell is plain text with its control characters escaped: frame text, tags and the
+    # event log come from clients (issue 34 item 6: no markup, no terminal escapes).
     state = Table.grid(padding=(0, 2))
-    state.add_row("address", snap["address"], "time", f"{snap['t_s']:.1f} s")
-    state.add_row("node", snap["state"] + (" (paused)" if snap["paused"] else ""),
+    state.add_row("address", plain(snap["address"]), "time", f"{snap['t_s']:.1f} s")
+    state.add_row("node", plain(snap["state"] + (" (paused)" if snap["paused"] else "")),
                   "connections", str(len(snap["connections"])))
     state.add_row("moving", str(snap["moving"]), "queue", f"{snap['queue_length']} items, "
                   f"{snap['scripts_buffered']} scripts")
-    state.add_row("pose", " ".join(f"{v:8.2f}" for v in snap["pose"]), "base/tcp", f"{snap['base']} / {snap['tcp']}")
+    state.add_row("pose", " ".join(f"{v:8.2f}" for v in snap["pose"]), "base/tcp",
+                  plain(f"{snap['base']} / {snap['tcp']}"))
     state.add_row("joints", " ".join(f"{v:8.2f}" for v in snap["joints"]), "tags",
-                  " ".join(f"{k}:{v}" for k, v in snap["tags"].items()) or "-")
+                  plain(" ".join(f"{k}:{v}" for k, v in snap["tags"].items()) or "-"))
     frames = Table(show_header=True, header_style="bold", expand=True)
     frames.add_column("t (s)", width=10)
     frames.add_column("dir", width=3)
     frames.add_column("conn", width=4)
     frames.add_column("frame")
     for t_s, direction, text, conn in snap["recent_frames"]:
-        frames.add_row(f"{t_s:.3f}", direction, str(conn), text.replace("\r\n", "⏎").rstrip("⏎"))
-    events = "\n".join(snap["log"]) or "-"
+        frames.add_row(f"{t_s:.3f}", direction, str(conn), plain(text.replace("\r\n", "⏎").rstrip("⏎")))
+    from rich.text import Text
+    events = Text("\n".join(printable(line) for line in snap["log"]) or "-")
     return Group(Panel(state, title="tm-emulator"), Panel(frames, title=f"last frames (rx {snap['frames']['rx']}, "
                                                                          f"tx {snap['frames']['tx']})"),
                  Panel(events, title="events"))
