@@ -29,6 +29,18 @@ def _port(text: str) -> int:
     return port
 
 
+def _host(text: str) -> str:
+    # socket.bind(("", port)) listens on every interface: an empty --host (an unset shell
+    # variable) must not open the robot to the network without a word (issue 34 item 8)
+    if not text.strip():
+        raise argparse.ArgumentTypeError("needs an address to listen on (127.0.0.1 for this machine only; "
+                                         "0.0.0.0 for every interface)")
+    return text
+
+
+WILDCARD_HOSTS = ("0.0.0.0",)
+
+
 def _seconds(text: str) -> float:
     import math
     try:
@@ -58,7 +70,8 @@ def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="tm-emulator",
         description="Emulated TM robot in Listen Node mode (TMSCT/TMSTA/CPERR on TCP).")
-    parser.add_argument("--host", default="127.0.0.1", help="address to bind (default 127.0.0.1)")
+    parser.add_argument("--host", type=_host, default="127.0.0.1",
+                        help="address to bind (default 127.0.0.1; 0.0.0.0 = every interface)")
     parser.add_argument("--port", type=_port, default=5890, help="TCP port 0-65535 (default 5890; 0 = any free)")
     parser.add_argument("--log", metavar="FILE", help="append every frame as a JSON line to FILE")
     parser.add_argument("--fault", action="append", default=[], metavar="NAME[:ARG]",
@@ -93,6 +106,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"tm-emulator: cannot listen on {args.host}:{args.port}: {exc}", file=sys.stderr)
         return 1
     print(f"tm-emulator listening on {args.host}:{server.port}", flush=True)
+    if args.host in WILDCARD_HOSTS:
+        print(f"tm-emulator: warning: listening on every network interface (--host {args.host}): "
+              f"anyone who can reach this machine can move the emulated robot", file=sys.stderr, flush=True)
     for line in faults.describe():
         print(f"  fault: {line}", flush=True)
     stop = threading.Event()

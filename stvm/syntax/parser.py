@@ -15,12 +15,12 @@ from importlib import resources
 from pathlib import Path
 from typing import Sequence
 
-import lark
 from lark import Lark, Token, Transformer, Tree
 from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken
 
 from stvm.diagnostics import Diagnostic
-from stvm.folders import content_name, private_file
+from stvm.cache import SignedCache
+from stvm.folders import content_name
 from stvm.heap import collector_paused
 from stvm.settings import DEFAULT_SETTINGS, Dialect, DoubleQuoteStrings, SysmacSettings
 from stvm.source import read_source
@@ -47,13 +47,21 @@ def _parser(start: str = "start") -> Lark:
     shipped = tables.load(grammar, options)
     if shipped is not None:
         return shipped
-    # A stale shipped file (an edited grammar, another Lark): Lark builds the tables and keeps
-    # them in a file (it checks a hash of the grammar, the options and its version at load). Not
-    # Lark's default place (`cache=True`: a predictable name in the shared temp dir, which
-    # another user could plant a pickle under) but a file in stvm's own private cache folder;
-    # none if that is not safe.
-    cached = private_file(content_name("lark-tables", grammar, lark.__version__, _GRAMMAR_FILE, suffix=".pickle"))
-    return Lark(grammar, cache=str(cached) if cached is not None else False, **options)
+    # A stale shipped file (an edited grammar, another Lark, another Python): Lark builds the
+    # tables, kept in the signed cache. Never Lark's own `cache=`: its file is a pickle that Lark
+    # partly unpickles before it checks the file's hash (a hash anyone can compute), so a file
+    # planted under its name ran code (issues 28.4 and 34). Our entries carry the user's HMAC
+    # tag and are unpickled only once it verifies.
+    cache = SignedCache()
+    name = content_name("lark-tables", tables.key(grammar, options), suffix=".bin")
+    body = cache.get(name)
+    if body is not None:
+        parser = tables.from_bytes(body, options)
+        if parser is not None:
+            return parser
+    parser = Lark(grammar, **options)
+    cache.put(name, tables.to_bytes(parser))
+    return parser
 
 
 def build_shipped_tables() -> Path:

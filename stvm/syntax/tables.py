@@ -48,14 +48,24 @@ def load(grammar: str, options: dict) -> Lark | None:
     """The Lark parser from the shipped tables when they were built from exactly this grammar and
     these options, else None."""
     body = read_keyed(FILE, key(grammar, options))
-    if body is None:
-        return None
+    return None if body is None else from_bytes(body, options)
+
+
+def from_bytes(body: bytes, options: dict) -> Lark | None:
+    """A Lark parser from tables written by `to_bytes` (None if they do not load). Only for
+    trusted bytes: the shipped file, or a signed cache entry (Lark's format is a pickle)."""
     try:
         # what Lark's own `cache=` does with its file (`Lark.load` takes no options; the lexer
         # callbacks are functions, left out of the file and given again here)
         return Lark.__new__(Lark)._load(io.BytesIO(body), **{k: v for k, v in options.items() if k in _CALLER_OPTIONS})
     except Exception:   # damaged, or a Lark whose classes changed under the same version: build instead
         return None
+
+
+def to_bytes(parser: Lark) -> bytes:
+    out = io.BytesIO()
+    parser.save(out, exclude_options=_CALLER_OPTIONS)
+    return out.getvalue()
 
 
 def build(grammar: str, options: dict, file: Path = FILE) -> Path:
@@ -65,7 +75,5 @@ def build(grammar: str, options: dict, file: Path = FILE) -> Path:
     if file == FILE and load(grammar, options) is not None:
         return file
     parser = Lark(grammar, **options)
-    out = io.BytesIO()
-    parser.save(out, exclude_options=_CALLER_OPTIONS)
-    write_keyed(file, key(grammar, options), out.getvalue())
+    write_keyed(file, key(grammar, options), to_bytes(parser))
     return file
