@@ -15,6 +15,7 @@ from typing import Any, Sequence
 
 from .faults import parse_faults
 from .settings import DEFAULT_SETTINGS, parse_setting_assignment
+from .terminal_text import plain, printable
 from .transport import TcpServer
 
 
@@ -26,6 +27,18 @@ def _port(text: str) -> int:
     if not 0 <= port <= 65535:
         raise argparse.ArgumentTypeError(f"needs a TCP port number 0-65535 (0: any free port), got {port}")
     return port
+
+
+def _host(text: str) -> str:
+    # socket.bind(("", port)) listens on every interface: an empty --host (an unset shell
+    # variable) must not open the robot to the network without a word (issue 34 item 8)
+    if not text.strip():
+        raise argparse.ArgumentTypeError("needs an address to listen on (127.0.0.1 for this machine only; "
+                                         "0.0.0.0 for every interface)")
+    return text
+
+
+WILDCARD_HOSTS = ("0.0.0.0",)
 
 
 def _seconds(text: str) -> float:
@@ -57,7 +70,8 @@ def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="tm-emulator",
         description="Emulated TM robot in Listen Node mode (TMSCT/TMSTA/CPERR on TCP).")
-    parser.add_argument("--host", default="127.0.0.1", help="address to bind (default 127.0.0.1)")
+    parser.add_argument("--host", type=_host, default="127.0.0.1",
+                        help="address to bind (default 127.0.0.1; 0.0.0.0 = every interface)")
     parser.add_argument("--port", type=_port, default=5890, help="TCP port 0-65535 (default 5890; 0 = any free)")
     parser.add_argument("--log", metavar="FILE", help="append every frame as a JSON line to FILE")
     parser.add_argument("--fault", action="append", default=[], metavar="NAME[:ARG]",
@@ -92,6 +106,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"tm-emulator: cannot listen on {args.host}:{args.port}: {exc}", file=sys.stderr)
         return 1
     print(f"tm-emulator listening on {args.host}:{server.port}", flush=True)
+    if args.host in WILDCARD_HOSTS:
+        print(f"tm-emulator: warning: listening on every network interface (--host {args.host}): "
+              f"anyone who can reach this machine can move the emulated robot", file=sys.stderr, flush=True)
     for line in faults.describe():
         print(f"  fault: {line}", flush=True)
     stop = threading.Event()
@@ -118,23 +135,27 @@ def _render(snap: dict[str, Any]) -> Any:
     from rich.panel import Panel
     from rich.table import Table
 
+    # Every cell is plain text with its control characters escaped: frame text, tags and the
+    # event log come from clients (issue 34 item 6: no markup, no terminal escapes).
     state = Table.grid(padding=(0, 2))
-    state.add_row("address", snap["address"], "time", f"{snap['t_s']:.1f} s")
-    state.add_row("node", snap["state"] + (" (paused)" if snap["paused"] else ""),
+    state.add_row("address", plain(snap["address"]), "time", f"{snap['t_s']:.1f} s")
+    state.add_row("node", plain(snap["state"] + (" (paused)" if snap["paused"] else "")),
                   "connections", str(len(snap["connections"])))
     state.add_row("moving", str(snap["moving"]), "queue", f"{snap['queue_length']} items, "
                   f"{snap['scripts_buffered']} scripts")
-    state.add_row("pose", " ".join(f"{v:8.2f}" for v in snap["pose"]), "base/tcp", f"{snap['base']} / {snap['tcp']}")
+    state.add_row("pose", " ".join(f"{v:8.2f}" for v in snap["pose"]), "base/tcp",
+                  plain(f"{snap['base']} / {snap['tcp']}"))
     state.add_row("joints", " ".join(f"{v:8.2f}" for v in snap["joints"]), "tags",
-                  " ".join(f"{k}:{v}" for k, v in snap["tags"].items()) or "-")
+                  plain(" ".join(f"{k}:{v}" for k, v in snap["tags"].items()) or "-"))
     frames = Table(show_header=True, header_style="bold", expand=True)
     frames.add_column("t (s)", width=10)
     frames.add_column("dir", width=3)
     frames.add_column("conn", width=4)
     frames.add_column("frame")
     for t_s, direction, text, conn in snap["recent_frames"]:
-        frames.add_row(f"{t_s:.3f}", direction, str(conn), text.replace("\r\n", "⏎").rstrip("⏎"))
-    events = "\n".join(snap["log"]) or "-"
+        frames.add_row(f"{t_s:.3f}", direction, str(conn), plain(text.replace("\r\n", "⏎").rstrip("⏎")))
+    from rich.text import Text
+    events = Text("\n".join(printable(line) for line in snap["log"]) or "-")
     return Group(Panel(state, title="tm-emulator"), Panel(frames, title=f"last frames (rx {snap['frames']['rx']}, "
                                                                          f"tx {snap['frames']['tx']})"),
                  Panel(events, title="events"))

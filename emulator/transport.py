@@ -49,10 +49,12 @@ The link also exposes ``now_ns``, ``robot`` (the :class:`~emulator.robot.Robot`)
 
 from __future__ import annotations
 
+import errno
 import heapq
 import json
 import selectors
 import socket
+import sys
 import threading
 import time
 from collections import deque
@@ -66,6 +68,14 @@ from .settings import DEFAULT_SETTINGS, EmulatorSettings
 # Pending connections the kernel queues before accept(): like a real server's (nginx 511,
 # asyncio 100), not 16, which made a client's connect/close loop stall for the 1 s SYN retry.
 ACCEPT_BACKLOG = 128
+
+# accept() failing for lack of descriptors or memory leaves the pending connection queued, so the
+# listener stays readable: selecting on it again at once spins a core (3.9 s CPU per 5 s measured).
+# The listener is taken out of the selector for a back-off that doubles up to the maximum, as
+# nginx and asyncio do, and put back afterwards; a connection that closes frees a descriptor.
+ACCEPT_BACKOFF_MIN_S = 0.05
+ACCEPT_BACKOFF_MAX_S = 1.0
+_RESOURCE_ERRNOS = frozenset({errno.EMFILE, errno.ENFILE, errno.ENOBUFS, errno.ENOMEM})
 
 # ============================================================================ frame log
 
@@ -146,6 +156,13 @@ class TcpServer:
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
         self.error: BaseException | None = None
+        # accept() back-off (see ACCEPT_BACKOFF_MIN_S): the monotonic instant the listener goes
+        # back into the selector, None when it is in
+        self._accept_resume_s: float | None = None
+        self._accept_backoff_s = ACCEPT_BACKOFF_MIN_S
+        self.accept_failures = 0   # accept() calls that failed for lack of resources
+        self.handler_errors = 0    # frames whose handling raised (the connection was dropped)
+        self.log_line: Callable[[str], None] = _log_stderr
 
     # ------------------------------------------------------------------ lifecycle
 
@@ -216,7 +233,11 @@ class TcpServer:
 
     def _close_listener(self) -> None:
         if self._listener is not None:
-            self._sel.unregister(self._listener)
+            try:
+                self._sel.unregister(self._listener)
+            except (KeyError, ValueError):   # out of the selector during an accept() back-off
+                pass
+            self._accept_resume_s = None
             self._listener.close()
             self._listener = None
 
@@ -233,8 +254,12 @@ class TcpServer:
                 deadline = core.next_deadline_ns()
             while not stop.is_set():
                 timeout = 1.0 if deadline is None else min(1.0, max(0.0, (deadline - now) / 1e9))
+                if self._accept_resume_s is not None:
+                    timeout = min(timeout, max(0.0, self._accept_resume_s - time.monotonic()))
                 events = select(timeout)
                 with lock:
+                    if self._accept_resume_s is not None and time.monotonic() >= self._accept_resume_s:
+                        self._resume_accept()
                     # One instant per wake-up: the events, then what is due at that instant.
                     now = self.now_ns()
                     for key, mask in events:
@@ -258,7 +283,10 @@ class TcpServer:
                 except OSError:
                     data = b""
                 if data:
-                    self.core.receive(conn.conn_id, data, now)
+                    try:
+                        self.core.receive(conn.conn_id, data, now)
+                    except Exception as exc:  # noqa: BLE001 - defence in depth, see _handler_failed
+                        self._handler_failed(conn, exc, now)
                 else:
                     self.core.close(conn.conn_id, now)
                     self._drop(conn)
@@ -273,8 +301,11 @@ class TcpServer:
             assert self._listener is not None
             try:
                 sock, _ = self._listener.accept()
-            except OSError:
+            except OSError as exc:
+                if exc.errno in _RESOURCE_ERRNOS:
+                    self._pause_accept(exc)
                 return
+            self._accept_backoff_s = ACCEPT_BACKOFF_MIN_S
             conn_id = self.core.open(now)
             if conn_id is None:
                 # Refuse: reset the connection at once (SO_LINGER 0 sends RST).
@@ -287,6 +318,42 @@ class TcpServer:
             self._conns[conn_id] = conn
             self._by_sock[sock] = conn
             self._sel.register(sock, selectors.EVENT_READ, conn)
+
+    def _handler_failed(self, conn: _Conn, exc: Exception, now: int) -> None:
+        """A frame raised while being handled: a bug in the emulator, which no client may turn
+        into a dead server. That connection is closed (its state may be half-updated), one line
+        is logged, and the thread goes on serving every other client."""
+        self.handler_errors += 1
+        self.log_line(f"tm-emulator: internal error on connection {conn.conn_id}, closed: "
+                      f"{type(exc).__name__}: {str(exc)[:200]}")
+        try:
+            self.core.close(conn.conn_id, now)
+        except Exception:  # noqa: BLE001 - the connection goes in any case
+            self.core.framers.pop(conn.conn_id, None)
+            self.core.rx_buffers.pop(conn.conn_id, None)
+        self._drop(conn)
+
+    def _pause_accept(self, exc: OSError) -> None:
+        if self._listener is None:
+            return
+        if self.accept_failures == 0 or self._accept_backoff_s == ACCEPT_BACKOFF_MIN_S:
+            self.log_line(f"tm-emulator: cannot accept a connection ({exc.strerror or exc}); "
+                          f"retrying in {self._accept_backoff_s:.2f} s")
+        self.accept_failures += 1
+        try:
+            self._sel.unregister(self._listener)
+        except (KeyError, ValueError):
+            pass
+        self._accept_resume_s = time.monotonic() + self._accept_backoff_s
+        self._accept_backoff_s = min(ACCEPT_BACKOFF_MAX_S, self._accept_backoff_s * 2)
+
+    def _resume_accept(self) -> None:
+        self._accept_resume_s = None
+        if self._listener is not None:
+            try:
+                self._sel.register(self._listener, selectors.EVENT_READ, "listen")
+            except (KeyError, ValueError):
+                pass
 
     def _flush(self, now: int) -> None:
         for delivery in self.core.pop_ready(now):
@@ -363,6 +430,13 @@ class TcpServer:
             sock.close()
         self._sel.close()
         self.frame_log.close()
+
+
+def _log_stderr(line: str) -> None:
+    try:
+        print(line, file=sys.stderr, flush=True)
+    except (OSError, ValueError):
+        pass
 
 
 def start_server(host: str = "127.0.0.1", port: int = 5890, log_path: str | None = None,

@@ -32,6 +32,48 @@ from stvm.folders import default_folder, folder_problem as _folder_problem  # no
 
 TAG_BYTES = 32
 
+MAX_ENTRY_BYTES = 512 * 2**20
+"""The largest cache entry read (512 MiB; the compile cache of a 100,000-line project is tens of
+MB). `STVM_CACHE_MAX_ENTRY_MB` changes it. A larger entry is treated as missing."""
+
+
+def max_entry_bytes() -> int:
+    text = os.environ.get("STVM_CACHE_MAX_ENTRY_MB", "")
+    try:
+        megabytes = int(text)
+    except ValueError:
+        return MAX_ENTRY_BYTES
+    return megabytes * 2**20 if 0 < megabytes <= 1 << 20 else MAX_ENTRY_BYTES
+
+
+def read_regular_file(path: Path, limit: int) -> bytes | None:
+    """The bytes of `path` if it is a regular file (a symbolic link is not followed) of at most
+    `limit` bytes, else None. Opened non-blocking, so a FIFO planted under the name cannot hang
+    the reader; checked with fstat on the open descriptor, so nothing can be swapped in between;
+    read up to its size, so /dev/zero or a growing file cannot exhaust memory."""
+    try:
+        fd = os.open(path, os.O_RDONLY | getattr(os, "O_NOFOLLOW", 0) | getattr(os, "O_NONBLOCK", 0)
+                     | getattr(os, "O_CLOEXEC", 0))
+    except OSError:
+        return None
+    try:
+        info = os.fstat(fd)
+        if not stat.S_ISREG(info.st_mode) or info.st_size > limit:
+            return None
+        chunks = []
+        left = info.st_size
+        while left > 0:
+            chunk = os.read(fd, min(left, 1 << 24))
+            if not chunk:
+                break
+            chunks.append(chunk)
+            left -= len(chunk)
+        return b"".join(chunks)
+    except OSError:
+        return None
+    finally:
+        os.close(fd)
+
 
 class CacheWarning(UserWarning):
     """The cache cannot be used safely; the run goes on without it."""
@@ -56,7 +98,7 @@ def key_file() -> Path:
 def _load_key(path: Path) -> bytes | None:
     """The user's key, created on first use; None (with a warning) if it cannot be trusted."""
     try:
-        fd = os.open(path, os.O_RDONLY | getattr(os, "O_NOFOLLOW", 0))
+        fd = os.open(path, os.O_RDONLY | getattr(os, "O_NOFOLLOW", 0) | getattr(os, "O_NONBLOCK", 0))
     except FileNotFoundError:
         return _create_key(path)
     except OSError as exc:
@@ -129,10 +171,8 @@ class SignedCache:
         """The payload stored under `name`, or None if missing, damaged or not signed by us."""
         if not self._ready():
             return None
-        try:
-            with self.path(name).open("rb") as fh:
-                data = fh.read()
-        except OSError:
+        data = read_regular_file(self.path(name), max_entry_bytes() + TAG_BYTES)
+        if data is None:   # missing, not a regular file (link, FIFO, device, folder) or too large
             return None
         tag, payload = data[:TAG_BYTES], data[TAG_BYTES:]
         if len(tag) < TAG_BYTES or not hmac.compare_digest(tag, self._tag(name, payload)):
@@ -147,16 +187,27 @@ class SignedCache:
         """Store `payload` under `name` (atomically; errors are ignored: a cache is optional)."""
         if not self._ready():
             return
+        tmp = self.path(f"{name}.tmp{os.getpid()}")
         try:
             self.folder.mkdir(parents=True, exist_ok=True, mode=0o700)
-            tmp = self.path(f"{name}.tmp{os.getpid()}")
-            fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o600)
+            try:
+                tmp.unlink()   # a leftover of a killed run with our pid (never followed if a link)
+            except FileNotFoundError:
+                pass
+            fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_NOFOLLOW", 0), 0o600)
             with os.fdopen(fd, "wb") as fh:
                 fh.write(self._tag(name, payload))
                 fh.write(payload)
-            tmp.replace(self.path(name))
+            target = self.path(name)
+            if target.is_dir() and not target.is_symlink():
+                # a folder planted under the entry's name: replace() cannot overwrite it
+                raise IsADirectoryError(str(target))
+            tmp.replace(target)
         except OSError:
-            pass
+            try:   # no temporary file left behind, whatever failed
+                tmp.unlink()
+            except OSError:
+                pass
 
     def prune(self, pattern: str, keep: int) -> None:
         """Keep the `keep` most recently used entries matching `pattern`."""

@@ -18,6 +18,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from emulator.terminal_text import plain, printable
+
 # lazy: start-up (`stvm` imports this module to look for `stvm.demo.cli`; the scenario reader,
 # the VM and the emulator load when a demo runs)
 
@@ -198,7 +200,7 @@ def _frame_text(frame: Any) -> str:
     data = frame.get("data") if isinstance(frame, dict) else frame[2] if isinstance(frame, (tuple, list)) and len(frame) > 2 else frame
     if isinstance(data, bytes):
         data = data.decode("latin-1")
-    return str(data).replace("\r", "\\r").replace("\n", "\\n")[:110]
+    return printable(str(data)[:110])
 
 
 def run_with_status(demo: Demo, run_scans, stream=None) -> None:
@@ -212,8 +214,10 @@ def run_with_status(demo: Demo, run_scans, stream=None) -> None:
             table = Table(title=f"stvm — {demo.title} (Ctrl-C to stop)", show_header=False)
             table.add_column("what", style="bold")
             table.add_column("value")
+            # plain text, control characters escaped: frames and ST strings (error
+            # descriptions) come from the robot and the program (issue 34 item 6)
             for name, value in demo.status_rows():
-                table.add_row(name, value)
+                table.add_row(plain(name), plain(value))
             return table
 
         with Live(render(), refresh_per_second=8, transient=False) as live:
@@ -230,7 +234,7 @@ def run_with_status(demo: Demo, run_scans, stream=None) -> None:
         second = vm.now_ns // 1_000_000_000
         if second != last_print[0]:
             last_print[0] = second
-            fields = "  ".join(f"{k}={v}" for k, v in demo.status_rows()[1:6] + demo.error_rows())
+            fields = printable("  ".join(f"{k}={v}" for k, v in demo.status_rows()[1:6] + demo.error_rows()))
             print(fields, file=stream, flush=True)
     demo.vm.on_scan_end.append(line)
     run_scans()

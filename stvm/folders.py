@@ -1,4 +1,4 @@
-"""Where stvm keeps its private files (the compile cache, Lark's parser tables), and whether a
+"""Where stvm keeps its private files (the signed compile cache, stvm/cache.py), and whether a
 folder is safe for them: files there are unpickled, so nobody else may be able to write them.
 
 The cache folder is `STVM_CACHE_DIR`, else `$XDG_CACHE_HOME/stvm`, else `~/.cache/stvm`. A folder
@@ -52,21 +52,6 @@ def folder_problem(folder: Path) -> str | None:
     return None
 
 
-
-
-def private_file(name: str) -> Path | None:
-    """`name` in the cache folder, the folder created private (0700) if need be; None when the
-    folder is not safe or cannot be made (then the caller does without the file)."""
-    folder = default_folder()
-    if folder_problem(folder) is not None:
-        return None
-    try:
-        folder.mkdir(mode=0o700, parents=True, exist_ok=True)
-    except OSError:
-        return None
-    if folder_problem(folder) is not None:
-        return None
-    return folder / name
 
 
 def content_name(prefix: str, *parts: str, suffix: str = ".bin") -> str:

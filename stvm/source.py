@@ -111,9 +111,27 @@ class SourceError(Exception):
         self.text = text
 
 
+STDLIB_PREFIX = "<stdlib>/"
+"""The name of every unit of stvm's own standard library begins with this."""
+
+
 def is_stdlib_file(file: str) -> bool:
-    """A unit of stvm's own standard library (`<stdlib>/…`), not the user's."""
-    return file.startswith("<stdlib")
+    """A unit of stvm's own standard library (`<stdlib>/…`), not the user's.
+
+    A name beginning with `<` is one no user file can have: `read_source` refuses such a
+    relative path (issue 34 item 7: a file named `<stdlib>x.st` was taken for the stdlib and
+    given `{native}` and the stdlib's exemptions)."""
+    return file.startswith(STDLIB_PREFIX)
+
+
+def reserved_name_problem(path: Path | str) -> str | None:
+    """Why `path` cannot name a user source file (None if it can): names beginning with `<`
+    are stvm's own built-in texts (`<stdlib>/…`, `<builtin>`)."""
+    name = str(path)
+    if name.startswith("<"):
+        return (f"the file name '{name}' begins with '<', which stvm keeps for its built-in sources "
+                f"(<stdlib>/…); rename the file")
+    return None
 
 
 def _is_utf8(encoding: str) -> bool:
@@ -124,6 +142,9 @@ def read_source(path: Path, encoding: str = "utf-8") -> str:
     """The text of an ST file. Sources are UTF-8 (a BOM is skipped) unless the project manifest
     declares `encoding`; raises SourceError for an oversized, binary or mis-encoded file and
     OSError if it cannot be read."""
+    problem = reserved_name_problem(path)
+    if problem:
+        raise SourceError(problem)
     with open(path, "rb") as fh:
         data = fh.read(MAX_SOURCE_BYTES + 1)   # bounded: /dev/zero must not exhaust memory
     if len(data) > MAX_SOURCE_BYTES:

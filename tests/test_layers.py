@@ -45,15 +45,15 @@ LAYERS: list[tuple[str, ...]] = [
     ("emulator",),                       # the TM robot: knows nothing of stvm
     ("stvm.version", "stvm.settings"),
     ("stvm.numeric",),                   # REAL rounding, STRING fitting: checker, lowering, runtime
-    # spans, read_source, SourceError; the private cache folder; the collector's pause
-    ("stvm.source", "stvm.folders", "stvm.heap"),
+    # spans, read_source, SourceError; the private cache folder and its signed entries; the collector's pause
+    ("stvm.source", "stvm.folders", "stvm.cache", "stvm.heap"),
     ("stvm.diagnostics",),               # FILE:LINE:COL: error: message + excerpt
     ("stvm.syntax",),                    # grammar, AST nodes, literals, tree walks
     ("stvm.semantics",),                 # index, types, checker
     ("stvm.lower",),                     # Python source + line map
     ("stvm.runtime",),                   # VM, clock, tasks, faults
     ("stvm.stdlib",),                    # IEC + Omron natives, sockets, ST sources
-    ("stvm.cache", "stvm.manifest"),
+    ("stvm.manifest",),
     ("stvm.project",),                   # the driver: load, check, lower, start
     ("stvm.lockstep", "stvm.scenario"),
     ("stvm.demo", "stvm.trace"),

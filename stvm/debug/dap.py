@@ -225,9 +225,12 @@ class DapServer:
 
     def dispatch(self, request: dict) -> None:
         command = request.get("command", "")
-        if not isinstance(command, str) or not isinstance(request.get("seq", 0), int) \
+        seq = request.get("seq", 0)
+        if not isinstance(command, str) or not isinstance(seq, int) or isinstance(seq, bool) \
                 or not isinstance(request.get("arguments") or {}, dict):
-            self.respond({"seq": 0, "command": ""}, success=False,
+            # answered under the request's own seq when it has one, so the client can match it
+            self.respond({"seq": seq if isinstance(seq, int) and not isinstance(seq, bool) else 0,
+                          "command": command if isinstance(command, str) else ""}, success=False,
                          message="a request needs \"command\" (a string), \"seq\" (an integer) and "
                                  "\"arguments\" (an object)")
             return
@@ -243,8 +246,12 @@ class DapServer:
         except ProtocolError as exc:
             self.respond(request, success=False, message=str(exc))
             return
+        except RecursionError:
+            self.respond(request, success=False, message="the request is nested too deeply for stvm dap")
+            return
         except Exception as exc:  # an adapter bug: answer, keep serving
-            self.respond(request, success=False, message=f"internal error in stvm dap ({type(exc).__name__}: {exc})")
+            self.respond(request, success=False, message=f"internal error in stvm dap ({type(exc).__name__}: "
+                                                         f"{printable(str(exc), 200)})")
             return
         self.respond(request, body)
         after = getattr(self, "after_" + command, None)
@@ -279,6 +286,11 @@ class DapServer:
     def on_launch(self, args: dict) -> dict:
         from stvm.debug.session import SessionOptions, open_session   # lazy: start-up
         from stvm.scenario import ScenarioError   # lazy: start-up
+        if self.session is not None:
+            # one program per debug session (as the DAP spec has it): a second launch would start
+            # a second VM and emulator and leak the first one's port and thread
+            raise ProtocolError("a program is already launched in this debug session; "
+                                "disconnect first (or start a new session)")
         program = args.get("program")
         if not program:
             raise ProtocolError("launch needs \"program\": an ST file (or a list of files)")
@@ -289,8 +301,8 @@ class DapServer:
         for name in ("scenario", "robot"):
             _str_arg(args, name)
         scan = args.get("scan")
-        if scan is not None and (isinstance(scan, bool) or not isinstance(scan, (str, int))):
-            raise ProtocolError("launch \"scan\" must be a duration such as \"1ms\"")
+        if scan is not None and not isinstance(scan, str):   # 5: 5 what? (was an internal error)
+            raise ProtocolError("launch \"scan\" must be a duration in a string, such as \"1ms\"")
         cycles = args.get("cycles")
         if cycles is not None and (_int_arg(args, "cycles") < 0):
             raise ProtocolError("launch \"cycles\" must be >= 0")

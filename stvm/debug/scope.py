@@ -201,10 +201,16 @@ class ScopeCompiler:
 
     # ---- parsing
     def parse(self, text: str) -> n.Expr:
+        if len(text) > MAX_EXPRESSION_CHARS:
+            raise DebugError(f"the expression is {len(text)} characters long, more than the debugger takes "
+                             f"({MAX_EXPRESSION_CHARS})")
         expr, diags = parse_expression(text.strip(), EXPR_FILENAME, self.settings)
         errors = [d for d in diags if d.is_error]
         if expr is None or errors:
-            raise DebugError(_messages(errors or diags, text) or f"cannot parse {text!r}")
+            raise DebugError(_messages(errors or diags, text) or f"cannot parse {_shown(text)}")
+        if _tree_depth(expr) > MAX_EXPRESSION_DEPTH:
+            raise DebugError(f"the expression is nested more than {MAX_EXPRESSION_DEPTH} levels deep "
+                             f"(operators, brackets, calls), more than the debugger takes")
         return expr
 
     # ---- checking and lowering
@@ -311,9 +317,12 @@ def _internal_errors_as_debug_errors(fn, *args):
         return fn(*args)
     except DebugError:
         raise
+    except RecursionError:
+        raise DebugError("the expression is nested too deeply for the debugger") from None
     except Exception as exc:  # noqa: BLE001 - reported to the user, never fatal to the session
-        raise DebugError(f"stvm cannot handle {' := '.join(a for a in args[1:] if isinstance(a, str))!r} "
-                         f"({type(exc).__name__}: {exc}); this is an stvm bug") from exc
+        text = " := ".join(a for a in args[1:] if isinstance(a, str))
+        raise DebugError(f"stvm cannot handle {_shown(text)} ({type(exc).__name__}: {_shown(str(exc), quote=False)}); "
+                         f"this is an stvm bug") from exc
 
 
 def run_guarded(fn):
@@ -357,9 +366,43 @@ def _compile(source: str, mode: str) -> CodeType:
     return compile(source, EXPR_FILENAME, mode)
 
 
+# What the debugger evaluates (watch, hover, console, conditions, set/force): a hostile or pasted
+# 40 KB expression must give a short error, not a RecursionError reported as an stvm bug with
+# the whole text (issue 34 item 11).
+MAX_EXPRESSION_CHARS = 4096
+MAX_EXPRESSION_DEPTH = 100
+_MAX_MESSAGES = 3
+
+
+def _tree_depth(node: object) -> int:
+    """How deep a syntax tree is, walked with a stack (never recursively)."""
+    deepest = 0
+    stack = [(node, 1)]
+    while stack:
+        item, depth = stack.pop()
+        if depth > deepest:
+            deepest = depth
+        for name in getattr(item, "__dataclass_fields__", ()):
+            child = getattr(item, name, None)
+            if isinstance(child, (list, tuple)):
+                stack.extend((c, depth + 1) for c in child if hasattr(c, "__dataclass_fields__"))
+            elif hasattr(child, "__dataclass_fields__") and name != "span":
+                stack.append((child, depth + 1))
+    return deepest
+
+
+def _shown(text: str, limit: int = 80, quote: bool = True) -> str:
+    """`text` for a message: control characters escaped, cut to `limit` characters."""
+    text = "".join(c if c.isprintable() else f"\\x{ord(c):02x}" for c in text[:limit + 1])
+    text = text if len(text) <= limit else text[:limit] + "…"
+    return repr(text) if quote else text
+
+
 def _messages(diags, text: str) -> str:
     out = []
     for d in diags:
         col = d.span.column if d.span.file == EXPR_FILENAME and d.span.column > 0 else 0
         out.append(d.message + (f" (column {col})" if col and len(text.strip()) > 20 else ""))
-    return "; ".join(dict.fromkeys(out))
+    unique = list(dict.fromkeys(out))
+    more = len(unique) - _MAX_MESSAGES
+    return "; ".join(unique[:_MAX_MESSAGES]) + (f"; and {more} more error(s)" if more > 0 else "")

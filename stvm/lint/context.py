@@ -12,6 +12,7 @@ from stvm.lint.findings import Finding
 from stvm.semantics import types as t
 from stvm.syntax import nodes as n
 from stvm.lint.dataflow import solve
+from stvm.source import is_stdlib_file
 
 
 class ProjectContext:
@@ -29,14 +30,14 @@ class ProjectContext:
             info = self.analysis.model.pous.get(key)
             if info is None or info.native or not node.body:
                 continue
-            if node.span.file.startswith("<stdlib") and not include_stdlib:
+            if is_stdlib_file(node.span.file) and not include_stdlib:
                 continue
             out.append(PouContext(self, node, info))
         for key, node in self.analysis.pou_nodes.items():
             info = self.analysis.model.pous.get(key)
             if info is None or info.kind not in ("FUNCTION_BLOCK", "PROGRAM"):
                 continue
-            if node.span.file.startswith("<stdlib") and not include_stdlib:
+            if is_stdlib_file(node.span.file) and not include_stdlib:
                 continue
             out += self.method_contexts(node, info)
         return out

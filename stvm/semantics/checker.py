@@ -1650,7 +1650,7 @@ class Checker:
             ordered = sorted(tasks.values(), key=lambda tk: tk.priority)
             return ordered, []
         programs = [info.qualname for key, info in self.pous.items()
-                    if info.kind == "PROGRAM" and not info.file.startswith("<stdlib")]
+                    if info.kind == "PROGRAM" and not is_stdlib_file(info.file)]
         return [], programs
 
 

@@ -54,3 +54,19 @@ def test_cli_runs_with_faults_and_settings(capsys: pytest.CaptureFixture[str]) -
                  "--set", "accept_one_digit_checksum=true", "--set", "known_bases=RobotBase,Base1"]) == 0
     out = capsys.readouterr().out
     assert "listening on 127.0.0.1:" in out and "reply_delay_ms=5" in out
+
+
+@pytest.mark.parametrize("host", ["", "  "])
+def test_cli_refuses_an_empty_host_instead_of_every_interface(host: str, capsys: pytest.CaptureFixture[str]) -> None:
+    """`--host ''` (an unset shell variable) bound every interface silently (issue 34 item 8)."""
+    with pytest.raises(SystemExit) as exit_info:
+        main(["--host", host, "--port", "0", "--quiet", "--duration", "0"])
+    assert exit_info.value.code == 2
+    assert "needs an address to listen on" in capsys.readouterr().err
+
+
+def test_cli_warns_when_listening_on_every_interface(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["--host", "0.0.0.0", "--port", "0", "--quiet", "--duration", "0"]) == 0
+    captured = capsys.readouterr()
+    assert "listening on 0.0.0.0:" in captured.out
+    assert "warning: listening on every network interface" in captured.err
