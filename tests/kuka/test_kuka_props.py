@@ -15,7 +15,7 @@ from kuka_harness import KukaBench
 from robotlibs_helpers import Probe, run_schedule, schedules
 from robotlibs_helpers import V2_ERROR_IDS
 
-KUKA_CODES = frozenset([501, 510, 511, 512, 520, 521, 522, 530, 531, 532, 540, 541]) | {10000 + c for c in V2_ERROR_IDS}
+KUKA_CODES = frozenset([501, 510, 511, 512, 520, 521, 522, 530, 531, 532, 540, 541, 542]) | {10000 + c for c in V2_ERROR_IDS}
 
 E6POS = {**{k: "REAL" for k in ("X", "Y", "Z", "A", "B", "C", "E1", "E2", "E3", "E4", "E5", "E6")}, "S": "INT", "T": "INT"}
 APO = {"PTP_MODE": "INT", "CP_MODE": "INT", "CPTP": "INT", "CDIS": "REAL", "CORI": "REAL", "CVEL": "INT"}
