@@ -519,3 +519,33 @@ def test_a_zero_length_point_completes_or_is_a_refused_target(bench, reject):
         assert out["Sts_ER"] and out["Sts_ERR"] == 1044 and out["Sts_EXERR"] == 1
     else:
         assert out["Sts_PC"] and not out["Sts_ER"]
+
+
+def test_status_estimates_from_polled_poses(bench):
+    """Issue 31 item 3: with Cfg.StatusPollPeriod the handler polls the TCP (ListenSend 92,
+    Robot[0].CoordRobot) and estimates ActiveMovePerc and the linear/angular velocity and
+    acceleration; without it (the default) nothing is polled and they stay 0."""
+    b = bench()
+    b.set("R.Robot.Cfg.StatusPollPeriod", 50_000_000)            # 50 ms
+    b.path([cartesian((400.0, -150.0, 300.0, 180, 0, 90), move_id=1, interpolation=1, speed=100.0, accel=500.0),
+            cartesian((400.0, -150.0, 100.0, 180, 0, 90), move_id=2, interpolation=1, speed=100.0, accel=500.0)])
+    b.watch = {"Perc": "R.Robot.Sts.ActiveMovePerc", "V": "R.Robot.Sts.LinearVelocity", "ID": "R.Robot.Sts.ActiveMoveID",
+               "W": "R.Robot.Sts.AngularVelocity", "A": "R.Robot.Sts.LinearAccleration"}
+    b.run("A", 0, 2)
+    assert until_end(b)["Sts_PC"]
+    assert any(b"ListenSend(92,GetString(Robot[0].CoordRobot))" in f for f in b.rx())
+    second = [s for s in b.samples if s["ID"] == 2]
+    percs = [s["Perc"] for s in second]
+    assert percs == sorted(percs) and 40.0 < max(percs) <= 100.0          # rises along the 200 mm line
+    assert max(s["V"] for s in second) == pytest.approx(100.0, rel=0.1)  # the commanded 100 mm/s
+    assert max(abs(s["W"]) for s in second) < 1.0                        # the orientation does not change
+    assert any(s["A"] > 0 for s in second) and any(s["A"] < 0 for s in second)
+
+
+def test_no_status_polling_by_default(bench):
+    b = bench()
+    b.path([pnp_point(0)])
+    b.run("A", 0, 1)
+    until_end(b)
+    assert not any(b"ListenSend" in f for f in b.rx())
+    assert b.get("R.Robot.Sts.LinearVelocity") == 0.0 and b.get("R.Robot.Sts.ActiveMovePerc") == 0.0
