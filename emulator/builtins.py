@@ -191,6 +191,9 @@ def fn_ptp(robot: ScriptHost, args: list[Any], ctx: ScriptContext) -> bool:
             joints = target
         else:
             joints = robot.planner.solve(ctx.plan, dm.matmul(ctx.plan.base, pose_to_matrix(target)))
+        if robot.settings.reject_zero_length_motion and max(abs(float(a) - float(b))
+                                                            for a, b in zip(joints, ctx.plan.joints)) < 1e-9:
+            raise PlanError("zero-length motion")
         seg = robot.planner.joint_motion(ctx.plan, joints, speed, accel, blend, precise, f"PTP {fmt}")
     except PlanError as exc:
         raise ArgError(str(exc)) from None
@@ -205,6 +208,10 @@ def _line_like(robot: ScriptHost, ctx: ScriptContext, fmt: str, target_tcp: np.n
     speed = _speed(v[7], speed_is_pct, robot.settings)
     accel, blend = _accel(v[8]), _blend(v[9], not blend_is_radius)
     precise = not _boolean(v[10], "disablePrecise") if len(v) > 10 else False
+    if robot.settings.reject_zero_length_motion and \
+            float(dm.norm(target_tcp[:3, 3] - ctx.plan.tcp[:3, 3])) < 1e-9 and \
+            float(dm.norm(target_tcp[:3, :3] - ctx.plan.tcp[:3, :3])) < 1e-9:
+        raise ArgError("zero-length motion")
     try:
         seg = robot.planner.cart_motion(ctx.plan, target_tcp, speed, speed_is_pct, accel, blend,
                                         blend_is_radius, precise, label)

@@ -574,9 +574,12 @@ class Robot:
         """Stop the motion and drop the motion queue; the plan restarts from the rest pose (§8)."""
         self.executor.stop_and_clear(self.tool)
         # §8 / §11 #7: dropped tags stay "false", no notification.
-        self.plan = PlannedState(self.executor.rest_joints.copy(), self.executor.rest_tcp.copy(),
-                                 self.plan.base.copy(), self.plan.tool.copy())
-        self.base, self.tool = self.plan.base.copy(), self.plan.tool.copy()
+        if self.settings.stop_applies_queued_frames:
+            base, tool = self.plan.base, self.plan.tool
+        else:
+            base, tool = self.base, self.tool      # dropped ChangeBase/ChangeTCP markers never happened
+        self.plan = PlannedState(self.executor.rest_joints.copy(), self.executor.rest_tcp.copy(), base.copy(), tool.copy())
+        self.base, self.tool = base.copy(), tool.copy()
 
     # ---------------------------------------------------------------- script runner
 

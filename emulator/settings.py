@@ -294,6 +294,14 @@ class EmulatorSettings:
     """Multiplies every motion duration (e.g. 0.01 for fast tests)."""
     min_accel_ms: int = setting(1, "Choice (§8)", Integer(0, 86_400_000))
     """Choice: accel_ms below this is raised to it (a zero acceleration time is not physical)."""
+    stop_applies_queued_frames: bool = setting(True, "Choice (§7, §8)", Flag())
+    """Choice: a ChangeBase/ChangeTCP queued behind motions that StopAndClearBuffer drops still
+    sets the base/tool of the motions after the stop (True, as the plan had it), or is dropped with
+    them (False: the frames in effect where the robot stopped). The TM documents neither."""
+    reject_zero_length_motion: bool = setting(False, "Choice (§7)", Flag())
+    """Choice: a PTP/Line/Circle to the pose the robot is planned to be at is run as a motion of
+    zero length that completes at once (False), or refused like an invalid argument (True:
+    ``ERROR;<line>``). The TM documents neither."""
 
     def __post_init__(self) -> None:
         # every value is checked (lists become tuples, spellings Enum members) at construction

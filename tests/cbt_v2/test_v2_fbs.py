@@ -419,3 +419,28 @@ def test_exit_node_then_commands_wait_for_the_node(bench):
     b.start("Abs", move_params())
     assert b.finish("Abs")["Done"]
     assert script_of(b.rx()[1])[1] == "ScriptExit()"
+
+
+# ------------------------------------------------------------------------- codes of the docs/robotlibs_cbt_v2.md table (issue 31)
+
+
+def test_motion_reported_failed_is_16_110():
+    """The robot reports the motion's QueueTag false (emulator fault tag_false): 16#110 motion failed."""
+    b = V2Bench("Abs", faults=["tag_false"])
+    try:
+        b.start("Abs", move_params(target=(417.5, -122.3, 300.0, 180.0, 0.0, 90.0)))
+        end = b.finish("Abs")
+        assert end["Error"] and end["ErrorID"] == 0x110 and not end["Done"]
+    finally:
+        b.close()
+
+
+def test_cperr_answer_is_16_81():
+    """The robot answers CPERR (a frame longer than its max_data_length): 16#81."""
+    b = V2Bench("Abs", settings=emulator.EmulatorSettings(max_data_length=40))
+    try:
+        b.start("Abs", move_params(target=(417.5, -122.3, 300.0, 180.0, 0.0, 90.0)))
+        end = b.finish("Abs")
+        assert end["Error"] and end["ErrorID"] == 0x81
+    finally:
+        b.close()

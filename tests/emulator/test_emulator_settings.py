@@ -127,6 +127,10 @@ PROBES: dict[str, Callable[[EmulatorSettings], Any]] = {
     "precise_settle_ms": lambda s: client(s).tag_time(PTP_HOME_J6_90.replace(",true)", ",false)")),
     "time_scale": lambda s: client(s).tag_time(PTP_HOME_J6_90),
     "min_accel_ms": lambda s: client(s).tag_time('PTP("JPP",0,0,90,0,90,1,100,0,0,true)'),
+    # a base 100 mm up queued behind a motion, dropped by the stop: the next Line is longer when it applies
+    "stop_applies_queued_frames": lambda s: client(s).sct("1," + PTP_HOME_J6_90 + "\r\nChangeBase(0,0,100,0,0,0)")
+    .at(100 * MS).sct("2,StopAndClearBuffer()").at(200 * MS).tag_time(LINE_X_100),
+    "reject_zero_length_motion": lambda s: client(s).sct('1,PTP("JPP",0,0,90,0,90,0,20,200,0,true)').log,
 }
 
 # the alternative each probe runs under (the defaults are the spec's; see emulator/settings.py)
@@ -161,6 +165,8 @@ ALTERNATIVES: dict[str, Any] = {
     "precise_settle_ms": 100,
     "time_scale": 0.5,
     "min_accel_ms": 500,
+    "stop_applies_queued_frames": False,
+    "reject_zero_length_motion": True,
 }
 
 

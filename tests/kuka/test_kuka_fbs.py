@@ -241,3 +241,81 @@ def test_robot_refusal_and_lost_connection(bench):
     assert b.finish("Ptp")["ErrorID"] == 10000 + 0x99
     b.scan(5)
     assert not b.get("K.Group.Valid") and b.get("K.Group.ErrorID") == 0x90
+
+
+# ------------------------------------------------------------------------- the seed STRUCTs, element by element (issue 31 item 5)
+
+
+@pytest.mark.parametrize(("status", "config"), [
+    (0, None),                          # not given: the TM takes the nearest configuration
+    (1, [1.0, 2.0, 4.0]),               # overhead -> Lefty
+    (2, [0.0, 3.0, 4.0]),               # A3 bit -> Below
+    (4, [0.0, 2.0, 5.0]),               # A5 <= 0 -> Flip
+    (7, [1.0, 3.0, 5.0]),
+    (8 + 2, [0.0, 3.0, 4.0]),           # bit 3 (unused by KUKA) ignored
+    (16 + 4, [0.0, 2.0, 5.0]),          # bit 4 (absolutely accurate) ignored
+])
+def test_e6pos_status_is_the_tm_pose_configuration(bench, status, config):
+    b = bench()
+    b.pos("K.PtpPosition", 417.5, -122.3, 330.0, 90.0, 0.0, 180.0)
+    b.set("K.PtpPosition.S", status)
+    b.set("K.PtpPosition.T", 35)                              # Turn: no TM counterpart, ignored
+    b.set("K.PtpExecute", True)
+    out = b.finish("Ptp")
+    assert out["Done"] and not out["Error"]                   # the emulator accepts the configuration
+    name, args = motion_commands(b.rx())[0]
+    assert name == "PTP" and (args[11:] if config else len(args)) == (config if config else 11)
+
+
+@pytest.mark.parametrize("status", [-1, -32768])
+def test_e6pos_status_negative_is_542(bench, status):
+    b = bench()
+    b.pos("K.PtpPosition", 417.5, -122.3, 330.0, 90.0, 0.0, 180.0)
+    b.set("K.PtpPosition.S", status)
+    b.set("K.PtpExecute", True)
+    out = b.finish("Ptp", 10)
+    assert out["Error"] and out["ErrorID"] == 542 and sent_scripts(b) == []
+
+
+def test_linear_target_ignores_status_and_turn(bench):
+    b = bench()
+    b.pos("K.LinPosition", 417.5, -122.3, 300.0, 90.0, 0.0, 180.0)
+    b.set_many("K.LinPosition", {"S": 7, "T": 63})
+    b.set("K.LinExecute", True)
+    assert b.finish("Lin")["Done"]
+    assert len(motion_commands(b.rx())[0][1]) == 11
+
+
+@pytest.mark.parametrize("element", ["E1", "E2", "E3", "E4", "E5", "E6"])
+@pytest.mark.parametrize("fb", ["Ptp", "Lin"])
+def test_every_additional_axis_of_e6pos_is_540(bench, fb, element):
+    b = bench()
+    b.pos(f"K.{fb}Position", 417.5, -122.3, 330.0, 90.0, 0.0, 180.0)
+    b.set(f"K.{fb}Position.{element}", -0.5)
+    b.set(f"K.{fb}Execute", True)
+    out = b.finish(fb, 10)
+    assert out["Error"] and out["ErrorID"] == 540 and sent_scripts(b) == []
+
+
+@pytest.mark.parametrize("element", ["E1", "E2", "E3", "E4", "E5", "E6"])
+def test_every_additional_axis_of_e6axis_is_540(bench, element):
+    b = bench()
+    b.set_many("K.AxisPosition", {"A3": 90.0, "A5": 90.0, element: 2.0})
+    b.set("K.AxisExecute", True)
+    out = b.finish("Axis", 10)
+    assert out["Error"] and out["ErrorID"] == 540 and sent_scripts(b) == []
+
+
+@pytest.mark.parametrize(("cp_mode", "outcome"), [(0, "Done"), (1, "Done"), (2, 531), (3, "Done")])
+def test_apo_cori_is_only_read_by_orientation_contouring(bench, cp_mode, outcome):
+    """APO.CORI (orientation parameter) belongs to CP_MODE 2, which a TM Line cannot do (531); with any
+    other mode it is not used, whatever its value."""
+    b = bench()
+    b.pos("K.LinPosition", 417.5, -122.3, 300.0, 90.0, 0.0, 180.0)
+    b.set_many("K.LinApo", {"CP_MODE": cp_mode, "CORI": 45.0, "CDIS": 5.0, "CVEL": 50})
+    b.set("K.LinExecute", True)
+    out = b.finish("Lin")
+    if outcome == "Done":
+        assert out["Done"] and "45" not in sent_scripts(b)[0].split("\r\n")[0].split(",")[-2]
+    else:
+        assert out["Error"] and out["ErrorID"] == outcome

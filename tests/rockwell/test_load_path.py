@@ -475,3 +475,77 @@ def test_handler_stopping_is_1003_for_a_new_path(bench):
     b.run("B", 5, 1)
     b.scan(1)
     assert b.get("R.B.Sts_ERR") == 1003 and b.get("R.B.Sts_EXERR") == 0
+
+
+# ------------------------------------------------------------------------- emulator choices (docs/emulator.md)
+
+
+@pytest.mark.parametrize("applies", [True, False])
+def test_after_a_stop_the_next_path_runs_in_its_own_frame_whatever_the_robot_kept(bench, applies):
+    """A stop drops a point whose ChangeBase was queued; whether the robot keeps that base is the
+    emulator switch stop_applies_queued_frames. The handler sends tool and base again after a stop,
+    so the next path ends at the same place under both choices."""
+    b = bench(settings=emulator.EmulatorSettings(stop_applies_queued_frames=applies))
+    b.set_many("R.Robot.Cfg.UserFrames[3]", {"X": 10.0, "Y": 20.0})
+    b.set("R.Robot.Cfg.UserConfigured[3]", True)
+    b.path([pnp_point(0), cartesian((400.0, -150.0, 250.0, 180, 0, 90), ref_type=4, ref_id=3, speed=36.0,
+                                    accel=180.0)])
+    b.run("A", 0, 2)
+    b.scan(60)                                          # both points on the robot, the first one moving
+    b.set("R.Stop", True)
+    assert until_end(b, max_scans=300)["Sts_ERR"] == 1007
+    b.set("R.Stop", False)
+    b.set("R.AEnable", False)
+    b.scan(2)
+    # the same user frame as the dropped point: the handler may not assume the robot has it
+    b.path([cartesian(PNP_TARGETS[3], ref_type=4, ref_id=3)], start=5)
+    b.run("B", 5, 1)
+    assert until_end(b, "B")["Sts_PC"]
+    assert "ChangeBase(10.00,20.00,0.00,0.00,0.00,0.00)" in script_of(b.rx()[-1])[1]
+    x, y, z = PNP_TARGETS[3][:3]
+    assert list(matrix_to_pose(b.robot().executor.current_tcp()))[:3] == pytest.approx([x + 10.0, y + 20.0, z],
+                                                                                       abs=0.05)
+
+
+@pytest.mark.parametrize("reject", [False, True])
+def test_a_zero_length_point_completes_or_is_a_refused_target(bench, reject):
+    """A point at the pose the robot is at: the emulator switch reject_zero_length_motion decides
+    whether the TM runs it (done at once) or refuses it (1044, as any refused target)."""
+    b = bench(settings=emulator.EmulatorSettings(reject_zero_length_motion=reject))
+    b.path([pnp_point(0), pnp_point(0, move_id=7)])
+    b.run("A", 0, 2)
+    out = until_end(b)
+    if reject:
+        assert out["Sts_ER"] and out["Sts_ERR"] == 1044 and out["Sts_EXERR"] == 1
+    else:
+        assert out["Sts_PC"] and not out["Sts_ER"]
+
+
+def test_status_estimates_from_polled_poses(bench):
+    """Issue 31 item 3: with Cfg.StatusPollPeriod the handler polls the TCP (ListenSend 92,
+    Robot[0].CoordRobot) and estimates ActiveMovePerc and the linear/angular velocity and
+    acceleration; without it (the default) nothing is polled and they stay 0."""
+    b = bench()
+    b.set("R.Robot.Cfg.StatusPollPeriod", 50_000_000)            # 50 ms
+    b.path([cartesian((400.0, -150.0, 300.0, 180, 0, 90), move_id=1, interpolation=1, speed=100.0, accel=500.0),
+            cartesian((400.0, -150.0, 100.0, 180, 0, 90), move_id=2, interpolation=1, speed=100.0, accel=500.0)])
+    b.watch = {"Perc": "R.Robot.Sts.ActiveMovePerc", "V": "R.Robot.Sts.LinearVelocity", "ID": "R.Robot.Sts.ActiveMoveID",
+               "W": "R.Robot.Sts.AngularVelocity", "A": "R.Robot.Sts.LinearAccleration"}
+    b.run("A", 0, 2)
+    assert until_end(b)["Sts_PC"]
+    assert any(b"ListenSend(92,GetString(Robot[0].CoordRobot))" in f for f in b.rx())
+    second = [s for s in b.samples if s["ID"] == 2]
+    percs = [s["Perc"] for s in second]
+    assert percs == sorted(percs) and 40.0 < max(percs) <= 100.0          # rises along the 200 mm line
+    assert max(s["V"] for s in second) == pytest.approx(100.0, rel=0.1)  # the commanded 100 mm/s
+    assert max(abs(s["W"]) for s in second) < 1.0                        # the orientation does not change
+    assert any(s["A"] > 0 for s in second) and any(s["A"] < 0 for s in second)
+
+
+def test_no_status_polling_by_default(bench):
+    b = bench()
+    b.path([pnp_point(0)])
+    b.run("A", 0, 1)
+    until_end(b)
+    assert not any(b"ListenSend" in f for f in b.rx())
+    assert b.get("R.Robot.Sts.LinearVelocity") == 0.0 and b.get("R.Robot.Sts.ActiveMovePerc") == 0.0

@@ -431,3 +431,35 @@ def test_library_is_lint_clean():
     run = subprocess.run([sys.executable, "-m", "stvm", "lint", "st_src/schneider"], cwd=REPO, capture_output=True,
                          text=True)
     assert run.returncode == 0, run.stdout + run.stderr
+
+
+# ------------------------------------------------------------------------- emulator choices (docs/emulator.md)
+
+
+@pytest.mark.parametrize("applies", [True, False])
+def test_after_a_stop_the_coordinate_system_set_last_stays(bench, applies):
+    """A refused segment stops the robot and drops the segment carrying a ChangeBase; whether the
+    robot keeps that base is the emulator switch stop_applies_queued_frames. The link sends the
+    coordinate system sent last again with the next segment after a stop, so the next path runs in it
+    (seed: the robot stays in the coordinate system set last) under both choices."""
+    b = bench(settings=emulator.EmulatorSettings(stop_applies_queued_frames=applies))
+    user_frame(b, 1, (10.0, 20.0, 0.0, 0.0, 0.0, 0.0))
+    pick_path(b, hold=True)
+    b.issue(move("MovePTP", 4, (2000.0, 0.0, 300.0, 180.0, 0.0, 90.0)))     # unreachable: refused
+    assert b.issue(set_cs("User1"), change(2, 0.0, 2, 0.0), execute(True)) == [OK, OK, OK]
+    b.until_path_end()
+    assert b.path_diag()[1] == "UnexpectedFeedback"
+    b.scan(50)
+    b.issue(move("MovePTP", 1, PICK[1]))
+    b.until_path_end()
+    assert b.path_diag() == OK
+    assert statements(motion_frames(b)[-1])[0] == ("ChangeBase", [10.0, 20.0, 0.0, 0.0, 0.0, 0.0])
+    assert robot_frame_tcp(b)[:3] == pytest.approx([PICK[1][0] + 10.0, PICK[1][1] + 20.0, PICK[1][2]], abs=0.05)
+
+
+@pytest.mark.parametrize("reject", [False, True])
+def test_a_zero_length_segment_completes_or_is_unexpected_feedback(bench, reject):
+    b = bench(settings=emulator.EmulatorSettings(reject_zero_length_motion=reject))
+    b.issue(move("MovePTP", 1, PICK[0]), move("MovePTP", 2, PICK[0]))
+    b.until_path_end()
+    assert b.path_diag()[:2] == (("UnexpectedProgramBehavior", "UnexpectedFeedback") if reject else ("Ok", "Ok"))

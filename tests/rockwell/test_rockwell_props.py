@@ -29,7 +29,8 @@ POINT_FIELDS = {"MoveID": "DINT", "MoveType": "DINT", "TargetPointType": "SINT",
                 "OrientationSpeed": "REAL", "OrientationAcceleration": "REAL", "OrientationDeceleration": "REAL"}
 INPUTS = {"R.AStart": "DINT", "R.ANumber": "DINT", "R.ATracking0": "BOOL", "R.ATracking1": "BOOL",
           "R.BEnable": "BOOL", "R.BStart": "DINT", "R.BNumber": "DINT", "R.Stop": "BOOL", "R.Reset": "BOOL",
-          "R.HandlerEnable": "BOOL"}
+          "R.HandlerEnable": "BOOL",
+          "R.Robot.Cfg.StatusPollPeriod": (0, 1_000_000, 20_000_000, 200_000_000)}     # TIME in ns: off, 1 ms .. 200 ms
 # the points the demo path uses (0..5) and the last one, every member
 INPUTS |= {f"R.Path[{i}].{field}": kind for i in (0, 1, 2, 5, 19) for field, kind in POINT_FIELDS.items()}
 INPUTS |= {f"R.Path[1].Joints[{j}]": "REAL" for j in range(9)}

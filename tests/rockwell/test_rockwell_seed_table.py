@@ -8,7 +8,7 @@ import re
 from pathlib import Path
 
 from robotlibs_helpers import REPO
-from test_props import SEED_CODES
+from test_rockwell_props import SEED_CODES
 
 DOC = REPO / "docs" / "robotlibs_rockwell.md"
 TESTS = Path(__file__).resolve().parent / "test_load_path.py"
