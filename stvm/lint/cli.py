@@ -34,7 +34,7 @@ def register(subparsers) -> None:
     lint.add_argument("--no-cache", action="store_true", help="do not use the parse cache")
     lint.add_argument("--sysmac", action="append", metavar="NAME=VALUE", help="override a Sysmac UNCERTAIN setting")
     lint.set_defaults(func=cmd_lint)
-    lsp = subparsers.add_parser("lsp", help="language server on stdio: check and lint diagnostics for editors")
+    lsp = subparsers.add_parser("lsp", help="language server on stdio (hover, definition, completion, rename, diagnostics …; docs/editor.md)")
     lsp.add_argument("--sysmac", action="append", metavar="NAME=VALUE", help="override a Sysmac UNCERTAIN setting")
     lsp.set_defaults(func=cmd_lsp)
 
@@ -118,8 +118,9 @@ def cmd_lsp(args) -> int:
     except ValueError as exc:
         return _usage(str(exc))
     try:
-        from stvm.lint.lsp import serve   # lazy: start-up
+        from stvm.lsp.server import serve   # lazy: start-up
     except ImportError as exc:
         return _usage(f"the language server needs pygls: pip install 'stvm[lsp]' ({exc})")
-    serve(settings)
+    del settings   # validated above; each project's settings come from its stvm.toml plus these overrides
+    serve(list(args.sysmac or []))
     return EXIT_CLEAN
