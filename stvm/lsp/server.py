@@ -23,7 +23,7 @@ import logging
 import concurrent.futures
 import threading
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from urllib.parse import unquote, urlparse
 
@@ -131,7 +131,8 @@ class ProjectState:
     result: CheckResult | None = None
     index: Index | None = None        # the last one built from a project that parsed
     published: frozenset = frozenset()
-    seconds: float = 0.0
+    lint: dict = field(default_factory=dict)        # file → its last lint findings
+    indexed: object = None                          # the CheckResult `index` was built from
 
 
 class StvmLanguageServer(LanguageServer):
@@ -148,6 +149,7 @@ class StvmLanguageServer(LanguageServer):
         self.executor = concurrent.futures.ThreadPoolExecutor(max_workers=1, thread_name_prefix="stvm-check")
         self.pending: dict[tuple[str, ...], asyncio.TimerHandle] = {}
         self.timings: list[float] = []
+        self.problems: list[str] = []               # errors met off the event loop, logged on it
 
     # ---- files and projects ------------------------------------------------------------------
 
@@ -173,26 +175,61 @@ class StvmLanguageServer(LanguageServer):
         return tuple(_norm(p) for p in project_root_of(path))
 
     def check_now(self, path: Path) -> ProjectState:
-        """Check the project of `path` (blocking) and publish its diagnostics."""
-        state, by_uri = self.compute(path, self.buffers())
+        """Check, lint and index the project of `path` (blocking) and publish its diagnostics."""
+        state, by_uri = self.compute(path, self.buffers(), lint="all")
         self.publish(state, by_uri)
+        self.reindex(state)
         return state
 
-    def compute(self, path: Path, buffers: dict[str, str]) -> tuple[ProjectState, dict]:
-        """Check the project of `path` with `buffers` and rebuild its index (any thread)."""
+    def compute(self, path: Path, buffers: dict[str, str], lint: str = "all") -> tuple[ProjectState, dict]:
+        """Check the project of `path` with `buffers` (any thread): the diagnostics per URI.
+        `lint` "all" lints every file of the project, "none" none: the findings of the files
+        not edited are kept from their last lint, the edited file's are dropped until
+        `relint` (its lines may have moved)."""
         key = self.project_key(path)
         with self.lock:
             result = self.driver.check(path, buffers)
             state = self.projects.setdefault(key, ProjectState())
             state.result = result
-            if result.analysis is not None:
-                state.index = build_index(result.analysis, result.texts, result.files)
             for file in result.files:
                 self.project_of_file[file] = key
-            by_uri = self.diagnostics_of(result, path)
-        return state, by_uri
+            if lint == "all":
+                state.lint = self.lint_of(result, None)
+            else:
+                state.lint.pop(_norm(path), None)
+            return state, self.diagnostics_of(state, path)
 
-    def diagnostics_of(self, result: CheckResult, path: Path) -> dict[str, list[lsp.Diagnostic]]:
+    def relint(self, state: ProjectState, path: Path) -> dict | None:
+        """Lint the edited file again (any thread); the diagnostics per URI, None if it cannot be."""
+        with self.lock:
+            result = state.result
+            if result is None or result.analysis is None:
+                return None
+            file = _norm(path)
+            state.lint.update(self.lint_of(result, {file}))
+            state.lint.setdefault(file, [])
+            return self.diagnostics_of(state, path)
+
+    def reindex(self, state: ProjectState) -> None:
+        """Rebuild the position index from the last check (kept when that check had no analysis)."""
+        result = state.result
+        if result is not None and result.analysis is not None and state.indexed is not result:
+            state.index = build_index(result.analysis, result.texts, result.files)
+            state.indexed = result
+
+    def lint_of(self, result: CheckResult, files: set[str] | None) -> dict[str, list]:
+        out: dict[str, list] = {f: [] for f in (files if files is not None else result.files)}
+        try:
+            findings = self.driver.lint_findings(result, files)
+        except Exception as exc:  # a lint rule's bug must not hide the checker's diagnostics
+            self.problems.append(f"stvm lint failed: {exc!r}")
+            return out
+        for fnd in findings:
+            out.setdefault(_norm(Path(fnd.span.file)), []).append(fnd)
+        return out
+
+    def diagnostics_of(self, state: ProjectState, path: Path) -> dict[str, list[lsp.Diagnostic]]:
+        result = state.result
         out: dict[str, list[lsp.Diagnostic]] = {self.uri_of(file): [] for file in result.files}
 
         def add(file: str, diag: lsp.Diagnostic) -> None:
@@ -204,16 +241,16 @@ class StvmLanguageServer(LanguageServer):
             severity = lsp.DiagnosticSeverity.Error if d.is_error else lsp.DiagnosticSeverity.Warning
             add(d.span.file, lsp.Diagnostic(_range(d.span), d.message, severity=severity, code=d.code or None,
                                             source=SOURCE_CHECK))
-        try:
-            findings = self.driver.lint_findings(result)
-        except Exception as exc:  # a lint rule's bug must not hide the checker's diagnostics
-            self.window_log_message(lsp.LogMessageParams(lsp.MessageType.Error, f"stvm lint failed: {exc!r}"))
-            findings = []
-        for fnd in findings:
-            add(fnd.span.file, lsp.Diagnostic(_range(fnd.span), fnd.message, severity=lsp.DiagnosticSeverity.Warning,
-                                              code=fnd.code, source=SOURCE_LINT,
-                                              code_description=lsp.CodeDescription(href=rule_href(fnd.code, path))))
+        for findings in state.lint.values():
+            for fnd in findings:
+                add(fnd.span.file, lsp.Diagnostic(_range(fnd.span), fnd.message, severity=lsp.DiagnosticSeverity.Warning,
+                                                  code=fnd.code, source=SOURCE_LINT,
+                                                  code_description=lsp.CodeDescription(href=rule_href(fnd.code, path))))
         return out
+
+    def flush_problems(self) -> None:
+        while self.problems:
+            self.window_log_message(lsp.LogMessageParams(lsp.MessageType.Error, self.problems.pop(0)))
 
     def publish(self, state: ProjectState, by_uri: dict[str, list[lsp.Diagnostic]]) -> None:
         for stale in state.published - set(by_uri):
@@ -236,6 +273,8 @@ class StvmLanguageServer(LanguageServer):
             if not is_source(path) or not path.exists() and file not in self.open_files:
                 return None
             state = self.check_now(path)
+        if state.indexed is not state.result:
+            self.reindex(state)
         if state.index is None:
             return None
         return file, state.index
@@ -257,7 +296,7 @@ def build_server(overrides: list[str] | None = None) -> StvmLanguageServer:
         try:
             return fn(*args)
         except Exception as exc:  # a bug in stvm must not kill the editor session
-            server.window_log_message(lsp.LogMessageParams(lsp.MessageType.Error, f"stvm: {exc!r}"))
+            server.problems.append(f"stvm: {exc!r}")
             return None
 
     def opened(uri: str) -> Path | None:
@@ -273,6 +312,7 @@ def build_server(overrides: list[str] | None = None) -> StvmLanguageServer:
         path = opened(params.text_document.uri)
         if path is not None:
             safely(ls.check_now, path)
+        ls.flush_problems()
 
     @server.feature(lsp.TEXT_DOCUMENT_DID_SAVE, lsp.SaveOptions(include_text=True))
     def did_save(ls: StvmLanguageServer, params: lsp.DidSaveTextDocumentParams) -> None:
@@ -285,6 +325,7 @@ def build_server(overrides: list[str] | None = None) -> StvmLanguageServer:
                 ls.workspace.put_text_document(lsp.TextDocumentItem(params.text_document.uri, doc.language_id or "structured-text",
                                                                     (doc.version or 0) + 1, params.text))
         safely(ls.check_now, path)
+        ls.flush_problems()
 
     @server.feature(lsp.TEXT_DOCUMENT_DID_CHANGE)
     async def did_change(ls: StvmLanguageServer, params: lsp.DidChangeTextDocumentParams) -> None:
@@ -300,10 +341,20 @@ def build_server(overrides: list[str] | None = None) -> StvmLanguageServer:
 
         async def run() -> None:
             buffers = ls.buffers()
-            done = await loop.run_in_executor(ls.executor, lambda: safely(ls.compute, path, buffers))
-            if done is not None:
-                ls.publish(*done)       # on the event loop: the transport is not thread-safe
-                ls.timings.append(time.perf_counter() - edited)
+            done = await loop.run_in_executor(ls.executor, lambda: safely(ls.compute, path, buffers, "none"))
+            if done is None:
+                return
+            state, by_uri = done
+            ls.publish(state, by_uri)     # on the event loop: the transport is not thread-safe
+            ls.timings.append(time.perf_counter() - edited)
+            # then the index (hover & co. see the edit) and the edited file's lint findings
+            await loop.run_in_executor(ls.executor, lambda: safely(ls.reindex, state))
+            if key in ls.pending:         # typing went on: the next check supersedes this one
+                return
+            linted = await loop.run_in_executor(ls.executor, lambda: safely(ls.relint, state, path))
+            if linted is not None and key not in ls.pending:
+                ls.publish(state, linted)
+            ls.flush_problems()
 
         def start() -> None:
             ls.pending.pop(key, None)
