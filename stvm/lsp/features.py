@@ -393,7 +393,9 @@ def signature_help(ix: Index, file: str, line: int, text: str, offset: int) -> l
         elif ch == "," and depth == 0:
             commas += 1
             current = i + 1
-    m = re.match(r"\s*(?:NOT\s+)?([A-Za-z_]\w*)\s*(?::=|=>)", args[current:], re.I)
+    # the argument under the cursor, whole (the cursor may stand inside its pin name)
+    segment = args[current:] + _rest_of_argument(text, offset)
+    m = re.match(r"\s*(?:NOT\s+)?([A-Za-z_]\w*)\s*(?::=|=>)", segment, re.I)
     active = commas
     if m:
         names = [v.key for v in params]
@@ -409,6 +411,21 @@ def signature_help(ix: Index, file: str, line: int, text: str, offset: int) -> l
                                    parameters=[lsp.ParameterInformation(label=o) for o in offsets])
     return lsp.SignatureHelp(signatures=[sig], active_signature=0,
                              active_parameter=min(active, max(len(params) - 1, 0)))
+
+
+def _rest_of_argument(text: str, offset: int) -> str:
+    depth = 0
+    for i in range(offset, min(len(text), offset + 400)):
+        ch = text[i]
+        if ch in "([":
+            depth += 1
+        elif ch in ")]":
+            if depth == 0:
+                return text[offset:i]
+            depth -= 1
+        elif (ch == "," or ch == ";") and depth == 0:
+            return text[offset:i]
+    return text[offset:offset + 400]
 
 
 # ---- rename ----------------------------------------------------------------------------------

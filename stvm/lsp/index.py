@@ -208,6 +208,7 @@ class _Builder:
         self.by_var: dict[int, tuple] = {}
         self.user = set(files)
         self.seen: set[tuple] = set()
+        self.externals: list[tuple] = []
 
     # ---- symbols from the model ------------------------------------------------------------------
 
@@ -233,6 +234,15 @@ class _Builder:
                             owner.name if owner is not None else "", pou))
         own = list(pou.variables.values())[pou.inherited:]
         for var in own:
+            if var.section == "VAR_EXTERNAL" and var.key in self.model.globals:
+                # `VAR_EXTERNAL x` names the global x: its uses are the global's, and renaming
+                # the global renames the external declaration with it
+                key = (GLOBAL, var.key)
+                self.by_var[id(var)] = key
+                sp = var.span
+                self.by_span.setdefault((sp.file, sp.line - 1, sp.column - 1), key)
+                self.externals.append((sp.file, sp.line - 1, sp.column - 1, sp.column - 1 + len(var.name), key))
+                continue
             self.var_symbol(pou, var, (VAR, pou.key, var.key))
         for method in pou.methods.values():
             self.pou_symbols(method, pou)
@@ -541,6 +551,8 @@ class _Builder:
         for sym in self.ix.symbols.values():
             if sym.file in self.user:
                 self.occ(sym.file, sym.line, sym.col, sym.end_col, sym.key, decl=True)
+        for file, line, col, end, key in self.externals:
+            self.occ(file, line, col, end, key)
         for unit in self.a.units:
             if unit.path in self.user:
                 self.unit(unit)
