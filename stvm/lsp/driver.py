@@ -54,9 +54,9 @@ def project_root_of(path: Path) -> list[Path]:
 
 @dataclass
 class CheckResult:
-    """One check of a project: the analysis (None when a file has a syntax error or the checker
-    found errors that stop it), every diagnostic, the text of every file (vendor XML: its ST
-    text, laid out on the XML's lines) and the project's files."""
+    """One check of a project: the analysis (None when a file has a syntax error), every
+    diagnostic, the ST text of every file (vendor XML: its ST laid out on the XML's lines), the
+    files' own text and the project's files."""
 
     analysis: object | None
     diagnostics: list[Diagnostic]
@@ -67,6 +67,7 @@ class CheckResult:
     root: Path | None
     seconds: float = 0.0
     units: dict[str, object] = field(default_factory=dict)
+    originals: dict[str, str] = field(default_factory=dict)   # each file's own text (vendor XML: the XML)
 
 
 class Driver:
@@ -110,6 +111,7 @@ class Driver:
         texts: dict[str, str] = dict(std_texts)
         names: list[str] = []
         unit_of: dict[str, object] = {}
+        originals: dict[str, str] = {}
         settings_key = repr(settings)
         for file in files:
             file = file.resolve()
@@ -132,6 +134,7 @@ class Driver:
                 diags.append(Diagnostic.error(f"cannot read file: {exc.strerror or exc}", Span(name, 0, 0, 0, 0)))
                 continue
             texts[name] = str(text)
+            originals[name] = getattr(text, "original", None) or str(text)
             key = (name, settings_key, _digest(getattr(text, "original", None) or str(text)))
             parsed = self._units.get(key)
             if parsed is None:
@@ -153,7 +156,7 @@ class Driver:
                                               Span(names[-1] if names else "<input>", 1, 1, 1, 2)))
         diags.sort(key=sort_key)
         return CheckResult(analysis, diags, texts, names, settings, manifest, root,
-                           time.perf_counter() - started, unit_of)
+                           time.perf_counter() - started, unit_of, originals)
 
     def lint_findings(self, result: CheckResult, only: set[str] | None = None) -> list:
         """The lint findings of a checked project (the files `only`, else the project's), with the

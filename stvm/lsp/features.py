@@ -291,8 +291,12 @@ def completion(ix: Index, file: str, line: int, col: int, line_text: str) -> lis
                                                 insert_text=snippet, insert_text_format=lsp.InsertTextFormat.Snippet,
                                                 filter_text=sym.name, sort_text=f"2{sym.name.lower()}"))
         return items
+    word = re.search(r"[A-Za-z_]\w*$", before)
+    prefix = word.group(0).lower() if word else ""
     items: list[lsp.CompletionItem] = []
     for sym in scope_symbols(ix, file, line):
+        if not sym.name.lower().startswith(prefix):
+            continue
         items.append(_item(sym, "0" if sym.key[0] == VAR else "1"))
         tsym = ix.type_symbol(sym.type)
         if tsym is not None and tsym.pou is not None and tsym.pou.kind == "FUNCTION_BLOCK" \
@@ -302,20 +306,37 @@ def completion(ix: Index, file: str, line: int, col: int, line_text: str) -> lis
                                             detail=signature(tsym.pou), insert_text=snippet,
                                             insert_text_format=lsp.InsertTextFormat.Snippet,
                                             filter_text=sym.name, sort_text=f"0{sym.name.lower()}~"))
+    for low, item, stdlib in global_items(ix):
+        # the stdlib's ~900 names only once a letter is typed: the list stays short, and the
+        # answer is marked incomplete so the editor asks again as the word grows
+        if low.startswith(prefix) and (prefix or not stdlib):
+            items.append(item)
+    return items
+
+
+def global_items(ix: Index) -> list[tuple[str, lsp.CompletionItem, bool]]:
+    """The POUs, types and keywords offered everywhere: (lower-case name, item, from the
+    stdlib), built once per index."""
+    cached = ix.cache.get("global_items")
+    if cached is not None:
+        return cached
+    out: list[tuple[str, lsp.CompletionItem, bool]] = []
     for sym in ix.symbols.values():
         if sym.key[0] == POU and sym.pou is not None and sym.pou.kind != "METHOD":
-            items.append(_item(sym, "2"))
+            out.append((sym.name.lower(), _item(sym, "2"), sym.stdlib))
             if sym.pou.kind == "FUNCTION":
                 label, snippet = call_snippet(sym.name, sym.pou)
-                items.append(lsp.CompletionItem(label=label, kind=lsp.CompletionItemKind.Snippet,
-                                                detail=signature(sym.pou), insert_text=snippet,
-                                                insert_text_format=lsp.InsertTextFormat.Snippet,
-                                                filter_text=sym.name, sort_text=f"2{sym.name.lower()}~"))
+                out.append((sym.name.lower(), lsp.CompletionItem(
+                    label=label, kind=lsp.CompletionItemKind.Snippet, detail=signature(sym.pou), insert_text=snippet,
+                    insert_text_format=lsp.InsertTextFormat.Snippet, filter_text=sym.name,
+                    sort_text=f"2{sym.name.lower()}~"), sym.stdlib))
         elif sym.key[0] == TYPE:
-            items.append(_item(sym, "2"))
+            out.append((sym.name.lower(), _item(sym, "2"), sym.stdlib))
     for word in KEYWORDS:
-        items.append(lsp.CompletionItem(label=word, kind=lsp.CompletionItemKind.Keyword, sort_text=f"3{word.lower()}"))
-    return items
+        out.append((word.lower(), lsp.CompletionItem(label=word, kind=lsp.CompletionItemKind.Keyword,
+                                                     sort_text=f"3{word.lower()}"), False))
+    ix.cache["global_items"] = out
+    return out
 
 
 # ---- signature help --------------------------------------------------------------------------
@@ -485,8 +506,11 @@ def rename_edits(ix: Index, sym: Symbol) -> dict[str, list[tuple[int, int, int]]
     """(line, col, end) of every occurrence per file, or why one cannot be edited (its text is
     not the name: an XML entity, a macro)."""
     out: dict[str, list[tuple[int, int, int]]] = {}
+    split: dict[str, list[str]] = {}
     for file, occ in ix.references(sym.key):
-        lines = ix.texts.get(file, "").splitlines()
+        lines = split.get(file)
+        if lines is None:
+            lines = split[file] = (ix.originals.get(file) or ix.texts.get(file, "")).splitlines()
         here = lines[occ.line][occ.col:occ.end] if occ.line < len(lines) else ""
         if here.lower() != sym.name.lower():
             return f"the name at {file}:{occ.line + 1}:{occ.col + 1} is not spelled '{sym.name}' in the source"

@@ -80,11 +80,13 @@ class Index:
     refs: dict[tuple, list[tuple[str, Occurrence]]] = field(default_factory=dict)
     scopes: dict[str, list[Scope]] = field(default_factory=dict)
     folds: dict[str, list[tuple[int, int]]] = field(default_factory=dict)
-    texts: dict[str, str] = field(default_factory=dict)
+    texts: dict[str, str] = field(default_factory=dict)        # ST text (vendor XML: as ST, on the XML's lines)
+    originals: dict[str, str] = field(default_factory=dict)    # the files' own text (the XML), what positions index
     files: list[str] = field(default_factory=list)
     model: object = None
     pou_by_key: dict[str, POUInfo] = field(default_factory=dict)   # every POU, method, accessor
     type_names: dict[str, tuple] = field(default_factory=dict)     # lower-case name → symbol key
+    cache: dict = field(default_factory=dict)                      # answers derived once (completion lists)
 
     # ---- queries ---------------------------------------------------------------------------------
 
@@ -199,16 +201,17 @@ _POU_KIND = {"FUNCTION": "FUNCTION", "FUNCTION_BLOCK": "FUNCTION_BLOCK", "PROGRA
 
 
 class _Builder:
-    def __init__(self, analysis, texts: dict[str, str], files: list[str]) -> None:
+    def __init__(self, analysis, texts: dict[str, str], files: list[str], originals: dict[str, str] | None = None) -> None:
         self.a = analysis
         self.facts = analysis.facts
         self.model = analysis.model
-        self.ix = Index(texts=texts, files=list(files), model=analysis.model)
+        self.ix = Index(texts=texts, originals=dict(originals or {}), files=list(files), model=analysis.model)
         self.by_span: dict[tuple[str, int, int], tuple] = {}
         self.by_var: dict[int, tuple] = {}
         self.user = set(files)
         self.seen: set[tuple] = set()
         self.externals: list[tuple] = []
+        self.lines: dict[str, list[str]] = {}
 
     # ---- symbols from the model ------------------------------------------------------------------
 
@@ -392,6 +395,13 @@ class _Builder:
             elif cls is n.HashLiteral:
                 self.hash_literal(node)
 
+    def source_lines(self, file: str) -> list[str]:
+        lines = self.lines.get(file)
+        if lines is None:
+            text = self.ix.originals.get(file) or self.ix.texts.get(file, "")
+            lines = self.lines[file] = text.splitlines()
+        return lines
+
     def accessor_property(self, pou: POUInfo) -> tuple | None:
         """A property's GET/SET (`owner.__get_p`) stands for the property `p` itself."""
         owner, _, name = pou.key.rpartition(".")
@@ -400,7 +410,7 @@ class _Builder:
         return None
 
     def _after_not(self, span, col: int) -> int:
-        line = self.ix.texts.get(span.file, "").splitlines()[span.line - 1:span.line]
+        line = self.source_lines(span.file)[span.line - 1:span.line]
         m = re.match(r"NOT\s+", line[0][col:], re.I) if line else None
         return col + (m.end() if m else 0)
 
@@ -417,7 +427,7 @@ class _Builder:
         key = self.resolve_type_name(prefix) if prefix else None
         if key is None or key[0] != TYPE:
             return
-        lines = self.ix.texts.get(sp.file, "").splitlines()
+        lines = self.source_lines(sp.file)
         if sp.line - 1 < len(lines) and sp.line == sp.end_line:
             text = lines[sp.line - 1][sp.column - 1:sp.end_column - 1]
             hash_at = text.rfind("#")
@@ -563,7 +573,7 @@ class _Builder:
         return self.ix
 
 
-def build_index(analysis, texts: dict[str, str], files: list[str]) -> Index:
+def build_index(analysis, texts: dict[str, str], files: list[str], originals: dict[str, str] | None = None) -> Index:
     """The index of a checked project; `files` are the user's (their uses are indexed; the
     stdlib's declarations are symbols, its bodies are not walked)."""
-    return _Builder(analysis, texts, files).build()
+    return _Builder(analysis, texts, files, originals).build()

@@ -39,7 +39,7 @@ from stvm.source import is_stdlib_file
 from stvm.version import __version__
 
 SOURCE_CHECK, SOURCE_LINT = "stvm", "stvm-lint"
-DEBOUNCE_SECONDS = 0.15
+DEBOUNCE_SECONDS = 0.08
 """How long typing must pause before the project is checked again: short enough that the
 diagnostics of an edit arrive within the 300 ms budget (bench/bench_lsp.py), long enough that a
 burst of keystrokes costs one check."""
@@ -214,7 +214,7 @@ class StvmLanguageServer(LanguageServer):
         """Rebuild the position index from the last check (kept when that check had no analysis)."""
         result = state.result
         if result is not None and result.analysis is not None and state.indexed is not result:
-            state.index = build_index(result.analysis, result.texts, result.files)
+            state.index = build_index(result.analysis, result.texts, result.files, result.originals)
             state.indexed = result
 
     def lint_of(self, result: CheckResult, files: set[str] | None) -> dict[str, list]:
@@ -310,7 +310,16 @@ def build_server(overrides: list[str] | None = None) -> StvmLanguageServer:
     @server.feature(lsp.TEXT_DOCUMENT_DID_OPEN)
     def did_open(ls: StvmLanguageServer, params: lsp.DidOpenTextDocumentParams) -> None:
         path = opened(params.text_document.uri)
-        if path is not None:
+        if path is None:
+            return
+        state = ls.projects.get(ls.project_key(path))
+        file = _norm(path)
+        if state is not None and state.result is not None and file in state.result.files \
+                and state.result.originals.get(file) == params.text_document.text:
+            # another file of a project already checked with this very text: its diagnostics
+            # are out already, under the URI the client now uses
+            ls.publish(state, ls.diagnostics_of(state, path))
+        else:
             safely(ls.check_now, path)
         ls.flush_problems()
 
@@ -453,7 +462,7 @@ def build_server(overrides: list[str] | None = None) -> StvmLanguageServer:
         lines = doc.lines
         line_text = lines[params.position.line] if params.position.line < len(lines) else ""
         items = f.completion(ctx[1], ctx[0], params.position.line, params.position.character, line_text)
-        return lsp.CompletionList(is_incomplete=False, items=items)
+        return lsp.CompletionList(is_incomplete=True, items=items)
 
     @server.feature(lsp.TEXT_DOCUMENT_SIGNATURE_HELP, lsp.SignatureHelpOptions(trigger_characters=["(", ","]))
     def signature_help(ls: StvmLanguageServer, params: lsp.SignatureHelpParams):

@@ -6,7 +6,7 @@ from __future__ import annotations
 import pytest
 from lsprotocol import types as lsp
 
-from conftest import FIXTURES, doc, open_file, position, text_at
+from lsp_helpers import FIXTURES, doc, open_file, position, text_at
 
 pytestmark = pytest.mark.asyncio(loop_scope="module")
 
@@ -104,7 +104,11 @@ async def test_completion_of_enum_values_and_scope(client):
     assert [i.label for i in items] == ["Red", "Green", "Blue"]
     items = await _complete(client, "reading := drive", 0)
     labels = {i.label for i in items}
-    assert {"axis", "drive", "delay", "point", "lamp", "reading", "Scale", "IF", "TON"} <= labels
+    assert {"axis", "drive", "delay", "point", "lamp", "reading", "Scale", "IF"} <= labels
+    assert "TON" not in labels       # the stdlib's names once a letter is typed
+    typed = await _complete(client, "reading := drive", 3)      # `rea|`
+    assert {i.label for i in typed} >= {"reading", "REAL"} and "axis" not in {i.label for i in typed}
+    assert "TON" in {i.label for i in await _complete(client, "TON;", 2)}
     snippets = {i.label: i.insert_text for i in items if i.kind == lsp.CompletionItemKind.Snippet}
     assert snippets["delay(IN := , PT := )"] == "delay(IN := ${1}, PT := ${2})$0"
     assert snippets["Scale(value := , factor := )"] == "Scale(value := ${1}, factor := ${2})$0"

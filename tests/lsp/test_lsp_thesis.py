@@ -6,7 +6,7 @@ from __future__ import annotations
 import pytest
 from lsprotocol import types as lsp
 
-from conftest import ROOT, doc, open_file, position, text_at
+from lsp_helpers import ROOT, doc, open_file, position, text_at
 
 pytestmark = pytest.mark.asyncio(loop_scope="module")
 
