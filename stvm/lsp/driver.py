@@ -52,6 +52,15 @@ def project_root_of(path: Path) -> list[Path]:
     return [path]
 
 
+def project_identity(path: Path) -> tuple[str, ...]:
+    """One key per project: its manifest when it has one (every file of st_src/ is the same
+    project), else what `project_root_of` checks."""
+    manifest = path.parent / MANIFEST
+    if manifest.exists():
+        return (str(manifest.resolve()),)
+    return tuple(str(p.resolve()) for p in project_root_of(path))
+
+
 @dataclass
 class CheckResult:
     """One check of a project: the analysis (None when a file has a syntax error), every
