@@ -61,6 +61,10 @@ function clientOptions() {
   return {
     documentSelector: LANGUAGES.map((language) => ({ scheme: "file", language })),
     diagnosticCollectionName: "stvm",
+    // live values (inlay hints) read from a running `stvm run --opcua` (stvm/lsp/live.py)
+    initializationOptions: {
+      liveValues: { enable: config().get("liveValues.enable", true), endpoint: config().get("liveValues.endpoint", "opc.tcp://127.0.0.1:4840") },
+    },
     synchronize: { fileEvents: vscode.workspace.createFileSystemWatcher("**/{stvm.toml,*.st,*.Tc*,*.xml}") },
   };
 }

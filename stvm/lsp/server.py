@@ -18,6 +18,7 @@ its host, `file:///a/../b.st` stays as sent); other files under their resolved p
 from __future__ import annotations
 
 import asyncio
+import os
 import functools
 import logging
 import concurrent.futures
@@ -35,6 +36,8 @@ from pygls.protocol import LanguageServerProtocol
 from stvm.lsp import features as f
 from stvm.lsp.driver import CheckResult, Driver, is_source, project_identity, stdlib_path
 from stvm.lsp.index import Index, build_index
+from stvm.lsp.live import DEFAULT_ENDPOINT, LiveValues, format_value, instance_paths
+from stvm.semantics import types as t
 from stvm.source import is_stdlib_file
 from stvm.version import __version__
 
@@ -88,6 +91,27 @@ def _range(span) -> lsp.Range:
     else:
         end_line, end_col = line, col + 1
     return lsp.Range(lsp.Position(line, col), lsp.Position(end_line, end_col))
+
+
+def live_spots(ix: Index, file: str, first: int, last: int) -> list[tuple]:
+    """(occurrence, stvm path, symbol) of each scalar program or global variable on lines
+    first..last: what the running VM publishes (an FB's internals have no single path)."""
+    instances = instance_paths(ix.model)
+    out = []
+    for occ in ix.by_file.get(file, ()):
+        if occ.line < first or occ.line > last:
+            continue
+        sym = ix.symbols.get(occ.key)
+        if sym is None or isinstance(sym.type, (t.StructType, t.ArrayType, t.FBType, t.InterfaceType)):
+            continue
+        if occ.key[0] == "global":
+            out.append((occ, sym.name, sym))
+        elif occ.key[0] == "var":
+            pou = ix.pou_by_key.get(occ.key[1])
+            if pou is not None and pou.kind == "PROGRAM":
+                for instance in instances.get(pou.key, [])[:1]:
+                    out.append((occ, f"{instance}.{sym.name}", sym))
+    return out
 
 
 class RequestFailed(JsonRpcException):
@@ -150,6 +174,8 @@ class StvmLanguageServer(LanguageServer):
         self.pending: dict[tuple[str, ...], asyncio.TimerHandle] = {}
         self.timings: list[float] = []
         self.problems: list[str] = []               # errors met off the event loop, logged on it
+        self.live = LiveValues(DEFAULT_ENDPOINT)     # replaced at `initialize` (its options)
+        self.refresh_hints = False
 
     # ---- files and projects ------------------------------------------------------------------
 
@@ -522,6 +548,39 @@ def build_server(overrides: list[str] | None = None) -> StvmLanguageServer:
     def folding(ls: StvmLanguageServer, params: lsp.FoldingRangeParams):
         ctx = ls.context(params.text_document.uri)
         return f.folding_ranges(ctx[1], ctx[0]) if ctx else []
+
+    @server.feature(lsp.INITIALIZE)
+    def initialize(ls: StvmLanguageServer, params: lsp.InitializeParams) -> None:
+        options = params.initialization_options if isinstance(params.initialization_options, dict) else {}
+        live = options.get("liveValues") if isinstance(options.get("liveValues"), dict) else {}
+        endpoint = live.get("endpoint") if isinstance(live.get("endpoint"), str) else None
+        ls.live = LiveValues(endpoint or os.environ.get("STVM_LIVE_ENDPOINT") or DEFAULT_ENDPOINT,
+                             live.get("enable", True) is not False)
+        caps = params.capabilities.workspace
+        ls.refresh_hints = bool(caps and caps.inlay_hint and caps.inlay_hint.refresh_support)
+
+    @server.feature(lsp.TEXT_DOCUMENT_INLAY_HINT)
+    async def inlay_hint(ls: StvmLanguageServer, params: lsp.InlayHintParams):
+        """Live values (stvm/lsp/live.py) beside the program and global variables in range."""
+        ctx = ls.context(params.text_document.uri)
+        if ctx is None or not ls.live.enabled:
+            return []
+        spots = live_spots(ctx[1], ctx[0], params.range.start.line, params.range.end.line)
+        if not spots:
+            return []
+        paths = sorted({path for _, path, _ in spots})
+        values = await ls.live.read(paths)
+        if not values:
+            return []
+
+        async def changed() -> None:
+            if ls.refresh_hints:
+                ls.workspace_inlay_hint_refresh(None)
+
+        ls.live.watch(list(values), changed)
+        return [lsp.InlayHint(position=lsp.Position(occ.line, occ.end), label=f"= {format_value(values[path], sym.type)}",
+                              padding_left=True, tooltip=f"live value of {path} ({ls.live.endpoint})")
+                for occ, path, sym in spots if path in values]
 
     @server.command("stvm.timings")
     def timings(ls: StvmLanguageServer, *args):
