@@ -23,7 +23,7 @@ import time
 DEFAULT_ENDPOINT = "opc.tcp://127.0.0.1:4840"
 POLL_SECONDS = 0.25
 RETRY_SECONDS = 5.0
-CONNECT_TIMEOUT = 1.0
+CONNECT_TIMEOUT = 4.0     # a loaded machine answers an OPC UA handshake slowly; a refused port fails at once
 
 
 class LiveValues:
@@ -49,7 +49,7 @@ class LiveValues:
             return False
         client = Client(self.endpoint, timeout=CONNECT_TIMEOUT)
         try:
-            await asyncio.wait_for(client.connect(), CONNECT_TIMEOUT * 3)
+            await asyncio.wait_for(client.connect(), CONNECT_TIMEOUT * 2)
             names = await client.get_namespace_array()
             self.ns = next(i for i, uri in enumerate(names)
                            if uri.startswith("urn:stvm:") and not uri.endswith(":server"))

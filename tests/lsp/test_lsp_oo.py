@@ -36,6 +36,15 @@ async def test_hover_on_function_shows_signature_and_doc(client):
     assert "Scales a value by a factor." in hover.contents.value
 
 
+async def test_hover_on_a_stdlib_fb_shows_its_documentation(client):
+    await open_file(client, MAIN)
+    hover = await client.text_document_hover_async(lsp.HoverParams(doc(MAIN), position(MAIN, "TON;")))
+    text = hover.contents.value
+    assert "FUNCTION_BLOCK TON(IN : BOOL; PT : TIME) => (Q : BOOL; ET : TIME)" in text
+    assert "Timers: IN, PT -> Q, ET on the VM clock" in text      # the comment above it in iec_standard.st
+    assert "stvm standard library" in text
+
+
 async def test_hover_on_struct_field_across_files(client):
     await open_file(client, MAIN)
     hover = await client.text_document_hover_async(lsp.HoverParams(doc(MAIN), position(MAIN, "point.x", offset=6)))
