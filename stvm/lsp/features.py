@@ -449,6 +449,35 @@ def _rest_of_argument(text: str, offset: int) -> str:
     return text[offset:offset + 400]
 
 
+def implementations(ix: Index, sym: Symbol) -> list[Symbol]:
+    """The FBs implementing an interface, or their METHOD/PROPERTY for an interface's one
+    (through EXTENDS of the FB and of the interface)."""
+    if sym.key[0] == POU and sym.pou is not None and sym.pou.kind == "INTERFACE":
+        itf, member = sym.pou.key, None
+    elif sym.key[0] == POU and sym.pou is not None and sym.pou.kind == "METHOD":
+        itf, member = sym.pou.owner, sym.pou.key.rsplit(".", 1)[-1]
+    elif sym.key[0] == PROP:
+        itf, member = sym.key[1], sym.key[2]
+    else:
+        return []
+    owner = ix.pou_by_key.get(itf)
+    if owner is None or owner.kind != "INTERFACE":
+        return []
+    out: list[Symbol] = []
+    for pou in ix.pou_by_key.values():
+        if pou.kind != "FUNCTION_BLOCK" or itf not in {p.key for p in ix.lineage(pou.key)[1:]}:
+            continue
+        if member is None:
+            target = ix.symbols.get((POU, pou.key))
+        elif member in pou.methods:
+            target = ix.symbols.get((POU, pou.methods[member].key))
+        else:
+            target = ix.symbols.get((PROP, pou.key, member)) if member in pou.properties else None
+        if target is not None:
+            out.append(target)
+    return out
+
+
 # ---- rename ----------------------------------------------------------------------------------
 
 

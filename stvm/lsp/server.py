@@ -450,6 +450,18 @@ def build_server(overrides: list[str] | None = None) -> StvmLanguageServer:
             return None
         return [lsp.Location(ls.uri_of(tsym.file), f.rng(tsym.line, tsym.col, tsym.end_col))]
 
+    @server.feature(lsp.TEXT_DOCUMENT_IMPLEMENTATION)
+    def implementation(ls: StvmLanguageServer, params: lsp.ImplementationParams):
+        """From an interface (or its method/property): the FBs implementing it (their method/property)."""
+        ctx = ls.context(params.text_document.uri)
+        if ctx is None:
+            return None
+        found = f.symbol_at(ctx[1], ctx[0], params.position.line, params.position.character)
+        if found is None:
+            return []
+        return [lsp.Location(ls.uri_of(sym.file), f.rng(sym.line, sym.col, sym.end_col))
+                for sym in f.implementations(ctx[1], found[0]) if sym.line >= 0]
+
     @server.feature(lsp.TEXT_DOCUMENT_REFERENCES)
     def references(ls: StvmLanguageServer, params: lsp.ReferenceParams) -> list[lsp.Location] | None:
         ctx = ls.context(params.text_document.uri)

@@ -77,6 +77,26 @@ async def test_definition_into_the_stdlib(client):
     assert line.strip().startswith("IN")
 
 
+async def test_implementation_of_an_interface_method_and_the_interface(client):
+    await open_file(client, MAIN)
+    locs = await client.text_document_implementation_async(lsp.ImplementationParams(doc(MAIN), position(MAIN, "MoveTo(target")))
+    assert [(loc.uri.rsplit("/", 1)[-1], loc.range.start) for loc in locs] == [("axis.st", position(AXIS, "MoveTo : BOOL", nth=1))]
+    locs = await client.text_document_implementation_async(lsp.ImplementationParams(doc(MAIN), position(MAIN, "I_Axis")))
+    assert [text_at(AXIS, loc.range) for loc in locs] == ["FB_Axis"]
+
+
+async def test_editing_one_file_rechecks_its_dependents(client):
+    await open_file(client, MAIN)
+    await open_file(client, TYPES)
+    main_uri, types_uri = MAIN.resolve().as_uri(), TYPES.resolve().as_uri()
+    original = TYPES.read_text(encoding="utf-8")
+    await _edit(client, types_uri, 2, original.replace("x : REAL;", "xpos : REAL;"))
+    diags = await _diagnostics(client, main_uri, lambda d: any(x.severity == lsp.DiagnosticSeverity.Error for x in d))
+    assert "ST_Point has no member 'x'" in diags[0].message and diags[0].range.start.line == 11
+    await _edit(client, types_uri, 3, original)
+    await _diagnostics(client, main_uri, lambda d: list(d) == [])
+
+
 async def test_references_of_an_fb_variable_in_method_and_property(client):
     await open_file(client, AXIS)
     refs = await client.text_document_references_async(lsp.ReferenceParams(text_document=doc(AXIS), position=position(AXIS, "posNow"), context=lsp.ReferenceContext(include_declaration=True)))
