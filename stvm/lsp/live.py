@@ -20,6 +20,8 @@ from __future__ import annotations
 import asyncio
 import time
 
+from stvm.semantics import types as t
+
 DEFAULT_ENDPOINT = "opc.tcp://127.0.0.1:4840"
 POLL_SECONDS = 0.25
 RETRY_SECONDS = 5.0
@@ -124,7 +126,6 @@ def instance_paths(model) -> dict[str, list[str]]:
 
 def format_value(value, ty=None) -> str:
     """An IEC literal-like text of an OPC UA value (enumerators by name)."""
-    from stvm.semantics import types as t
     if isinstance(value, bool):
         return "TRUE" if value else "FALSE"
     if isinstance(ty, t.EnumType) and isinstance(value, int):
