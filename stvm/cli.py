@@ -105,9 +105,9 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def _register_extensions(sub) -> None:
-    """Commands living in their own modules (trace, debug, lint) register themselves here.
+    """Commands living in their own modules (trace, debug, lint, lsp) register themselves here.
     (The demo is `stvm run` on a project with a `[demo]` table: it has no command of its own.)"""
-    for module_name in ("stvm.trace.cli", "stvm.debug.cli", "stvm.lint.cli"):
+    for module_name in ("stvm.trace.cli", "stvm.debug.cli", "stvm.lint.cli", "stvm.lsp.cli"):
         try:
             module = importlib.import_module(module_name)
         except ModuleNotFoundError as exc:

@@ -58,6 +58,7 @@ LAYERS: list[tuple[str, ...]] = [
     ("stvm.lockstep", "stvm.scenario"),
     ("stvm.demo", "stvm.trace"),
     ("stvm.debug", "stvm.frontend", "stvm.hmi", "stvm.opcua", "stvm.lint"),
+    ("stvm.lsp",),                       # the language server: the checker's index, lint, live values
     # the commands: `stvm run` drives the demo, scenarios and every front end; `stvm` is the API
     ("stvm", "stvm.cli", "stvm.run", "stvm.__main__", "stvm.pytest_plugin"),
 ]

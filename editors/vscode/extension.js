@@ -1,19 +1,38 @@
 // stvm for VS Code.
-//  * Debugger: starts `stvm dap` (the command is the `stvm.command` setting) as the debug adapter
-//    of every `stvm` launch configuration.
-//  * Diagnostics: starts `stvm lsp`, a language server that publishes the checker's errors and the
-//    `stvm lint` findings of a .st file when it is opened or saved. A finding's code (SA201 …)
-//    links to its explanation: docs/lint.md of the repository, or a read-only page produced by
-//    `stvm lint --explain CODE` (the `stvm-rule:` scheme below).
+//  * Language server: starts `stvm lsp` (the `stvm.command` setting, plus `--sysmac` for the
+//    `stvm.dialect` and `stvm.sysmac` settings) for .st, TwinCAT (.TcPOU/.TcDUT/.TcGVL/.TcIO) and
+//    PLCopen XML files: diagnostics while typing, hover, definition, references, completion,
+//    signature help, rename, symbols, semantic tokens, folding (docs/editor.md).
+//  * Debugger: starts `stvm dap` as the debug adapter of every `stvm` launch configuration.
+//  * Commands: run, trace, lint and test the current file's project, in a terminal task.
+//  * `stvm-rule:SA201` links of lint findings open `stvm lint --explain SA201`.
 // Everything else is in stvm itself.
 const vscode = require("vscode");
 const cp = require("child_process");
 
+const LANGUAGES = ["structured-text", "twincat-xml", "plcopen-xml"];
 let client;
 
+function config() {
+  return vscode.workspace.getConfiguration("stvm");
+}
+
 function stvmCommand() {
-  const command = vscode.workspace.getConfiguration("stvm").get("command", ["stvm"]);
+  const command = config().get("command", ["stvm"]);
   return command.length ? command : ["stvm"];
+}
+
+// --sysmac NAME=VALUE for the dialect and the extra settings
+function settingArgs() {
+  const out = [];
+  const dialect = config().get("dialect", "");
+  if (dialect) {
+    out.push("--sysmac", `dialect=${dialect}`);
+  }
+  for (const item of config().get("sysmac", [])) {
+    out.push("--sysmac", item);
+  }
+  return out;
 }
 
 function workspaceFolderPath() {
@@ -33,26 +52,56 @@ const ruleProvider = {
   },
 };
 
+function serverOptions() {
+  const [executable, ...args] = stvmCommand();
+  return { command: executable, args: [...args, "lsp", ...settingArgs()], options: { cwd: workspaceFolderPath() } };
+}
+
+function clientOptions() {
+  return {
+    documentSelector: LANGUAGES.map((language) => ({ scheme: "file", language })),
+    diagnosticCollectionName: "stvm",
+    // live values (inlay hints) read from a running `stvm run --opcua` (stvm/lsp/live.py)
+    initializationOptions: {
+      liveValues: { enable: config().get("liveValues.enable", true), endpoint: config().get("liveValues.endpoint", "opc.tcp://127.0.0.1:4840") },
+    },
+    synchronize: { fileEvents: vscode.workspace.createFileSystemWatcher("**/{stvm.toml,*.st,*.Tc*,*.xml}") },
+  };
+}
+
 function startLanguageServer(context) {
-  if (!vscode.workspace.getConfiguration("stvm").get("lint.enable", true)) {
+  if (!config().get("lint.enable", true)) {
     return;
   }
   let languageclient;
   try {
     languageclient = require("vscode-languageclient/node");
   } catch (err) {
-    vscode.window.showWarningMessage("stvm: run `npm install` in editors/vscode to get check and lint diagnostics.");
+    vscode.window.showWarningMessage("stvm: the packaged extension carries vscode-languageclient; from a checkout run `npm install` in editors/vscode.");
     return;
   }
-  const [executable, ...args] = stvmCommand();
-  const serverOptions = { command: executable, args: [...args, "lsp"], options: { cwd: workspaceFolderPath() } };
-  const clientOptions = {
-    documentSelector: [{ scheme: "file", language: "structured-text" }],
-    diagnosticCollectionName: "stvm",
-  };
-  client = new languageclient.LanguageClient("stvm", "stvm (check and lint)", serverOptions, clientOptions);
+  client = new languageclient.LanguageClient("stvm", "stvm language server", serverOptions(), clientOptions());
   client.start();
   context.subscriptions.push({ dispose: () => client && client.stop() });
+}
+
+// run / trace / lint / test the file in the editor (a file of a folder with stvm.toml is that
+// project), as a task in the terminal panel: no shell, so paths need no quoting
+function runStvm(subcommand, extra) {
+  const editor = vscode.window.activeTextEditor;
+  if (!editor || !LANGUAGES.includes(editor.document.languageId)) {
+    vscode.window.showInformationMessage(`stvm ${subcommand}: open a Structured Text, TwinCAT or PLCopen file first.`);
+    return;
+  }
+  const file = editor.document.uri.fsPath;
+  const [executable, ...args] = stvmCommand();
+  const folder = vscode.workspace.getWorkspaceFolder(editor.document.uri);
+  const execution = new vscode.ProcessExecution(executable, [...args, subcommand, ...extra, ...settingArgs(), file],
+    { cwd: folder ? folder.uri.fsPath : undefined });
+  const task = new vscode.Task({ type: "stvm", subcommand }, folder || vscode.TaskScope.Workspace,
+    `${subcommand} ${editor.document.fileName.split(/[\\/]/).pop()}`, "stvm", execution, []);
+  task.presentationOptions = { reveal: vscode.TaskRevealKind.Always, clear: true };
+  return editor.document.save().then(() => vscode.tasks.executeTask(task));
 }
 
 function activate(context) {
@@ -64,7 +113,18 @@ function activate(context) {
         return new vscode.DebugAdapterExecutable(executable, [...args, "dap"], { cwd: folder });
       },
     }),
-    vscode.workspace.registerTextDocumentContentProvider("stvm-rule", ruleProvider)
+    vscode.workspace.registerTextDocumentContentProvider("stvm-rule", ruleProvider),
+    vscode.commands.registerCommand("stvm.run", () => runStvm("run", [])),
+    vscode.commands.registerCommand("stvm.trace", () => runStvm("trace", [])),
+    vscode.commands.registerCommand("stvm.lint", () => runStvm("lint", [])),
+    vscode.commands.registerCommand("stvm.test", () => runStvm("test", [])),
+    vscode.commands.registerCommand("stvm.restartServer", () => (client ? client.restart() : startLanguageServer(context))),
+    vscode.workspace.onDidChangeConfiguration((event) => {
+      if (event.affectsConfiguration("stvm") && client) {
+        vscode.window.showInformationMessage("stvm: settings changed; restarting the language server.");
+        client.stop().then(() => { client = undefined; startLanguageServer(context); });
+      }
+    })
   );
   startLanguageServer(context);
 }
@@ -73,4 +133,6 @@ function deactivate() {
   return client ? client.stop() : undefined;
 }
 
-module.exports = { activate, deactivate };
+// serverOptions/clientOptions are exported for tests/lsp/test_vscode_extension.py, which starts
+// the server with the command line built here and talks to it through the client's JSON-RPC
+module.exports = { activate, deactivate, serverOptions, clientOptions, settingArgs };

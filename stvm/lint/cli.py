@@ -1,9 +1,8 @@
-"""`stvm lint` and `stvm lsp`.
+"""`stvm lint` (`stvm lsp` is stvm/lsp/cli.py).
 
     stvm lint FILE|DIR... [--select CODES] [--ignore CODES] [--format text|json|sarif]
               [--output F] [--sysmac NAME=VALUE]... [--no-cache]
     stvm lint --explain SAnnn|ALL
-    stvm lsp                     (language server on stdio: check + lint diagnostics)
 
 Exit codes: 0 no findings, 1 findings (or compile errors), 2 usage error.
 """
@@ -34,9 +33,6 @@ def register(subparsers) -> None:
     lint.add_argument("--no-cache", action="store_true", help="do not use the parse cache")
     lint.add_argument("--sysmac", action="append", metavar="NAME=VALUE", help="override a Sysmac UNCERTAIN setting")
     lint.set_defaults(func=cmd_lint)
-    lsp = subparsers.add_parser("lsp", help="language server on stdio: check and lint diagnostics for editors")
-    lsp.add_argument("--sysmac", action="append", metavar="NAME=VALUE", help="override a Sysmac UNCERTAIN setting")
-    lsp.set_defaults(func=cmd_lsp)
 
 
 def _usage(message: str) -> int:
@@ -110,16 +106,3 @@ def cmd_lint(args) -> int:
             summary += f"; {errors} error(s): fix them to lint"
         print(summary, file=sys.stderr)
     return EXIT_FINDINGS if report.findings or errors else EXIT_CLEAN
-
-
-def cmd_lsp(args) -> int:
-    try:
-        settings = _settings(args)
-    except ValueError as exc:
-        return _usage(str(exc))
-    try:
-        from stvm.lint.lsp import serve   # lazy: start-up
-    except ImportError as exc:
-        return _usage(f"the language server needs pygls: pip install 'stvm[lsp]' ({exc})")
-    serve(settings)
-    return EXIT_CLEAN

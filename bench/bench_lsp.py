@@ -1,0 +1,185 @@
+"""Latency of `stvm lsp` on the thesis project (st_src/), measured through the protocol: a client
+over stdio, as an editor talks to it.
+
+* hover, definition and completion: one request at each of N name positions of the open files
+  (every identifier the index knows, sampled evenly), the time from sending the request to its
+  answer; p50 / p95 / max per request kind. Target: p95 <= 50 ms.
+* diagnostics after an edit: a `didChange` that breaks a line (an undeclared name) then one that
+  restores it, the time from sending the change to the `publishDiagnostics` of that file with
+  the new verdict (the server's debounce included). Target: p95 <= 300 ms.
+
+    python bench/bench_lsp.py [--samples 200] [--edits 20]
+
+The machine's load is printed with the figures: the server is single-threaded Python, so the
+numbers scale with the CPU it gets.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import queue
+import re
+import statistics
+import subprocess
+import sys
+import threading
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+DEBOUNCE_MS = 80   # stvm/lsp/server.py DEBOUNCE_SECONDS
+ST = ROOT / "st_src"
+FILES = ["PnP_Example.st", "CBT_MoveAbsolute.st", "Program_Example.st"]
+
+
+class Client:
+    def __init__(self) -> None:
+        self.proc = subprocess.Popen([sys.executable, "-m", "stvm", "lsp"], stdin=subprocess.PIPE,
+                                     stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, cwd=ROOT)
+        self.messages: queue.Queue = queue.Queue()
+        self.next_id = 0
+        threading.Thread(target=self._read, daemon=True).start()
+
+    def _read(self) -> None:
+        stream = self.proc.stdout
+        while True:
+            header = b""
+            while not header.endswith(b"\r\n\r\n"):
+                byte = stream.read(1)
+                if not byte:
+                    return
+                header += byte
+            length = int(next(line.split(b":")[1] for line in header.split(b"\r\n")
+                              if line.lower().startswith(b"content-length")))
+            self.messages.put((time.perf_counter(), json.loads(stream.read(length))))
+
+    def send(self, message: dict) -> float:
+        body = json.dumps(message).encode()
+        sent = time.perf_counter()
+        self.proc.stdin.write(b"Content-Length: %d\r\n\r\n" % len(body) + body)
+        self.proc.stdin.flush()
+        return sent
+
+    def request(self, method: str, params) -> tuple[float, dict]:
+        self.next_id += 1
+        sent = self.send({"jsonrpc": "2.0", "id": self.next_id, "method": method, "params": params})
+        while True:
+            at, msg = self.messages.get(timeout=120)
+            if msg.get("id") == self.next_id and "method" not in msg:
+                return at - sent, msg
+
+    def notify(self, method: str, params) -> float:
+        return self.send({"jsonrpc": "2.0", "method": method, "params": params})
+
+    def wait_diagnostics(self, uri: str, ready) -> tuple[float, list]:
+        while True:
+            at, msg = self.messages.get(timeout=120)
+            if msg.get("method") == "textDocument/publishDiagnostics" and msg["params"]["uri"] == uri \
+                    and ready(msg["params"]["diagnostics"]):
+                return at, msg["params"]["diagnostics"]
+
+    def close(self) -> None:
+        try:
+            self.request("shutdown", None)
+            self.notify("exit", None)
+            self.proc.wait(timeout=10)
+        finally:
+            if self.proc.poll() is None:
+                self.proc.kill()
+
+
+def identifiers(text: str) -> list[tuple[int, int]]:
+    """(line, column) of every identifier outside comments (roughly: lines' code part)."""
+    out = []
+    code = re.sub(r"\(\*.*?\*\)", lambda m: re.sub(r"[^\n]", " ", m.group(0)), text, flags=re.S)
+    for i, line in enumerate(code.splitlines()):
+        line = line.split("//")[0]
+        for m in re.finditer(r"[A-Za-z_]\w*", line):
+            out.append((i, m.start() + 1))
+    return out
+
+
+def percentile(values: list[float], p: float) -> float:
+    ordered = sorted(values)
+    return ordered[min(len(ordered) - 1, int(round(p / 100 * (len(ordered) - 1))))]
+
+
+def report(name: str, seconds: list[float], budget_ms: float) -> bool:
+    ms = [s * 1000 for s in seconds]
+    p95 = percentile(ms, 95)
+    ok = p95 <= budget_ms
+    print(f"{name:<22} n={len(ms):<4} p50 {statistics.median(ms):7.1f} ms   p95 {p95:7.1f} ms   "
+          f"max {max(ms):7.1f} ms   (target p95 <= {budget_ms:.0f} ms: {'met' if ok else 'NOT met'})")
+    return ok
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--samples", type=int, default=200, help="positions per request kind")
+    parser.add_argument("--edits", type=int, default=20, help="edit/restore pairs")
+    args = parser.parse_args()
+    print(f"load average {os.getloadavg()[0]:.2f} on {os.cpu_count()} CPUs")
+    client = Client()
+    client.request("initialize", {"processId": os.getpid(), "rootUri": ST.as_uri(), "capabilities": {}})
+    client.notify("initialized", {})
+    texts = {}
+    started = time.perf_counter()
+    for name in FILES:
+        path = ST / name
+        texts[name] = path.read_text(encoding="utf-8")
+        client.notify("textDocument/didOpen", {"textDocument": {"uri": path.as_uri(), "languageId": "structured-text",
+                                                                "version": 1, "text": texts[name]}})
+    first = (ST / FILES[0]).as_uri()
+    client.wait_diagnostics(first, lambda d: True)
+    print(f"first open (check + lint of the project, to its diagnostics): {time.perf_counter() - started:.2f} s")
+    seconds, _ = client.request("textDocument/hover", {"textDocument": {"uri": first}, "position": {"line": 0, "character": 0}})
+    print(f"first request (waits for the index of the first check): {seconds:.2f} s")
+
+    positions = []
+    for name in FILES:
+        positions += [((ST / name).as_uri(), line, col) for line, col in identifiers(texts[name])]
+    step = max(1, len(positions) // args.samples)
+    sample = positions[::step][:args.samples]
+    ok = True
+    for method, label in (("textDocument/hover", "hover"), ("textDocument/definition", "definition"),
+                          ("textDocument/completion", "completion")):
+        times = []
+        answered = 0
+        for uri, line, col in sample:
+            seconds, reply = client.request(method, {"textDocument": {"uri": uri}, "position": {"line": line, "character": col}})
+            times.append(seconds)
+            answered += bool(reply.get("result"))
+        ok &= report(label, times, 50)
+        print(f"{'':<22} answered with a result at {answered} of {len(sample)} positions")
+    # diagnostics after an edit
+    name = "PnP_Example.st"
+    uri = (ST / name).as_uri()
+    original = texts[name]
+    broken = original.replace("Prg_Step:=1;", "Prg_Step:=UndeclaredName;", 1)
+    assert broken != original
+    times = []
+    version = 1
+    for _ in range(args.edits):
+        for text, want_error in ((broken, True), (original, False)):
+            version += 1
+            sent = client.notify("textDocument/didChange", {
+                "textDocument": {"uri": uri, "version": version}, "contentChanges": [{"text": text}]})
+            at, _ = client.wait_diagnostics(uri, lambda d, w=want_error: any(x.get("severity") == 1 for x in d) == w)
+            times.append(at - sent)
+            time.sleep(1.0)    # let the index and the re-lint that follow settle (typing pauses)
+    ok &= report("diagnostics after edit", times, 300)
+    _, reply = client.request("workspace/executeCommand", {"command": "stvm.timings", "arguments": []})
+    cpu = [t["check_cpu"] for t in reply.get("result") or []]
+    if cpu:
+        ms = [c * 1000 for c in cpu]
+        print(f"{'  server CPU per check':<22} n={len(ms):<4} p50 {statistics.median(ms):7.1f} ms   "
+              f"p95 {percentile(ms, 95):7.1f} ms   (parse of the edited file + checker, without the "
+              f"{DEBOUNCE_MS} ms debounce and without waiting for the CPU)")
+    client.close()
+    return 0 if ok else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())

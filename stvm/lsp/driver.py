@@ -1,0 +1,210 @@
+"""The one place the language server meets the pipeline (stvm/project.py): which files make the
+project of an open file, its settings, and a check of it with the editor's unsaved buffers in
+place of the files' text.
+
+Everything here goes through `stvm.project`'s public functions (`expand_paths`,
+`project_settings`, `read_source_text`, `stdlib_units`, `parse_unit`) and the checker's
+`analyze`, so the manifest, dialect, defines and libraries are those of `stvm check`. When the
+driver's API changes, this module is the only one to adapt.
+
+Incremental where the pipeline allows: each file's parsed unit is kept in memory with the text
+it came from, so an edit re-parses only the file edited (the stdlib is parsed once per
+settings); the checker itself runs over the whole project (it is not incremental, ~70-170 ms on
+st_src/), which is what re-checks the edited file's dependents.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from stvm.diagnostics import Diagnostic, has_errors, sort_key
+from stvm.source import SourceError, Span
+
+VENDOR_SUFFIXES = (".tcpou", ".tcdut", ".tcgvl", ".tcio", ".xml")
+SOURCE_SUFFIXES = (".st",) + VENDOR_SUFFIXES
+MANIFEST = "stvm.toml"
+
+
+def is_source(path: Path) -> bool:
+    return path.suffix.lower() in SOURCE_SUFFIXES
+
+
+def project_root_of(path: Path) -> list[Path]:
+    """What `stvm check` is given for an open file. A file of a folder with `stvm.toml` is that
+    project (expand_paths does it). Otherwise (a choice, documented in docs/editor.md) the
+    file's folder: every .st file in it, or for a TwinCAT/PLCopen file the folder holding its
+    `.plcproj` (up to three levels up: POUs/, DUTs/, GVLs/) — so names from the other files of
+    the folder resolve, as they do in CODESYS's and TwinCAT's project tree."""
+    folder = path.parent
+    if (folder / MANIFEST).exists():
+        return [path]
+    if path.suffix.lower() in VENDOR_SUFFIXES:
+        for up in [folder, *list(folder.parents)[:3]]:
+            if any(up.glob("*.plcproj")):
+                return [up]
+        return [folder]
+    if path.suffix.lower() == ".st":
+        return [folder]
+    return [path]
+
+
+def project_identity(path: Path) -> tuple[str, ...]:
+    """One key per project: its manifest when it has one (every file of st_src/ is the same
+    project), else what `project_root_of` checks."""
+    manifest = path.parent / MANIFEST
+    if manifest.exists():
+        return (str(manifest.resolve()),)
+    return tuple(str(p.resolve()) for p in project_root_of(path))
+
+
+@dataclass
+class CheckResult:
+    """One check of a project: the analysis (None when a file has a syntax error), every
+    diagnostic, the ST text of every file (vendor XML: its ST laid out on the XML's lines), the
+    files' own text and the project's files."""
+
+    analysis: object | None
+    diagnostics: list[Diagnostic]
+    texts: dict[str, str]
+    files: list[str]
+    settings: object
+    manifest: dict
+    root: Path | None
+    seconds: float = 0.0
+    units: dict[str, object] = field(default_factory=dict)
+    originals: dict[str, str] = field(default_factory=dict)   # each file's own text (vendor XML: the XML)
+
+
+class Driver:
+    """Checks projects with the editor's buffers; keeps parsed units keyed by their text."""
+
+    def __init__(self, overrides: list[str] | None = None) -> None:
+        self.overrides = list(overrides or [])
+        self._units: dict[tuple[str, str, str], tuple[object, list[Diagnostic]]] = {}
+
+    def settings_for(self, paths: list[Path]):
+        from stvm.project import project_settings   # lazy: start-up
+        return project_settings(paths, self.overrides)
+
+    def files_for(self, paths: list[Path]) -> tuple[list[Path], dict, Path | None]:
+        from stvm.project import expand_paths   # lazy: start-up
+        return expand_paths(paths)
+
+    def check(self, path: Path, buffers: dict[str, str]) -> CheckResult:
+        """Check the project of the open file `path`; `buffers` (file name → editor text) replace
+        the files' content. The collector is paused meanwhile, as `stvm check` does: the checker
+        builds many small objects that live as long as the result, and collecting them while
+        they are built doubled the time of a check of st_src/."""
+        from stvm.heap import collector_paused   # lazy: start-up
+        with collector_paused(age_survivors=True):
+            return self._check(path, buffers)
+
+    def _check(self, path: Path, buffers: dict[str, str]) -> CheckResult:
+        from stvm.project import parse_unit, read_source_text, stdlib_units   # lazy: start-up
+        from stvm.semantics import analyze   # lazy: start-up
+        from stvm.stdlib import NATIVE_FUNCTIONS   # lazy: start-up
+        started = time.perf_counter()
+        path = path.resolve()
+        paths = project_root_of(path)
+        settings = self.settings_for(paths)
+        files, manifest, root = self.files_for(paths)
+        if path.resolve() not in {f.resolve() for f in files}:
+            files = [*files, path]       # an open file the manifest does not list: checked with it
+        encoding = manifest.get("project", {}).get("encoding", "utf-8")
+        std_units, diags, std_texts = stdlib_units(settings)
+        units = list(std_units)
+        texts: dict[str, str] = dict(std_texts)
+        names: list[str] = []
+        unit_of: dict[str, object] = {}
+        originals: dict[str, str] = {}
+        settings_key = repr(settings)
+        for file in files:
+            file = file.resolve()
+            name = str(file)
+            names.append(name)
+            try:
+                if name in buffers:
+                    text = buffers[name]
+                    if file.suffix.lower() in VENDOR_SUFFIXES:
+                        from stvm.syntax.vendor_xml import translate   # lazy: vendor XML only
+                        text = translate(text, name)
+                else:
+                    text = read_source_text(file, encoding)
+            except SourceError as exc:
+                diags.append(Diagnostic.error(exc.message, Span(name, exc.line, exc.column, exc.line,
+                                                                 exc.column + 1), "E001"))
+                texts[name] = exc.text
+                continue
+            except OSError as exc:
+                diags.append(Diagnostic.error(f"cannot read file: {exc.strerror or exc}", Span(name, 0, 0, 0, 0)))
+                continue
+            texts[name] = str(text)
+            originals[name] = getattr(text, "original", None) or str(text)
+            key = (name, settings_key, _digest(getattr(text, "original", None) or str(text)))
+            parsed = self._units.get(key)
+            if parsed is None:
+                parsed = parse_unit(name, text, settings, use_cache=False)
+                for old in [k for k in self._units if k[0] == name]:
+                    del self._units[old]      # one version of each file kept
+                self._units[key] = parsed
+            unit, d = parsed
+            units.append(unit)
+            unit_of[name] = unit
+            diags += d
+        analysis = None
+        if not has_errors(diags):
+            try:
+                analysis = analyze(units, settings, NATIVE_FUNCTIONS)
+                diags += analysis.diagnostics
+            except RecursionError:
+                diags.append(Diagnostic.error("the program is nested too deeply to analyse",
+                                              Span(names[-1] if names else "<input>", 1, 1, 1, 2)))
+        diags.sort(key=sort_key)
+        return CheckResult(analysis, diags, texts, names, settings, manifest, root,
+                           time.perf_counter() - started, unit_of, originals)
+
+    def lint_findings(self, result: CheckResult, only: set[str] | None = None) -> list:
+        """The lint findings of a checked project (the files `only`, else the project's), with the
+        project's `[lint]` configuration and `noqa` comments applied."""
+        if result.analysis is None:
+            return []
+        from stvm.lint import lint_analysis   # lazy: start-up
+        from stvm.lint.config import load_config, suppressed   # lazy: start-up
+        from stvm.lint.registry import select_rules   # lazy: start-up
+        config = load_config(result.manifest, result.root)
+        rules = select_rules(list(config.select), list(config.ignore))
+        findings = lint_analysis(result.analysis, result.settings, rules, False,
+                                 only if only is not None else set(result.files))
+        return [f for f in findings if not suppressed(f, result.texts, config)]
+
+
+def _digest(text: str) -> str:
+    return hashlib.blake2b(text.encode("utf-8", "surrogatepass"), digest_size=16).hexdigest()
+
+
+def stdlib_folder() -> Path:
+    """Where the stdlib's sources are written so an editor can open them (go to definition into
+    `<stdlib>/iec_standard.st`): the cache folder's `lsp-stdlib/`, private to the user."""
+    from stvm.folders import default_folder   # lazy: start-up
+    folder = default_folder() / "lsp-stdlib"
+    folder.mkdir(parents=True, exist_ok=True, mode=0o700)
+    return folder
+
+
+def stdlib_path(display_name: str, text: str) -> Path:
+    """The file holding stdlib source `display_name` (`<stdlib>/x.st`) with `text`, written once
+    per content (read-only: it is a view of stvm's library, not a file to edit)."""
+    base = display_name.split("/", 1)[-1] if display_name.startswith("<stdlib") else Path(display_name).name
+    folder = stdlib_folder() / _digest(text)[:12]
+    target = folder / base
+    if not target.exists():
+        folder.mkdir(parents=True, exist_ok=True, mode=0o700)
+        tmp = folder / f".{base}.{os.getpid()}"
+        tmp.write_text(text, encoding="utf-8")
+        os.chmod(tmp, 0o400)
+        os.replace(tmp, target)
+    return target

@@ -1,0 +1,611 @@
+"""`stvm lsp`: the language server (LSP over stdio, pygls 2).
+
+On open, change (debounced) and save, the project of the document (its stvm.toml, else its
+folder: stvm/lsp/driver.py) is checked with the editor's unsaved buffers; the checker's errors
+and the lint findings are published for every file of the project (so an edit in one file
+updates its dependents), and the position index (stvm/lsp/index.py) is rebuilt. The requests
+(hover, definition, references, completion, …) read the last index that was built from a
+project without syntax errors, so they keep answering while a line is half typed.
+
+Diagnostics carry `source` "stvm" (checker) or "stvm-lint", the rule code, and for lint findings
+`codeDescription.href` = the rule's page (docs/lint.md#saNNN of the repository holding the file,
+or the `stvm-rule:` URI the VS Code extension resolves with `stvm lint --explain`).
+
+Documents are published under the URI the client used for them (`file://host/share/a.st` keeps
+its host, `file:///a/../b.st` stays as sent); other files under their resolved path's URI.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import os
+import functools
+import logging
+import concurrent.futures
+import threading
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from urllib.parse import unquote, urlparse
+
+from lsprotocol import types as lsp
+from pygls.exceptions import JsonRpcException, JsonRpcInternalError, JsonRpcInvalidParams
+from pygls.lsp.server import LanguageServer
+from pygls.protocol import LanguageServerProtocol
+
+from stvm.lsp import features as f
+from stvm.lsp.driver import CheckResult, Driver, is_source, project_identity, stdlib_path
+from stvm.lsp.index import Index, build_index
+from stvm.lsp.live import DEFAULT_ENDPOINT, LiveValues, format_value, instance_paths
+from stvm.semantics import types as t
+from stvm.source import is_stdlib_file
+from stvm.version import __version__
+
+SOURCE_CHECK, SOURCE_LINT = "stvm", "stvm-lint"
+DEBOUNCE_SECONDS = 0.08
+"""How long typing must pause before the project is checked again: short enough that the
+diagnostics of an edit arrive within the 300 ms budget (bench/bench_lsp.py), long enough that a
+burst of keystrokes costs one check."""
+
+
+def path_of(uri: str) -> Path | None:
+    """The file a `file:` URI names; a host other than localhost is kept as a UNC path
+    (`file://host/share/a.st` → //host/share/a.st)."""
+    try:
+        parsed = urlparse(uri)
+    except ValueError:
+        return None
+    if parsed.scheme != "file":
+        return None
+    path = unquote(parsed.path)
+    if parsed.netloc and parsed.netloc.lower() != "localhost":
+        path = f"//{parsed.netloc}{path}"
+    return Path(path)
+
+
+def _norm(path: Path) -> str:
+    try:
+        return str(path.resolve())
+    except (OSError, RuntimeError):
+        return str(path)
+
+
+def rule_href(code: str, path: Path) -> str:
+    """docs/lint.md#code of the repository that holds `path`, else a stvm-rule: URI."""
+    for folder in [path.parent, *path.parents]:
+        page = folder / "docs" / "lint.md"
+        try:
+            if page.exists():
+                return page.as_uri() + f"#{code.lower()}"
+        except OSError:
+            break
+    return f"stvm-rule:{code}"
+
+
+def _range(span) -> lsp.Range:
+    line = max(span.line - 1, 0)
+    col = max(span.column - 1, 0)
+    if span.end_line >= span.line and span.end_line > 0:
+        end_line = span.end_line - 1
+        end_col = max(span.end_column - 1, col + 1 if end_line == line else 0)
+    else:
+        end_line, end_col = line, col + 1
+    return lsp.Range(lsp.Position(line, col), lsp.Position(end_line, end_col))
+
+
+def live_spots(ix: Index, file: str, first: int, last: int) -> list[tuple]:
+    """(occurrence, stvm path, symbol) of each scalar program or global variable on lines
+    first..last: what the running VM publishes (an FB's internals have no single path)."""
+    instances = instance_paths(ix.model)
+    out = []
+    for occ in ix.by_file.get(file, ()):
+        if occ.line < first or occ.line > last:
+            continue
+        sym = ix.symbols.get(occ.key)
+        if sym is None or isinstance(sym.type, (t.StructType, t.ArrayType, t.FBType, t.InterfaceType)):
+            continue
+        if occ.key[0] == "global":
+            out.append((occ, sym.name, sym))
+        elif occ.key[0] == "var":
+            pou = ix.pou_by_key.get(occ.key[1])
+            if pou is not None and pou.kind == "PROGRAM":
+                for instance in instances.get(pou.key, [])[:1]:
+                    out.append((occ, f"{instance}.{sym.name}", sym))
+    return out
+
+
+class RequestFailed(JsonRpcException):
+    """A request the server understood and refuses (LSP RequestFailed, -32803): the editor
+    shows the message (a rename that would clash, a name of the stdlib)."""
+
+    CODE = -32803
+
+
+_DROPPED = object()
+
+
+class GuardedProtocol(LanguageServerProtocol):
+    """pygls, except that a request whose params do not fit the method's schema is answered
+    with a JSON-RPC InvalidParams error (-32602) carrying its id, instead of being dropped with a
+    traceback on stderr, and a notification with bad params is ignored (logged to the client)."""
+
+    def structure_message(self, data):
+        try:
+            return super().structure_message(data)
+        except (JsonRpcInvalidParams, JsonRpcInternalError) as exc:
+            if not isinstance(data, dict) or "method" not in data:
+                raise
+            method = data.get("method")
+            if "id" in data and isinstance(data["id"], (int, str)) and not isinstance(data["id"], bool):
+                self._send_response(data["id"], error=JsonRpcInvalidParams(
+                    f"invalid params for {method!s:.80}: they do not match the LSP schema").to_response_error())
+            else:
+                self._server.window_log_message(lsp.LogMessageParams(
+                    lsp.MessageType.Warning, f"stvm: ignored {method!s:.80} notification: invalid params ({type(exc).__name__})"))
+            return _DROPPED
+
+    def handle_message(self, message):
+        if message is _DROPPED:
+            return None
+        return super().handle_message(message)
+
+
+@dataclass
+class ProjectState:
+    result: CheckResult | None = None
+    index: Index | None = None        # the last one built from a project that parsed
+    published: frozenset = frozenset()
+    lint: dict = field(default_factory=dict)        # file → its last lint findings
+    indexed: object = None                          # the CheckResult `index` was built from
+
+
+class StvmLanguageServer(LanguageServer):
+    def __init__(self, overrides: list[str] | None = None) -> None:
+        super().__init__("stvm", __version__, text_document_sync_kind=lsp.TextDocumentSyncKind.Incremental,
+                         protocol_cls=GuardedProtocol)
+        self.driver = Driver(overrides)
+        self.projects: dict[tuple[str, ...], ProjectState] = {}
+        self.project_of_file: dict[str, tuple[str, ...]] = {}
+        self.client_uris: dict[str, str] = {}       # resolved path → the URI the client opened it as
+        self.open_files: set[str] = set()
+        self.stdlib_views: dict[str, str] = {}      # written stdlib file → its display name
+        self.lock = threading.Lock()
+        self.executor = concurrent.futures.ThreadPoolExecutor(max_workers=1, thread_name_prefix="stvm-check")
+        self.pending: dict[tuple[str, ...], asyncio.TimerHandle] = {}
+        self.timings: list[float] = []
+        self.problems: list[str] = []               # errors met off the event loop, logged on it
+        self.live = LiveValues(DEFAULT_ENDPOINT)     # replaced at `initialize` (its options)
+        self.refresh_hints = False
+
+    # ---- files and projects ------------------------------------------------------------------
+
+    def uri_of(self, file: str) -> str:
+        if file in self.client_uris:
+            return self.client_uris[file]
+        if is_stdlib_file(file):
+            state = next((s for s in self.projects.values() if s.result and file in s.result.texts), None)
+            if state is not None:
+                path = stdlib_path(file, state.result.texts[file])
+                self.stdlib_views[_norm(path)] = file
+                return path.as_uri()
+        return Path(file).as_uri()
+
+    def buffers(self) -> dict[str, str]:
+        out = {}
+        for file in self.open_files:
+            doc = self.workspace.get_text_document(self.client_uris[file])
+            out[file] = doc.source
+        return out
+
+    def project_key(self, path: Path) -> tuple[str, ...]:
+        return project_identity(path)
+
+    def check_now(self, path: Path) -> ProjectState:
+        """Check, lint and index the project of `path` (blocking) and publish its diagnostics."""
+        state, by_uri = self.compute(path, self.buffers(), lint="all")
+        self.publish(state, by_uri)
+        self.reindex(state)
+        return state
+
+    def compute(self, path: Path, buffers: dict[str, str], lint: str = "all") -> tuple[ProjectState, dict]:
+        """Check the project of `path` with `buffers` (any thread): the diagnostics per URI.
+        `lint` "all" lints every file of the project, "none" none: the findings of the files
+        not edited are kept from their last lint, the edited file's are dropped until
+        `relint` (its lines may have moved)."""
+        key = self.project_key(path)
+        with self.lock:
+            result = self.driver.check(path, buffers)
+            state = self.projects.setdefault(key, ProjectState())
+            state.result = result
+            for file in result.files:
+                self.project_of_file[file] = key
+            if lint == "all":
+                state.lint = self.lint_of(result, None)
+            else:
+                state.lint.pop(_norm(path), None)
+            return state, self.diagnostics_of(state, path)
+
+    def relint(self, state: ProjectState, path: Path) -> dict | None:
+        """Lint the edited file again (any thread); the diagnostics per URI, None if it cannot be."""
+        with self.lock:
+            result = state.result
+            if result is None or result.analysis is None:
+                return None
+            file = _norm(path)
+            state.lint.update(self.lint_of(result, {file}))
+            state.lint.setdefault(file, [])
+            return self.diagnostics_of(state, path)
+
+    def reindex(self, state: ProjectState) -> None:
+        """Rebuild the position index from the last check (kept when that check had no analysis)."""
+        result = state.result
+        if result is not None and result.analysis is not None and state.indexed is not result:
+            state.index = build_index(result.analysis, result.texts, result.files, result.originals)
+            state.indexed = result
+
+    def lint_of(self, result: CheckResult, files: set[str] | None) -> dict[str, list]:
+        out: dict[str, list] = {f: [] for f in (files if files is not None else result.files)}
+        try:
+            findings = self.driver.lint_findings(result, files)
+        except Exception as exc:  # a lint rule's bug must not hide the checker's diagnostics
+            self.problems.append(f"stvm lint failed: {exc!r}")
+            return out
+        for fnd in findings:
+            out.setdefault(_norm(Path(fnd.span.file)), []).append(fnd)
+        return out
+
+    def diagnostics_of(self, state: ProjectState, path: Path) -> dict[str, list[lsp.Diagnostic]]:
+        result = state.result
+        out: dict[str, list[lsp.Diagnostic]] = {self.uri_of(file): [] for file in result.files}
+
+        def add(file: str, diag: lsp.Diagnostic) -> None:
+            if file.startswith("<"):
+                return
+            out.setdefault(self.uri_of(_norm(Path(file))), []).append(diag)
+
+        for d in result.diagnostics:
+            severity = lsp.DiagnosticSeverity.Error if d.is_error else lsp.DiagnosticSeverity.Warning
+            add(d.span.file, lsp.Diagnostic(_range(d.span), d.message, severity=severity, code=d.code or None,
+                                            source=SOURCE_CHECK))
+        for findings in state.lint.values():
+            for fnd in findings:
+                add(fnd.span.file, lsp.Diagnostic(_range(fnd.span), fnd.message, severity=lsp.DiagnosticSeverity.Warning,
+                                                  code=fnd.code, source=SOURCE_LINT,
+                                                  code_description=lsp.CodeDescription(href=rule_href(fnd.code, path))))
+        return out
+
+    def flush_problems(self) -> None:
+        while self.problems:
+            self.window_log_message(lsp.LogMessageParams(lsp.MessageType.Error, self.problems.pop(0)))
+
+    def publish(self, state: ProjectState, by_uri: dict[str, list[lsp.Diagnostic]]) -> None:
+        for stale in state.published - set(by_uri):
+            self.text_document_publish_diagnostics(lsp.PublishDiagnosticsParams(stale, []))
+        state.published = frozenset(by_uri)
+        for uri, diags in by_uri.items():
+            self.text_document_publish_diagnostics(lsp.PublishDiagnosticsParams(uri, diags))
+
+    def context(self, uri: str) -> tuple[str, Index] | None:
+        """(file name, index) for a request on `uri`, checking its project first if needed."""
+        path = path_of(uri)
+        if path is None:
+            return None
+        file = _norm(path)
+        if file in self.stdlib_views:
+            return None
+        key = self.project_of_file.get(file)
+        state = self.projects.get(key) if key else None
+        if state is None:
+            if not is_source(path) or not path.exists() and file not in self.open_files:
+                return None
+            state = self.check_now(path)
+        if state.indexed is not state.result:
+            self.reindex(state)
+        if state.index is None:
+            return None
+        return file, state.index
+
+    def text_of(self, uri: str) -> str:
+        return self.workspace.get_text_document(uri).source
+
+
+def build_server(overrides: list[str] | None = None) -> StvmLanguageServer:
+    server = StvmLanguageServer(overrides)
+
+    def relevant(uri: str) -> Path | None:
+        path = path_of(uri)
+        if path is None or not is_source(path) or _norm(path) in server.stdlib_views:
+            return None
+        return path
+
+    def safely(fn, *args):
+        try:
+            return fn(*args)
+        except Exception as exc:  # a bug in stvm must not kill the editor session
+            server.problems.append(f"stvm: {exc!r}")
+            return None
+
+    def opened(uri: str) -> Path | None:
+        path = relevant(uri)
+        if path is not None:
+            file = _norm(path)
+            server.client_uris[file] = uri
+            server.open_files.add(file)
+        return path
+
+    @server.feature(lsp.TEXT_DOCUMENT_DID_OPEN)
+    def did_open(ls: StvmLanguageServer, params: lsp.DidOpenTextDocumentParams) -> None:
+        path = opened(params.text_document.uri)
+        if path is None:
+            return
+        state = ls.projects.get(ls.project_key(path))
+        file = _norm(path)
+        if state is not None and state.result is not None and file in state.result.files \
+                and state.result.originals.get(file) == params.text_document.text:
+            # another file of a project already checked with this very text: its diagnostics
+            # are out already, under the URI the client now uses
+            ls.publish(state, ls.diagnostics_of(state, path))
+        else:
+            safely(ls.check_now, path)
+        ls.flush_problems()
+
+    @server.feature(lsp.TEXT_DOCUMENT_DID_SAVE, lsp.SaveOptions(include_text=True))
+    def did_save(ls: StvmLanguageServer, params: lsp.DidSaveTextDocumentParams) -> None:
+        path = opened(params.text_document.uri)
+        if path is None:
+            return
+        if params.text is not None:
+            doc = ls.workspace.get_text_document(params.text_document.uri)
+            if doc.source != params.text:    # the client's saved text is the truth
+                ls.workspace.put_text_document(lsp.TextDocumentItem(params.text_document.uri, doc.language_id or "structured-text",
+                                                                    (doc.version or 0) + 1, params.text))
+        safely(ls.check_now, path)
+        ls.flush_problems()
+
+    @server.feature(lsp.TEXT_DOCUMENT_DID_CHANGE)
+    async def did_change(ls: StvmLanguageServer, params: lsp.DidChangeTextDocumentParams) -> None:
+        path = opened(params.text_document.uri)
+        if path is None:
+            return
+        key = ls.project_key(path)
+        loop = asyncio.get_running_loop()
+        previous = ls.pending.pop(key, None)
+        if previous is not None:
+            previous.cancel()
+        edited = time.perf_counter()
+
+        async def run() -> None:
+            buffers = ls.buffers()
+            def timed():
+                cpu = time.thread_time()
+                out = safely(ls.compute, path, buffers, "none")
+                return out, time.thread_time() - cpu
+
+            done, cpu = await loop.run_in_executor(ls.executor, timed)
+            if done is None:
+                return
+            state, by_uri = done
+            ls.publish(state, by_uri)     # on the event loop: the transport is not thread-safe
+            ls.timings.append({"edit_to_publish": time.perf_counter() - edited, "check_cpu": cpu})
+            # then the index (hover & co. see the edit) and the edited file's lint findings
+            await loop.run_in_executor(ls.executor, lambda: safely(ls.reindex, state))
+            if key in ls.pending:         # typing went on: the next check supersedes this one
+                return
+            linted = await loop.run_in_executor(ls.executor, lambda: safely(ls.relint, state, path))
+            if linted is not None and key not in ls.pending:
+                ls.publish(state, linted)
+            ls.flush_problems()
+
+        def start() -> None:
+            ls.pending.pop(key, None)
+            asyncio.ensure_future(run())
+
+        ls.pending[key] = loop.call_later(DEBOUNCE_SECONDS, start)
+
+    @server.feature(lsp.TEXT_DOCUMENT_DID_CLOSE)
+    def did_close(ls: StvmLanguageServer, params: lsp.DidCloseTextDocumentParams) -> None:
+        path = path_of(params.text_document.uri)
+        if path is not None:
+            ls.open_files.discard(_norm(path))
+        ls.text_document_publish_diagnostics(lsp.PublishDiagnosticsParams(params.text_document.uri, []))
+
+    @server.feature(lsp.TEXT_DOCUMENT_HOVER)
+    def hover(ls: StvmLanguageServer, params: lsp.HoverParams) -> lsp.Hover | None:
+        ctx = ls.context(params.text_document.uri)
+        if ctx is None:
+            return None
+        found = f.symbol_at(ctx[1], ctx[0], params.position.line, params.position.character)
+        if found is None:
+            return None
+        sym, occ = found
+        return lsp.Hover(lsp.MarkupContent(lsp.MarkupKind.Markdown, f.hover_markdown(ctx[1], sym)),
+                         f.rng(occ.line, occ.col, occ.end))
+
+    def goto(ls: StvmLanguageServer, params) -> list[lsp.Location] | None:
+        ctx = ls.context(params.text_document.uri)
+        if ctx is None:
+            return None
+        found = f.symbol_at(ctx[1], ctx[0], params.position.line, params.position.character)
+        if found is None or found[0].line < 0:
+            return None
+        sym = found[0]
+        return [lsp.Location(ls.uri_of(sym.file), f.rng(sym.line, sym.col, sym.end_col))]
+
+    @server.feature(lsp.TEXT_DOCUMENT_DEFINITION)
+    def definition(ls: StvmLanguageServer, params: lsp.DefinitionParams):
+        return goto(ls, params)
+
+    @server.feature(lsp.TEXT_DOCUMENT_DECLARATION)
+    def declaration(ls: StvmLanguageServer, params: lsp.DeclarationParams):
+        return goto(ls, params)
+
+    @server.feature(lsp.TEXT_DOCUMENT_TYPE_DEFINITION)
+    def type_definition(ls: StvmLanguageServer, params: lsp.TypeDefinitionParams):
+        ctx = ls.context(params.text_document.uri)
+        if ctx is None:
+            return None
+        found = f.symbol_at(ctx[1], ctx[0], params.position.line, params.position.character)
+        tsym = ctx[1].type_symbol(found[0].type) if found else None
+        if tsym is None or tsym.line < 0:
+            return None
+        return [lsp.Location(ls.uri_of(tsym.file), f.rng(tsym.line, tsym.col, tsym.end_col))]
+
+    @server.feature(lsp.TEXT_DOCUMENT_IMPLEMENTATION)
+    def implementation(ls: StvmLanguageServer, params: lsp.ImplementationParams):
+        """From an interface (or its method/property): the FBs implementing it (their method/property)."""
+        ctx = ls.context(params.text_document.uri)
+        if ctx is None:
+            return None
+        found = f.symbol_at(ctx[1], ctx[0], params.position.line, params.position.character)
+        if found is None:
+            return []
+        return [lsp.Location(ls.uri_of(sym.file), f.rng(sym.line, sym.col, sym.end_col))
+                for sym in f.implementations(ctx[1], found[0]) if sym.line >= 0]
+
+    @server.feature(lsp.TEXT_DOCUMENT_REFERENCES)
+    def references(ls: StvmLanguageServer, params: lsp.ReferenceParams) -> list[lsp.Location] | None:
+        ctx = ls.context(params.text_document.uri)
+        if ctx is None:
+            return None
+        found = f.symbol_at(ctx[1], ctx[0], params.position.line, params.position.character)
+        if found is None:
+            return []
+        include = params.context.include_declaration
+        return [lsp.Location(ls.uri_of(file), f.rng(o.line, o.col, o.end))
+                for file, o in ctx[1].references(found[0].key) if include or not o.decl]
+
+    @server.feature(lsp.TEXT_DOCUMENT_DOCUMENT_HIGHLIGHT)
+    def highlight(ls: StvmLanguageServer, params: lsp.DocumentHighlightParams):
+        ctx = ls.context(params.text_document.uri)
+        if ctx is None:
+            return None
+        found = f.symbol_at(ctx[1], ctx[0], params.position.line, params.position.character)
+        if found is None:
+            return []
+        return [lsp.DocumentHighlight(f.rng(o.line, o.col, o.end),
+                                      lsp.DocumentHighlightKind.Write if o.decl else lsp.DocumentHighlightKind.Read)
+                for file, o in ctx[1].references(found[0].key) if file == ctx[0]]
+
+    @server.feature(lsp.TEXT_DOCUMENT_DOCUMENT_SYMBOL)
+    def document_symbol(ls: StvmLanguageServer, params: lsp.DocumentSymbolParams):
+        ctx = ls.context(params.text_document.uri)
+        return f.document_symbols(ctx[1], ctx[0]) if ctx else None
+
+    @server.feature(lsp.WORKSPACE_SYMBOL)
+    def workspace_symbol(ls: StvmLanguageServer, params: lsp.WorkspaceSymbolParams):
+        return f.workspace_symbols([s.index for s in ls.projects.values() if s.index is not None],
+                                   params.query, ls.uri_of)
+
+    @server.feature(lsp.TEXT_DOCUMENT_COMPLETION, lsp.CompletionOptions(trigger_characters=[".", "#"]))
+    def completion(ls: StvmLanguageServer, params: lsp.CompletionParams):
+        ctx = ls.context(params.text_document.uri)
+        if ctx is None:
+            return None
+        doc = ls.workspace.get_text_document(params.text_document.uri)
+        lines = doc.lines
+        line_text = lines[params.position.line] if params.position.line < len(lines) else ""
+        items = f.completion(ctx[1], ctx[0], params.position.line, params.position.character, line_text)
+        return lsp.CompletionList(is_incomplete=True, items=items)
+
+    @server.feature(lsp.TEXT_DOCUMENT_SIGNATURE_HELP, lsp.SignatureHelpOptions(trigger_characters=["(", ","]))
+    def signature_help(ls: StvmLanguageServer, params: lsp.SignatureHelpParams):
+        ctx = ls.context(params.text_document.uri)
+        if ctx is None:
+            return None
+        doc = ls.workspace.get_text_document(params.text_document.uri)
+        offset = doc.offset_at_position(params.position)
+        return f.signature_help(ctx[1], ctx[0], params.position.line, doc.source, offset)
+
+    @server.feature(lsp.TEXT_DOCUMENT_PREPARE_RENAME)
+    def prepare_rename(ls: StvmLanguageServer, params: lsp.PrepareRenameParams):
+        ctx = ls.context(params.text_document.uri)
+        if ctx is None:
+            return None
+        found = f.symbol_at(ctx[1], ctx[0], params.position.line, params.position.character)
+        if found is None:
+            return None
+        sym, occ = found
+        if sym.stdlib:
+            raise RequestFailed(f"'{sym.name}' is declared in the stvm standard library: it cannot be renamed")
+        return lsp.PrepareRenamePlaceholder(f.rng(occ.line, occ.col, occ.end), sym.name)
+
+    @server.feature(lsp.TEXT_DOCUMENT_RENAME, lsp.RenameOptions(prepare_provider=True))
+    def rename(ls: StvmLanguageServer, params: lsp.RenameParams):
+        ctx = ls.context(params.text_document.uri)
+        if ctx is None:
+            return None
+        found = f.symbol_at(ctx[1], ctx[0], params.position.line, params.position.character)
+        if found is None:
+            raise RequestFailed("nothing to rename here")
+        sym = found[0]
+        problem = f.rename_problem(ctx[1], sym, params.new_name)
+        if problem:
+            raise RequestFailed(problem)
+        edits = f.rename_edits(ctx[1], sym)
+        if isinstance(edits, str):
+            raise RequestFailed(edits)
+        return lsp.WorkspaceEdit(changes={
+            ls.uri_of(file): [lsp.TextEdit(f.rng(line, col, end), params.new_name) for line, col, end in spots]
+            for file, spots in edits.items()})
+
+    @server.feature(lsp.TEXT_DOCUMENT_SEMANTIC_TOKENS_FULL,
+                    lsp.SemanticTokensLegend(token_types=f.TOKEN_TYPES, token_modifiers=f.TOKEN_MODIFIERS))
+    def semantic_tokens(ls: StvmLanguageServer, params: lsp.SemanticTokensParams):
+        ctx = ls.context(params.text_document.uri)
+        if ctx is None:
+            return lsp.SemanticTokens(data=[])
+        return lsp.SemanticTokens(data=f.semantic_tokens(ctx[1], ctx[0]))
+
+    @server.feature(lsp.TEXT_DOCUMENT_FOLDING_RANGE)
+    def folding(ls: StvmLanguageServer, params: lsp.FoldingRangeParams):
+        ctx = ls.context(params.text_document.uri)
+        return f.folding_ranges(ctx[1], ctx[0]) if ctx else []
+
+    @server.feature(lsp.INITIALIZE)
+    def initialize(ls: StvmLanguageServer, params: lsp.InitializeParams) -> None:
+        options = params.initialization_options if isinstance(params.initialization_options, dict) else {}
+        live = options.get("liveValues") if isinstance(options.get("liveValues"), dict) else {}
+        endpoint = live.get("endpoint") if isinstance(live.get("endpoint"), str) else None
+        ls.live = LiveValues(endpoint or os.environ.get("STVM_LIVE_ENDPOINT") or DEFAULT_ENDPOINT,
+                             live.get("enable", True) is not False)
+        caps = params.capabilities.workspace
+        ls.refresh_hints = bool(caps and caps.inlay_hint and caps.inlay_hint.refresh_support)
+
+    @server.feature(lsp.TEXT_DOCUMENT_INLAY_HINT)
+    async def inlay_hint(ls: StvmLanguageServer, params: lsp.InlayHintParams):
+        """Live values (stvm/lsp/live.py) beside the program and global variables in range."""
+        ctx = ls.context(params.text_document.uri)
+        if ctx is None or not ls.live.enabled:
+            return []
+        spots = live_spots(ctx[1], ctx[0], params.range.start.line, params.range.end.line)
+        if not spots:
+            return []
+        paths = sorted({path for _, path, _ in spots})
+        values = await ls.live.read(paths)
+        if not values:
+            return []
+
+        async def changed() -> None:
+            if ls.refresh_hints:
+                ls.workspace_inlay_hint_refresh(None)
+
+        ls.live.watch(list(values), changed)
+        return [lsp.InlayHint(position=lsp.Position(occ.line, occ.end), label=f"= {format_value(values[path], sym.type)}",
+                              padding_left=True, tooltip=f"live value of {path} ({ls.live.endpoint})")
+                for occ, path, sym in spots if path in values]
+
+    @server.command("stvm.timings")
+    def timings(ls: StvmLanguageServer, *args):
+        """Per edit: seconds from the edit to its diagnostics and the CPU seconds of the check
+        (bench/bench_lsp.py reads them: the CPU time does not depend on the machine's load)."""
+        out = list(ls.timings)
+        return out
+
+    return server
+
+
+def serve(overrides: list[str] | None = None) -> None:
+    # pygls logs every failed message with its traceback on stderr; the client is told instead
+    # (a JSON-RPC error, window/logMessage)
+    logging.getLogger("pygls").setLevel(logging.CRITICAL)
+    build_server(overrides).start_io()

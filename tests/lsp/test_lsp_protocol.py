@@ -1,0 +1,159 @@
+"""The protocol's edges (issue 34 item 11, LSP half): requests with params that do not fit get a
+JSON-RPC error and the server keeps serving; a `file://host/…` URI keeps its host; a URI with
+`..` is answered under the URI the client used. Raw JSON-RPC over stdio, no client library, so
+the malformed messages reach the server as sent."""
+
+from __future__ import annotations
+
+import json
+import os
+import queue
+import subprocess
+import sys
+import threading
+from pathlib import Path
+
+import pytest
+
+from stvm.lsp.server import path_of
+
+FIXTURE = Path(__file__).resolve().parent / "fixtures" / "oo"
+
+
+class RawClient:
+    def __init__(self) -> None:
+        self.proc = subprocess.Popen([sys.executable, "-m", "stvm", "lsp"], stdin=subprocess.PIPE,
+                                     stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+        self.messages: queue.Queue = queue.Queue()
+        self.next_id = 0
+        threading.Thread(target=self._read, daemon=True).start()
+
+    def _read(self) -> None:
+        stream = self.proc.stdout
+        while True:
+            header = b""
+            while not header.endswith(b"\r\n\r\n"):
+                byte = stream.read(1)
+                if not byte:
+                    return
+                header += byte
+            length = int(next(line.split(b":")[1] for line in header.split(b"\r\n")
+                              if line.lower().startswith(b"content-length")))
+            self.messages.put(json.loads(stream.read(length)))
+
+    def send(self, message) -> None:
+        body = (json.dumps(message) if not isinstance(message, bytes) else message)
+        body = body.encode() if isinstance(body, str) else body
+        self.proc.stdin.write(b"Content-Length: %d\r\n\r\n" % len(body) + body)
+        self.proc.stdin.flush()
+
+    def request(self, method: str, params) -> dict:
+        self.next_id += 1
+        self.send({"jsonrpc": "2.0", "id": self.next_id, "method": method, "params": params})
+        while True:
+            msg = self.messages.get(timeout=60)
+            if msg.get("id") == self.next_id and "method" not in msg:
+                return msg
+
+    def notify(self, method: str, params) -> None:
+        self.send({"jsonrpc": "2.0", "method": method, "params": params})
+
+    def diagnostics_uris(self, until: str) -> list[str]:
+        seen = []
+        while True:
+            msg = self.messages.get(timeout=60)
+            if msg.get("method") == "textDocument/publishDiagnostics":
+                seen.append(msg["params"]["uri"])
+                if msg["params"]["uri"] == until:
+                    return seen
+
+    def close(self) -> str:
+        if self.proc.poll() is not None:
+            return ""
+        try:
+            self.request("shutdown", None)
+            self.notify("exit", None)
+            self.proc.wait(timeout=10)
+        finally:
+            if self.proc.poll() is None:
+                self.proc.kill()
+                self.proc.wait()
+        return self.proc.stderr.read().decode(errors="replace")
+
+
+@pytest.fixture
+def client():
+    c = RawClient()
+    reply = c.request("initialize", {"processId": os.getpid(), "rootUri": None, "capabilities": {}})
+    assert "hover" in json.dumps(reply["result"]["capabilities"]).lower()
+    c.notify("initialized", {})
+    yield c
+    c.close()
+
+
+@pytest.mark.parametrize("params", [
+    {"textDocument": None, "position": {"line": 0, "character": 0}},
+    {"textDocument": {"uri": "file:///x.st"}, "position": {"line": -1, "character": 2 ** 40}},
+    {"textDocument": {"uri": "file:///x.st"}, "position": {"line": "zero", "character": 0}},
+    {"textDocument": {"uri": "file:///x.st"}},
+    [1, 2, 3],
+    "hover",
+])
+def test_invalid_params_get_a_json_rpc_error_and_the_server_goes_on(client, params):
+    reply = client.request("textDocument/hover", params)
+    assert reply.get("error", {}).get("code") == -32602, reply
+    assert "Traceback" not in json.dumps(reply)
+    # still serving: a valid request on a real file answers
+    main = (FIXTURE / "main.st").resolve()
+    client.notify("textDocument/didOpen", {"textDocument": {"uri": main.as_uri(), "languageId": "structured-text",
+                                                            "version": 1, "text": main.read_text()}})
+    reply = client.request("textDocument/hover", {"textDocument": {"uri": main.as_uri()},
+                                                  "position": {"line": 2, "character": 5}})
+    assert "FB_Axis" in reply["result"]["contents"]["value"]
+
+
+def test_a_uri_that_names_no_file_is_answered_with_null(client):
+    # lsprotocol's converter takes 5 as the string "5": not a file: URI, so nothing to say
+    reply = client.request("textDocument/hover", {"textDocument": {"uri": 5}, "position": {"line": 0, "character": 0}})
+    assert reply["result"] is None
+
+
+def test_invalid_notification_params_are_ignored_without_a_traceback(client):
+    client.notify("textDocument/didOpen", {"textDocument": {"uri": 7}})
+    client.notify("textDocument/didChange", {"textDocument": None, "contentChanges": "x"})
+    reply = client.request("workspace/symbol", {"query": "FB"})
+    assert "result" in reply
+    stderr = client.close()
+    assert "Traceback" not in stderr
+
+
+def test_a_handler_refusal_is_an_lsp_request_failed_error(client):
+    main = (FIXTURE / "main.st").resolve()
+    client.notify("textDocument/didOpen", {"textDocument": {"uri": main.as_uri(), "languageId": "structured-text",
+                                                            "version": 1, "text": main.read_text()}})
+    reply = client.request("textDocument/rename", {"textDocument": {"uri": main.as_uri()},
+                                                   "position": {"line": 4, "character": 13}, "newName": "X"})
+    assert reply.get("error", {}).get("code") == -32803, reply
+    assert "standard library" in reply["error"]["message"]
+
+
+def test_uri_with_a_host_keeps_it():
+    assert str(path_of("file://fileserver/share/a.st")) == "//fileserver/share/a.st"
+    assert str(path_of("file:///home/a.st")) == "/home/a.st"
+    assert str(path_of("file://localhost/home/a.st")) == "/home/a.st"
+    assert path_of("untitled:Untitled-1") is None
+
+
+def test_diagnostics_are_published_under_the_uri_the_client_used(client, tmp_path):
+    folder = tmp_path / "proj" / "sub"
+    folder.mkdir(parents=True)
+    text = "PROGRAM P\nVAR x : INT; END_VAR\nx := y;\nEND_PROGRAM\n"
+    (tmp_path / "proj" / "p.st").write_text(text)
+    dotted = folder.as_uri() + "/../p.st"
+    client.notify("textDocument/didOpen", {"textDocument": {"uri": dotted, "languageId": "structured-text",
+                                                            "version": 1, "text": text}})
+    uris = client.diagnostics_uris(until=dotted)
+    assert (tmp_path / "proj" / "p.st").resolve().as_uri() not in uris
+    # and requests on that URI are answered
+    reply = client.request("textDocument/hover", {"textDocument": {"uri": dotted}, "position": {"line": 1, "character": 4}})
+    assert "(VAR) P.x : INT" in reply["result"]["contents"]["value"]
