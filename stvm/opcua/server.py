@@ -34,6 +34,7 @@ import gc
 import hashlib
 import hmac
 import logging
+import re
 import socket
 import threading
 import time
@@ -93,13 +94,20 @@ class OpcUaServer:
         self._server: Server | None = None
         self.url = config.endpoint.url
         self.ns = 0
-        self._wall_offset_ns = 0
+        # real-time clock: the host's UTC time of VM time 0, taken when the first scan starts (a
+        # start-up of seconds must not shift every time stamp); until then, the time of creation
+        self._wall_offset_ns = time.time_ns()
+        self._wall_offset_taken = False
+        if self.realtime:
+            vm.on_scan_start.append(self._take_wall_offset)
         # monitored items (server loop only)
         self._monitors: dict[int, tuple[str, int]] = {}     # callback handle → (path, every_ns)
         self._watches: dict[tuple, Any] = {}            # (every_ns, paths) → bridge watch
         self._group_handles: dict[tuple, dict[str, list[int]]] = {}   # watch key → path → handles
         self._group_sent: dict[tuple, dict[str, Any]] = {}  # watch key → path → value last notified
         self._heartbeat = None
+        self._runtime_monitors: dict[int, int] = {}   # callback handle on a Runtime variable → every_ns
+        self._runtime_watches: dict[int, Any] = {}    # every_ns → bridge watch (no paths: scan count, time)
         self._rebuild_pending = False
         # snapshot hand-over (VM thread writes slots, the loop pops them)
         self._inbox: dict[Any, Snapshot] = {}
@@ -125,7 +133,6 @@ class OpcUaServer:
         """Start the server thread; returns the endpoint URL (with the port chosen if it was 0).
         Raises RuntimeError (the cause chained) if the server cannot start."""
         _quiet_asyncua()
-        self._wall_offset_ns = time.time_ns()
         self._thread = threading.Thread(target=self._thread_main, name="stvm-opcua", daemon=True)
         self._thread.start()
         if not self._ready.wait(timeout):
@@ -176,7 +183,8 @@ class OpcUaServer:
         try:
             loop.run_forever()
         finally:
-            for watch in list(self._watches.values()) + ([self._heartbeat] if self._heartbeat else []):
+            for watch in list(self._watches.values()) + list(self._runtime_watches.values()) + \
+                    ([self._heartbeat] if self._heartbeat else []):
                 watch.close()
             self._watches = {}
             try:
@@ -312,6 +320,11 @@ class OpcUaServer:
                                  _arity(self._method_resume, 0), [], [])
 
     # ---------------------------------------------------------------- time
+    def _take_wall_offset(self, vm) -> None:   # VM thread, at the start of every scan: one test
+        if not self._wall_offset_taken:
+            self._wall_offset_taken = True
+            self._wall_offset_ns = time.time_ns() - vm.now_ns
+
     def _timestamp(self, now_ns: int):
         if self.realtime:
             return datetime_of(self._wall_offset_ns + now_ns)
@@ -476,6 +489,11 @@ class OpcUaServer:
                 finally:
                     _TOKEN_KIND.reset(reset)
 
+            async def history_read(self, params: ua.HistoryReadParameters) -> list[ua.HistoryReadResult]:
+                # no history is kept: say so per node (asyncua would answer Good with no data)
+                return [ua.HistoryReadResult(StatusCode=ua.StatusCode(ua.StatusCodes.BadHistoryOperationUnsupported))
+                        for _ in params.NodesToRead]
+
             async def read(self, params: ua.ReadParameters) -> list[ua.DataValue]:
                 return await owner._read(self, params)
 
@@ -493,6 +511,10 @@ class OpcUaServer:
         snapshot = await self._fresh(list(dict.fromkeys(var.path for _, var in ours))) \
             if ours or runtime else None
         results = await InternalSession.read(session, params)
+        for i, _ in ours:
+            index_range = params.NodesToRead[i].IndexRange
+            if index_range:   # every published variable is a scalar: no element of it to read
+                results[i] = ua.DataValue(StatusCode=ua.StatusCode(_index_range_status(index_range)))
         if snapshot is not None:
             stamp = self._timestamp(snapshot.now_ns)
             for i, _ in ours:
@@ -509,7 +531,10 @@ class OpcUaServer:
         for i, item in enumerate(items):
             var = self._by_nodeid.get(item.NodeId)
             if var is None:
-                others.append(i)
+                if item.NodeId in self._runtime_ids and item.AttributeId == ua.AttributeIds.Value:
+                    results[i] = ua.StatusCode(ua.StatusCodes.BadNotWritable)   # the VM's own state
+                else:
+                    others.append(i)
                 continue
             status = self._check_write(session, var, item)
             if status is None:
@@ -537,8 +562,9 @@ class OpcUaServer:
     def _check_write(session: InternalSession, var: PublishedVariable, item: ua.WriteValue) -> int | None:
         if item.AttributeId != ua.AttributeIds.Value:
             return ua.StatusCodes.BadNotWritable
-        if item.IndexRange:
-            return ua.StatusCodes.BadWriteNotSupported
+        if item.IndexRange:   # OPC UA Part 4 §5.11.4.2: an IndexRange that cannot be written
+            status = _index_range_status(item.IndexRange)
+            return ua.StatusCodes.BadWriteNotSupported if status == ua.StatusCodes.BadIndexRangeNoData else status
         if not var.writable:
             return ua.StatusCodes.BadNotWritable
         user = session.user
@@ -646,15 +672,20 @@ class OpcUaServer:
         def add_datachange_callback(nodeid, attr, callback):
             status, handle = add(nodeid, attr, callback)
             var = self._by_nodeid.get(nodeid)
-            if status.is_good() and var is not None and attr == ua.AttributeIds.Value:
+            if status.is_good() and attr == ua.AttributeIds.Value:
                 requested = (_REQUESTED_INTERVALS.get() or {}).get(nodeid, 0.0)
-                self._monitors[handle] = (var.path, self._every_ns(requested))
-                self._rebuild_soon()
+                if var is not None:
+                    self._monitors[handle] = (var.path, self._every_ns(requested))
+                    self._rebuild_soon()
+                elif nodeid in self._runtime_ids:
+                    # ScanCount and Time at the client's interval, not only at the 1 s heartbeat
+                    self._runtime_monitors[handle] = self._every_ns(requested)
+                    self._rebuild_soon()
             return status, handle
 
         def delete_datachange_callback(handle):
             delete(handle)
-            if self._monitors.pop(handle, None) is not None:
+            if self._monitors.pop(handle, None) is not None or self._runtime_monitors.pop(handle, None) is not None:
                 self._rebuild_soon()
 
         aspace.add_datachange_callback = add_datachange_callback
@@ -682,6 +713,12 @@ class OpcUaServer:
             handles[key] = by_path
         for old in self._watches.values():
             old.close()
+        intervals = set(self._runtime_monitors.values())
+        for every in list(self._runtime_watches):
+            if every not in intervals:
+                self._runtime_watches.pop(every).close()
+        for every in intervals - set(self._runtime_watches):
+            self._runtime_watches[every] = self.bridge.watch([], every, self._handover_for(("runtime", every)))
         self._group_sent = {key: sent for key, sent in self._group_sent.items() if key in watches}
         self._watches, self._group_handles = watches, handles
 
@@ -792,6 +829,17 @@ def _free_port(host: str) -> int:
     with socket.socket(family, socket.SOCK_STREAM) as probe:
         probe.bind((host, 0))
         return probe.getsockname()[1]
+
+
+def _index_range_status(text: str) -> int:
+    """The status of an IndexRange read on a scalar variable: BadIndexRangeInvalid when the text is
+    no NumericRange (OPC UA Part 4 §7.27: `i`, `i:j` with i < j, dimensions joined by commas), else
+    BadIndexRangeNoData (§7.27: a valid range that selects nothing; a scalar has no elements)."""
+    for part in text.split(","):
+        match = re.fullmatch(r"(\d+)(?::(\d+))?", part)
+        if match is None or (match.group(2) is not None and int(match.group(2)) <= int(match.group(1))):
+            return ua.StatusCodes.BadIndexRangeInvalid
+    return ua.StatusCodes.BadIndexRangeNoData
 
 
 def _arity(method, count: int):
