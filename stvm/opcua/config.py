@@ -12,6 +12,10 @@ users = { operator = "env:STVM_OPCUA_PASSWORD" }   # or "sha256:<hex digest of t
 certificate = "pki/server_cert.der"       # server certificate and key: Basic256Sha256 endpoints
 private_key = "pki/server_key.pem"
 trusted_clients = ["pki/scada.der"]       # client certificates accepted as user identity
+
+[opcua.limits]                            # any of the server's bounds (docs/opcua.md lists them all)
+max_connections = 20
+max_monitored_items_per_session = 2000
 ```
 
 Entries of `publish`, `exclude`, `writable` and `read_only` are path patterns (the trace's glob
@@ -30,9 +34,10 @@ from __future__ import annotations
 
 import hashlib
 import ipaddress
+import math
 import os
 import re
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from pathlib import Path
 from urllib.parse import urlsplit
 
@@ -41,7 +46,71 @@ SETS = ("@globals", "@programs", "@program_inputs", "@fb_internals")
 DEFAULT_PUBLISH = ("@globals", "@programs")
 DEFAULT_WRITABLE = ("@globals", "@program_inputs")
 KEYS = ("endpoint", "publish", "exclude", "writable", "read_only", "start", "users", "certificate",
-        "private_key", "trusted_clients")
+        "private_key", "trusted_clients", "limits")
+
+
+@dataclass(frozen=True)
+class ServerLimits:
+    """Every bound of the server; the manifest's `[opcua.limits]` sets any of them."""
+    max_chunk_size: int = 65535            # bytes of one chunk (the receive buffer offered in Acknowledge)
+    max_message_size: int = 4 * 1024 * 1024  # bytes of one request or response, all its chunks
+    max_connections: int = 100             # TCP connections, logged in or not
+    max_sessions: int = 64
+    max_pending_requests: int = 64         # requests queued per connection before it is closed
+    login_timeout: float = 10.0            # seconds a connection may stay without an activated session
+    max_session_timeout: float = 60.0      # seconds a session lives without its client (revised down to it)
+    max_subscriptions_per_session: int = 10
+    max_monitored_items_per_session: int = 2000
+    max_queue_size: int = 100              # notifications a monitored item queues between two publishes
+    min_publishing_interval: float = 10.0  # ms; faster requests are revised up to it
+    max_interval: float = 3_600_000.0      # ms; slower publishing or sampling intervals are revised down to it
+
+    @property
+    def max_chunk_count(self) -> int:
+        return math.ceil(self.max_message_size / self.max_chunk_size)
+
+
+LIMIT_KEYS = tuple(f.name for f in fields(ServerLimits))
+_FLOATS = {"login_timeout", "max_session_timeout", "min_publishing_interval", "max_interval"}
+_MINIMUM = {"max_chunk_size": 8192, "max_message_size": 8192}   # OPC UA Part 6: buffers of at least 8192 bytes
+
+
+def limits_from(table, where: str) -> ServerLimits:
+    """`[opcua.limits]` read into ServerLimits; raises OpcUaConfigError naming the bad key."""
+    if table is None:
+        return ServerLimits()
+    if not isinstance(table, dict):
+        raise OpcUaConfigError(f"{where}: must be a table")
+    unknown = sorted(set(table) - set(LIMIT_KEYS))
+    if unknown:
+        raise OpcUaConfigError(f"{where}: unknown key(s) {', '.join(unknown)} (known: {', '.join(LIMIT_KEYS)})")
+    values = {}
+    for key, value in table.items():
+        kind = "a number" if key in _FLOATS else "an integer"
+        ok = isinstance(value, (int, float)) and not isinstance(value, bool) if key in _FLOATS else \
+            isinstance(value, int) and not isinstance(value, bool)
+        if not ok or not math.isfinite(value) or value <= 0 or value < _MINIMUM.get(key, 0) or value > 2**31:
+            low = _MINIMUM.get(key)
+            raise OpcUaConfigError(f"{where} {key}: expected {kind} greater than 0"
+                                 f"{f' and at least {low}' if low else ''} (up to 2^31), got {value!r}")
+        values[key] = float(value) if key in _FLOATS else value
+    limits = ServerLimits(**values)
+    if limits.max_message_size < limits.max_chunk_size:
+        raise OpcUaConfigError(f"{where}: max_message_size ({limits.max_message_size}) is smaller than "
+                                 f"max_chunk_size ({limits.max_chunk_size})")
+    if limits.min_publishing_interval > limits.max_interval:
+        raise OpcUaConfigError(f"{where}: min_publishing_interval is above max_interval")
+    return limits
+
+
+def revise_interval(requested, fastest: float, slowest: float) -> float | None:
+    """A requested publishing or sampling interval (ms) revised into [fastest, slowest] (OPC UA
+    Part 4: 0 and negative ask for the fastest); None for NaN, which asks for nothing."""
+    if not isinstance(requested, (int, float)) or math.isnan(requested):
+        return None
+    if requested <= fastest:
+        return fastest
+    return min(float(requested), slowest)
 
 
 class OpcUaConfigError(ValueError):
@@ -73,6 +142,7 @@ class OpcUaConfig:
     certificate: Path | None = None
     private_key: Path | None = None
     trusted_clients: tuple[Path, ...] = ()
+    limits: ServerLimits = field(default_factory=lambda: ServerLimits())
 
     @property
     def namespace_uri(self) -> str:
@@ -159,6 +229,7 @@ def load_config(manifest: dict, root: Path | None, files, endpoint_arg: str | No
         private_key=_path(table, "private_key", base, where),
         trusted_clients=tuple(_file(base, p, f"{where} trusted_clients") for p in
                               _string_list(table, "trusted_clients", (), where)),
+        limits=limits_from(table.get("limits"), f"{where} limits"),
     )
     _check_security(config, where)
     return config

@@ -28,11 +28,13 @@ from __future__ import annotations
 
 import asyncio
 import contextvars
+import copy
 import dataclasses
 import gc
 import hashlib
 import hmac
 import logging
+import re
 import socket
 import threading
 import time
@@ -41,11 +43,13 @@ from typing import Any
 from asyncua import Server, ua
 from asyncua.crypto import uacrypto
 from asyncua.crypto.permission_rules import User, UserRole
+from asyncua.common.utils import ServiceError
 from asyncua.server.internal_session import InternalSession
 
 from stvm.frontend import RunControl, Snapshot, VariableBridge, WriteRejected, catalog
+from stvm.opcua import bounds
 from stvm.opcua.aspace_cache import init_server
-from stvm.opcua.config import OpcUaConfig
+from stvm.opcua.config import OpcUaConfig, revise_interval as bounds_interval
 from stvm.opcua.datatypes import BadWrite, datetime_of
 from stvm.opcua.nodes import GLOBALS_ID, RUNTIME_ID, NodeBuilder, PublishedVariable, describe, select, \
     walk_published
@@ -90,13 +94,20 @@ class OpcUaServer:
         self._server: Server | None = None
         self.url = config.endpoint.url
         self.ns = 0
-        self._wall_offset_ns = 0
+        # real-time clock: the host's UTC time of VM time 0, taken when the first scan starts (a
+        # start-up of seconds must not shift every time stamp); until then, the time of creation
+        self._wall_offset_ns = time.time_ns()
+        self._wall_offset_taken = False
+        if self.realtime:
+            vm.on_scan_start.append(self._take_wall_offset)
         # monitored items (server loop only)
         self._monitors: dict[int, tuple[str, int]] = {}     # callback handle → (path, every_ns)
         self._watches: dict[tuple, Any] = {}            # (every_ns, paths) → bridge watch
         self._group_handles: dict[tuple, dict[str, list[int]]] = {}   # watch key → path → handles
         self._group_sent: dict[tuple, dict[str, Any]] = {}  # watch key → path → value last notified
         self._heartbeat = None
+        self._runtime_monitors: dict[int, int] = {}   # callback handle on a Runtime variable → every_ns
+        self._runtime_watches: dict[int, Any] = {}    # every_ns → bridge watch (no paths: scan count, time)
         self._rebuild_pending = False
         # snapshot hand-over (VM thread writes slots, the loop pops them)
         self._inbox: dict[Any, Snapshot] = {}
@@ -121,17 +132,18 @@ class OpcUaServer:
     def start(self, timeout: float = 120.0) -> str:
         """Start the server thread; returns the endpoint URL (with the port chosen if it was 0).
         Raises RuntimeError (the cause chained) if the server cannot start."""
-        if logging.getLogger("asyncua").level == logging.NOTSET:
-            # asyncua warns about setups we make on purpose (no encryption on loopback …)
-            logging.getLogger("asyncua").setLevel(logging.ERROR)
-        self._wall_offset_ns = time.time_ns()
+        _quiet_asyncua()
         self._thread = threading.Thread(target=self._thread_main, name="stvm-opcua", daemon=True)
         self._thread.start()
         if not self._ready.wait(timeout):
             raise RuntimeError("the OPC UA server did not start in time")
-        if self._startup_error is not None:
+        error = self._startup_error
+        if error is not None:
+            if isinstance(error, OSError):   # one line: the port is taken, the address is not ours …
+                reason = _os_reason(error)
+                raise RuntimeError(f"cannot serve OPC UA on {self.config.endpoint.url}: {reason}") from None
             raise RuntimeError(f"the OPC UA server could not start on {self.config.endpoint.url}: "
-                               f"{self._startup_error}") from self._startup_error
+                               f"{error}") from error
         return self.url
 
     def stop(self) -> None:
@@ -171,7 +183,8 @@ class OpcUaServer:
         try:
             loop.run_forever()
         finally:
-            for watch in list(self._watches.values()) + ([self._heartbeat] if self._heartbeat else []):
+            for watch in list(self._watches.values()) + list(self._runtime_watches.values()) + \
+                    ([self._heartbeat] if self._heartbeat else []):
                 watch.close()
             self._watches = {}
             try:
@@ -198,6 +211,7 @@ class OpcUaServer:
         host = f"[{endpoint.host}]" if ":" in endpoint.host else endpoint.host
         self.url = f"opc.tcp://{host}:{port}{endpoint.path or ''}"
         server = Server(user_manager=_UserManager(config))
+        bounds.apply(server, config.limits)
         await init_server(server)   # the standard nodes from the signed cache (aspace_cache)
         server.set_endpoint(self.url + "/")
         server.set_server_name(f"stvm {config.project_name}")
@@ -219,7 +233,7 @@ class OpcUaServer:
                 gc.enable()
         self._hook_sessions(server)
         self._hook_monitoring(server)
-        await server.start()
+        await _start_listening(server, self.url)
         self._heartbeat = self.bridge.watch([], HEARTBEAT_NS, self._handover_for("heartbeat"))
 
     async def _build_address_space(self, server: Server) -> None:
@@ -299,13 +313,18 @@ class OpcUaServer:
         done = ua.Argument(Name="ScanCount", DataType=ua.NodeId(ua.ObjectIds.UInt64), ValueRank=-1,
                            Description=ua.LocalizedText("scans run since the start, once the steps are done"))
         await runtime.add_method(ua.NodeId(f"{RUNTIME_ID}.Scan", ns), ua.QualifiedName("Scan", ns),
-                                 self._method_scan, [count], [done])
+                                 _arity(self._method_scan, 1), [count], [done])
         await runtime.add_method(ua.NodeId(f"{RUNTIME_ID}.Pause", ns), ua.QualifiedName("Pause", ns),
-                                 self._method_pause, [], [])
+                                 _arity(self._method_pause, 0), [], [])
         await runtime.add_method(ua.NodeId(f"{RUNTIME_ID}.Resume", ns), ua.QualifiedName("Resume", ns),
-                                 self._method_resume, [], [])
+                                 _arity(self._method_resume, 0), [], [])
 
     # ---------------------------------------------------------------- time
+    def _take_wall_offset(self, vm) -> None:   # VM thread, at the start of every scan: one test
+        if not self._wall_offset_taken:
+            self._wall_offset_taken = True
+            self._wall_offset_ns = time.time_ns() - vm.now_ns
+
     def _timestamp(self, now_ns: int):
         if self.realtime:
             return datetime_of(self._wall_offset_ns + now_ns)
@@ -415,7 +434,51 @@ class OpcUaServer:
         iserver = server.iserver
         owner = self
 
+        limits = self.config.limits
+        sessions: set = set()
+
+        def items_of(session) -> int:
+            return sum(len(sub.monitored_item_srv._monitored_items)
+                       for sub in iserver.subscription_service.subscriptions.values()
+                       if sub.session_id == session.session_id)
+
+        def subscriptions_of(session) -> int:
+            return sum(sub.session_id == session.session_id
+                       for sub in iserver.subscription_service.subscriptions.values())
+
         class Session(InternalSession):
+            async def create_session(self, params, sockname=None):
+                if len(sessions) >= limits.max_sessions:
+                    bounds.log_limited(f"OPC UA session refused: {limits.max_sessions} sessions open (max_sessions)")
+                    raise ServiceError(ua.StatusCodes.BadTooManySessions)
+                result = await super().create_session(params, sockname=sockname)
+                sessions.add(self)
+                return result
+
+            async def close_session(self, delete_subs: bool = True) -> None:
+                sessions.discard(self)
+                await super().close_session(delete_subs)
+
+            async def create_subscription(self, params, callback, request_callback=None):
+                if subscriptions_of(self) >= limits.max_subscriptions_per_session:
+                    raise ServiceError(ua.StatusCodes.BadTooManySubscriptions)
+                # OPC UA Part 4 §5.13.2: the server revises the interval to one it supports (NaN: the fastest)
+                interval = bounds_interval(params.RequestedPublishingInterval, limits.min_publishing_interval,
+                                           limits.max_interval)
+                params.RequestedPublishingInterval = limits.min_publishing_interval if interval is None else interval
+                return await super().create_subscription(params, callback, request_callback=request_callback)
+
+            def modify_subscription(self, params):
+                # asyncua keeps the interval it revised at creation; the request's values need no check
+                return super().modify_subscription(params)
+
+            async def create_monitored_items(self, params: ua.CreateMonitoredItemsParameters):
+                room = limits.max_monitored_items_per_session - items_of(self)
+                return await owner._create_monitored_items(self, params, room)
+
+            def modify_monitored_items(self, params: ua.ModifyMonitoredItemsParameters):
+                return owner._modify_monitored_items(self, params)
+
             def activate_session(self, params: ua.ActivateSessionParameters, peer_certificate):
                 token = params.UserIdentityToken
                 kind = "username" if isinstance(token, ua.UserNameIdentityToken) else \
@@ -426,14 +489,16 @@ class OpcUaServer:
                 finally:
                     _TOKEN_KIND.reset(reset)
 
+            async def history_read(self, params: ua.HistoryReadParameters) -> list[ua.HistoryReadResult]:
+                # no history is kept: say so per node (asyncua would answer Good with no data)
+                return [ua.HistoryReadResult(StatusCode=ua.StatusCode(ua.StatusCodes.BadHistoryOperationUnsupported))
+                        for _ in params.NodesToRead]
+
             async def read(self, params: ua.ReadParameters) -> list[ua.DataValue]:
                 return await owner._read(self, params)
 
             async def write(self, params: ua.WriteParameters) -> list[ua.StatusCode]:
                 return await owner._write(self, params)
-
-            async def create_monitored_items(self, params: ua.CreateMonitoredItemsParameters):
-                return await owner._create_monitored_items(self, params)
 
         def create_session(name: str, user: User = User(role=UserRole.Anonymous), external: bool = False):
             return Session(iserver, iserver.aspace, iserver.subscription_service, name, user=user, external=external)
@@ -446,6 +511,10 @@ class OpcUaServer:
         snapshot = await self._fresh(list(dict.fromkeys(var.path for _, var in ours))) \
             if ours or runtime else None
         results = await InternalSession.read(session, params)
+        for i, _ in ours:
+            index_range = params.NodesToRead[i].IndexRange
+            if index_range:   # every published variable is a scalar: no element of it to read
+                results[i] = ua.DataValue(StatusCode=ua.StatusCode(_index_range_status(index_range)))
         if snapshot is not None:
             stamp = self._timestamp(snapshot.now_ns)
             for i, _ in ours:
@@ -462,7 +531,10 @@ class OpcUaServer:
         for i, item in enumerate(items):
             var = self._by_nodeid.get(item.NodeId)
             if var is None:
-                others.append(i)
+                if item.NodeId in self._runtime_ids and item.AttributeId == ua.AttributeIds.Value:
+                    results[i] = ua.StatusCode(ua.StatusCodes.BadNotWritable)   # the VM's own state
+                else:
+                    others.append(i)
                 continue
             status = self._check_write(session, var, item)
             if status is None:
@@ -490,8 +562,9 @@ class OpcUaServer:
     def _check_write(session: InternalSession, var: PublishedVariable, item: ua.WriteValue) -> int | None:
         if item.AttributeId != ua.AttributeIds.Value:
             return ua.StatusCodes.BadNotWritable
-        if item.IndexRange:
-            return ua.StatusCodes.BadWriteNotSupported
+        if item.IndexRange:   # OPC UA Part 4 §5.11.4.2: an IndexRange that cannot be written
+            status = _index_range_status(item.IndexRange)
+            return ua.StatusCodes.BadWriteNotSupported if status == ua.StatusCodes.BadIndexRangeNoData else status
         if not var.writable:
             return ua.StatusCodes.BadNotWritable
         user = session.user
@@ -527,18 +600,62 @@ class OpcUaServer:
         return statuses
 
     # ---------------------------------------------------------------- monitored items
-    async def _create_monitored_items(self, session: InternalSession, params: ua.CreateMonitoredItemsParameters):
-        requested = {item.ItemToMonitor.NodeId: item.RequestedParameters.SamplingInterval
-                     for item in params.ItemsToCreate}
-        token = _REQUESTED_INTERVALS.set(requested)
-        try:
-            results = await InternalSession.create_monitored_items(session, params)
-        finally:
-            _REQUESTED_INTERVALS.reset(token)
-        for item, result in zip(params.ItemsToCreate, results):
-            if result.StatusCode.is_good() and item.ItemToMonitor.NodeId in self._by_nodeid:
-                result.RevisedSamplingInterval = self._every_ns(item.RequestedParameters.SamplingInterval) / 1e6 \
-                    or self.base_ns / 1e6
+    async def _create_monitored_items(self, session: InternalSession, params: ua.CreateMonitoredItemsParameters,
+                                      room: int) -> list[ua.MonitoredItemCreateResult]:
+        """asyncua's CreateMonitoredItems for the items that fit the session's cap (`room`) and ask
+        for a sampling interval; the others get their Bad status without reaching asyncua."""
+        limits = self.config.limits
+        results: list[ua.MonitoredItemCreateResult | None] = [None] * len(params.ItemsToCreate)
+        accepted: list[int] = []
+        requested: dict[ua.NodeId, float] = {}
+        for i, item in enumerate(params.ItemsToCreate):
+            interval = bounds_interval(item.RequestedParameters.SamplingInterval, 0.0, limits.max_interval)
+            if interval is None:
+                status = ua.StatusCodes.BadInvalidArgument        # NaN: no interval at all (stvm's choice)
+            elif len(accepted) >= room:
+                status = ua.StatusCodes.BadTooManyMonitoredItems
+            else:
+                accepted.append(i)
+                requested[item.ItemToMonitor.NodeId] = interval
+                continue
+            results[i] = ua.MonitoredItemCreateResult(StatusCode=ua.StatusCode(status))
+        if len(accepted) < len(results):
+            bounds.log_limited(f"OPC UA CreateMonitoredItems: {len(results) - len(accepted)} of {len(results)} "
+                               f"items refused (max_monitored_items_per_session {limits.max_monitored_items_per_session}"
+                               f" or NaN sampling interval)")
+        if accepted:
+            sub = copy.copy(params)
+            sub.ItemsToCreate = [params.ItemsToCreate[i] for i in accepted]
+            token = _REQUESTED_INTERVALS.set(requested)
+            try:
+                created = await InternalSession.create_monitored_items(session, sub)
+            finally:
+                _REQUESTED_INTERVALS.reset(token)
+            for i, result in zip(accepted, created):
+                item = params.ItemsToCreate[i]
+                if result.StatusCode.is_good() and item.ItemToMonitor.NodeId in self._by_nodeid:
+                    result.RevisedSamplingInterval = self._every_ns(requested[item.ItemToMonitor.NodeId]) / 1e6 \
+                        or self.base_ns / 1e6
+                results[i] = result
+        return results   # type: ignore[return-value]
+
+    def _modify_monitored_items(self, session: InternalSession, params: ua.ModifyMonitoredItemsParameters):
+        """asyncua's ModifyMonitoredItems; a NaN sampling interval is refused per item, ±inf revised."""
+        limits = self.config.limits
+        results: list[ua.MonitoredItemModifyResult | None] = [None] * len(params.ItemsToModify)
+        accepted = []
+        for i, item in enumerate(params.ItemsToModify):
+            interval = bounds_interval(item.RequestedParameters.SamplingInterval, 0.0, limits.max_interval)
+            if interval is None:
+                results[i] = ua.MonitoredItemModifyResult(StatusCode=ua.StatusCode(ua.StatusCodes.BadInvalidArgument))
+            else:
+                item.RequestedParameters.SamplingInterval = interval
+                accepted.append(i)
+        if accepted:
+            sub = copy.copy(params)
+            sub.ItemsToModify = [params.ItemsToModify[i] for i in accepted]
+            for i, result in zip(accepted, InternalSession.modify_monitored_items(session, sub)):
+                results[i] = result
         return results
 
     def _every_ns(self, requested_ms: float) -> int:
@@ -555,15 +672,20 @@ class OpcUaServer:
         def add_datachange_callback(nodeid, attr, callback):
             status, handle = add(nodeid, attr, callback)
             var = self._by_nodeid.get(nodeid)
-            if status.is_good() and var is not None and attr == ua.AttributeIds.Value:
+            if status.is_good() and attr == ua.AttributeIds.Value:
                 requested = (_REQUESTED_INTERVALS.get() or {}).get(nodeid, 0.0)
-                self._monitors[handle] = (var.path, self._every_ns(requested))
-                self._rebuild_soon()
+                if var is not None:
+                    self._monitors[handle] = (var.path, self._every_ns(requested))
+                    self._rebuild_soon()
+                elif nodeid in self._runtime_ids:
+                    # ScanCount and Time at the client's interval, not only at the 1 s heartbeat
+                    self._runtime_monitors[handle] = self._every_ns(requested)
+                    self._rebuild_soon()
             return status, handle
 
         def delete_datachange_callback(handle):
             delete(handle)
-            if self._monitors.pop(handle, None) is not None:
+            if self._monitors.pop(handle, None) is not None or self._runtime_monitors.pop(handle, None) is not None:
                 self._rebuild_soon()
 
         aspace.add_datachange_callback = add_datachange_callback
@@ -591,6 +713,12 @@ class OpcUaServer:
             handles[key] = by_path
         for old in self._watches.values():
             old.close()
+        intervals = set(self._runtime_monitors.values())
+        for every in list(self._runtime_watches):
+            if every not in intervals:
+                self._runtime_watches.pop(every).close()
+        for every in intervals - set(self._runtime_watches):
+            self._runtime_watches[every] = self.bridge.watch([], every, self._handover_for(("runtime", every)))
         self._group_sent = {key: sent for key, sent in self._group_sent.items() if key in watches}
         self._watches, self._group_handles = watches, handles
 
@@ -701,3 +829,72 @@ def _free_port(host: str) -> int:
     with socket.socket(family, socket.SOCK_STREAM) as probe:
         probe.bind((host, 0))
         return probe.getsockname()[1]
+
+
+def _index_range_status(text: str) -> int:
+    """The status of an IndexRange read on a scalar variable: BadIndexRangeInvalid when the text is
+    no NumericRange (OPC UA Part 4 §7.27: `i`, `i:j` with i < j, dimensions joined by commas), else
+    BadIndexRangeNoData (§7.27: a valid range that selects nothing; a scalar has no elements)."""
+    for part in text.split(","):
+        match = re.fullmatch(r"(\d+)(?::(\d+))?", part)
+        if match is None or (match.group(2) is not None and int(match.group(2)) <= int(match.group(1))):
+            return ua.StatusCodes.BadIndexRangeInvalid
+    return ua.StatusCodes.BadIndexRangeNoData
+
+
+def _arity(method, count: int):
+    """`method` called only with its `count` input arguments: asyncua passes whatever the client
+    sent, so a wrong count would raise inside the call (Bad_UnexpectedError and a traceback)."""
+    async def call(parent, *args):
+        if len(args) > count:
+            return ua.StatusCode(ua.StatusCodes.BadTooManyArguments)
+        if len(args) < count:
+            return ua.StatusCode(ua.StatusCodes.BadArgumentsMissing)
+        return await method(parent, *args)
+    return call
+
+
+def _os_reason(error: OSError) -> str:
+    import errno
+    if error.errno == errno.EADDRINUSE:
+        return "the port is in use (another server listens there; choose another port: --opcua opc.tcp://HOST:PORT)"
+    if error.errno == errno.EADDRNOTAVAIL:
+        return "the address is not one of this computer's"
+    if error.errno == errno.EACCES:
+        return "permission denied (ports below 1024 need privileges)"
+    return error.strerror or str(error)
+
+
+async def _start_listening(server: Server, url: str) -> None:
+    """asyncua's `Server.start()` with the bounded transport (stvm.opcua.bounds), and without its
+    traceback in the log when the port cannot be bound (start() reports that in one line)."""
+    if server.iserver.certificate is not None:
+        uacrypto.check_certificate(server.iserver.certificate, server._application_uri, socket.gethostname())
+    await server._setup_server_nodes()
+    await server.iserver.start()
+    try:
+        host, port = server._get_bind_socket_info()
+        server.bserver = bounds.BoundedBinaryServer(server.iserver, host, port, server.limits)
+        server.bserver.set_policies(server._policies)
+        await server.bserver.start()
+    except BaseException:
+        server.bserver = None
+        await server.iserver.stop()
+        raise
+
+
+_QUIET = bounds.OneLine()
+
+
+def _quiet_asyncua() -> None:
+    """asyncua's log: errors only (it warns about setups made on purpose, such as no encryption on
+    loopback), one line each (no tracebacks for a client's malformed request), rate-limited."""
+    log = logging.getLogger("asyncua")
+    if log.level == logging.NOTSET:
+        log.setLevel(logging.ERROR)
+    if not log.handlers:
+        handler = logging.StreamHandler()
+        handler.setFormatter(logging.Formatter("opcua: %(message)s"))
+        handler.addFilter(_QUIET)
+        log.addHandler(handler)
+        log.propagate = False
