@@ -435,6 +435,10 @@ def _check_demo_flags(args, is_demo: bool) -> None:
     if given and not is_demo:
         raise UsageError(f"{', '.join(given)}: only for a demo project (a stvm.toml with a [demo] table "
                          f"beside the file, e.g. st_src/); {' '.join(args.files)} has none")
+    if getattr(args, "emulator_log", None) and getattr(args, "robot", None):
+        # no emulator runs with a real robot: the log would stay empty without a word
+        raise UsageError("--emulator-log writes the bundled emulator's frames, and with --robot "
+                         "HOST:PORT no emulator runs (drop one of the two)")
     if getattr(args, "emulator_log", None):
         from emulator.cli import check_log_path   # lazy: start-up
         problem = check_log_path(args.emulator_log)

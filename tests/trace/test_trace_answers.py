@@ -87,3 +87,46 @@ def test_a_short_run_against_a_longer_golden_says_the_run_ended(recorded, tmp_pa
     err = capsys.readouterr().err
     assert "this run ended after 5 scan(s)" in err and "has 9" in err and "--cycles 9" in err
     assert "first divergence at scan" not in err
+
+
+HINTS = """TYPE Conn : STRUCT Connected : BOOL; Port : INT; END_STRUCT; END_TYPE
+VAR_GLOBAL Cobot : Conn; END_VAR
+PROGRAM Main
+VAR Step : INT; END_VAR
+Step := Step + 1;
+END_PROGRAM
+"""
+
+
+@pytest.mark.parametrize("watch, hint", [
+    ("Cobot.Conected", "did you mean Cobot.Connected?"),
+    ("Main.Stepp", "did you mean Main.Step?"),
+    ("Cobt.Connected", "did you mean Cobot?"),
+    ("Cobot.Conected*", "did you mean Cobot.Connected?"),
+])
+def test_did_you_mean_names_the_member(tmp_path, capsys, watch: str, hint: str) -> None:
+    src = tmp_path / "hints.st"
+    src.write_text(HINTS, encoding="utf-8")
+    assert main(["trace", str(src), "--cycles", "1", "--watch", watch, "-o", str(tmp_path / "t.jsonl")]) == 2
+    assert hint in capsys.readouterr().err
+
+
+def test_emulator_log_with_a_real_robot_is_refused(capsys) -> None:
+    root = Path(__file__).resolve().parents[2]
+    log = root / "no_such_dir_for_the_log_test" / "e.log"
+    code = main(["run", str(root / "st_src" / "PnP_Example.st"), "--robot", "127.0.0.1:9",
+                 "--emulator-log", str(log), "--cycles", "1"])
+    assert code == 2
+    assert "with --robot HOST:PORT no emulator runs" in capsys.readouterr().err
+    assert not log.exists()
+
+
+def test_a_tcp_path_picture_without_a_robot_is_refused(recorded, tmp_path, capsys) -> None:
+    """The robot's home pose alone was drawn as the start of an empty path."""
+    pytest.importorskip("matplotlib")
+    src, _ = recorded
+    out = tmp_path / "path.png"
+    capsys.readouterr()
+    assert main(["trace", str(src), "--cycles", "5", *WATCH, "-o", str(out)]) == 2
+    assert "never connected to the robot" in capsys.readouterr().err
+    assert not out.exists()
