@@ -16,7 +16,7 @@ from typing import Any, Sequence
 from .faults import parse_faults
 from .settings import DEFAULT_SETTINGS, parse_setting_assignment
 from .terminal_text import plain, printable
-from .transport import TcpServer
+from .transport import MAX_CONNECTIONS, TcpServer
 
 
 def _port(text: str) -> int:
@@ -39,6 +39,12 @@ def _host(text: str) -> str:
 
 
 WILDCARD_HOSTS = ("0.0.0.0",)
+
+
+def _count(text: str) -> int:
+    if not text.isdigit() or len(text) > 6 or int(text) < 1:
+        raise argparse.ArgumentTypeError(f"needs a number 1-999999, got {text!r}")
+    return int(text)
 
 
 def _seconds(text: str) -> float:
@@ -80,6 +86,8 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--set", action="append", default=[], metavar="NAME=VALUE", dest="settings",
                         help="change an EmulatorSettings field (repeatable), e.g. "
                              "--set accept_one_digit_checksum=true")
+    parser.add_argument("--max-connections", type=_count, default=MAX_CONNECTIONS, metavar="N",
+                        help=f"clients served at once; more are reset (default {MAX_CONNECTIONS})")
     parser.add_argument("--quiet", action="store_true", help="no live view, only the listening line")
     parser.add_argument("--duration", type=_seconds, default=None, help=argparse.SUPPRESS)  # tests
     return parser
@@ -101,7 +109,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             print(f"tm-emulator: error: {problem}", file=sys.stderr)
             return 2
     try:
-        server = TcpServer(args.host, args.port, settings, faults, args.log).start()
+        server = TcpServer(args.host, args.port, settings, faults, args.log, args.max_connections).start()
     except OSError as exc:
         print(f"tm-emulator: cannot listen on {args.host}:{args.port}: {exc}", file=sys.stderr)
         return 1

@@ -77,6 +77,11 @@ ACCEPT_BACKOFF_MIN_S = 0.05
 ACCEPT_BACKOFF_MAX_S = 1.0
 _RESOURCE_ERRNOS = frozenset({errno.EMFILE, errno.ENFILE, errno.ENOBUFS, errno.ENOMEM})
 
+# Clients served at once; one more is accepted and reset at once (as a refused connection), so a
+# flood of idle connections cannot take every descriptor of the process. A TM robot's Listen node
+# serves a handful of clients; `tm-emulator --max-connections N` changes it.
+MAX_CONNECTIONS = 64
+
 # ============================================================================ frame log
 
 
@@ -139,8 +144,10 @@ class TcpServer:
 
     def __init__(self, host: str = "127.0.0.1", port: int = 5890,
                  settings: EmulatorSettings = DEFAULT_SETTINGS, faults: FaultPlan = NO_FAULTS,
-                 log_path: str | None = None) -> None:
+                 log_path: str | None = None, max_connections: int = MAX_CONNECTIONS) -> None:
         self.host = host
+        self.max_connections = max_connections
+        self.refused_over_limit = 0
         self.requested_port = port
         self.port = port
         self._t0 = time.monotonic_ns()
@@ -306,6 +313,10 @@ class TcpServer:
                     self._pause_accept(exc)
                 return
             self._accept_backoff_s = ACCEPT_BACKOFF_MIN_S
+            if len(self._conns) >= self.max_connections:
+                self.refused_over_limit += 1
+                _reset(sock)
+                return
             conn_id = self.core.open(now)
             if conn_id is None:
                 # Refuse: reset the connection at once (SO_LINGER 0 sends RST).
@@ -432,6 +443,15 @@ class TcpServer:
         self.frame_log.close()
 
 
+def _reset(sock: socket.socket) -> None:
+    """Close `sock` with a reset (SO_LINGER 0 sends RST), as a refused connection."""
+    try:
+        sock.setsockopt(socket.SOL_SOCKET, socket.SO_LINGER, b"\x01\x00\x00\x00\x00\x00\x00\x00")
+    except OSError:
+        pass
+    sock.close()
+
+
 def _log_stderr(line: str) -> None:
     try:
         print(line, file=sys.stderr, flush=True)
@@ -440,10 +460,12 @@ def _log_stderr(line: str) -> None:
 
 
 def start_server(host: str = "127.0.0.1", port: int = 5890, log_path: str | None = None,
-                 faults: FaultPlan | None = None, settings: EmulatorSettings | None = None) -> TcpServer:
+                 faults: FaultPlan | None = None, settings: EmulatorSettings | None = None,
+                 max_connections: int = MAX_CONNECTIONS) -> TcpServer:
     """Start the emulator on ``host:port`` in a background thread and return the running server
     (``.port`` is the bound port; ``port=0`` picks a free one; ``.stop()`` shuts it down)."""
-    return TcpServer(host, port, settings or DEFAULT_SETTINGS, faults or NO_FAULTS, log_path).start()
+    return TcpServer(host, port, settings or DEFAULT_SETTINGS, faults or NO_FAULTS, log_path,
+                     max_connections).start()
 
 
 # ============================================================================ in-process link

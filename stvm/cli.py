@@ -141,7 +141,23 @@ def program() -> int:
     whole run, flush every line). Not in `main`, which tests and tools call in-process."""
     code = main()
     gc.freeze()
+    try:
+        sys.stdout.flush()
+    except OSError as exc:   # stdout on a full device (/dev/full): an error, not "Exception ignored"
+        _quiet_stdout()
+        print(f"stvm: error: cannot write the output: {exc.strerror or exc}", file=sys.stderr)
+        return code or EXIT_COMPILE
     return code
+
+
+def _quiet_stdout() -> None:
+    """Point stdout at /dev/null, so the flush at exit does not fail again on what is left."""
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        os.close(devnull)
+    except (OSError, ValueError):
+        pass
 
 
 def _show_cache_warnings() -> None:
@@ -182,6 +198,11 @@ def _main(argv: list[str] | None) -> int:
         return 130
     except MemoryError:
         print("stvm: error: out of memory", file=sys.stderr)
+        return EXIT_COMPILE
+    except OSError as exc:   # the system refused (a full disk or stdout, a name too long): not a bug
+        _quiet_stdout()
+        name = f": {printable(str(exc.filename))[:80]}" if exc.filename else ""
+        print(f"stvm: error: {exc.strerror or exc}{name}", file=sys.stderr)
         return EXIT_COMPILE
     except Exception as exc:   # a bug in stvm: one line, not a traceback (STVM_TRACEBACK=1 shows it)
         if os.environ.get("STVM_TRACEBACK"):

@@ -84,11 +84,13 @@ _SCHEMA: dict[str, dict[str, tuple[Any, str]] | None] = {
 def read_manifest(path: Path) -> dict:
     """The checked contents of a `stvm.toml` (a plain dict, as TOML gives it)."""
     import tomllib   # lazy: start-up (a run without a manifest never parses TOML)
+    from stvm.source import SourceError, read_limited   # lazy: start-up (as tomllib)
     try:
-        with path.open("rb") as fh:
-            data = tomllib.load(fh)
+        data = tomllib.loads(read_limited(path, "project manifest").decode("utf-8"))
     except OSError as exc:
         raise ManifestError(f"{path}: cannot read the project manifest: {exc.strerror or exc}") from exc
+    except SourceError as exc:
+        raise ManifestError(f"{path}: {exc.message}") from exc
     except tomllib.TOMLDecodeError as exc:
         raise ManifestError(f"{path}: not valid TOML: {exc}") from exc
     except UnicodeDecodeError as exc:

@@ -126,7 +126,8 @@ class Until:
         return bool(self._test())
 
     def _error(self, message: str) -> UsageError:
-        return UsageError(f"--until {self.text!r}: {message}")
+        shown = self.text if len(self.text) <= 80 else self.text[:77] + "..."
+        return UsageError(f"--until {shown!r}: {message}")
 
     def _compile(self, e):
         from stvm.runtime.vm import PathError, UnboundInOut   # lazy: start-up
@@ -248,7 +249,12 @@ class Until:
             elif isinstance(ty, t.RealType):
                 value = coerce_python_value(literal.value, ty)    # a REAL literal is binary32
             elif isinstance(ty, t.IntType):
-                value = literal.value                             # INT against 1.5: as REAL
+                # `Count = 1.5` could never be TRUE: the run would go on forever (issue 34 item 12)
+                raise ValueError(f"{literal.text} is a REAL literal and {ty.name} holds whole numbers "
+                                 f"(compare with an integer, or convert: {ty.name}_TO_REAL(...))")
+            elif isinstance(ty, t.BoolType) and isinstance(literal.value, int) and literal.value in (0, 1) \
+                    and not literal.text.startswith("-"):
+                value = bool(literal.value)   # IEC 61131-3 table 5: 0 and 1 are BOOL literals
             else:
                 raise ValueError(f"{literal.text} cannot be compared with {ty.name}"
                                  + (" (write a duration as T#5ms)" if isinstance(ty, t.TimeType) else ""))
@@ -280,7 +286,7 @@ def cmd_run(args) -> int:
     settings = run_settings(args)
     try:
         scan_ns = parse_duration(args.scan)
-        duration_ns = parse_duration(args.duration) if args.duration else None
+        duration_ns = parse_duration(args.duration) if args.duration is not None else None   # "" is an error, not "forever"
     except ValueError as exc:
         raise UsageError(str(exc)) from exc
     if scan_ns <= 0:
@@ -429,6 +435,10 @@ def _check_demo_flags(args, is_demo: bool) -> None:
     if given and not is_demo:
         raise UsageError(f"{', '.join(given)}: only for a demo project (a stvm.toml with a [demo] table "
                          f"beside the file, e.g. st_src/); {' '.join(args.files)} has none")
+    if getattr(args, "emulator_log", None) and getattr(args, "robot", None):
+        # no emulator runs with a real robot: the log would stay empty without a word
+        raise UsageError("--emulator-log writes the bundled emulator's frames, and with --robot "
+                         "HOST:PORT no emulator runs (drop one of the two)")
     if getattr(args, "emulator_log", None):
         from emulator.cli import check_log_path   # lazy: start-up
         problem = check_log_path(args.emulator_log)

@@ -52,6 +52,7 @@ from stvm.project import parse_duration
 from stvm.runtime.vm import PathError, UnboundInOut, coerce_python_value
 from stvm.semantics import types as t
 from stvm.semantics.literals import literal_value
+from stvm.source import SourceError, read_limited
 
 
 class ScenarioError(ValueError):
@@ -115,10 +116,13 @@ class Scenario:
 def load_scenario(path: str | Path) -> Scenario:
     path = Path(path)
     try:
-        with path.open("rb") as fh:
-            data = tomllib.load(fh)
+        data = tomllib.loads(read_limited(path, "scenario file").decode("utf-8"))
     except OSError as exc:
         raise ScenarioError(f"{path}: cannot read scenario: {exc.strerror or exc}") from exc
+    except SourceError as exc:
+        raise ScenarioError(f"{path}: {exc.message}") from exc
+    except UnicodeDecodeError as exc:
+        raise ScenarioError(f"{path}: not valid TOML: the file is not UTF-8 ({exc.reason})") from exc
     except tomllib.TOMLDecodeError as exc:
         raise ScenarioError(f"{path}: not valid TOML: {exc}") from exc
     return parse_scenario(data, str(path))

@@ -442,6 +442,12 @@ class SysmacSettings:
     string_fn_range: StringFnRange = setting(StringFnRange.ERROR, "7")
     concat_arity: ConcatArity = setting(ConcatArity.ONE_WARNS, "7")
     find_empty: FindEmpty = setting(FindEmpty.ZERO, "7")
+    # not from the spec: a resource limit (docs/security.md). Sysmac's own memory ends far below
+    # (a CPU unit holds a few MB of variables); stvm's VM keeps one Python object per element, so
+    # ARRAY[0..2000000000] OF INT passed the check and then exhausted the host's memory.
+    max_array_elements: int = setting(16_777_216, "limits", lo=1, hi=2**31 - 1,
+                                      doc="Most elements one array variable may have, nested arrays "
+                                          "counted (a larger array is a check error)")
     # not an UNCERTAIN setting: the conditional-compilation defines, (NAME, VALUE) pairs from
     # `stvm.toml` `[project] defines` and `--define` (stvm/syntax/conditional.py); carried here so
     # that every parse and every cache key sees them

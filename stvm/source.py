@@ -7,6 +7,7 @@ nothing of stvm.
 
 from __future__ import annotations
 
+import codecs
 import dataclasses
 from dataclasses import dataclass
 from pathlib import Path
@@ -98,6 +99,21 @@ MAX_SOURCE_BYTES = 8 * 2**20
 input is refused with a clear error instead of minutes of parsing and gigabytes of memory."""
 
 
+MAX_SETTINGS_FILE_BYTES = 4 * 2**20
+"""The largest scenario, manifest, debugger command or HMI page file read (4 MiB; such files are
+a few KB): /dev/zero or a huge file given by mistake is refused instead of exhausting memory."""
+
+
+def read_limited(path: Path | str, what: str, limit: int = MAX_SETTINGS_FILE_BYTES) -> bytes:
+    """The bytes of a small input file (`what` names it in the error): raises SourceError when
+    it holds more than `limit` bytes, OSError when it cannot be read."""
+    with open(path, "rb") as fh:
+        data = fh.read(limit + 1)   # bounded: /dev/zero must not exhaust memory
+    if len(data) > limit:
+        raise SourceError(f"the {what} is larger than {limit // 2**20} MiB, the most stvm reads from one")
+    return data
+
+
 class SourceError(Exception):
     """A file that is not ST source text: too large, binary, or not in its encoding.
     `line`/`column` locate the offending byte (0 when the whole file is the problem);
@@ -145,6 +161,11 @@ def read_source(path: Path, encoding: str = "utf-8") -> str:
     problem = reserved_name_problem(path)
     if problem:
         raise SourceError(problem)
+    try:
+        codecs.lookup(encoding)
+    except (LookupError, TypeError, ValueError):   # an XML file's own declaration, or stvm.toml's
+        shown = str(encoding)[:40]
+        raise SourceError(f"unknown text encoding {shown!r} (declared for this file; use e.g. utf-8 or cp1252)") from None
     with open(path, "rb") as fh:
         data = fh.read(MAX_SOURCE_BYTES + 1)   # bounded: /dev/zero must not exhaust memory
     if len(data) > MAX_SOURCE_BYTES:

@@ -34,7 +34,8 @@ def at_scan_2(variable: str, value: str) -> str:
     ("n", "true", "Main.n: cannot store TRUE in an INT variable"),
     ("r", "1e40", "Main.r: 1e+40 is out of range for REAL"),
     ("r", "inf", "Main.r: inf is not a number a variable can hold"),
-    ("b", "1", "Main.b: '1' is not a BOOL: write TRUE or FALSE"),
+    # 0 and 1 are BOOL literals (IEC 61131-3 table 5; issue 34 item 12), 2 is not
+    ("b", "2", "Main.b: '2' is not a BOOL: write TRUE or FALSE (or 1 or 0)"),
 ])
 @pytest.mark.parametrize("command", ["run", "trace"])
 def test_a_value_the_variable_cannot_hold_is_a_usage_error_before_the_first_scan(

@@ -15,6 +15,8 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
+from stvm.source import SourceError, read_limited
+
 EXIT_OK, EXIT_COMPILE, EXIT_USAGE = 0, 1, 2
 
 
@@ -65,9 +67,13 @@ def cmd_debug(args) -> int:
     commands: list[str] = []
     if args.commands:
         try:
-            commands = Path(args.commands).read_text(encoding="utf-8").splitlines()
+            commands = read_limited(args.commands, "command file").decode("utf-8").splitlines()
         except OSError as exc:
             return _error(f"cannot read {args.commands}: {exc.strerror or exc}")
+        except SourceError as exc:
+            return _error(f"{args.commands}: {exc.message}")
+        except UnicodeDecodeError:
+            return _error(f"{args.commands}: the command file is not UTF-8 text")
     options = SessionOptions(args.files, scan=args.scan, scenario=args.scenario, sets=args.set,
                              sysmac=args.sysmac, robot=args.robot, realtime=args.realtime)
     try:

@@ -36,7 +36,7 @@ def parse_address(text: str) -> tuple[str, int]:
     if not sep:
         host, port = "127.0.0.1", text
     host = host.strip("[]") or "127.0.0.1"
-    if not port.isdigit() or not 0 <= int(port) < 65536:
+    if not port.isdigit() or len(port) > 5 or not 0 <= int(port) < 65536:   # (5,000 digits: exit 70)
         raise HmiUsageError(f"--hmi needs [HOST:]PORT (e.g. 8080 or 127.0.0.1:8080), got {text!r}")
     return host, int(port)
 

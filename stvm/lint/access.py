@@ -85,6 +85,10 @@ class _Collector:
             return
         if info.is_fb and info.instance is not None:
             self.value(info.instance)
+        elif isinstance(e.callee, n.Member):
+            # `itf.M()`, `fb.M()`: the method is called through the variable, which reads it
+            # (an interface variable used only so was "written but never read", SA102)
+            self.value(e.callee.base)
         for var, value in info.inputs:
             if var.section == IN_OUT:
                 self.indices(value)

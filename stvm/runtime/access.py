@@ -13,10 +13,10 @@ come only from the layout's slots; nothing here knows how lowering spells them.
 from __future__ import annotations
 
 import functools
-import re
 from typing import Any, Mapping
 
 from stvm.lower.layout import ProjectLayout, VarSlot
+from stvm.runtime import paths
 from stvm.runtime.values import AttrRef, ItemRef, MapRef, OpenArray
 from stvm.semantics import types as t
 
@@ -32,31 +32,17 @@ class UnboundInOut(PathError):
     """The path is well-formed but goes through a VAR_IN_OUT the FB has not been called with yet."""
 
 
-_PATH_TOKEN = re.compile(r"\s*(?:([A-Za-z_][A-Za-z0-9_]*)|\[([^\]]*)\]|(\.)|(\^))")
-
-
 @functools.lru_cache(maxsize=4096)
 def parse_path(path: str) -> tuple[tuple[str, str], ...]:
-    """(kind, text) tokens of a path: ("name", "Q"), ("index", "1, 2"), ("deref", "^").
+    """(kind, text) tokens of a path: ("name", "Q"), ("index", "1,2"), ("deref", "^"), read by
+    the one strict path reader (stvm/runtime/paths.py: `Main..x` or `Main.x; DROP` is an error).
 
     Memoised (bounded): scenarios, the demo, the HMI and OPC UA read the same few paths every
     scan, and parsing one costs about as much as the rest of a `vm.get`."""
-    tokens = []
-    pos = 0
-    while pos < len(path):
-        m = _PATH_TOKEN.match(path, pos)
-        if not m or m.end() == pos:
-            raise PathError(f"malformed variable path {path!r}")
-        pos = m.end()
-        if m.group(1):
-            tokens.append(("name", m.group(1)))
-        elif m.group(2) is not None:
-            tokens.append(("index", m.group(2)))
-        elif m.group(4):
-            tokens.append(("deref", "^"))
-    if not tokens or tokens[0][0] != "name":
-        raise PathError(f"malformed variable path {path!r}")
-    return tuple(tokens)
+    try:
+        return paths.parse_path(path)
+    except paths.PathSyntaxError as exc:
+        raise PathError(str(exc)) from None
 
 
 class VariableAccess:

@@ -13,6 +13,7 @@ from dataclasses import dataclass, field
 from typing import Any, Mapping
 
 from stvm.diagnostics import Diagnostic
+from stvm.semantics.limits import array_bounds_problem, array_size_problem
 from stvm.source import is_stdlib_file
 from stvm.numeric import f32, utf16_units
 from stvm.semantics import types as t
@@ -1013,10 +1014,18 @@ class Checker:
                 hi = self.const_int(hi_expr, namespace)
                 if lo is None or hi is None:
                     return None
+                problem = array_bounds_problem(lo, hi)
+                if problem:
+                    self.error(problem, spec.span, "E019")
+                    return None
                 if hi < lo:
                     self.error(f"array bounds {lo}..{hi} are empty", spec.span, "E019")
                     return None
                 dims.append((lo, hi))
+            problem = array_size_problem(dims, element, self.settings.max_array_elements)
+            if problem:
+                self.error(problem, spec.span, "E019")
+                return None
             # ARRAY[..] OF ARRAY[..] stays an array of arrays (indexed a[i][j]); a[i, j] needs
             # ARRAY[.., ..]
             text = ",".join(f"{lo}..{hi}" for lo, hi in dims)

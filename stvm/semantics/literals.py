@@ -11,12 +11,30 @@ import math
 
 from stvm.semantics import types as t
 from stvm.syntax import nodes as n
-from stvm.syntax.literals import decode_int
+from stvm.syntax.literals import LiteralError, decode_int
+
+
+MAX_VALUE_CHARS = 16384
+"""The longest value text read (a WSTRING literal of the longest WSTRING fits)."""
 
 
 def literal_value(text: str, ty):
     """An IEC literal typed by a user, converted to the value a variable of type `ty` holds
-    (raises ValueError saying what is wrong)."""
+    (raises ValueError saying what is wrong, the text cut to a readable length)."""
+    if len(text) > MAX_VALUE_CHARS:
+        raise ValueError(f"a value of {len(text)} characters is longer than any literal stvm reads "
+                         f"({MAX_VALUE_CHARS})")
+    try:
+        return _literal_value(text, ty)
+    except ValueError as exc:
+        if len(text) <= 60:
+            raise
+        short = text[:40] + "…"
+        message = str(exc).replace(repr(text), repr(short)).replace(text, short)
+        raise ValueError(message) from None
+
+
+def _literal_value(text: str, ty):
     from stvm.syntax.parser import parse_expression   # lazy: Lark is loaded only when a literal is read
     expr, diags = parse_expression(text, "<--set>")
     if expr is None or any(d.is_error for d in diags):
@@ -28,7 +46,8 @@ def literal_value(text: str, ty):
                              f"write $' for a quote inside)")
         if isinstance(ty, t.StringType):
             return text.encode("utf-8")
-        raise ValueError(f"{text!r} is not an ST literal")
+        first = next((d.message for d in diags if d.is_error), "")
+        raise ValueError(f"{text!r} is not an ST literal" + (f" ({first[:120]})" if first else ""))
     negate = False
     if isinstance(expr, n.Unary) and expr.op == "MINUS":
         negate, expr = True, expr.operand
@@ -40,12 +59,16 @@ def literal_value(text: str, ty):
         if isinstance(ty, t.EnumType):
             return expr.text
         text_value = expr.text
-        if isinstance(ty, t.BoolType):
-            value = text_value.upper() in ("TRUE", "1")
-        elif "." in text_value or "e" in text_value.lower() and "#" not in text_value:
-            value = float(text_value)
-        else:
-            value = decode_int(text_value.lstrip("+-")) * (-1 if text_value.startswith("-") else 1)
+        try:
+            if isinstance(ty, t.BoolType):
+                value = text_value.upper() in ("TRUE", "1")
+            elif "." in text_value or "e" in text_value.lower() and "#" not in text_value:
+                value = float(text_value)
+            else:
+                value = decode_int(text_value.lstrip("+-")) * (-1 if text_value.startswith("-") else 1)
+        except ValueError as exc:   # never Python's own words ("could not convert string to float")
+            detail = str(exc) if isinstance(exc, LiteralError) else "not a number"
+            raise ValueError(f"{text!r} is not an ST literal ({detail})") from None
     elif isinstance(expr, n.Name) and len(expr.parts) == 1 and isinstance(ty, t.EnumType):
         return expr.parts[0]
     else:
@@ -53,6 +76,8 @@ def literal_value(text: str, ty):
     if negate:
         value = -value
     _check_kind(text, expr, value, ty)
+    if isinstance(ty, t.BoolType) and isinstance(expr, n.IntLiteral):
+        value = bool(value)
     if isinstance(ty, t.RealType) and isinstance(value, int) and not isinstance(value, bool):
         try:
             value = float(value)
@@ -70,5 +95,14 @@ def _check_kind(text: str, expr, value, ty) -> None:
     5 ns), BOOL takes TRUE/FALSE (or BOOL#1), not 1."""
     if isinstance(ty, t.TimeType) and not isinstance(expr, (n.TimeLiteral, n.HashLiteral)):
         raise ValueError(f"{text!r} is not a duration: write it as TIME, e.g. T#5ms or T#1s500ms")
+    if isinstance(ty, t.BoolType) and isinstance(expr, n.IntLiteral) and value in (0, 1) \
+            and not text.strip().startswith(("-", "+")):
+        return   # IEC 61131-3 table 5: 0 and 1 are BOOL literals (as BOOL#0 and BOOL#1)
     if isinstance(ty, t.BoolType) and not isinstance(expr, (n.BoolLiteral, n.HashLiteral)):
-        raise ValueError(f"{text!r} is not a BOOL: write TRUE or FALSE")
+        raise ValueError(f"{text!r} is not a BOOL: write TRUE or FALSE (or 1 or 0)")
+    if isinstance(ty, (t.IntType, t.RealType)) and isinstance(expr, n.TimeLiteral):
+        raise ValueError(f"{text!r} is a duration (TIME), and {ty.name} holds a number")
+    if isinstance(ty, t.IntType) and isinstance(expr, n.RealLiteral):
+        raise ValueError(f"{text!r} is a REAL literal, and {ty.name} holds whole numbers")
+    if isinstance(ty, (t.IntType, t.RealType)) and isinstance(expr, n.StringLiteral):
+        raise ValueError(f"{text!r} is a string, and {ty.name} holds a number")

@@ -928,6 +928,11 @@ class Driver:
                 if cls is function_:                                    # reduce
                     state = act(states, values, spans, lines, handler)
                     if state == end_state:
+                        if ttype != "$END":
+                            # the start rules share states: `1;` reduces to a whole expression on
+                            # `;`, with text left over; only the end of the input ends the parse
+                            # (issue 34 item 10: `--set Main.x=1; DROP` was taken as 1)
+                            raise Fallback
                         return values[-1]
                     continue
                 # a run of one-child reductions (an _OneChildRun): worked out once per state below
@@ -936,6 +941,8 @@ class Driver:
                     run(states, values, spans, lines, handler)
                 states[-1] = state = final
                 if state == end_state:
+                    if ttype != "$END":   # (as above)
+                        raise Fallback
                     return values[-1]
 
 

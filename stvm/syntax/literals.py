@@ -102,8 +102,30 @@ def decode_wstring(token_text: str, settings: SysmacSettings) -> str:
     return value.split("\x00", 1)[0]   # as a STRING, a WSTRING ends at its first NUL
 
 
+# The longest integer literal read: a ULINT in binary is 64 digits (plus separators). Longer
+# text is refused before conversion: a 100,000-digit 16# literal took seconds and ended in exit 70,
+# and Python refuses decimal text over 4,300 digits with a ValueError (issue 34 item 9).
+MAX_INT_LITERAL_CHARS = 160
+# TIME/LTIME are 64-bit counts of nanoseconds (about ±106,751 days)
+TIME_NS_MIN, TIME_NS_MAX = -2**63, 2**63 - 1
+
+
+def check_digit_separators(text: str) -> None:
+    """IEC 61131-3: an underscore stands between two digits (`1_000`, `16#FF_FF`); `1__0`, `1_`
+    and `_1` are not numbers. Raises LiteralError."""
+    digits = text.split("#", 1)[-1].lstrip("+-")
+    if "__" in digits or digits.startswith("_") or digits.endswith("_"):
+        raise LiteralError(f"malformed number {text!r}: an underscore must stand between two digits")
+
+
 def decode_int(text: str) -> int:
-    text = text.replace("_", "")
+    """An ST integer literal's value (`1_000`, `16#FF`, `2#1010`). Raises LiteralError."""
+    if len(text) > MAX_INT_LITERAL_CHARS:
+        raise LiteralError(f"integer literal of {len(text)} characters: longer than any ST integer type "
+                           f"needs (at most {MAX_INT_LITERAL_CHARS})")
+    if "_" in text:
+        check_digit_separators(text)
+        text = text.replace("_", "")
     if "#" in text:
         base, digits = text.split("#", 1)
         return int(digits, int(base))
@@ -130,7 +152,11 @@ def decode_time(text: str) -> int:
         pos = match.end()
     if pos != len(body):
         raise LiteralError(f"malformed duration literal {text!r}")
-    return sign * int(total)
+    value = sign * int(total)
+    if not TIME_NS_MIN <= value <= TIME_NS_MAX:
+        raise LiteralError(f"duration {text if len(text) <= 40 else text[:40] + '…'} is out of range: "
+                           f"TIME and LTIME hold at most ±106751d23h47m16s854ms775us807ns (64-bit nanoseconds)")
+    return value
 
 
 def _date_ns(y: int, mo: int, d: int) -> int:

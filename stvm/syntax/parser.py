@@ -7,6 +7,7 @@ stages only see values.
 
 from __future__ import annotations
 
+import math
 import threading
 from bisect import bisect_right
 from dataclasses import replace
@@ -87,7 +88,7 @@ def grammar_text() -> str:
     return resources.files("stvm.syntax").joinpath(_GRAMMAR_FILE).read_text(encoding="utf-8")
 
 
-from stvm.syntax.literals import (LiteralError, decode_date, decode_dt, decode_int, decode_string,  # noqa: F401
+from stvm.syntax.literals import (LiteralError, check_digit_separators, decode_date, decode_dt, decode_int, decode_string,  # noqa: F401
                                   decode_time, decode_tod, decode_wstring)
 
 
@@ -600,15 +601,33 @@ class _ToNodes:
 
     def int_literal(self, meta, items):
         text = str(items[0])
-        # INTEGER is /[0-9][0-9_]*/: int() takes it as it is unless it has a `_`
-        return n.IntLiteral(int(text) if "_" not in text else decode_int(text), self._s(meta))
+        # INTEGER is /[0-9][0-9_]*/: int() takes it as it is unless it has a `_` or is long
+        if "_" not in text and len(text) <= 20:
+            return n.IntLiteral(int(text), self._s(meta))
+        return self.based_literal(meta, items)
 
     def based_literal(self, meta, items):
-        return n.IntLiteral(decode_int(str(items[0])), self._s(meta))
+        try:
+            value = decode_int(str(items[0]))
+        except LiteralError as exc:   # a `1__0`, or thousands of digits (an error, not exit 70)
+            self._error(str(exc), self._s(meta))
+            value = 0
+        return n.IntLiteral(value, self._s(meta))
 
     def real_literal(self, meta, items):
-        text = str(items[0]).replace("_", "")
-        return n.RealLiteral(float(text), text, self._s(meta))
+        raw = str(items[0])
+        text = raw.replace("_", "")
+        try:
+            if "_" in raw:
+                check_digit_separators(raw.split("e")[0].split("E")[0].replace(".", ""))
+            value = float(text)
+            if not math.isfinite(value):
+                raise LiteralError(f"REAL literal {text[:40]!r} is out of range: LREAL holds at most "
+                                   f"±1.7976931348623157E308")
+        except LiteralError as exc:
+            self._error(str(exc), self._s(meta))
+            value = 0.0
+        return n.RealLiteral(value, text, self._s(meta))
 
     def true_literal(self, meta, items):
         return n.BoolLiteral(True, self._s(meta))

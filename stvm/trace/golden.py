@@ -106,6 +106,11 @@ def compare(expected: Trace, actual: Trace) -> Divergence | None:
         scan, exp_text, act_text = found_frame
         candidates.append((scan, 2, 0, Divergence(scan, expected.time_of(scan), "emulator frame",
                                                   exp_text, act_text, "frame")))
+    if expected.scans != actual.scans:
+        # an event or frame the shorter trace cannot have (its run had ended) is the length's
+        # difference, not a divergence at a scan that never ran
+        common = min(expected.scans, actual.scans)
+        candidates = [c for c in candidates if c[0] < common]
     if candidates:
         return min(candidates, key=lambda c: c[:3])[3]
     if expected.scans != actual.scans:
@@ -201,6 +206,15 @@ def render_report(divergence: Divergence, expected: Trace | None = None, actual:
                   context: int = 0, golden_name: str = "golden") -> str:
     """The first-divergence report the CLI prints and a failing golden test shows."""
     d = divergence
+    if d.kind == "length" and expected is not None and actual is not None:
+        shorter, longer = ("this run", golden_name) if actual.scans < expected.scans else (golden_name, "this run")
+        lines = [f"trace differs from {golden_name}: {shorter} ended after {min(expected.scans, actual.scans)} "
+                 f"scan(s), {longer} has {max(expected.scans, actual.scans)}; the first "
+                 f"{min(expected.scans, actual.scans)} scan(s) agree"
+                 + (f" (run --cycles {expected.scans} to compare them all)" if actual.scans < expected.scans else ""),
+                 f"  expected: {d.expected}",
+                 f"  actual:   {d.actual}"]
+        return "\n".join(lines) + "\n"
     lines = [f"trace differs from {golden_name}: first divergence at scan {d.scan} (t={format_time(d.time_ns)})",
              f"  variable: {d.variable}",
              f"  expected: {d.expected}",
@@ -280,7 +294,7 @@ class _WriteFinder:
         self.steps = signal.steps
         self.key = signal.steps[-1] if signal.steps and isinstance(signal.steps[-1], str) else None
         self.last = self._value(None)
-        self.last_line: int | None = None
+        self.frame_lines: dict = {}   # frame -> its last line with an ST statement
         self.span = None
 
     def _container(self):
@@ -310,15 +324,22 @@ class _WriteFinder:
         return self.local_trace
 
     def local_trace(self, frame, event, arg):
+        # The statement to blame is the last one of the frame in which the change shows: a
+        # change seen in a caller after a FUNCTION, METHOD or interface call returned was made by
+        # the caller's statement (`x := F(n)` assigns after F's last line ran), and one seen in
+        # the callee by the callee's. One last line per frame, not one for the whole trace.
         if event in ("line", "return"):
             value = self._value(frame)
-            if value != self.last and self.last_line is not None:
-                span = self.line_map.span_at(self.last_line)
+            if value != self.last:
+                line = self.frame_lines.get(frame)
+                span = self.line_map.span_at(line) if line is not None else None
                 if span is not None:
                     self.span = span
             self.last = value
             if event == "line" and self._owns(frame):
-                self.last_line = frame.f_lineno
+                self.frame_lines[frame] = frame.f_lineno
+            elif event == "return":
+                self.frame_lines.pop(frame, None)
         return self.local_trace
 
     def _owns(self, frame) -> bool:

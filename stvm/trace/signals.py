@@ -167,7 +167,7 @@ def _exact(vm, path: str) -> list[Signal]:
     try:
         container, key, ty = vm.resolve(path)
     except PathError as exc:
-        raise WatchError(f"--watch {path!r}: {exc}") from exc
+        raise WatchError(f"--watch {path!r}: {exc}{_hint(vm, path)}") from exc
     root, steps = container, (key,)
     name = _canonical_name(vm, path)
     if ty.kind in _ELEMENTARY:
@@ -206,11 +206,45 @@ def _iter_prefix(vm, path: str):
 
 
 def _hint(vm, pattern: str) -> str:
+    """` (did you mean …?)` for a pattern that matches nothing: the names are followed as far
+    as they resolve, and the first one that does not is compared with the members there, so
+    `Cobot.Conected` suggests `Cobot.Connected`, not `Cobot`."""
     import difflib
-    head = re.split(r"[.\[*?]", pattern, maxsplit=1)[0]
-    names = [var.name for var in vm.model.globals.values()] + [n for n, _, _ in vm.instances.values()]
-    close = difflib.get_close_matches(head, names, n=3, cutoff=0.6)
-    return f" (did you mean {', '.join(close)}?)" if close else ""
+    parts = re.split(r"\.", re.sub(r"\s+", "", pattern))
+    if any(ch in pattern for ch in "[*?^"):
+        parts = re.split(r"\.", re.split(r"[\[*?^]", re.sub(r"\s+", "", pattern), maxsplit=1)[0])
+    heads = {var.name.lower(): ("global", var.name) for var in vm.model.globals.values()}
+    heads.update({n.lower(): ("instance", n) for n, _, _ in vm.instances.values()})
+    close = difflib.get_close_matches(parts[0], [name for _, name in heads.values()], n=3, cutoff=0.6)
+    found = heads.get(parts[0].lower())
+    if found is None or len(parts) == 1:
+        return f" (did you mean {', '.join(close)}?)" if close else ""
+    layout = _layout_of_head(vm, found)
+    prefix = found[1]
+    for part in parts[1:]:
+        if layout is None:
+            return ""
+        members = {slot.name.lower(): slot for slot in layout if slot.section not in _SKIPPED_SECTIONS}
+        slot = members.get(part.lower())
+        if slot is None:
+            close = difflib.get_close_matches(part, [m.name for m in members.values()], n=3, cutoff=0.6)
+            if not close:
+                close = [m.name for m in members.values() if m.name.lower().startswith(part.lower()[:3])][:3]
+            return f" (did you mean {', '.join(f'{prefix}.{c}' for c in close)}?)" if close else ""
+        prefix = f"{prefix}.{slot.name}"
+        layout = vm.layouts.of(slot.type)
+    return ""
+
+
+def _layout_of_head(vm, found: tuple[str, str]):
+    kind, name = found
+    if kind == "instance":
+        for inst_name, _inst, qualname in vm.instances.values():
+            if inst_name == name:
+                return vm.layouts.pous[qualname.lower()]
+        return None
+    slot = vm.layouts.globals.slot(name)
+    return vm.layouts.of(slot.type) if slot is not None else None
 
 
 def _expression(root_name: str, steps: tuple) -> str:

@@ -14,6 +14,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from stvm.trace.writers import TraceFormatError
+
 PICTURE_SUFFIXES = (".svg", ".png")
 SAMPLE_NS = 10_000_000     # 100 samples a second of VM time: smooth at PnP speeds
 
@@ -23,6 +25,7 @@ class TcpPathRecorder:
     transport: object
     every_ns: int = SAMPLE_NS
     points: list[tuple[int, float, float, float, bool]] = field(default_factory=list)   # t, x, y, z, moving
+    used: bool = False   # whether the program connected to the robot during the run
     _next_ns: int = 0
 
     def sample(self, vm) -> None:
@@ -30,6 +33,8 @@ class TcpPathRecorder:
             return
         self._next_ns = vm.now_ns + self.every_ns
         snap = self.transport.link.robot.snapshot()
+        if snap.get("connections") or snap.get("moving"):
+            self.used = True
         x, y, z = (float(v) for v in snap["pose"][:3])
         self.points.append((vm.now_ns, x, y, z, bool(snap["moving"])))
 
@@ -48,6 +53,10 @@ class PlotUnavailable(RuntimeError):
     """matplotlib is not installed."""
 
 
+class NoPath(TraceFormatError):
+    """The run never used the robot: there is no path to draw."""
+
+
 def render_tcp_path(recorder: TcpPathRecorder, out: str | Path, title: str = "TCP path") -> Path:
     """Write the top and side views of the recorded path to `out` (.svg or .png)."""
     try:
@@ -59,6 +68,10 @@ def render_tcp_path(recorder: TcpPathRecorder, out: str | Path, title: str = "TC
     out = Path(out)
     if out.suffix.lower() not in PICTURE_SUFFIXES:
         raise ValueError(f"{out}: a TCP path picture is .svg or .png")
+    if not recorder.used:
+        # the robot's home pose alone would be drawn as "start" of an empty path (issue 34 item 12)
+        raise NoPath(f"{out}: the program never connected to the robot during the run, so there is "
+                     f"no TCP path to draw (record a run that moves the robot, e.g. with a scenario)")
     coords = {"X": [p[1] for p in recorder.points], "Y": [p[2] for p in recorder.points],
               "Z": [p[3] for p in recorder.points]}
     stops = recorder.stops()

@@ -69,7 +69,8 @@ def test_cycles_still_bound_a_run_whose_condition_never_holds(main_st):
     ("Main.n = 100000", "100000 is out of range for INT"),
     ("Main.n = T#1s", "a TIME literal cannot be compared with INT"),
     ("Main.t = 5", "5 cannot be compared with TIME (write a duration as T#5ms)"),
-    ("Main.b = 1", "1 cannot be compared with BOOL"),
+    ("Main.b = 2", "2 cannot be compared with BOOL"),   # (0 and 1 are BOOL literals)
+    ("Main.n = 1.5", "1.5 is a REAL literal and INT holds whole numbers"),
     ("Main.s = 5", "5 cannot be compared with STRING[10]"),
     ("Main.c = Purple", "Purple is not a value of Color"),
     ("Main.n + 1 = 3", "only variables, literals, comparisons"),

@@ -159,3 +159,32 @@ def test_accept_backoff_resets_after_listener_closed_and_reopened() -> None:
             client.close()
     finally:
         srv.stop()
+
+
+def test_connection_flood_is_bounded_and_the_server_serves_after_it() -> None:
+    """Idle connections beyond max_connections are reset at once: the flood holds at most that
+    many descriptors of the emulator; when it ends, clients are served again."""
+    srv = start_server(port=0, max_connections=8)
+    flood: list[socket.socket] = []
+    try:
+        for _ in range(40):
+            try:
+                flood.append(socket.create_connection(("127.0.0.1", srv.port), timeout=5))
+            except ConnectionResetError:   # reset while connecting: refused over the limit
+                pass
+        assert wait_until(lambda: srv.refused_over_limit >= 32, 5.0)
+        assert len(srv.snapshot()["connections"]) <= 8
+        for sock in flood:
+            sock.close()
+        flood.clear()
+        assert wait_until(lambda: srv.snapshot()["connections"] == [], 5.0)
+        client = SyncClient(srv.port)
+        try:
+            client.send(QUERY)
+            assert client.read_frame() == IN_NODE
+        finally:
+            client.close()
+    finally:
+        for sock in flood:
+            sock.close()
+        srv.stop()

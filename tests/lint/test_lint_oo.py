@@ -129,3 +129,37 @@ END_PROGRAM
 
 def findings_of(found):
     return [f for f in found if f.code in ("SA101", "SA102", "SA103")]
+
+
+ITF_CALL = """
+INTERFACE ICalc
+METHOD Calc : INT
+VAR_INPUT a : INT; END_VAR
+END_METHOD
+END_INTERFACE
+
+FUNCTION_BLOCK Doubler IMPLEMENTS ICalc
+METHOD Calc : INT
+VAR_INPUT a : INT; END_VAR
+Calc := a * 2;
+END_METHOD
+END_FUNCTION_BLOCK
+
+FUNCTION_BLOCK User
+VAR itf : ICalc; d : Doubler; END_VAR
+itf := d;
+itf.Calc(3);
+END_FUNCTION_BLOCK
+
+PROGRAM Main
+VAR u : User; END_VAR
+u();
+END_PROGRAM
+"""
+
+
+def test_an_interface_variable_used_only_to_call_a_method_is_read():
+    """`itf.M()` reads itf (issue 34 item 12: SA102 said "written but never read")."""
+    assert "SA102" not in codes(ITF_CALL)
+    unused = ITF_CALL.replace("itf.Calc(3);", "d.Calc(3);")
+    assert "SA102" in codes(unused)   # written, and really never read now

@@ -4,18 +4,16 @@ escape sequences and rich markup is shown escaped, never acted on by the termina
 from __future__ import annotations
 
 import io
-import sys
-from pathlib import Path
+import socket
 
 from rich.console import Console
 
 from emulator import start_server
 from emulator.cli import _render
+from emulator.framing import encode
 from emulator.terminal_text import plain, printable
 from stvm.demo import _frame_text
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "emulator"))   # the emulator tests' client
-from emu_helpers import SyncClient  # noqa: E402
 
 # set the window title, clear the screen, an OSC 8 link, a bidi override, rich markup
 HOSTILE = ("\x1b]0;pwned\x07\x1b[2J\x1b[H\x1b]8;;http://evil.example/\x07click\x1b]8;;\x07"
@@ -45,12 +43,9 @@ def test_printable_escapes_every_control_character() -> None:
 def test_emulator_live_view_shows_a_hostile_frame_inert() -> None:
     srv = start_server(port=0)
     try:
-        client = SyncClient(srv.port)
-        try:
-            client.send_frame("TMSCT", f'1,var_s = "{HOSTILE}"')
-            client.read_frame()
-        finally:
-            client.close()
+        with socket.create_connection(("127.0.0.1", srv.port), timeout=5) as client:
+            client.sendall(encode("TMSCT", f'1,var_s = "{HOSTILE}"'))
+            assert client.recv(4096).startswith(b"$TMSCT")   # the answer: the frame was handled
         snap = srv.snapshot()
     finally:
         srv.stop()
