@@ -117,6 +117,7 @@ class Widget:
 class Area:
     title: str
     widgets: tuple[Widget, ...]
+    place: str = ""                  # "side" (commands, status) | "main" | "": by its widgets
 
 
 @dataclass(frozen=True)
@@ -291,9 +292,13 @@ class _Reader:
         popups = self._read_popups(f, name, data.get("popup", []))
         areas = []
         for i, area in enumerate(self._tables(f, ("area",), data.get("area", []), "[[area]]")):
-            self._known(f, ("area", i), area, {"title", "widget"}, "[[area]]")
+            self._known(f, ("area", i), area, {"title", "widget", "place"}, "[[area]]")
             widgets = self._read_widgets(f, ("area", i, "widget"), area.get("widget", []), name, {})
-            areas.append(Area(self._string(f, ("area", i, "title"), area.get("title", "")), tuple(widgets)))
+            place = area.get("place", "")
+            if place not in ("", "side", "main"):
+                f.error(("area", i, "place"), "place must be \"side\" (beside every tab) or \"main\" (a tab)")
+                place = ""
+            areas.append(Area(self._string(f, ("area", i, "title"), area.get("title", "")), tuple(widgets), place))
         for i, preset in enumerate(self._tables(f, ("preset",), data.get("preset", []), "[[preset]]")):
             self._read_preset(f, ("preset", i), preset, name)
         for i, guard in enumerate(self._tables(f, ("guard",), data.get("guard", []), "[[guard]]")):

@@ -68,8 +68,12 @@ class PageRenderer:
 def area_role(area: Area) -> str:
     """`side`: commands and their status (kept in view while parameters are edited, docs/hmi.md
     "Panel layout"); `edit`: everything else."""
+    if area.place:
+        return "side" if area.place == "side" else "edit"
     kinds = {w.kind for w in area.widgets}
-    return "side" if kinds and kinds <= _SIDE_KINDS else "edit"
+    if kinds & {"numeric", "dropdown", "text", "robot_view", "popup"}:
+        return "edit"
+    return "side" if kinds & _SIDE_KINDS else "edit"
 
 
 def _meaning(widget) -> str:

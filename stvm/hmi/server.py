@@ -326,8 +326,8 @@ class HmiServer:
             state, reason = "running", ""
         if state != self.vm_state["state"]:
             self.vm_state = {"state": state, "since": _now_text(), "reason": reason, "scan": scan}
-        elif reason:
-            self.vm_state["reason"] = reason
+        else:
+            self.vm_state = dict(self.vm_state, reason=reason or self.vm_state["reason"], scan=scan)
         return self.vm_state
 
     def send_status(self, force: bool = False) -> None:

@@ -162,6 +162,7 @@ for (const el of document.querySelectorAll("input[data-var]:not([readonly]), sel
       return;
     }
     delete el.dataset.dirty;
+    show(path, current[path]);            // the VM's value in operator form (its update may follow)
   });
 }
 
@@ -369,6 +370,7 @@ function connect() {
     if (update.alarms) showAlarms(update.alarms);
     for (const notice of update.notices || []) say(notice, false, "notice");
     if (update.scan >= 0) clock.textContent = `scan ${update.scan} · t = ${update.t.toFixed(3)} s`;
+    else if (update.vm && update.vm.scan !== undefined) clock.textContent = `scan ${update.vm.scan}`;
     for (const view of views) {
       drawTargets(view);
       if (update.robot) drawRobot(view, update.robot, update.t);
