@@ -243,3 +243,21 @@ def test_liveness_when_the_vm_stops_and_when_the_server_goes(chromium):
     finally:
         tab.close()
         live.vm.close()
+
+
+def test_robot_view_has_a_scale_and_marks_targets_out_of_view(thesis_live, chromium):
+    tab = chromium.new_page(viewport={"width": 1920, "height": 1080})
+    try:
+        reply = httpx.post(thesis_live.base + "/api/vars", json={"PnP_MoveParameters[0].TargetPosition.X": "900"})
+        assert reply.status_code == 200, reply.text
+        tab.goto(f"{thesis_live.base}/page/pgPnP_sequence")
+        wait_live(tab)
+        assert tab.locator("[data-robot-view] .view-top .grid line").count() >= 8   # axes with a scale
+        assert "100" in tab.locator("[data-robot-view] .view-top .grid").text_content()
+        target = tab.locator('[data-robot-view] .view-top .target[data-target="0"]')
+        expect(target).to_have_attribute("data-outside", "1")
+        expect(target).to_contain_text("out of view")
+        x = float(target.locator("rect").get_attribute("x"))
+        assert 0 <= x <= 320 - 8          # pinned inside the 320-wide view box, not off its edge
+    finally:
+        tab.close()

@@ -291,12 +291,35 @@ const views = [...document.querySelectorAll("[data-robot-view]")].map((figure) =
   points: [],
 }));
 const SVG = "http://www.w3.org/2000/svg";
+setTimeout(() => views.forEach(drawGrid), 0);
 
 function toView(view, axes, p) {           // mm -> viewBox coordinates: y up, equal scale, centred
   const [a, b] = axes;
   const [a0, a1] = view.ranges[a], [b0, b1] = view.ranges[b];
   const scale = Math.min(300 / (a1 - a0), 200 / (b1 - b0));
   return [160 + (p[a] - (a0 + a1) / 2) * scale, 130 - (p[b] - (b0 + b1) / 2) * scale];
+}
+
+// axes with a scale: a grid line and its value every 50/100/200 mm, drawn once per projection
+function drawGrid(view) {
+  for (const svg of view.figure.querySelectorAll("svg")) {
+    const axes = svg.dataset.axes.split(",").map(Number);
+    const group = svg.querySelector(".grid");
+    const parts = [];
+    axes.forEach((axis, k) => {
+      const [lo, hi] = view.ranges[axis];
+      const step = (hi - lo) > 1200 ? 200 : (hi - lo) > 500 ? 100 : 50;
+      for (let mm = Math.ceil(lo / step) * step; mm <= hi; mm += step) {
+        const p = [0, 0, 0];
+        p[axes[0]] = k === 0 ? mm : view.ranges[axes[0]][0];
+        p[axes[1]] = k === 1 ? mm : view.ranges[axes[1]][0];
+        const [x, y] = toView(view, axes, p);
+        parts.push(k === 0 ? `<line x1="${x.toFixed(1)}" y1="20" x2="${x.toFixed(1)}" y2="232"></line><text x="${(x + 2).toFixed(1)}" y="236">${mm}</text>`
+                           : `<line x1="8" y1="${y.toFixed(1)}" x2="312" y2="${y.toFixed(1)}"></line><text x="2" y="${(y - 2).toFixed(1)}">${mm}</text>`);
+      }
+    });
+    group.innerHTML = parts.join("");
+  }
 }
 
 function drawTargets(view) {
@@ -307,13 +330,20 @@ function drawTargets(view) {
     view.targets.forEach((target, i) => {
       const p = ["X", "Y", "Z"].map((axis) => parseFloat(current[`${target}.${axis}`]));
       if (p.some(Number.isNaN)) return;
-      const [x, y] = toView(view, axes, p);
+      // a target outside the drawn range is pinned to the frame's edge and marked as such
+      const outside = axes.some((a) => p[a] < view.ranges[a][0] || p[a] > view.ranges[a][1]);
+      let [x, y] = toView(view, axes, p);
+      x = Math.min(314, Math.max(6, x));
+      y = Math.min(234, Math.max(20, y));
       const mark = document.createElementNS(SVG, "g");
-      mark.setAttribute("class", "target");
+      mark.setAttribute("class", outside ? "target outside" : "target");
       mark.dataset.target = String(i);
       mark.dataset.mm = p.join(",");
+      if (outside) mark.dataset.outside = "1";
+      // labels alternate above/below so neighbouring targets do not overlap
+      const dy = i % 2 ? 14 : -6;
       mark.innerHTML = `<rect x="${x - 4}" y="${y - 4}" width="8" height="8"></rect>` +
-                       `<text x="${x + 6}" y="${y - 6}">${i + 1}</text>`;
+                       `<text x="${x + 6}" y="${y + dy}">${i + 1}${outside ? " out of view" : ""}</text>`;
       group.appendChild(mark);
     });
   }
