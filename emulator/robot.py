@@ -296,6 +296,22 @@ class Robot:
             "do": {module: list(values["DO"]) for module, values in self.io.items()},
         }
 
+    def pose_at(self, now_ns: int) -> list[float]:
+        """The TCP pose (in the current base, like ``snapshot()["pose"]``) at ``now_ns``,
+        interpolated along the active motions without advancing the robot. ``snapshot()`` shows
+        the pose of the last event (a frame, a motion's end), which may be a second old in the
+        middle of a move; a live view reads this instead. Read-only: no state changes."""
+        executor = self.executor
+        active = executor.active
+        if not active or self.paused or self.state == _STOPPED or executor.stalled or now_ns <= self.now_ns:
+            tcp = executor.current_tcp()
+        else:
+            at = max(executor.time_ns, self.motion_ns + (now_ns - self.now_ns))
+            tcp = active[-1].tcp_at(at).copy()
+            for older in active[:-1]:   # the superposition current_tcp() draws, at `at`
+                tcp[:3, 3] += older.tcp_at(at)[:3, 3] - older.end_tcp[:3, 3]
+        return [round(float(v), 3) for v in self._pose_in_base(tcp)]
+
     # ================================================================ time
 
     def _take(self) -> list[Action]:

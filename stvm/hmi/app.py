@@ -157,7 +157,11 @@ def build_app(server: Any) -> Starlette:
         try:
             body = await _json_body(request, server.limits)
             values, literals = server.check_writes(body)
+            refused = await server.guard_problem(values)
+            if refused:
+                raise Refused(409, refused)
             scan = await server.submit(values)
+            server.notify_write(request.headers.get("x-hmi-client"), literals)
         except Refused as exc:
             return _error(exc.status, exc.reason, exc.path)
         except WriteRejected as exc:
@@ -191,15 +195,47 @@ def build_app(server: Any) -> Starlette:
             "writable": sorted(hmi.writable),
         })
 
+    async def alarms_page(request: Request) -> Response:
+        response = HTMLResponse(server.renderer.render_alarms())
+        _remember_token(request, response)
+        return response
+
+    async def get_alarms(request: Request) -> Response:
+        history = server.alarms.history() if server.alarms is not None else []
+        return JSONResponse(dict(server.alarm_json(), history=[a.as_json() for a in history[:100]],
+                                 vm=server.vm_state))
+
+    async def ack_alarm(request: Request) -> Response:
+        try:
+            await _json_body(request, server.limits, allow_empty=True)
+        except Refused as exc:
+            return _error(exc.status, exc.reason)
+        which = request.path_params["which"]
+        if server.alarms is None:
+            return _error(404, "no alarm list")
+        if which == "all":
+            count = server.alarms.acknowledge_all()
+        elif which.isdigit() and len(which) < 12:
+            if server.alarms.acknowledge(int(which)) is None:
+                return _error(404, f"no current alarm {which}")
+            count = 1
+        else:
+            return _error(404, f"no current alarm {which}")
+        server.send_status(force=True)
+        return JSONResponse({"ok": True, "acknowledged": count})
+
     async def websocket(ws: WebSocket) -> None:
-        found = hmi.pages.get(ws.query_params.get("page", hmi.start))
+        name = ws.query_params.get("page", hmi.start)
+        found = hmi.pages.get(name) or (server.renderer.alarm_page if name == "@alarms" else None)
         if found is None or len(server.clients) >= server.limits.max_websockets:
             await ws.close(code=1008 if found is None else 1013)
             return
         await ws.accept()
-        client = Client(ws, found)
+        client = Client(ws, found, ws.query_params.get("client", ""))
         server.clients.add(client)
         server._update_watch()
+        # rides on the first message (every value of the page); the heartbeat sends it anyway
+        client.offer_status(server.check_vm(), server.alarm_json(), wake=False)
         sender = asyncio.create_task(_send_loop(server, client))
         try:
             while True:   # a page only says which pop-up is open; reading also notices it leave
@@ -231,6 +267,9 @@ def build_app(server: Any) -> Starlette:
         Route("/api/vars", post_vars, methods=["POST"]),
         Route("/api/presets/{name}", post_preset, methods=["POST"]),
         Route("/api/pages", pages),
+        Route("/alarms", alarms_page),
+        Route("/api/alarms", get_alarms, methods=["GET"]),
+        Route("/api/alarms/{which}/ack", ack_alarm, methods=["POST"]),
         WebSocketRoute("/ws", websocket),
         Mount("/static", StaticFiles(directory=str(STATIC)), name="static"),
     ]

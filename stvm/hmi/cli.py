@@ -70,10 +70,15 @@ def start_hmi(project, vm, address: str, pose=None, run_parameters: dict[str, An
         limits = ServerLimits.from_table(table.get("server"))
     except ValueError as exc:
         raise HmiUsageError(f"stvm.toml {exc}") from None
+    from stvm.frontend.limits import LimitTable, LimitsError
+    try:
+        limit_table = LimitTable.for_project(project, vm)
+    except LimitsError as exc:
+        raise HmiUsageError(str(exc)) from None
     bridge = VariableBridge(vm)
     hmi = load_pages(files, bridge.type_of, start)
     server = HmiServer(hmi, bridge, host=host, port=port, pose=pose, run_parameters=run_parameters,
-                       limits=limits)
+                       limits=limits, limit_table=limit_table)
     try:
         server.start()
     except OSError as exc:

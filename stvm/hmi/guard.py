@@ -74,6 +74,7 @@ class GuardedH11Protocol(H11Protocol):
 
     def connection_made(self, transport) -> None:
         self._header_timer = None
+        self._upgraded = False
         if len(self.open) >= self.limits.max_connections:
             oldest_idle = next((c for c in self.open if not c._busy()), None)
             if oldest_idle is not None:
@@ -97,7 +98,7 @@ class GuardedH11Protocol(H11Protocol):
         self._arm()
 
     def _arm(self) -> None:
-        if self._header_timer is None:
+        if self._header_timer is None and not self._upgraded:
             self._header_timer = self.loop.call_later(self.limits.header_timeout_s, self._header_timeout)
 
     def _disarm(self) -> None:
@@ -121,7 +122,8 @@ class GuardedH11Protocol(H11Protocol):
             self._arm()   # bytes of a request head that is not complete yet: the clock runs
 
     def handle_websocket_upgrade(self, event) -> None:
-        self._disarm()   # the WebSocket protocol takes the transport over, with its own pings
+        self._upgraded = True   # the WebSocket protocol takes the transport over, with its own pings
+        self._disarm()
         self.open.pop(self, None)
         super().handle_websocket_upgrade(event)
 

@@ -49,7 +49,7 @@ WRITING_KINDS = ("numeric", "dropdown", "text", "toggle", "momentary", "set")
 
 _COMMON = {"kind", "label"}
 _KEYS: dict[str, set[str]] = {
-    "lamp": {"var"},
+    "lamp": {"var", "meaning"},
     "numeric": {"var", "min", "max", "unit", "step"},
     "dropdown": {"var", "options"},
     "text": {"var"},
@@ -110,12 +110,14 @@ class Widget:
     history_s: float = 20.0
     ranges: tuple[tuple[float, float], ...] = ()  # robot_view: x, y, z ranges in mm
     views: tuple[str, ...] = ("XY", "XZ")         # robot_view: the projections drawn (axes →, ↑)
+    meaning: str = ""                             # lamp: error | warning | ok (colour); "": by name
 
 
 @dataclass(frozen=True)
 class Area:
     title: str
     widgets: tuple[Widget, ...]
+    place: str = ""                  # "side" (commands, status) | "main" | "": by its widgets
 
 
 @dataclass(frozen=True)
@@ -171,12 +173,23 @@ class Page:
 
 
 @dataclass(frozen=True)
+class Guard:
+    """A write a page refuses while other variables are all zero (`[[guard]]`, docs/hmi.md)."""
+
+    var: str
+    value: Any                      # the Python value whose write is refused (TRUE: an Execute)
+    all_zero: tuple[str, ...]
+    message: str
+
+
+@dataclass(frozen=True)
 class Hmi:
     pages: Mapping[str, Page]
     presets: Mapping[str, Preset]
     writable: Mapping[str, Limits]
     start: str
     types: Mapping[str, t.Type] = field(compare=False, default_factory=dict)
+    guards: Mapping[str, tuple[Guard, ...]] = field(compare=False, default_factory=dict)
 
     @property
     def paths(self) -> tuple[str, ...]:
@@ -233,7 +246,8 @@ def load_pages(files: Sequence[str | Path], type_of: Callable[[str], t.Type],
         raise HmiLoadError([Diagnostic.error(f"start page {start!r} is not one of the pages "
                                              f"({', '.join(reader.pages) or 'none'})",
                                              Span(str(files[0]) if files else "<hmi>", 1, 1, 1, 2))], sources)
-    return Hmi(reader.pages, reader.presets, reader.limits(), start, reader.types)
+    return Hmi(reader.pages, reader.presets, reader.limits(), start, reader.types,
+               {k: tuple(v) for k, v in reader.guards.items()})
 
 
 class _Reader:
@@ -248,6 +262,7 @@ class _Reader:
         self._refs: list[tuple[_File, tuple, str, str]] = []
         self._popups: dict[str, set[str]] = {}   # page → popup ids
         self._preset_checks: list[tuple[_File, tuple, str, Any]] = []
+        self.guards: dict[str, list[Guard]] = {}
 
     # ---- files
     def read_file(self, f: _File) -> None:
@@ -260,7 +275,7 @@ class _Reader:
             text = re.sub(r"\s*\(at line \d+, column \d+\)", "", message) if m else message
             f.diags.append(Diagnostic.error(f"TOML syntax: {text}", Span(f.path, line, column, line, column + 1)))
             return
-        self._known(f, (), data, {"page", "area", "popup", "preset"}, "a page file")
+        self._known(f, (), data, {"page", "area", "popup", "preset", "guard"}, "a page file")
         page_table = data.get("page")
         if not isinstance(page_table, dict):
             f.error((), "a page file needs a [page] table with name = \"...\"")
@@ -277,12 +292,44 @@ class _Reader:
         popups = self._read_popups(f, name, data.get("popup", []))
         areas = []
         for i, area in enumerate(self._tables(f, ("area",), data.get("area", []), "[[area]]")):
-            self._known(f, ("area", i), area, {"title", "widget"}, "[[area]]")
+            self._known(f, ("area", i), area, {"title", "widget", "place"}, "[[area]]")
             widgets = self._read_widgets(f, ("area", i, "widget"), area.get("widget", []), name, {})
-            areas.append(Area(self._string(f, ("area", i, "title"), area.get("title", "")), tuple(widgets)))
+            place = area.get("place", "")
+            if place not in ("", "side", "main"):
+                f.error(("area", i, "place"), "place must be \"side\" (beside every tab) or \"main\" (a tab)")
+                place = ""
+            areas.append(Area(self._string(f, ("area", i, "title"), area.get("title", "")), tuple(widgets), place))
         for i, preset in enumerate(self._tables(f, ("preset",), data.get("preset", []), "[[preset]]")):
             self._read_preset(f, ("preset", i), preset, name)
+        for i, guard in enumerate(self._tables(f, ("guard",), data.get("guard", []), "[[guard]]")):
+            self._read_guard(f, ("guard", i), guard)
         self.pages[name] = Page(name, title, f.path, tuple(areas), tuple(popups))
+
+    def _read_guard(self, f: _File, where: tuple, table: dict) -> None:
+        if not self._known(f, where, table, {"var", "value", "all_zero", "message"}, "[[guard]]"):
+            return
+        var, ty = self._variable(f, where + ("var",), table.get("var"), {}, "")
+        if var is None:
+            return
+        literal = self._literal(f, where + ("value",), var, ty, table.get("value", True), "")
+        zero = table.get("all_zero")
+        message = table.get("message")
+        if not isinstance(zero, list) or not zero or not all(isinstance(x, str) for x in zero):
+            f.error(where + ("all_zero",), "all_zero must be a list of variable paths")
+            return
+        if not isinstance(message, str) or not message.strip():
+            f.error(where + ("message",), "a guard needs message = \"<what the operator is told>\"")
+            return
+        paths = []
+        for path in zero:
+            checked, _ = self._variable(f, where + ("all_zero",), path, {}, "")
+            if checked is None:
+                return
+            paths.append(checked)
+        if literal is None:
+            return
+        value = coerce_python_value(literal_value(literal, ty), ty)
+        self.guards.setdefault(var, []).append(Guard(var, value, tuple(paths), message.strip()))
 
     def _read_popups(self, f: _File, page: str, raw: Any) -> list[Popup]:
         popups: list[Popup] = []
@@ -346,6 +393,12 @@ class _Reader:
             fields.pop("invalid", None)
         elif kind == "status":
             fields["unit"] = self._string(f, where + ("unit",), table.get("unit", ""))
+        elif kind == "lamp" and "meaning" in table:
+            meaning = table["meaning"]
+            if meaning not in ("error", "warning", "ok", "neutral"):
+                f.error(where + ("meaning",), "meaning must be \"error\", \"warning\", \"ok\" or \"neutral\"")
+                return None
+            fields["meaning"] = meaning
         elif kind == "dropdown":
             options = self._options(f, where + ("options",), table.get("options"), ty, var)
             if options is None:

@@ -25,7 +25,17 @@ def from_lockstep(transport) -> PoseSource:
 
 
 def from_tcp_server(server) -> PoseSource:
-    return PoseSource(server.snapshot, False, f"emulator on port {server.port}")
+    """The bundled TCP emulator's robot, its pose interpolated to the moment of reading (the
+    snapshot's own pose only moves on events, so sub-second moves would jump and an arc would be
+    drawn as a chord)."""
+    def read() -> dict[str, Any]:
+        snap = server.snapshot()
+        robot = getattr(getattr(server, "core", None), "robot", None)
+        if robot is not None and hasattr(robot, "pose_at"):
+            with server.lock:
+                snap["pose"] = robot.pose_at(server.now_ns())
+        return snap
+    return PoseSource(read, False, f"emulator on port {server.port}")
 
 
 def robot_state(snapshot: dict[str, Any] | None) -> dict[str, Any] | None:

@@ -29,9 +29,14 @@ class Refused(Exception):
 class Client:
     """One WebSocket: the paths of its page, what is waiting to be sent, its sender task."""
 
-    def __init__(self, websocket, page) -> None:
+    def __init__(self, websocket, page, client_id: str = "") -> None:
         self.websocket = websocket
         self.page = page
+        self.id = client_id[:64]
+        self.status: dict[str, Any] | None = None    # the VM's state, sent on change
+        self.alarms: dict[str, Any] | None = None
+        self.notices: list[str] = []
+        self._sent_state: tuple | None = None
         self.paths = page.base_paths
         self._path_set = set(self.paths)
         self.popup: str | None = None
@@ -76,9 +81,32 @@ class Client:
         if self.pending or self.robot_pending is not None:
             self.wake.set()
 
+    def offer_status(self, vm_state: dict[str, Any], alarms: dict[str, Any] | None, wake: bool = True) -> None:
+        """The VM's state (every heartbeat: the page notices a silent server), the alarms when
+        they changed."""
+        self.status = dict(vm_state)
+        if alarms is not None:
+            self.alarms = alarms
+        if wake:
+            self.wake.set()
+
+    def offer_notice(self, text: str) -> None:
+        if len(self.notices) < 20:
+            self.notices.append(text)
+        self.wake.set()
+
     def take(self) -> dict[str, Any]:
         message: dict[str, Any] = {"scan": self.scan, "t": round(self.now_ns / 1e9, 3), "values": self.pending}
         self.pending = {}
+        if self.status is not None:
+            message["vm"] = self.status
+            self.status = None
+        if self.alarms is not None:
+            message["alarms"] = self.alarms
+            self.alarms = None
+        if self.notices:
+            message["notices"] = self.notices
+            self.notices = []
         if self.robot_pending is not None:
             message["robot"] = dict(self.robot_pending, points=self.points,
                                     reset=self.reset_path)

@@ -12,6 +12,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from stvm.frontend import VariableBridge
+from stvm.frontend.limits import LimitTable
 from stvm.hmi import HmiServer, from_lockstep, load_pages
 from stvm.hmi.cli import page_files
 
@@ -52,6 +53,7 @@ def start_live_hmi(project, time_scale: float = 0.25, host: str = "127.0.0.1", t
     files, start = page_files(project)
     hmi = load_pages(files, bridge.type_of, start)
     kwargs = {"update_ns": update_ns} if update_ns else {}
+    kwargs["limit_table"] = LimitTable.for_project(project, vm)   # st_src/hmi/limits.toml
     server = HmiServer(hmi, bridge, host=host, port=0, token=token, pose=from_lockstep(transport),
                        run_parameters={"robot_host": LOCKSTEP_HOST, "robot_port": LOCKSTEP_PORT}, **kwargs)
     server.start()

@@ -80,9 +80,9 @@ def test_page_html_carries_the_contract(live):
     assert re.search(r'class="lamp" data-var="Lamp" data-state="off"', html)
     for action in ("set:Start=TRUE", "momentary:Hold", "set:Speed=50", "preset:Defaults", "page:Main", "popup:Axis-X"):
         assert f'data-action="{action}"' in html, action
-    assert 'min="10"' in html and 'max="100"' in html
+    assert 'data-min="10"' in html and 'data-max="100"' in html
     assert '<option value="Run">Run</option>' in html and '<option value="1">LEFTY</option>' in html
-    assert 'maxlength="10"' in html    # STRING[11] holds 10 bytes (Omron counts the NUL)
+    assert 'data-maxbytes="10"' in html    # STRING[11] holds 10 bytes (Omron counts the NUL)
     assert "data-robot-view" in html and 'id="popup-Axis-Y"' in html
     assert "http://" not in html.replace(live.base, "") and "https://" not in html   # no CDN
     assert live.http.get("/static/hmi.js").status_code == 200
@@ -141,8 +141,11 @@ def test_each_writing_widget_kind(live, values, expected):
     ({"Speed": "abc"}, 422, "Speed:"),
     ({"Speed": "-1"}, 422, "out of range"),
     ({"Pose": "2"}, 422, "not one of the choices 0, 1"),
-    ({"M": "Walk"}, 422, "M:"),
-    ({"Name": "'" + "x" * 11 + "'"}, 422, "longer than STRING[11]"),
+    ({"M": "Walk"}, 422, "'Walk' is not one of the choices (Idle, Run, Stop)"),
+    ({"Name": "'" + "x" * 11 + "'"}, 422, "text too long (11 characters; at most 10)"),
+    ({"Speed": "0x10"}, 422, "'0x10' is not a number"),
+    ({"Speed": "50,5"}, 422, "50.5 is not a whole number"),
+    ({"Gain": "1.2.3"}, 422, "is not a number"),
     ({"Target.X": "501"}, 422, "above the maximum 500"),
     ({"Lamp": "TRUE"}, 403, "not written by any HMI page"),   # shown, read-only
     ({"Secret": "1"}, 403, "not a variable any HMI page maps"),

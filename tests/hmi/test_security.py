@@ -6,6 +6,7 @@ limit and stderr); every attack is bounded in count and time and stays on loopba
 from __future__ import annotations
 
 import http.server
+import json
 import os
 import resource
 import signal
@@ -132,6 +133,18 @@ def test_idle_and_slow_connections_are_closed_after_the_header_timeout(served):
         sock.close()
     assert time.monotonic() - started < 4
     assert served.get().status_code == 200
+
+
+@pytest.mark.parametrize("served", [{"header_timeout_s": 1.0}], indirect=True)
+def test_a_websocket_outlives_the_header_timeout(served):
+    from websockets.sync.client import connect
+    with connect(f"ws://127.0.0.1:{served.port}/ws?page=Main") as ws:
+        deadline = time.monotonic() + 3.0      # three header timeouts
+        beats = 0
+        while time.monotonic() < deadline:
+            beats += "vm" in json.loads(ws.recv(timeout=2))   # the VM state comes every 0.5 s
+        assert beats >= 4
+    assert "Traceback" not in served.stderr
 
 
 @pytest.mark.parametrize("served", [{"max_connections": 20}], indirect=True)
