@@ -18,35 +18,14 @@ import signal
 import sys
 from pathlib import Path
 
-EXIT_OK, EXIT_COMPILE, EXIT_USAGE, EXIT_FAULT = 0, 1, 2, 3
-
-
-class UsageError(Exception):
-    """A bad command line; the message is printed as `stvm: error: message`, exit 2."""
-
-
-def print_diagnostics(diags, sources) -> None:
-    from stvm.diagnostics import render   # lazy: start-up
-    for d in diags:
-        sys.stderr.write(render(d, sources))
+from stvm.cli_support import (EXIT_COMPILE, EXIT_FAULT, EXIT_OK, EXIT_USAGE, UsageError,  # noqa: F401 (API)
+                              compile_errors, print_diagnostics, require_files, resolve_project)
 
 
 def run_settings(args):
-    """The Sysmac settings of the run: the manifest's `[sysmac]`, then `--sysmac`, then
-    `--dialect`, and the manifest's defines with `--define`'s (usage errors)."""
-    from stvm.project import project_settings   # lazy: start-up
-    try:
-        dialect = [f"dialect={vars(args)['dialect']}"] if vars(args).get("dialect") else []
-        settings = project_settings(args.files, (getattr(args, "sysmac", None) or []) + dialect)
-        return settings.with_defines(vars(args).get("define") or [])
-    except ValueError as exc:
-        raise UsageError(str(exc)) from exc
-
-
-def require_files(files) -> None:
-    for f in files:
-        if not Path(f).exists():
-            raise UsageError(f"no such file: {f}")
+    """The Sysmac settings of the command line's project: defaults, the manifest, then
+    `--sysmac`, `--dialect` and `--define` (usage errors); `resolve_project(args).settings`."""
+    return resolve_project(args).settings
 
 
 def parse_assignment(text: str) -> tuple[str, str]:
@@ -276,8 +255,7 @@ _DEMO_FLAGS = (("robot", "--robot"), ("emulator_log", "--emulator-log"), ("no_de
 def cmd_run(args) -> int:
     from stvm.project import LoadError, load, nothing_to_run, parse_duration   # lazy: start-up
     from stvm.runtime.vm import PathError, RuntimeFault, UnboundInOut   # lazy: start-up
-    require_files(args.files)
-    settings = run_settings(args)
+    spec = resolve_project(args)
     try:
         scan_ns = parse_duration(args.scan)
         duration_ns = parse_duration(args.duration) if args.duration else None
@@ -290,11 +268,9 @@ def cmd_run(args) -> int:
     if args.cycles is not None and args.cycles < 0:
         raise UsageError("--cycles must be >= 0")
     try:
-        project = load(args.files, settings, use_cache=not args.no_cache)
+        project = load(spec)
     except LoadError as exc:
-        print_diagnostics(exc.diagnostics, exc.sources)
-        print(f"{sum(d.is_error for d in exc.diagnostics)} error(s)", file=sys.stderr)
-        return EXIT_COMPILE
+        return compile_errors(exc.diagnostics, exc.sources)
     print_diagnostics(project.warnings, project.sources)
     if nothing_to_run(project):
         print(f"stvm: error: {nothing_to_run(project, args.files)}", file=sys.stderr)

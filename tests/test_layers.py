@@ -54,7 +54,7 @@ LAYERS: list[tuple[str, ...]] = [
     ("stvm.runtime",),                   # VM, clock, tasks, faults
     ("stvm.stdlib",),                    # IEC + Omron natives, sockets, ST sources
     ("stvm.cache", "stvm.manifest"),
-    ("stvm.project",),                   # the driver: load, check, lower, start
+    ("stvm.project", "stvm.cli_support"),   # the driver: load, check, lower, start; the commands' conventions
     ("stvm.lockstep", "stvm.scenario"),
     ("stvm.demo", "stvm.trace"),
     ("stvm.debug", "stvm.frontend", "stvm.hmi", "stvm.opcua", "stvm.lint"),

@@ -20,7 +20,7 @@ from typing import Any, Sequence
 from stvm.debug.build import DebugBuild, load_debug
 from stvm.debug.engine import Engine
 from stvm.semantics.literals import literal_value
-from stvm.project import parse_duration, project_settings
+from stvm.project import Options, parse_duration, resolve
 
 
 @dataclass
@@ -30,6 +30,8 @@ class SessionOptions:
     scenario: str | None = None
     sets: list[str] = field(default_factory=list)          # NAME=VALUE, as `stvm run --set`
     sysmac: list[str] = field(default_factory=list)        # NAME=VALUE Sysmac settings
+    dialect: str | None = None                            # over the manifest's [project] dialect
+    defines: list[str] = field(default_factory=list)       # NAME[=VALUE], beside the manifest's
     robot: str | None = None                              # lockstep | emulator | HOST:PORT | None
     realtime: bool = False
     max_scans: int | None = None
@@ -60,7 +62,8 @@ def open_session(options: SessionOptions, build: DebugBuild | None = None) -> Se
     """Load (unless `build` is given) and prepare a session; raises LoadError, ValueError (bad
     options) or ScenarioError. The engine is not started yet."""
     from stvm.scenario import Scenario, load_scenario   # lazy: start-up
-    settings = project_settings(options.files, list(options.sysmac))
+    spec = resolve(list(options.files), Options(sysmac=tuple(options.sysmac), dialect=options.dialect,
+                                                defines=tuple(options.defines)))
     scenario = load_scenario(options.scenario) if options.scenario else Scenario()
     scan_ns = parse_duration(options.scan or scenario.scan or "10ms")
     if scan_ns <= 0:
@@ -69,7 +72,7 @@ def open_session(options: SessionOptions, build: DebugBuild | None = None) -> Se
     if robot is None and (scenario.robot_address or scenario.robot_port):
         robot = "lockstep"
     if build is None:
-        build = load_debug(options.files, settings)
+        build = load_debug(spec)
     transport = None
     if robot == "lockstep":
         from stvm.lockstep import LockstepTransport   # lazy: start-up

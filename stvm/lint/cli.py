@@ -1,9 +1,13 @@
 """`stvm lint` and `stvm lsp`.
 
     stvm lint FILE|DIR... [--select CODES] [--ignore CODES] [--format text|json|sarif]
-              [--output F] [--sysmac NAME=VALUE]... [--no-cache]
+              [--output F] [--sysmac NAME=VALUE]... [--dialect D] [--define N]... [--no-cache]
     stvm lint --explain SAnnn|ALL
-    stvm lsp                     (language server on stdio: check + lint diagnostics)
+    stvm lsp [--sysmac NAME=VALUE]... [--dialect D] [--define N]...
+                                 (language server on stdio: check + lint diagnostics)
+
+Both lint a project with the settings `stvm check` gives it (its stvm.toml, then the options):
+the files are resolved by the project driver (stvm/project.py).
 
 Exit codes: 0 no findings, 1 findings (or compile errors), 2 usage error.
 """
@@ -12,9 +16,11 @@ from __future__ import annotations
 
 import sys
 from pathlib import Path
-from stvm.settings import DEFAULT_SETTINGS
 
-EXIT_CLEAN, EXIT_FINDINGS, EXIT_USAGE = 0, 1, 2
+from stvm.cli_support import (EXIT_COMPILE, EXIT_OK, EXIT_USAGE, UsageError, add_project_options,  # noqa: F401
+                              project_options, resolve_project, usage)
+
+EXIT_CLEAN, EXIT_FINDINGS = EXIT_OK, EXIT_COMPILE
 
 
 def register(subparsers) -> None:
@@ -32,33 +38,24 @@ def register(subparsers) -> None:
     lint.add_argument("--output", "-o", metavar="FILE", help="write the report to FILE instead of stdout")
     lint.add_argument("--explain", metavar="CODE", help="print a rule's rationale and examples (ALL: every rule)")
     lint.add_argument("--no-cache", action="store_true", help="do not use the parse cache")
-    lint.add_argument("--sysmac", action="append", metavar="NAME=VALUE", help="override a Sysmac UNCERTAIN setting")
+    add_project_options(lint)
     lint.set_defaults(func=cmd_lint)
     lsp = subparsers.add_parser("lsp", help="language server on stdio: check and lint diagnostics for editors")
-    lsp.add_argument("--sysmac", action="append", metavar="NAME=VALUE", help="override a Sysmac UNCERTAIN setting")
+    add_project_options(lsp)
     lsp.set_defaults(func=cmd_lsp)
 
 
-def _usage(message: str) -> int:
-    print(f"stvm: error: {message}", file=sys.stderr)
-    return EXIT_USAGE
-
-
-def _settings(args):
-    settings = DEFAULT_SETTINGS
-    dialect = _vendor_dialect(getattr(args, "files", None) or [])
-    if dialect is not None:   # TwinCAT / PLCopen XML sources: their vendor's names and types
-        settings = settings.with_overrides([f"dialect={dialect}"])
-    return settings.with_overrides(getattr(args, "sysmac", None) or [])
-
-
-def _vendor_dialect(files) -> str | None:
-    from stvm.project import expand_paths, vendor_dialect   # lazy: start-up
-    try:
-        expanded, _, _ = expand_paths(files)
-    except Exception:  # noqa: BLE001 - the lint run itself reports unusable paths
-        return None
-    return vendor_dialect(expanded)
+def _options(args):
+    """The driver's Options: each file is linted with its project's settings and these on top."""
+    options = project_options(args)
+    from stvm.settings import DEFAULT_SETTINGS   # lazy: start-up
+    try:   # a bad --sysmac, --dialect or --define is a usage error before any file is read
+        DEFAULT_SETTINGS.with_overrides(list(options.sysmac) + ([f"dialect={options.dialect}"]
+                                                                 if options.dialect else [])) \
+            .with_defines(list(options.defines))
+    except ValueError as exc:
+        raise UsageError(str(exc)) from exc
+    return options
 
 
 def cmd_lint(args) -> int:
@@ -71,23 +68,20 @@ def cmd_lint(args) -> int:
         try:
             chosen = select_rules([args.explain])
         except SelectionError as exc:
-            return _usage(str(exc))
+            return usage(str(exc))
         sys.stdout.write("\n".join(explain(r) for r in chosen))
         return EXIT_CLEAN
     if not args.files:
-        return _usage("lint needs FILE or DIR arguments (or --explain CODE)")
-    for f in args.files:
-        if not Path(f).exists():
-            return _usage(f"no such file: {f}")
+        return usage("lint needs FILE or DIR arguments (or --explain CODE)")
     try:
-        settings = _settings(args)
-    except ValueError as exc:
-        return _usage(str(exc))
+        spec = resolve_project(args)
+    except UsageError as exc:
+        return usage(str(exc))
     from stvm.lint.report import render_json, render_sarif, render_text   # lazy: start-up
     try:
-        report = lint(args.files, settings, select=args.select, ignore=args.ignore, use_cache=not args.no_cache)
+        report = lint(args.files, spec, select=args.select, ignore=args.ignore, use_cache=not args.no_cache)
     except (SelectionError, ConfigError) as exc:
-        return _usage(str(exc))
+        return usage(str(exc))
     if args.format == "json":
         text = render_json(report.findings, report.diagnostics, report.rules)
     elif args.format == "sarif":
@@ -98,7 +92,7 @@ def cmd_lint(args) -> int:
         try:
             Path(args.output).write_text(text, encoding="utf-8")
         except OSError as exc:
-            return _usage(f"cannot write {args.output}: {exc.strerror or exc}")
+            return usage(f"cannot write {args.output}: {exc.strerror or exc}")
     else:
         sys.stdout.write(text)
     errors = sum(d.is_error for d in report.diagnostics)
@@ -114,12 +108,12 @@ def cmd_lint(args) -> int:
 
 def cmd_lsp(args) -> int:
     try:
-        settings = _settings(args)
-    except ValueError as exc:
-        return _usage(str(exc))
+        settings = _options(args)   # resolved per file with its project (stvm.lint.lint)
+    except UsageError as exc:
+        return usage(str(exc))
     try:
         from stvm.lint.lsp import serve   # lazy: start-up
     except ImportError as exc:
-        return _usage(f"the language server needs pygls: pip install 'stvm[lsp]' ({exc})")
+        return usage(f"the language server needs pygls: pip install 'stvm[lsp]' ({exc})")
     serve(settings)
     return EXIT_CLEAN

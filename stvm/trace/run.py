@@ -39,6 +39,9 @@ class TraceSpec:
     use_cache: bool = True
     record_frames: bool = True
     record_tcp: bool = False                   # sample the robot's TCP (stvm trace -o path.svg)
+    # the driver's resolution of `files` (stvm.project.resolve); None: resolved from `files`
+    # and `settings_overrides`, as `stvm trace` does
+    resolved: object = None
 
 
 @dataclass
@@ -59,12 +62,13 @@ class Prepared:
 
     def __init__(self, spec: TraceSpec, project=None) -> None:
         from stvm.lockstep import LOCKSTEP_HOST, LOCKSTEP_PORT, LockstepTransport   # lazy: start-up
-        from stvm.project import load, project_settings   # lazy: start-up
+        from stvm.project import Options, load, resolve   # lazy: start-up
         from stvm.scenario import Scenario, ScenarioDriver, load_scenario   # lazy: start-up
         self.spec = spec
         if project is None:
-            settings = project_settings(list(spec.files), list(spec.settings_overrides))
-            project = load(list(spec.files), settings, use_cache=spec.use_cache)
+            resolved = spec.resolved or resolve(list(spec.files), Options(sysmac=tuple(spec.settings_overrides),
+                                                                           use_cache=spec.use_cache))
+            project = load(resolved)
         self.project = project
         self.scenario = load_scenario(spec.scenario) if spec.scenario else Scenario()
         scenario = self.scenario
