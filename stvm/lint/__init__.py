@@ -2,7 +2,7 @@
 engineer otherwise finds on the plant floor.
 
 Entry point: `lint(paths, settings, select, ignore) -> LintReport`. Each POU gets a control-flow
-graph (`cfg`), an interval/constant analysis across scans (`ranges`, on the solver in
+graph (`cfg`), an interval/constant analysis across scans (`intervals`, on the solver in
 `dataflow`) and, for step sequences, a typestate analysis of resources held between scans
 (`machines`). Rules (`rules/`) read those facts and the checker's types; the registry gives
 each a stable code (SAnnn), a summary, a rationale and an example (`stvm lint --explain`).
