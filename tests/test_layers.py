@@ -56,7 +56,7 @@ LAYERS: list[tuple[str, ...]] = [
     ("stvm.cache", "stvm.manifest"),
     ("stvm.project", "stvm.cli_support"),   # the driver: load, check, lower, start; the commands' conventions
     ("stvm.lockstep", "stvm.scenario"),
-    ("stvm.demo", "stvm.trace"),
+    ("stvm.demo", "stvm.trace", "stvm.session"),   # a run: VM, robot, scenario, front ends
     ("stvm.debug", "stvm.frontend", "stvm.hmi", "stvm.opcua", "stvm.lint"),
     # the commands: `stvm run` drives the demo, scenarios and every front end; `stvm` is the API
     ("stvm", "stvm.cli", "stvm.run", "stvm.__main__", "stvm.pytest_plugin"),
