@@ -28,7 +28,7 @@ stops (a bundled emulator's server, a demo's).
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Callable, Sequence
 
@@ -54,11 +54,16 @@ class Session:
                  start_vm: Callable[..., Any] | None = None, close_vm: Callable[[], None] | None = None) -> None:
         """`start_vm(scan_ns=, realtime=, transport=)` makes the VM (default: `project.start`; the
         debugger's engine makes its own); `close_vm` ends it (default: `vm.close`)."""
-        from stvm.scenario import Scenario, ScenarioDriver, load_scenario   # lazy: start-up
         from stvm.project import parse_duration   # lazy: start-up
         self.project = project
         self.config = config = config or SessionConfig()
-        self.scenario = load_scenario(config.scenario) if config.scenario else Scenario()
+        self.scenario = _NO_SCENARIO
+        if config.scenario:
+            from stvm.scenario import load_scenario   # lazy: start-up (scenario and emulator)
+            self.scenario = load_scenario(config.scenario)
+        elif config.robot not in (None, "none"):
+            from stvm.scenario import Scenario   # lazy: start-up
+            self.scenario = Scenario()
         scan = config.scan if config.scan is not None else (self.scenario.scan or config.default_scan)
         self.scan_ns = parse_duration(scan) if isinstance(scan, str) else int(scan)
         if self.scan_ns <= 0:
@@ -75,7 +80,6 @@ class Session:
         self.events: list[tuple[int, str]] = []
         self.vm = None
         self._close_vm = close_vm
-        self._wired = False
         try:
             fault_sink = self._start_robot()
             start = start_vm or (lambda **kw: project.start(scan=kw["scan_ns"], realtime=kw["realtime"],
@@ -83,7 +87,10 @@ class Session:
             self.vm = start(scan_ns=self.scan_ns, realtime=config.realtime, transport=self.transport)
             on_event = (lambda event, scan: self.events.append((scan, event.describe()))) \
                 if config.record_events else None
-            self.driver = ScenarioDriver(self.scenario, self.vm, fault_sink, on_event=on_event)
+            self.driver = None          # a run without scenario and robot never loads their code
+            if self.scenario is not _NO_SCENARIO:
+                from stvm.scenario import ScenarioDriver   # lazy: start-up
+                self.driver = ScenarioDriver(self.scenario, self.vm, fault_sink, on_event=on_event)
         except BaseException:
             self.close()
             raise
@@ -119,7 +126,8 @@ class Session:
         vm = self.vm
         if sampler is not None:
             vm.on_scan_end.append(sampler)
-        vm.on_scan_end.append(self.driver.after_scan)
+        if self.driver is not None and self.scenario.events:   # without events: nothing to do between scans
+            vm.on_scan_end.append(self.driver.after_scan)
         if self.transport is not None:
             self.transport.attach(vm)   # appends the emulator step last
         overrides: dict[str, Any] = {}
@@ -128,8 +136,8 @@ class Session:
                 overrides[self.scenario.robot_address] = f"'{self.address[0]}'"
             if self.scenario.robot_port:
                 overrides[self.scenario.robot_port] = self.address[1]
-        self.driver.apply_initial(overrides)
-        self._wired = True
+        if self.driver is not None:
+            self.driver.apply_initial(overrides)
 
     def add_front_end(self, front_end) -> None:
         """A server on the VM (`stop()`): stopped before the VM closes."""
@@ -162,6 +170,17 @@ class Session:
         self._close_vm = lambda: None   # closed once
         if failure is not None:
             raise failure
+
+
+class _NoScenario:
+    """What a session without a scenario file reads of one (stvm.scenario.Scenario's defaults)."""
+    events: tuple = ()
+    initial: dict = {}
+    watch: tuple = ()
+    robot_address = robot_port = scan = cycles = latency_scans = latency_ns = None
+
+
+_NO_SCENARIO = _NoScenario()
 
 
 def _parse_robot(text: str) -> tuple[str, int]:

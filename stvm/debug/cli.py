@@ -118,7 +118,7 @@ def _start_hmi(address: str, session):
         return start_hmi(session.build.project, session.engine.vm, address, pose=pose,
                          run_parameters=parameters, stream=sys.stdout)
     except HmiLoadError as exc:
-        report_loaderror(exc)
+        report_load_error(exc)
         return None
 
 
