@@ -5,7 +5,9 @@ Each diagnostic carries `source` "stvm" (checker) or "stvm-lint", the rule code,
 findings `codeDescription.href` = the rule's page (docs/lint.md#saNNN next to the project, or
 the `stvm-rule:` URI the VS Code extension resolves with `stvm lint --explain`). The file is
 linted together with its project (the folder's stvm.toml, as `stvm lint FILE`), so names from
-other files resolve; the editor's unsaved text replaces the file's content.
+other files resolve; the editor's unsaved text replaces the file's content. The project's
+settings are `stvm check`'s (its stvm.toml, then `stvm lsp --sysmac/--dialect/--define`, then the
+client's `initializationOptions`: {"dialect": "codesys", "defines": ["SIM"], "sysmac": ["NAME=VALUE"]}).
 """
 
 from __future__ import annotations
@@ -72,16 +74,46 @@ def diagnostics_for(path: Path, text: str | None, settings) -> dict[str, list[ls
     return out
 
 
+def with_initialization_options(settings, given):
+    """`settings` (the driver's Options) with the client's initializationOptions on top:
+    `dialect`, `defines` and `sysmac`; raises ValueError naming a bad one."""
+    from dataclasses import replace   # lazy: start-up
+    from stvm.cli_support import DIALECTS   # lazy: start-up
+    from stvm.project import Options   # lazy: start-up
+    if not given:
+        return settings
+    if not isinstance(given, dict) or not isinstance(settings, Options):
+        raise ValueError("initializationOptions must be an object of dialect, defines, sysmac")
+    dialect = given.get("dialect", settings.dialect)
+    if dialect is not None and dialect not in DIALECTS:
+        raise ValueError(f"initializationOptions dialect must be one of {', '.join(DIALECTS)}, got {dialect!r}")
+    lists = {}
+    for key in ("defines", "sysmac"):
+        value = given.get(key, [])
+        if not isinstance(value, list) or not all(isinstance(v, str) for v in value):
+            raise ValueError(f"initializationOptions {key} must be a list of strings")
+        lists[key] = getattr(settings, key) + tuple(value)
+    return replace(settings, dialect=dialect, **lists)
+
+
 def build_server(settings) -> LanguageServer:
     server = LanguageServer("stvm", __version__, text_document_sync_kind=lsp.TextDocumentSyncKind.Full)
     published: set[str] = set()
+    current = [settings]   # what every file is linted with, once the client has initialised
+
+    @server.feature(lsp.INITIALIZE)
+    def initialize(ls: LanguageServer, params: lsp.InitializeParams) -> None:
+        try:
+            current[0] = with_initialization_options(settings, params.initialization_options)
+        except ValueError as exc:
+            ls.window_log_message(lsp.LogMessageParams(lsp.MessageType.Error, f"stvm: {exc}"))
 
     def refresh(uri: str, text: str | None) -> None:
         path = _path_of(uri)
         if path is None or path.suffix.lower() != ".st":
             return
         try:
-            by_uri = diagnostics_for(path, text, settings)
+            by_uri = diagnostics_for(path, text, current[0])
         except Exception as exc:  # a bug in stvm must not kill the editor session
             server.window_log_message(lsp.LogMessageParams(lsp.MessageType.Error, f"stvm lint failed: {exc!r}"))
             return

@@ -176,3 +176,24 @@ def test_a_dap_launch_takes_a_dialect(project):
             client.body("launch", program=str(project / "Main.st"), dialect="sysmac")
     finally:
         client.close()
+
+
+@pytest.mark.parametrize("init, errors", [({}, []), ({"dialect": "sysmac"}, ["name 'count_' may not end with '_'"])])
+def test_the_language_server_honours_the_manifest_and_its_initialization_options(project, init, errors):
+    """`stvm lsp` as an editor starts it: the manifest's dialect and defines, and the client's
+    initializationOptions over them."""
+    pytest.importorskip("pygls")
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "lint"))
+    from test_lint_lsp import Client
+    client = Client()
+    try:
+        client.request("initialize", {"processId": None, "rootUri": None, "capabilities": {},
+                                      "initializationOptions": init})
+        client.notify("initialized", {})
+        uri = (project / "Main.st").resolve().as_uri()
+        client.notify("textDocument/didOpen", {"textDocument": {"uri": uri, "languageId": "structured-text",
+                                                                "version": 1, "text": MAIN}})
+        found = [d["message"] for d in client.diagnostics(uri) if d["source"] == "stvm"]
+    finally:
+        client.close()
+    assert found == errors
