@@ -644,9 +644,8 @@ def compile_stage(checked: Checked, options: "LowerOptions | None" = None) -> Co
     debugger's build differs from the normal one); such a build is never cached."""
     if checked.analysis is None:
         raise LoadError(checked.diagnostics, checked.sources)
-    from stvm.lower.options import DEFAULT_OPTIONS   # lazy: start-up
     lowered, code = _lower_and_compile(checked.analysis, checked.spec.settings, checked.parsed.texts,
-                                       checked.sources, options or DEFAULT_OPTIONS)
+                                       checked.sources, options)
     return Compiled(checked, lowered, code)
 
 
@@ -667,14 +666,13 @@ def _lower_and_compile_unpaused(analysis, settings, texts, sources, options=None
     fallback = Span(texts[-1][0] if texts else "<input>", 1, 1, 1, 2)
     lowered = None
     try:
-        if options is None:
-            from stvm.lower.options import DEFAULT_OPTIONS   # lazy: start-up
-            options = DEFAULT_OPTIONS
+        # the lowering's own default options unless a build asks for others (the debugger's)
+        extra = {} if options is None else {"options": options}
         if isinstance(analysis, list):
-            lowered = lower_project(analysis[0], settings, options)
+            lowered = lower_project(analysis[0], settings, **extra)
             analysis.clear()
         else:
-            lowered = lower_project(analysis, settings, options)
+            lowered = lower_project(analysis, settings, **extra)
         del analysis
         code = compile_module(lowered.source, GENERATED_FILENAME)
     except RecursionError:
