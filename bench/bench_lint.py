@@ -23,7 +23,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from stvm.lint import lint_analysis, select_rules  # noqa: E402
-from stvm.lint.loader import load_for_lint  # noqa: E402
+from stvm.project import check_project as load_for_lint  # noqa: E402 (the driver's parse + check)
 from stvm.settings import DEFAULT_SETTINGS  # noqa: E402
 
 FB_TEMPLATE = """
@@ -116,16 +116,14 @@ def measure(paths, runs: int) -> dict:
         t0 = time.process_time()
         loaded = load_for_lint(paths, settings)
         t1 = time.process_time()
-        findings = lint_analysis(loaded.analysis, settings, rules, files=set(loaded.files))
+        findings = lint_analysis(loaded.analysis, settings, rules, files=set(loaded.parsed.files))
         t2 = time.process_time()
         from stvm.semantics import analyze
         units = []
-        from stvm.lint.loader import parse_cached
-        from stvm.stdlib import stdlib_sources
-        for name, text in stdlib_sources(settings):
-            units.append(parse_cached(text, name, settings)[0])
-        for f in loaded.files:
-            units.append(parse_cached(loaded.sources[f], f, settings)[0])
+        from stvm.project import parse_unit, stdlib_units
+        units += stdlib_units(settings)[0]
+        for f in loaded.parsed.files:
+            units.append(parse_unit(f, loaded.sources[f], settings)[0])
         t3 = time.process_time()
         analyze(units, settings)
         t4 = time.process_time()

@@ -39,10 +39,10 @@ def open_fds(pid: int | str = "self") -> int:
 
 
 def lockstep_soak(scans: int) -> None:
-    from stvm.trace.run import TraceSpec, Prepared   # the run_trace wiring, without a recorder
+    from stvm.trace.run import TraceSpec, trace_session   # the run_trace wiring, without a recorder
     spec = TraceSpec([ROOT / "st_src" / "PnP_Example.st"], scenario=ROOT / "st_src" / "scenarios" / "pnp_demo.toml",
                      scan="1ms")
-    prepared = Prepared(spec)
+    prepared = trace_session(spec)
     prepared.wire()
     vm = prepared.vm
     step = prepared.project.manifest["demo"]["step_variable"]

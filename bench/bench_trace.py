@@ -34,7 +34,7 @@ sys.path.insert(0, str(ROOT / "bench"))
 
 from stvm.project import load  # noqa: E402
 from stvm.trace import Recorder, TraceSpec, run_trace, select_signals, write_trace  # noqa: E402
-from stvm.trace.run import Prepared  # noqa: E402
+from stvm.trace.run import trace_session  # noqa: E402
 
 SCENARIO = ROOT / "st_src" / "scenarios" / "golden_pnp_cycle.toml"
 FILES = [ROOT / "st_src" / "PnP_Example.st"]
@@ -65,7 +65,7 @@ def determinism(runs: int, project) -> tuple[int, float]:
 
 def timed_run(project, watch: list[str] | None, cycles: int) -> tuple[float, float, int, float]:
     """(loop seconds, seconds inside the sampling hook, signals, program ns per scan)."""
-    prepared = Prepared(TraceSpec(FILES, scenario=SCENARIO, cycles=cycles), project)
+    prepared = trace_session(TraceSpec(FILES, scenario=SCENARIO, cycles=cycles), project)
     vm = prepared.vm
     hook_time = [0.0]
     count = 0
@@ -95,7 +95,7 @@ def timed_run(project, watch: list[str] | None, cycles: int) -> tuple[float, flo
 def sample_costs(project) -> tuple[float, float, int]:
     """Microseconds per `Recorder.sample` when nothing changed and when a value changed
     (tight loops on the state after 100 scans: less noisy than whole runs)."""
-    prepared = Prepared(TraceSpec(FILES, scenario=SCENARIO, cycles=100), project)
+    prepared = trace_session(TraceSpec(FILES, scenario=SCENARIO, cycles=100), project)
     prepared.wire()
     vm = prepared.vm
     vm.run(cycles=100)
@@ -152,7 +152,7 @@ def scan_time(project, repeat: int, cycles: int, warm: int = 1000) -> None:
     from stvm.runtime.vm import timing_us
     rows = []
     for _ in range(repeat):
-        prepared = Prepared(TraceSpec(FILES, scenario=SCENARIO, cycles=cycles + warm), project)
+        prepared = trace_session(TraceSpec(FILES, scenario=SCENARIO, cycles=cycles + warm), project)
         prepared.wire()
         vm = prepared.vm
         vm.run(cycles=warm)               # connected and commanding before anything is timed
@@ -206,7 +206,7 @@ def lockstep_st(cycles: int, paced: bool, warm: int = 1000) -> float:
     from stvm.runtime.stats import TimingStats
     from stvm.runtime.vm import timing_us
     project = load(FILES)
-    prepared = Prepared(TraceSpec(FILES, scenario=SCENARIO, cycles=cycles + warm), project)
+    prepared = trace_session(TraceSpec(FILES, scenario=SCENARIO, cycles=cycles + warm), project)
     prepared.wire()
     vm = prepared.vm
     vm.run(cycles=warm)

@@ -26,7 +26,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from stvm.lint import lint, lint_analysis, select_rules  # noqa: E402
-from stvm.lint.loader import load_for_lint  # noqa: E402
+from stvm.project import check_project as load_for_lint  # noqa: E402 (the driver's parse + check)
 from stvm.settings import DEFAULT_SETTINGS  # noqa: E402
 
 SUITES = ("syntax", "semantics", "lower", "runtime", "stdlib", "cli", "debug", "trace", "frontend")

@@ -13,8 +13,9 @@ import os
 import sys
 import warnings
 
-from stvm.run import (EXIT_COMPILE, EXIT_FAULT, EXIT_OK, EXIT_USAGE, UsageError,  # noqa: F401 (API)
-                      cmd_run, demo_cycles_flag, print_diagnostics, require_files, run_settings)
+from stvm.cli_support import (EXIT_COMPILE, EXIT_FAULT, EXIT_INTERNAL, EXIT_INTERRUPTED, EXIT_OK,  # noqa: F401 (API)
+                              EXIT_USAGE, UsageError, add_project_options, print_diagnostics, resolve_project)
+from stvm.run import cmd_run, demo_cycles_flag, run_settings  # noqa: F401 (API)
 from stvm.version import __version__
 
 
@@ -27,8 +28,7 @@ class _Parser(argparse.ArgumentParser):
 
 def cmd_check(args) -> int:
     from stvm.project import check   # lazy: start-up
-    require_files(args.files)
-    analysis, diags, sources = check(args.files, run_settings(args), generate=True)
+    analysis, diags, sources = check(resolve_project(args), generate=True)
     print_diagnostics(diags, sources)
     errors = sum(d.is_error for d in diags)
     if errors:
@@ -54,17 +54,9 @@ def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(prog="stvm", description="Structured Text virtual machine")
     parser.add_argument("--version", action="version", version="stvm " + __version__)
     sub = parser.add_subparsers(dest="command", parser_class=_Parser)
-    sysmac_help = "override a Sysmac UNCERTAIN setting, NAME=VALUE (see README)"
-    dialects = ["iec", "sysmac", "codesys", "twincat"]
-    dialect_help = "vendor dialect: name rules and vendor types (default: stvm.toml's, else sysmac)"
-    define_help = ("define NAME for conditional compilation ({IF defined(NAME)}, {IF hasvalue(NAME, 'VALUE')}), "
-                   "beside stvm.toml's [project] defines")
-
     check = sub.add_parser("check", help="check ST files and print diagnostics")
     check.add_argument("files", nargs="+")
-    check.add_argument("--sysmac", action="append", metavar="NAME=VALUE", help=sysmac_help)
-    check.add_argument("--dialect", choices=dialects, help=dialect_help)
-    check.add_argument("--define", action="append", metavar="NAME[=VALUE]", help=define_help)
+    add_project_options(check)
     check.set_defaults(func=cmd_check)
 
     run = sub.add_parser("run", help="run ST programs on the VM")
@@ -96,9 +88,7 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--hmi", metavar="[HOST:]PORT",
                      help="serve the project's HMI pages (stvm.toml [hmi], docs/hmi.md) while the VM runs; "
                           "host 127.0.0.1 unless given, any other host needs the token printed at start-up")
-    run.add_argument("--sysmac", action="append", metavar="NAME=VALUE", help=sysmac_help)
-    run.add_argument("--dialect", choices=dialects, help=dialect_help)
-    run.add_argument("--define", action="append", metavar="NAME[=VALUE]", help=define_help)
+    add_project_options(run)
     run.set_defaults(func=cmd_run)
     _register_extensions(sub)
     return parser
@@ -117,16 +107,13 @@ def _register_extensions(sub) -> None:
         module.register(sub)
 
 
-EXIT_INTERNAL = 70   # EX_SOFTWARE: a bug in stvm, never the user's input
-
-
 def main(argv: list[str] | None = None) -> int:
     try:
         return _main(argv)
     except KeyboardInterrupt:
         # Ctrl-C before the run started (imports, loading): nothing ran, nothing to print
         print("stvm: interrupted", file=sys.stderr)
-        return 130
+        return EXIT_INTERRUPTED
 
 
 def program() -> int:
@@ -195,7 +182,7 @@ def _main(argv: list[str] | None) -> int:
     except KeyboardInterrupt:
         # Ctrl-C before the run started (while loading): nothing ran, nothing to print
         print("stvm: interrupted", file=sys.stderr)
-        return 130
+        return EXIT_INTERRUPTED
     except MemoryError:
         print("stvm: error: out of memory", file=sys.stderr)
         return EXIT_COMPILE

@@ -26,6 +26,7 @@ from stvm.source import SourceError, Span, read_source
 if TYPE_CHECKING:
     from stvm.cache import SignedCache
     from stvm.lower import LoweredProject
+    from stvm.lower.options import LowerOptions
     from stvm.runtime.vm import VM
     from stvm.semantics.model import ProjectModel
 
@@ -92,13 +93,16 @@ _DURATION_UNITS = {"ns": 1, "us": 1_000, "ms": 1_000_000, "s": 1_000_000_000}
 
 
 def expand_paths(paths: Sequence[str | Path]) -> tuple[list[Path], dict, Path | None]:
-    """Files to load. A folder means the files its `stvm.toml` lists, else its *.st files; a lone
-    file in a folder with `stvm.toml` means the project that manifest describes (so `stvm run
-    st_src/PnP_Example.st` loads the whole thesis project). Raises ManifestError for a manifest
-    that cannot be used and LoadError when there is nothing to load (a folder without .st files)."""
+    """Files to load. A folder means the files its `stvm.toml` lists, else its *.st files; files
+    of a folder with `stvm.toml` (one or several, all in that folder) mean the project that
+    manifest describes (so `stvm run st_src/PnP_Example.st` loads the whole thesis project, and
+    `stvm check st_src/A.st st_src/B.st` checks them with it). Raises ManifestError for a
+    manifest that cannot be used and LoadError when there is nothing to load (a folder without
+    .st files)."""
     out: list[Path] = []
     manifest: dict = {}
     root: Path | None = None
+    given_files: list[Path] = []
     for raw in paths:
         path = Path(raw)
         if path.is_dir():
@@ -122,12 +126,14 @@ def expand_paths(paths: Sequence[str | Path]) -> tuple[list[Path], dict, Path | 
             out += items
         else:
             out.append(path)
-    if len(paths) == 1 and not Path(paths[0]).is_dir():
-        folder = Path(paths[0]).parent
-        if (folder / MANIFEST).exists():
-            manifest, root = read_manifest(folder / MANIFEST), folder
-            files = project_files(manifest, folder, folder / MANIFEST) or sorted(folder.glob("*.st"))
-            out = files if Path(paths[0]).resolve() in {f.resolve() for f in files} else files + out
+            given_files.append(path)
+    folder = _manifest_folder(given_files) if given_files and len(given_files) == len(paths) else None
+    if folder is not None:
+        manifest, root = read_manifest(folder / MANIFEST), folder
+        files = project_files(manifest, folder, folder / MANIFEST) or sorted(folder.glob("*.st"))
+        # the manifest's files in its order, then any file given that it does not list
+        listed = {f.resolve() for f in files}
+        out = files + [p for p in out if p.resolve() not in listed]
     seen: set[Path] = set()
     unique = []
     for p in out:
@@ -136,6 +142,15 @@ def expand_paths(paths: Sequence[str | Path]) -> tuple[list[Path], dict, Path | 
             seen.add(key)
             unique.append(p)
     return unique, manifest, root
+
+
+def _manifest_folder(files: Sequence[Path]) -> Path | None:
+    """The folder whose `stvm.toml` the given files belong to: all in one folder that has one."""
+    folders = {f.resolve().parent for f in files}
+    if len(folders) != 1:
+        return None
+    folder = Path(files[0]).parent
+    return folder if (folder / MANIFEST).exists() else None
 
 
 def _vendor_sources(folder: Path) -> list[Path]:
@@ -183,12 +198,74 @@ def vendor_dialect(files: Sequence[Path]) -> str | None:
     return None
 
 
-def project_settings(paths: Sequence[str | Path], overrides: Sequence[str] = ()) -> SysmacSettings:
-    """The Sysmac settings of a run on `paths`: the spec's defaults, then the `[sysmac]` table of
-    the project's `stvm.toml` (when the files belong to one), then `--sysmac NAME=VALUE`
-    overrides; the last one wins. Raises ValueError (SettingError, ManifestError) that names
-    the setting, the file and the allowed values."""
+@dataclass(frozen=True)
+class Options:
+    """What a command line (or an editor, a launch request, a caller) asks of a project on top
+    of its manifest: `--sysmac NAME=VALUE`, `--dialect`, `--define`, the cache policy, and the
+    libraries to load beside it (`--library NAME=DIR`, see `ProjectSpec.libraries`)."""
+
+    sysmac: tuple[str, ...] = ()
+    dialect: str | None = None
+    defines: tuple[str, ...] = ()
+    libraries: tuple[tuple[str, str], ...] = ()
+    use_cache: bool = True
+
+
+@dataclass(frozen=True, eq=False)
+class ProjectSpec:
+    """Everything a command knows about a project before reading a source: which files, which
+    manifest, which settings. The one answer `resolve` gives every command (check, run, trace,
+    debug, dap, lint, lsp and the Python API), so they cannot disagree about a project."""
+
+    paths: tuple[Path, ...]                 # as given on the command line
+    files: tuple[Path, ...]                 # the project's sources, in load order
+    manifest: dict                          # the checked `stvm.toml` ({} without one)
+    root: Path | None                       # the manifest's folder
+    settings: SysmacSettings                # defaults < manifest < command line
+    encoding: str = "utf-8"                 # `[project] encoding`
+    # (name, folder) of each library loaded beside the project; their sources are added in
+    # `library_files` (the one place a library reaches the pipeline)
+    libraries: tuple[tuple[str, Path], ...] = ()
+    use_cache: bool = True
+
+    @property
+    def dialect(self) -> str:
+        return getattr(self.settings.dialect, "value", str(self.settings.dialect))
+
+    @property
+    def sources_to_read(self) -> tuple[Path, ...]:
+        """The libraries' files, then the project's."""
+        return tuple(library_files(self)) + self.files
+
+
+def resolve(paths: Sequence[str | Path], options: Options | None = None,
+            settings: SysmacSettings | None = None) -> ProjectSpec:
+    """The project `paths` name (files, a folder, files of a folder with `stvm.toml`): its
+    files, manifest and settings. `settings` given: used as they are (an API caller's choice);
+    else the defaults, then the manifest (`[project] dialect`, `[sysmac]`, `[project] defines`),
+    then `options` (`--sysmac`, `--dialect`, `--define`). Raises ValueError (ManifestError,
+    SettingError) naming the file, the setting and what is allowed; LoadError when there is
+    nothing to load."""
+    options = options or Options()
     files, manifest, root = expand_paths(paths)
+    if settings is None:
+        settings = _manifest_settings(files, manifest, root)
+        overrides = list(options.sysmac) + ([f"dialect={options.dialect}"] if options.dialect else [])
+        settings = settings.with_overrides(overrides)
+        if options.defines:
+            settings = settings.with_defines(list(options.defines))
+    libraries = tuple((name, Path(folder)) for name, folder in options.libraries)
+    return ProjectSpec(tuple(Path(p) for p in paths), tuple(files), manifest, root, settings,
+                       source_encoding(manifest), libraries, options.use_cache)
+
+
+def library_files(spec: ProjectSpec) -> list[Path]:
+    """The sources of the libraries `spec` loads, ahead of the project's own (none yet: library
+    loading, `--library NAME=DIR` and `[libraries]`, plugs in here)."""
+    return []
+
+
+def _manifest_settings(files: Sequence[Path], manifest: dict, root: Path | None) -> SysmacSettings:
     settings = DEFAULT_SETTINGS
     dialect = manifest.get("project", {}).get("dialect")
     if dialect is None:
@@ -204,7 +281,21 @@ def project_settings(paths: Sequence[str | Path], overrides: Sequence[str] = ())
     defines = manifest.get("project", {}).get("defines")
     if defines:
         settings = settings.with_defines(defines, f"{Path(root or '.') / MANIFEST}: [project] defines")
-    return settings.with_overrides(list(overrides))
+    return settings
+
+
+def project_settings(paths: Sequence[str | Path], overrides: Sequence[str] = ()) -> SysmacSettings:
+    """The Sysmac settings of a run on `paths`: the spec's defaults, then the `[sysmac]` table of
+    the project's `stvm.toml` (when the files belong to one), then `--sysmac NAME=VALUE`
+    overrides; the last one wins (`resolve(paths).settings`, kept for the API)."""
+    return resolve(paths, Options(sysmac=tuple(overrides))).settings
+
+
+def _spec(paths, settings, use_cache: bool = True) -> ProjectSpec:
+    """`paths` may already be a resolved spec (what the commands pass)."""
+    if isinstance(paths, ProjectSpec):
+        return paths if settings is None else replace(paths, settings=settings)
+    return resolve(paths, Options(use_cache=use_cache), settings)
 
 
 def _stdlib(settings: SysmacSettings = DEFAULT_SETTINGS) -> list[tuple[str, str]]:
@@ -263,12 +354,17 @@ def _cache_key(texts: list[tuple[str, str]], settings: SysmacSettings, kind: str
     return digest.hexdigest()
 
 
-def read_files(paths: Sequence[Path], encoding: str = "utf-8") -> tuple[list[tuple[str, str]], list[Diagnostic]]:
+def read_files(paths: Sequence[Path], encoding: str = "utf-8",
+               overrides: dict[str, str] | None = None) -> tuple[list[tuple[str, str]], list[Diagnostic]]:
     """(name, text) of each file, and a diagnostic for each file that cannot be used (its text
-    is then empty or decoded with replacement characters, so a binary file is never parsed)."""
+    is then empty or decoded with replacement characters, so a binary file is never parsed).
+    `overrides` replaces the text of the files it names (an editor's unsaved buffer)."""
     texts = []
     diags = []
     for path in paths:
+        if overrides is not None and str(path) in overrides:
+            texts.append((str(path), overrides[str(path)]))
+            continue
         try:
             texts.append((str(path), read_source_text(path, encoding)))
         except SourceError as exc:
@@ -285,7 +381,7 @@ def read_files(paths: Sequence[Path], encoding: str = "utf-8") -> tuple[list[tup
     return texts, diags
 
 
-def check(paths: Sequence[str | Path], settings: SysmacSettings | None = None, generate: bool = False,
+def check(paths: "Sequence[str | Path] | ProjectSpec", settings: SysmacSettings | None = None, generate: bool = False,
           use_cache: bool = True):
     """Parse and check: (analysis or None, diagnostics sorted, sources). With `generate`, also
     lower and compile, so limits that only code generation meets are reported too. Without
@@ -294,10 +390,9 @@ def check(paths: Sequence[str | Path], settings: SysmacSettings | None = None, g
     The verdict (the diagnostics) of a project is cached by content hash (stvm's version and
     code, the settings, every file's name and text): an unchanged project skips parsing,
     checking and lowering. The analysis is then computed only if the caller reads it."""
-    if settings is None:
-        settings = project_settings(paths)
-    files, manifest, _ = expand_paths(paths)
-    texts, diags = read_files(files, source_encoding(manifest))
+    spec = _spec(paths, settings, use_cache)
+    settings, use_cache = spec.settings, use_cache and spec.use_cache
+    texts, diags = read_files(spec.sources_to_read, spec.encoding)
     cache_name = f"check-{_cache_key(texts, settings, 'check+generate' if generate else 'check')}.diag"
     cacheable = use_cache and not diags      # an unreadable file is reported afresh every time
     if cacheable:
@@ -435,34 +530,131 @@ def _check_texts(texts, diags, settings, use_cache: bool = True, unit_entries: b
 
 
 def _check_texts_unpaused(texts, diags, settings, use_cache: bool = True, unit_entries: bool = True):
-    from stvm.semantics import analyze   # lazy: start-up
-    from stvm.stdlib import NATIVE_FUNCTIONS   # lazy: start-up
+    units, diags, sources = _parse_units(texts, diags, settings, use_cache, unit_entries)
+    analysis, _, diags = _analyze(units, diags, settings)
+    return analysis, diags, sources
+
+
+def _parse_units(texts, diags, settings, use_cache: bool = True, unit_entries: bool = True):
+    """(units: the stdlib's then the files', diagnostics, sources: stdlib included)."""
     sources = source_texts(texts)
     units, stdlib_diags, stdlib_sources = stdlib_units(settings)
     units = list(units)
-    diags += stdlib_diags
+    diags = list(diags) + stdlib_diags
     sources.update(stdlib_sources)
     for name, text in texts:
         unit, d = parse_unit(name, text, settings, use_cache, unit_entries)
         units.append(unit)
         diags += d
-    analysis = None
+    return units, diags, sources
+
+
+def _analyze(units, diags, settings):
+    """(analysis or None, the checker, diagnostics sorted): the checker runs when parsing found
+    no error; the analysis is None when anything has an error."""
+    from stvm.semantics.checker import Checker   # lazy: start-up
+    from stvm.stdlib import NATIVE_FUNCTIONS   # lazy: start-up
+    diags = list(diags)
+    analysis = checker = None
     if not has_errors(diags):
         try:
-            analysis = analyze(units, settings, NATIVE_FUNCTIONS)
+            checker = Checker(units, settings, NATIVE_FUNCTIONS)
+            analysis = checker.run()
             diags += analysis.diagnostics
         except RecursionError:
             diags.append(_too_deep(units[-1].path if units else "<input>"))
     diags.sort(key=sort_key)
-    return (None if has_errors(diags) else analysis), diags, sources
+    return (None if has_errors(diags) else analysis), checker, diags
 
 
-def _lower_and_compile(analysis, settings, texts, sources):
+# ---------------------------------------------------------------- the stages, one by one
+#
+# What `load` and `check` do in one call (with their caches), as typed steps for the commands
+# that need a step's product: lint reads the checked tree, the debugger the checker and a build
+# lowered with other options. Every step starts from a `ProjectSpec` (`resolve`).
+
+@dataclass
+class Parsed:
+    spec: ProjectSpec
+    texts: list[tuple[str, str]]     # (name, text) of each user file, libraries first
+    units: list                      # the stdlib's syntax trees, then the files'
+    diagnostics: list[Diagnostic]    # reading and parsing
+    sources: dict[str, str]          # what excerpts show: every file and the stdlib
+
+    @property
+    def files(self) -> list[str]:
+        return [name for name, _ in self.texts]
+
+
+@dataclass
+class Checked:
+    parsed: Parsed
+    analysis: object | None          # semantics.Analysis; None when anything has an error
+    checker: object | None           # the Checker whose index types expressions (the debugger's)
+    diagnostics: list[Diagnostic]    # reading, parsing and checking, sorted
+
+    @property
+    def spec(self) -> ProjectSpec:
+        return self.parsed.spec
+
+    @property
+    def sources(self) -> dict[str, str]:
+        return self.parsed.sources
+
+
+@dataclass
+class Compiled:
+    checked: Checked
+    lowered: "LoweredProject"
+    code: tuple
+
+    def project(self) -> Project:
+        spec = self.checked.spec
+        model = self.checked.analysis.model
+        warnings = [d for d in self.checked.diagnostics if not d.is_error]
+        return Project(model, self.lowered, self.code, self.checked.sources, spec.settings, warnings, False,
+                       spec.manifest, spec.root, _native_modules(self.lowered))
+
+
+def parse_stage(spec: ProjectSpec, overrides: dict[str, str] | None = None) -> Parsed:
+    """Read and parse `spec`'s files (each file's tree from the cache when unchanged);
+    `overrides`: texts that replace files' contents (an editor's unsaved buffers)."""
+    texts, diags = read_files(spec.sources_to_read, spec.encoding, overrides)
     with _collector_paused():
-        return _lower_and_compile_unpaused(analysis, settings, texts, sources)
+        units, diags, sources = _parse_units(texts, diags, spec.settings, spec.use_cache)
+    return Parsed(spec, texts, units, diags, sources)
 
 
-def _lower_and_compile_unpaused(analysis, settings, texts, sources):
+def check_stage(parsed: Parsed) -> Checked:
+    """Check the parsed project (nothing is checked when reading or parsing found an error)."""
+    with _collector_paused():
+        analysis, checker, diags = _analyze(parsed.units, parsed.diagnostics, parsed.spec.settings)
+    return Checked(parsed, analysis, checker, diags)
+
+
+def check_project(paths: "Sequence[str | Path] | ProjectSpec", settings: SysmacSettings | None = None,
+                  overrides: dict[str, str] | None = None) -> Checked:
+    """`resolve`, `parse_stage` and `check_stage` in one call (lint, the benchmarks, tools)."""
+    return check_stage(parse_stage(_spec(paths, settings), overrides))
+
+
+def compile_stage(checked: Checked, options: "LowerOptions | None" = None) -> Compiled:
+    """Lower and compile a checked project (raises LoadError when it has errors, or when the
+    generated code meets one of Python's limits). `options`: the lowering switches (the
+    debugger's build differs from the normal one); such a build is never cached."""
+    if checked.analysis is None:
+        raise LoadError(checked.diagnostics, checked.sources)
+    lowered, code = _lower_and_compile(checked.analysis, checked.spec.settings, checked.parsed.texts,
+                                       checked.sources, options)
+    return Compiled(checked, lowered, code)
+
+
+def _lower_and_compile(analysis, settings, texts, sources, options=None):
+    with _collector_paused():
+        return _lower_and_compile_unpaused(analysis, settings, texts, sources, options)
+
+
+def _lower_and_compile_unpaused(analysis, settings, texts, sources, options=None):
     """Generate and compile the Python module; Python's own limits become diagnostics.
 
     `analysis` may come handed over in a one-item list, which is emptied once lowered: with no
@@ -474,11 +666,13 @@ def _lower_and_compile_unpaused(analysis, settings, texts, sources):
     fallback = Span(texts[-1][0] if texts else "<input>", 1, 1, 1, 2)
     lowered = None
     try:
+        # the lowering's own default options unless a build asks for others (the debugger's)
+        extra = {} if options is None else {"options": options}
         if isinstance(analysis, list):
-            lowered = lower_project(analysis[0], settings)
+            lowered = lower_project(analysis[0], settings, **extra)
             analysis.clear()
         else:
-            lowered = lower_project(analysis, settings)
+            lowered = lower_project(analysis, settings, **extra)
         del analysis
         code = compile_module(lowered.source, GENERATED_FILENAME)
     except RecursionError:
@@ -497,13 +691,12 @@ def _too_deep(file: str) -> Diagnostic:
                             Span(file, 1, 1, 1, 2), "E003")
 
 
-def load(paths: Sequence[str | Path], settings: SysmacSettings | None = None, use_cache: bool = True) -> Project:
+def load(paths: "Sequence[str | Path] | ProjectSpec", settings: SysmacSettings | None = None, use_cache: bool = True) -> Project:
     """Load a runnable project from ST files (raises LoadError with every diagnostic). Without
     `settings`, the project's own: `stvm.toml` `[sysmac]` over the defaults (`project_settings`)."""
-    if settings is None:
-        settings = project_settings(paths)
-    files, manifest, root = expand_paths(paths)
-    texts, read_diags = read_files(files, source_encoding(manifest))
+    spec = _spec(paths, settings, use_cache)
+    settings, use_cache, manifest, root = spec.settings, use_cache and spec.use_cache, spec.manifest, spec.root
+    texts, read_diags = read_files(spec.sources_to_read, spec.encoding)
     if read_diags:
         raise LoadError(read_diags, source_texts(texts))
     key = _cache_key(texts, settings, "load")

@@ -18,35 +18,14 @@ import signal
 import sys
 from pathlib import Path
 
-EXIT_OK, EXIT_COMPILE, EXIT_USAGE, EXIT_FAULT = 0, 1, 2, 3
-
-
-class UsageError(Exception):
-    """A bad command line; the message is printed as `stvm: error: message`, exit 2."""
-
-
-def print_diagnostics(diags, sources) -> None:
-    from stvm.diagnostics import render   # lazy: start-up
-    for d in diags:
-        sys.stderr.write(render(d, sources))
+from stvm.cli_support import (EXIT_COMPILE, EXIT_FAULT, EXIT_OK, EXIT_USAGE, UsageError,  # noqa: F401 (API)
+                              compile_errors, print_diagnostics, require_files, resolve_project)
 
 
 def run_settings(args):
-    """The Sysmac settings of the run: the manifest's `[sysmac]`, then `--sysmac`, then
-    `--dialect`, and the manifest's defines with `--define`'s (usage errors)."""
-    from stvm.project import project_settings   # lazy: start-up
-    try:
-        dialect = [f"dialect={vars(args)['dialect']}"] if vars(args).get("dialect") else []
-        settings = project_settings(args.files, (getattr(args, "sysmac", None) or []) + dialect)
-        return settings.with_defines(vars(args).get("define") or [])
-    except ValueError as exc:
-        raise UsageError(str(exc)) from exc
-
-
-def require_files(files) -> None:
-    for f in files:
-        if not Path(f).exists():
-            raise UsageError(f"no such file: {f}")
+    """The Sysmac settings of the command line's project: defaults, the manifest, then
+    `--sysmac`, `--dialect` and `--define` (usage errors); `resolve_project(args).settings`."""
+    return resolve_project(args).settings
 
 
 def parse_assignment(text: str) -> tuple[str, str]:
@@ -280,97 +259,24 @@ _DEMO_FLAGS = (("robot", "--robot"), ("emulator_log", "--emulator-log"), ("no_de
 
 
 def cmd_run(args) -> int:
-    from stvm.project import LoadError, load, nothing_to_run, parse_duration   # lazy: start-up
-    from stvm.runtime.vm import PathError, RuntimeFault, UnboundInOut   # lazy: start-up
-    require_files(args.files)
-    settings = run_settings(args)
+    from stvm.project import LoadError, load, nothing_to_run   # lazy: start-up
+    from stvm.runtime.vm import RuntimeFault   # lazy: start-up
+    spec = resolve_project(args)
+    scan_ns, duration_ns = _run_limits(args)
     try:
-        scan_ns = parse_duration(args.scan)
-        duration_ns = parse_duration(args.duration) if args.duration is not None else None   # "" is an error, not "forever"
-    except ValueError as exc:
-        raise UsageError(str(exc)) from exc
-    if scan_ns <= 0:
-        raise UsageError("--scan must be positive")
-    if duration_ns is not None and duration_ns < 0:
-        raise UsageError(f"--duration must not be negative, got {args.duration!r}")
-    if args.cycles is not None and args.cycles < 0:
-        raise UsageError("--cycles must be >= 0")
-    try:
-        project = load(args.files, settings, use_cache=not args.no_cache)
+        project = load(spec)
     except LoadError as exc:
-        print_diagnostics(exc.diagnostics, exc.sources)
-        print(f"{sum(d.is_error for d in exc.diagnostics)} error(s)", file=sys.stderr)
-        return EXIT_COMPILE
+        return compile_errors(exc.diagnostics, exc.sources)
     print_diagnostics(project.warnings, project.sources)
     if nothing_to_run(project):
         print(f"stvm: error: {nothing_to_run(project, args.files)}", file=sys.stderr)
         return EXIT_COMPILE
     _check_demo_flags(args, "demo" in project.manifest)
-    demo_mode = "demo" in project.manifest and not args.no_demo
-    # the demo talks to a robot that moves in wall-clock time: run on the real-time clock
-    realtime = args.realtime or (demo_mode and not args.virtual_clock)
-    vm = project.start(scan=scan_ns, realtime=realtime)
-    # real sockets get the controller's socket service between scans (stvm/stdlib/sockets.py:
-    # one poll of all sockets before each scan, the queued sends after it), made at the first call
-    vm.ctx.socket_service_vm = vm
-    # validate --print names and --until before running, so a typo is a usage error, not a lost run
-    for name in args.print or []:
-        try:
-            vm.resolve(name)
-        except UnboundInOut:
-            pass   # well-formed; bound once the FB has been called
-        except PathError as exc:
-            raise UsageError(str(exc)) from exc
-    until = Until(args.until, vm) if getattr(args, "until", None) is not None else None
-    if args.set:
-        # lazy: start-up (the literal parser brings the syntax nodes, ~50 ms, which a run from
-        # the cache never needs otherwise)
-        from stvm.semantics.literals import literal_value
-    for item in args.set or []:
-        name, text = parse_assignment(item)
-        try:
-            ty = vm.type_of(name)
-            vm.set(name, literal_value(text, ty))
-        except PathError as exc:
-            raise UsageError(str(exc)) from exc
-        except ValueError as exc:
-            raise UsageError(f"--set {name}: {exc}") from exc
-    demo = opcua = None
-    try:
-        if demo_mode:
-            from stvm.demo import Demo   # lazy: start-up
-            demo = Demo(project, vm, args, cycles=demo_cycle_limit(args, project.manifest))
-            demo.start()
-        elif args.scenario:
-            from stvm.scenario import ScenarioDriver, load_scenario   # lazy: start-up
-            driver = ScenarioDriver(load_scenario(args.scenario), vm)
-            driver.apply_initial()
-            vm.on_scan_end.append(driver.after_scan)
-        from stvm.opcua.cli import start_server   # lazy: start-up
-        opcua = start_server(args, project, vm, args.files)
-    except (ValueError, KeyError, RuntimeError) as exc:
-        if demo is not None:
-            demo.stop()
-        raise UsageError(str(exc)) from exc
-    hmi = None
-    if args.hmi:
-        try:
-            hmi = _start_hmi(args.hmi, project, vm, demo)
-        except BaseException:
-            if opcua is not None:
-                opcua.stop()
-            if demo is not None:
-                demo.stop()
-            raise
-        if hmi is None:
-            if opcua is not None:
-                opcua.stop()
-            if demo is not None:
-                demo.stop()
-            vm.close()
-            return EXIT_COMPILE
-    status = EXIT_OK
-    interrupted = False
+    session = _start_session(args, project, scan_ns)
+    if session is None:
+        return EXIT_COMPILE
+    vm, demo, until = session.vm, session.demo, session.until
+    status, interrupted = EXIT_OK, False
     previous = signal.getsignal(signal.SIGINT)
     stops = [test for test in (demo.done if demo else None, until) if test is not None]
 
@@ -394,15 +300,111 @@ def cmd_run(args) -> int:
             status = EXIT_FAULT
     finally:
         signal.signal(signal.SIGINT, previous)
-        if hmi is not None:
-            hmi.stop()
-        if opcua is not None:
-            opcua.stop()
-        vm.close()
+        session.close()
         if demo is not None:
-            demo.stop()
             print(f"PnP cycles completed: {demo.state.cycles}; VM time {vm.now_ns / 1e9:.3f} s; "
                   f"scans {vm.scan_count}; {_realtime_counts(vm)}", file=sys.stderr)
+    return _report(args, vm, status, until, interrupted)
+
+
+def _run_limits(args) -> tuple[int, int | None]:
+    """(--scan, --duration) in nanoseconds; a bad --scan, --duration or --cycles is a usage error."""
+    from stvm.project import parse_duration   # lazy: start-up
+    try:
+        scan_ns = parse_duration(args.scan)
+        duration_ns = parse_duration(args.duration) if args.duration is not None else None   # "" is an error, not "forever"
+    except ValueError as exc:
+        raise UsageError(str(exc)) from exc
+    if scan_ns <= 0:
+        raise UsageError("--scan must be positive")
+    if duration_ns is not None and duration_ns < 0:
+        raise UsageError(f"--duration must not be negative, got {args.duration!r}")
+    if args.cycles is not None and args.cycles < 0:
+        raise UsageError("--cycles must be >= 0")
+    return scan_ns, duration_ns
+
+
+def _start_session(args, project, scan_ns: int):
+    """The run's session (stvm/session.py): the VM, `--print`/`--until` checked and `--set`
+    applied before the first scan, then the demo or the scenario, OPC UA and the HMI. None
+    after HMI page errors (reported); a bad option is a UsageError. On any error what was
+    started is stopped."""
+    from stvm.session import Session, SessionConfig   # lazy: start-up
+    demo_mode = "demo" in project.manifest and not args.no_demo
+    # the demo talks to a robot that moves in wall-clock time: run on the real-time clock
+    realtime = args.realtime or (demo_mode and not args.virtual_clock)
+    try:
+        # the demo brings its own robot and scenario (stvm/demo.py)
+        session = Session(project, SessionConfig(scan=scan_ns, scenario=None if demo_mode else args.scenario,
+                                                 robot="none", realtime=realtime))
+    except ValueError as exc:   # ScenarioError
+        raise UsageError(str(exc)) from exc
+    session.demo = session.until = None
+    try:
+        vm = session.vm
+        # real sockets get the controller's socket service between scans (stvm/stdlib/sockets.py:
+        # one poll of all sockets before each scan, the queued sends after it), made at the first call
+        vm.ctx.socket_service_vm = vm
+        _check_prints(args, vm)   # a typo is a usage error, not a lost run
+        session.until = Until(args.until, vm) if getattr(args, "until", None) is not None else None
+        _apply_sets(args, vm)
+        try:
+            if demo_mode:
+                from stvm.demo import Demo   # lazy: start-up
+                session.demo = Demo(project, vm, args, cycles=demo_cycle_limit(args, project.manifest))
+                session.add_robot(session.demo)
+                session.demo.start()
+            else:
+                session.wire()
+            from stvm.opcua.cli import start_server   # lazy: start-up
+            session.add_front_end(start_server(args, project, vm, args.files))
+        except (ValueError, KeyError, RuntimeError) as exc:
+            raise UsageError(str(exc)) from exc
+        if args.hmi:
+            hmi = _start_hmi(args.hmi, project, vm, session.demo)
+            if hmi is None:
+                session.close()
+                return None
+            session.add_front_end(hmi)
+    except BaseException:
+        session.close()
+        raise
+    return session
+
+
+def _check_prints(args, vm) -> None:
+    from stvm.runtime.vm import PathError, UnboundInOut   # lazy: start-up
+    for name in args.print or []:
+        try:
+            vm.resolve(name)
+        except UnboundInOut:
+            pass   # well-formed; bound once the FB has been called
+        except PathError as exc:
+            raise UsageError(str(exc)) from exc
+
+
+def _apply_sets(args, vm) -> None:
+    """`--set NAME=VALUE`, before the scenario's initial values."""
+    if not args.set:
+        return
+    from stvm.runtime.vm import PathError   # lazy: start-up
+    # lazy: start-up (the literal parser brings the syntax nodes, ~50 ms, which a run from the
+    # cache never needs otherwise)
+    from stvm.semantics.literals import literal_value
+    for item in args.set:
+        name, text = parse_assignment(item)
+        try:
+            ty = vm.type_of(name)
+            vm.set(name, literal_value(text, ty))
+        except PathError as exc:
+            raise UsageError(str(exc)) from exc
+        except ValueError as exc:
+            raise UsageError(f"--set {name}: {exc}") from exc
+
+
+def _report(args, vm, status: int, until, interrupted: bool) -> int:
+    """What a run prints after it ends (--until, --print, --stats, real-time counts)."""
+    from stvm.runtime.vm import PathError   # lazy: start-up
     if until is not None and status == EXIT_OK and not interrupted and until():
         print(f"--until {args.until}: TRUE after scan {vm.scan_count}", file=sys.stderr)
     for name in args.print or []:

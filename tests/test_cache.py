@@ -116,25 +116,21 @@ def test_the_cli_prints_one_warning_line(private_cache):
     assert err.count("stvm: warning: compile cache not used") == 1, err
 
 
-def test_the_lint_parse_cache_never_unpickles_a_forged_entry(private_cache, tmp_path, monkeypatch):
-    from stvm.lint import loader
-    from stvm.settings import SysmacSettings
+def test_lint_reads_the_drivers_signed_unit_entries_and_never_a_forged_one(private_cache, tmp_path):
+    """`stvm lint` parses through the project driver: its trees are the driver's signed
+    `unit-*.ast` entries, so a forged entry is parsed again, never unpickled."""
+    from stvm.lint import lint
     folder, key, source = private_cache
-    monkeypatch.setattr(loader, "_CACHES", {})
-    monkeypatch.setattr(loader, "_MEMO", {})
-    settings = SysmacSettings()
-    loader.parse_cached(PROGRAM, "main.st", settings)
-    entries = list((folder / "lint-ast").glob("*.pickle"))
+    report = lint([source])
+    entries = list(folder.glob("unit-*.ast"))
     assert entries and all(e.stat().st_mode & 0o077 == 0 for e in entries)
-    loader._MEMO.clear()
-    unit, _ = loader.parse_cached(PROGRAM, "main.st", settings)     # from the signed entry
-    assert unit is not None
+    assert not report.has_errors and report.files == [str(source)]
     marker = tmp_path / "pwned"
     for entry in entries:
-        entry.write_bytes(pickle.dumps(_Payload(marker)))
-    loader._MEMO.clear()
-    unit, _ = loader.parse_cached(PROGRAM, "main.st", settings)
-    assert not marker.exists() and unit is not None               # parsed again, nothing ran
+        entry.write_bytes(b"\0" * 32 + pickle.dumps(_Payload(marker)))
+    project_module._CACHES.clear()
+    report = lint([source])
+    assert not marker.exists() and not report.has_errors      # parsed again, nothing ran
 
 
 # ---- the parse and check caches (issue 16): an unchanged project skips parse and check

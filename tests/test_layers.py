@@ -54,9 +54,9 @@ LAYERS: list[tuple[str, ...]] = [
     ("stvm.runtime",),                   # VM, clock, tasks, faults
     ("stvm.stdlib",),                    # IEC + Omron natives, sockets, ST sources
     ("stvm.manifest",),
-    ("stvm.project",),                   # the driver: load, check, lower, start
+    ("stvm.project", "stvm.cli_support"),   # the driver: load, check, lower, start; the commands' conventions
     ("stvm.lockstep", "stvm.scenario"),
-    ("stvm.demo", "stvm.trace"),
+    ("stvm.demo", "stvm.trace", "stvm.session"),   # a run: VM, robot, scenario, front ends
     ("stvm.debug", "stvm.frontend", "stvm.hmi", "stvm.opcua", "stvm.lint"),
     ("stvm.lsp",),                       # the language server: the checker's index, lint, live values
     # the commands: `stvm run` drives the demo, scenarios and every front end; `stvm` is the API

@@ -16,22 +16,16 @@ from __future__ import annotations
 
 import bisect
 import os
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Sequence
 
-from stvm.diagnostics import has_errors, sort_key
-from stvm.lower.codegen import Lowerer
 from stvm.lower.names import method_attr
 from stvm.lower.options import DEFAULT_OPTIONS
-from stvm.lower.product import compile_module
-from stvm.project import LoadError, Project, read_files, stdlib_units, expand_paths, source_encoding
-from stvm.runtime.vm import GENERATED_FILENAME
+from stvm.project import Project, ProjectSpec, check_stage, compile_stage, parse_stage, resolve
 from stvm.semantics.checker import Analysis, Checker
 from stvm.semantics.model import POUInfo
-from stvm.settings import DEFAULT_SETTINGS, SysmacSettings
-from stvm.stdlib import NATIVE_FUNCTIONS
+from stvm.settings import SysmacSettings
 from stvm.syntax import nodes as n
-from stvm.syntax.parser import parse_text
 
 
 # What the debugger needs: every variable in its instance or frame, never in a Python local;
@@ -138,32 +132,19 @@ class DebugBuild:
         return os.path.abspath(file)
 
 
-def load_debug(paths: Sequence[str | os.PathLike], settings: SysmacSettings = DEFAULT_SETTINGS) -> DebugBuild:
-    """Parse, check and lower `paths` for debugging (raises LoadError with every diagnostic)."""
-    files, manifest, root = expand_paths(paths)
-    texts, read_diags = read_files(files, source_encoding(manifest))
-    if read_diags:
-        raise LoadError(read_diags, {name: getattr(text, "original", text) for name, text in texts})
-    units, diags, sources = stdlib_units(settings)
-    units = list(units)
-    sources = dict(sources)
-    for name, text in texts:
-        sources[name] = getattr(text, "original", text)   # a vendor XML file: excerpts show the XML
-        unit, unit_diags = parse_text(text, name, settings)
-        units.append(unit)
-        diags += unit_diags
-    checker = None
-    if not has_errors(diags):
-        checker = Checker(units, settings, NATIVE_FUNCTIONS)
-        analysis = checker.run()
-        diags += analysis.diagnostics
-    diags.sort(key=sort_key)
-    if checker is None or has_errors(diags):
-        raise LoadError(diags, sources)
-    lowered = Lowerer(analysis, settings, DEBUG_OPTIONS).lower()
-    code = compile_module(lowered.source, GENERATED_FILENAME)
-    warnings = [d for d in diags if not d.is_error]
-    project = Project(analysis.model, lowered, code, sources, settings, warnings, False, manifest, root)
+def load_debug(paths: "Sequence[str | os.PathLike] | ProjectSpec",
+               settings: SysmacSettings | None = None) -> DebugBuild:
+    """Parse, check and lower `paths` for debugging (raises LoadError with every diagnostic):
+    the project driver's stages (`stvm.project`), lowered with `DEBUG_OPTIONS`. `paths` may be a
+    resolved `ProjectSpec`; `settings` given replace the project's own."""
+    spec = paths if isinstance(paths, ProjectSpec) else resolve(paths, settings=settings)
+    if settings is not None and isinstance(paths, ProjectSpec):
+        spec = replace(spec, settings=settings)
+    checked = check_stage(parse_stage(spec))
+    compiled = compile_stage(checked, DEBUG_OPTIONS)
+    analysis, checker, lowered = checked.analysis, checked.checker, compiled.lowered
+    texts = checked.parsed.texts
+    project = compiled.project()
     unit_pous = {lowered.classes[key]: pou for key, pou in analysis.model.pous.items() if key in lowered.classes}
     user_files = {os.path.normcase(os.path.abspath(name)): name for name, _ in texts}
     user_files.update({os.path.normcase(os.path.realpath(name)): name for name, _ in texts})

@@ -1,7 +1,7 @@
 """`stvm debug` (interactive console) and `stvm dap` (Debug Adapter Protocol over stdio).
 
     stvm debug FILE... [--scan 1ms] [--scenario S] [--robot lockstep|emulator|HOST:PORT]
-                       [--set NAME=VALUE] [-x COMMANDS] [--sysmac NAME=VALUE]
+                       [--set NAME=VALUE] [-x COMMANDS] [--sysmac NAME=VALUE] [--dialect D] [--define N]
     stvm dap [--log FILE]
 
 This module is imported by every `stvm` command (to register the subcommands), so it imports
@@ -15,9 +15,9 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
+from stvm.cli_support import (EXIT_COMPILE, EXIT_OK, EXIT_USAGE, UsageError,  # noqa: F401 (API)
+                              add_project_options, compile_errors, error, print_diagnostics, require_files)
 from stvm.source import SourceError, read_limited
-
-EXIT_OK, EXIT_COMPILE, EXIT_USAGE = 0, 1, 2
 
 
 def register(subparsers) -> None:
@@ -34,8 +34,7 @@ def register(subparsers) -> None:
                        help="set a variable before the first scan")
     debug.add_argument("-x", "--commands", metavar="FILE", help="run the debugger commands in FILE first")
     debug.add_argument("--realtime", action="store_true", help="sleep to each deadline (default: virtual clock)")
-    debug.add_argument("--sysmac", action="append", default=[], metavar="NAME=VALUE",
-                       help="override a Sysmac UNCERTAIN setting")
+    add_project_options(debug)
     debug.add_argument("--hmi", metavar="[HOST:]PORT",
                        help="serve the project's HMI pages while debugging (values between scans, "
                             "writes at the next scan start; docs/hmi.md)")
@@ -51,42 +50,35 @@ def register(subparsers) -> None:
     dap.set_defaults(func=cmd_dap)
 
 
-def _error(message: str, code: int = EXIT_USAGE) -> int:
-    print(f"stvm: error: {message}", file=sys.stderr)
-    return code
-
-
 def cmd_debug(args) -> int:
     from stvm.debug.console import Console   # lazy: start-up
     from stvm.debug.session import SessionOptions, open_session   # lazy: start-up
     from stvm.project import LoadError   # lazy: start-up
     from stvm.scenario import ScenarioError   # lazy: start-up
-    for f in args.files:
-        if not Path(f).exists():
-            return _error(f"no such file: {f}")
+    try:
+        require_files(args.files)
+    except UsageError as exc:
+        return error(str(exc))
     commands: list[str] = []
     if args.commands:
         try:
             commands = read_limited(args.commands, "command file").decode("utf-8").splitlines()
         except OSError as exc:
-            return _error(f"cannot read {args.commands}: {exc.strerror or exc}")
+            return error(f"cannot read {args.commands}: {exc.strerror or exc}")
         except SourceError as exc:
-            return _error(f"{args.commands}: {exc.message}")
+            return error(f"{args.commands}: {exc.message}")
         except UnicodeDecodeError:
-            return _error(f"{args.commands}: the command file is not UTF-8 text")
+            return error(f"{args.commands}: the command file is not UTF-8 text")
     options = SessionOptions(args.files, scan=args.scan, scenario=args.scenario, sets=args.set,
-                             sysmac=args.sysmac, robot=args.robot, realtime=args.realtime)
+                             sysmac=args.sysmac or [], dialect=args.dialect, defines=args.define or [],
+                             robot=args.robot, realtime=args.realtime)
     try:
         session = open_session(options)
     except LoadError as exc:
-        sys.stderr.write(exc.render())
-        print(f"{sum(d.is_error for d in exc.diagnostics)} error(s)", file=sys.stderr)
-        return EXIT_COMPILE
+        return compile_errors(exc.diagnostics, exc.sources)
     except (ValueError, KeyError, ScenarioError) as exc:
-        return _error(str(exc))
-    for warning in session.build.project.warnings:
-        from stvm.diagnostics import render   # lazy: start-up
-        sys.stderr.write(render(warning, session.build.project.sources))
+        return error(str(exc))
+    print_diagnostics(session.build.project.warnings, session.build.project.sources)
     if session.robot != "none":
         print(f"robot: {session.robot}" + (f" on port {session.server.port}" if session.server else ""))
     hmi = None
@@ -97,7 +89,7 @@ def cmd_debug(args) -> int:
         opcua = start_server(args, session.build.project, session.engine.vm, args.files, run_control=False)
     except (ValueError, RuntimeError) as exc:
         session.close()
-        return _error(str(exc))
+        return error(str(exc))
     try:
         if getattr(args, "hmi", None):
             hmi = _start_hmi(args.hmi, session)
@@ -105,7 +97,7 @@ def cmd_debug(args) -> int:
                 return EXIT_COMPILE
         return Console(session.engine).run(commands)
     except ValueError as exc:   # HmiUsageError
-        return _error(str(exc))
+        return error(str(exc))
     finally:
         if hmi is not None:
             hmi.stop()

@@ -12,7 +12,7 @@ exited.
 
 Launch arguments (see docs/debugging.md): `program` (an ST file or a list), `cwd`, `scan`,
 `scenario`, `robot` (lockstep | emulator | HOST:PORT), `set` (["NAME=VALUE"]), `sysmac`,
-`stopOnEntry`, `realtime`, `cycles` (end after N scans).
+`dialect` and `define` (as the command line's --dialect and --define), `stopOnEntry`, `realtime`, `cycles` (end after N scans).
 """
 
 from __future__ import annotations
@@ -298,7 +298,7 @@ class DapServer:
         if not all(isinstance(f, str) and f for f in files):
             raise ProtocolError("launch \"program\" must be a file name (a string) or a list of file names")
         cwd = _str_arg(args, "cwd") or os.getcwd()
-        for name in ("scenario", "robot"):
+        for name in ("scenario", "robot", "dialect"):
             _str_arg(args, name)
         scan = args.get("scan")
         if scan is not None and not isinstance(scan, str):   # 5: 5 what? (was an internal error)
@@ -307,6 +307,7 @@ class DapServer:
         if cycles is not None and (_int_arg(args, "cycles") < 0):
             raise ProtocolError("launch \"cycles\" must be >= 0")
         sets, sysmac = _str_list_arg(args, "set"), _str_list_arg(args, "sysmac")
+        defines = _str_list_arg(args, "define")
         files = [f if os.path.isabs(f) else os.path.join(cwd, f) for f in files]
         for f in files:
             if not os.path.exists(f):
@@ -315,7 +316,7 @@ class DapServer:
         if scenario and not os.path.isabs(scenario):
             scenario = os.path.join(cwd, scenario)
         options = SessionOptions(files, scan=args.get("scan"), scenario=scenario,
-                                 sets=sets, sysmac=sysmac,
+                                 sets=sets, sysmac=sysmac, dialect=args.get("dialect"), defines=defines,
                                  robot=args.get("robot"), realtime=bool(args.get("realtime")),
                                  max_scans=args.get("cycles"))
         try:

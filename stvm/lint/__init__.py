@@ -2,7 +2,7 @@
 engineer otherwise finds on the plant floor.
 
 Entry point: `lint(paths, settings, select, ignore) -> LintReport`. Each POU gets a control-flow
-graph (`cfg`), an interval/constant analysis across scans (`ranges`, on the solver in
+graph (`cfg`), an interval/constant analysis across scans (`intervals`, on the solver in
 `dataflow`) and, for step sequences, a typestate analysis of resources held between scans
 (`machines`). Rules (`rules/`) read those facts and the checker's types; the registry gives
 each a stable code (SAnnn), a summary, a rationale and an example (`stvm lint --explain`).
@@ -17,9 +17,10 @@ from typing import Iterable, Sequence
 from typing import TYPE_CHECKING
 
 from stvm.diagnostics import Diagnostic
-from stvm.settings import DEFAULT_SETTINGS, SysmacSettings
+from stvm.settings import SysmacSettings
 
 if TYPE_CHECKING:
+    from stvm.project import Options, ProjectSpec
     from stvm.lint.config import LintConfig
     from stvm.lint.findings import Finding, Rule
 
@@ -92,30 +93,47 @@ def _reported_files(paths: Sequence[str | Path], loaded: list[str]) -> set[str]:
             if Path(name).resolve() in wanted or Path(name).resolve().parent in folders}
 
 
-def lint(paths: Sequence[str | Path], settings: SysmacSettings = DEFAULT_SETTINGS,
+def lint(paths: Sequence[str | Path], settings: "SysmacSettings | Options | ProjectSpec | None" = None,
          select: Iterable[str] | None = None, ignore: Iterable[str] = (), use_cache: bool = True,
          texts: dict[str, str] | None = None, config: "LintConfig | None" = None,
          include_stdlib: bool = False) -> LintReport:
-    """Parse, check and lint `paths` (files or folders, as `stvm check`). `select`/`ignore` take
-    codes, prefixes (SA2) or names; the project's stvm.toml `[lint]` adds to them, and
-    `(* stvm: noqa SAnnn *)` on a line suppresses that line's findings."""
+    """Parse, check and lint `paths` (files or folders, as `stvm check`). `settings`: None or an
+    `Options` (the command line's --sysmac, --dialect, --define) to lint with the project's own
+    settings as `stvm check` does (its stvm.toml), explicit `SysmacSettings` to use those, or a
+    resolved `ProjectSpec`. `select`/`ignore` take codes, prefixes (SA2) or names; the
+    project's stvm.toml `[lint]` adds to them, and `(* stvm: noqa SAnnn *)` on a line
+    suppresses that line's findings. `texts` replaces files' contents (an editor's buffers)."""
     from stvm.lint.config import load_config, suppressed   # lazy: start-up
-    from stvm.lint.loader import load_for_lint   # lazy: start-up
     from stvm.lint.registry import select_rules   # lazy: start-up
-    loaded = load_for_lint(paths, settings, use_cache, texts)
+    from stvm.project import check_stage, parse_stage   # lazy: start-up
+    spec = _lint_spec(paths, settings, use_cache)
+    checked = check_stage(parse_stage(spec, texts))
+    files = checked.parsed.files
     if config is None:
-        config = load_config(loaded.manifest, loaded.root)
+        config = load_config(spec.manifest, spec.root)
     rules = select_rules(list(select or []) or config.select, list(ignore) + config.ignore)
-    report = LintReport([], loaded.diagnostics, loaded.sources, rules, files=loaded.files)
-    if loaded.analysis is None:
+    report = LintReport([], checked.diagnostics, checked.sources, rules, files=files)
+    if checked.analysis is None:
         return report
-    findings = lint_analysis(loaded.analysis, settings, rules, include_stdlib,
-                             None if include_stdlib else _reported_files(paths, loaded.files))
+    findings = lint_analysis(checked.analysis, spec.settings, rules, include_stdlib,
+                             None if include_stdlib else _reported_files(paths, files))
     kept = []
     for f in findings:
-        if suppressed(f, loaded.sources, config):
+        if suppressed(f, checked.sources, config):
             report.suppressed += 1
         else:
             kept.append(f)
     report.findings = kept
     return report
+
+
+def _lint_spec(paths, settings, use_cache: bool):
+    """The project `paths` name, resolved by the driver as every command resolves it."""
+    from dataclasses import replace   # lazy: start-up
+    from stvm.project import Options, ProjectSpec, resolve   # lazy: start-up
+    if isinstance(settings, ProjectSpec):
+        return replace(settings, use_cache=settings.use_cache and use_cache)
+    if settings is None or isinstance(settings, Options):
+        options = settings or Options()
+        return resolve(paths, replace(options, use_cache=options.use_cache and use_cache))
+    return resolve(paths, Options(use_cache=use_cache), settings)

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from stvm.lint.facts import FactsView, node_exprs
+from stvm.lint.facts_view import FactsView, node_exprs
 from stvm.semantics.model import IN_OUT, Variable
 from stvm.syntax import nodes as n
 

@@ -1,7 +1,7 @@
 """`stvm lint` (`stvm lsp` is stvm/lsp/cli.py).
 
     stvm lint FILE|DIR... [--select CODES] [--ignore CODES] [--format text|json|sarif]
-              [--output F] [--sysmac NAME=VALUE]... [--no-cache]
+              [--output F] [--sysmac NAME=VALUE]... [--dialect D] [--define N]... [--no-cache]
     stvm lint --explain SAnnn|ALL
 
 Exit codes: 0 no findings, 1 findings (or compile errors), 2 usage error.
@@ -11,9 +11,11 @@ from __future__ import annotations
 
 import sys
 from pathlib import Path
-from stvm.settings import DEFAULT_SETTINGS
 
-EXIT_CLEAN, EXIT_FINDINGS, EXIT_USAGE = 0, 1, 2
+from stvm.cli_support import (EXIT_COMPILE, EXIT_OK, EXIT_USAGE, UsageError, add_project_options,  # noqa: F401
+                              project_options, resolve_project, usage)
+
+EXIT_CLEAN, EXIT_FINDINGS = EXIT_OK, EXIT_COMPILE
 
 
 def register(subparsers) -> None:
@@ -31,30 +33,21 @@ def register(subparsers) -> None:
     lint.add_argument("--output", "-o", metavar="FILE", help="write the report to FILE instead of stdout")
     lint.add_argument("--explain", metavar="CODE", help="print a rule's rationale and examples (ALL: every rule)")
     lint.add_argument("--no-cache", action="store_true", help="do not use the parse cache")
-    lint.add_argument("--sysmac", action="append", metavar="NAME=VALUE", help="override a Sysmac UNCERTAIN setting")
+    add_project_options(lint)
     lint.set_defaults(func=cmd_lint)
 
 
-def _usage(message: str) -> int:
-    print(f"stvm: error: {message}", file=sys.stderr)
-    return EXIT_USAGE
-
-
-def _settings(args):
-    settings = DEFAULT_SETTINGS
-    dialect = _vendor_dialect(getattr(args, "files", None) or [])
-    if dialect is not None:   # TwinCAT / PLCopen XML sources: their vendor's names and types
-        settings = settings.with_overrides([f"dialect={dialect}"])
-    return settings.with_overrides(getattr(args, "sysmac", None) or [])
-
-
-def _vendor_dialect(files) -> str | None:
-    from stvm.project import expand_paths, vendor_dialect   # lazy: start-up
-    try:
-        expanded, _, _ = expand_paths(files)
-    except Exception:  # noqa: BLE001 - the lint run itself reports unusable paths
-        return None
-    return vendor_dialect(expanded)
+def _options(args):
+    """The driver's Options: each file is linted with its project's settings and these on top."""
+    options = project_options(args)
+    from stvm.settings import DEFAULT_SETTINGS   # lazy: start-up
+    try:   # a bad --sysmac, --dialect or --define is a usage error before any file is read
+        DEFAULT_SETTINGS.with_overrides(list(options.sysmac) + ([f"dialect={options.dialect}"]
+                                                                 if options.dialect else [])) \
+            .with_defines(list(options.defines))
+    except ValueError as exc:
+        raise UsageError(str(exc)) from exc
+    return options
 
 
 def cmd_lint(args) -> int:
@@ -67,23 +60,20 @@ def cmd_lint(args) -> int:
         try:
             chosen = select_rules([args.explain])
         except SelectionError as exc:
-            return _usage(str(exc))
+            return usage(str(exc))
         sys.stdout.write("\n".join(explain(r) for r in chosen))
         return EXIT_CLEAN
     if not args.files:
-        return _usage("lint needs FILE or DIR arguments (or --explain CODE)")
-    for f in args.files:
-        if not Path(f).exists():
-            return _usage(f"no such file: {f}")
+        return usage("lint needs FILE or DIR arguments (or --explain CODE)")
     try:
-        settings = _settings(args)
-    except ValueError as exc:
-        return _usage(str(exc))
+        spec = resolve_project(args)
+    except UsageError as exc:
+        return usage(str(exc))
     from stvm.lint.report import render_json, render_sarif, render_text   # lazy: start-up
     try:
-        report = lint(args.files, settings, select=args.select, ignore=args.ignore, use_cache=not args.no_cache)
+        report = lint(args.files, spec, select=args.select, ignore=args.ignore, use_cache=not args.no_cache)
     except (SelectionError, ConfigError) as exc:
-        return _usage(str(exc))
+        return usage(str(exc))
     if args.format == "json":
         text = render_json(report.findings, report.diagnostics, report.rules)
     elif args.format == "sarif":
@@ -94,7 +84,7 @@ def cmd_lint(args) -> int:
         try:
             Path(args.output).write_text(text, encoding="utf-8")
         except OSError as exc:
-            return _usage(f"cannot write {args.output}: {exc.strerror or exc}")
+            return usage(f"cannot write {args.output}: {exc.strerror or exc}")
     else:
         sys.stdout.write(text)
     errors = sum(d.is_error for d in report.diagnostics)

@@ -6,8 +6,8 @@ from __future__ import annotations
 from functools import cached_property
 
 from stvm.lint.cfg import CFG, Node, build_cfg
-from stvm.lint.facts import FactsView
-from stvm.lint.ranges import Interval, RangeAnalysis, State, analyze_ranges
+from stvm.lint.facts_view import FactsView
+from stvm.lint.intervals import Interval, RangeAnalysis, State, analyze_ranges
 from stvm.lint.findings import Finding
 from stvm.semantics import types as t
 from stvm.syntax import nodes as n

@@ -28,8 +28,8 @@ from dataclasses import dataclass, field
 from stvm.lint.access import node_accesses
 from stvm.lint.context import PouContext
 from stvm.lint.dataflow import solve
-from stvm.lint.facts import node_calls, place_key
-from stvm.lint.ranges import is_point
+from stvm.lint.facts_view import node_calls, place_key
+from stvm.lint.intervals import is_point
 from stvm.semantics import types as t
 from stvm.semantics.model import EXTERNAL, GLOBAL, IN_OUT, LOCAL, OUTPUT
 from stvm.syntax import nodes as n

@@ -82,13 +82,16 @@ class CheckResult:
 class Driver:
     """Checks projects with the editor's buffers; keeps parsed units keyed by their text."""
 
-    def __init__(self, overrides: list[str] | None = None) -> None:
-        self.overrides = list(overrides or [])
+    def __init__(self, options=None) -> None:
+        from stvm.project import Options   # lazy: start-up
+        self.options = options if options is not None else Options()   # `stvm lsp` options + the client's
         self._units: dict[tuple[str, str, str], tuple[object, list[Diagnostic]]] = {}
 
     def settings_for(self, paths: list[Path]):
-        from stvm.project import project_settings   # lazy: start-up
-        return project_settings(paths, self.overrides)
+        """The settings `stvm check` gives the project of `paths` (the one driver's resolve:
+        manifest, then the command line's and the client's options)."""
+        from stvm.project import resolve   # lazy: start-up
+        return resolve(paths, self.options).settings
 
     def files_for(self, paths: list[Path]) -> tuple[list[Path], dict, Path | None]:
         from stvm.project import expand_paths   # lazy: start-up

@@ -160,10 +160,10 @@ class ProjectState:
 
 
 class StvmLanguageServer(LanguageServer):
-    def __init__(self, overrides: list[str] | None = None) -> None:
+    def __init__(self, options=None) -> None:
         super().__init__("stvm", __version__, text_document_sync_kind=lsp.TextDocumentSyncKind.Incremental,
                          protocol_cls=GuardedProtocol)
-        self.driver = Driver(overrides)
+        self.driver = Driver(options)
         self.projects: dict[tuple[str, ...], ProjectState] = {}
         self.project_of_file: dict[str, tuple[str, ...]] = {}
         self.client_uris: dict[str, str] = {}       # resolved path → the URI the client opened it as
@@ -309,8 +309,28 @@ class StvmLanguageServer(LanguageServer):
         return self.workspace.get_text_document(uri).source
 
 
-def build_server(overrides: list[str] | None = None) -> StvmLanguageServer:
-    server = StvmLanguageServer(overrides)
+def with_initialization_options(options, given):
+    """The driver's `Options` with the client's initializationOptions on top: `dialect`,
+    `defines` and `sysmac` (what `stvm lsp --dialect/--define/--sysmac` give); raises ValueError
+    naming a bad one."""
+    from dataclasses import replace   # lazy: start-up
+    from stvm.cli_support import DIALECTS   # lazy: start-up
+    if not isinstance(given, dict):
+        return options
+    dialect = given.get("dialect", options.dialect)
+    if dialect is not None and dialect not in DIALECTS:
+        raise ValueError(f"initializationOptions dialect must be one of {', '.join(DIALECTS)}, got {dialect!r}")
+    lists = {}
+    for key in ("defines", "sysmac"):
+        value = given.get(key, [])
+        if not isinstance(value, list) or not all(isinstance(v, str) for v in value):
+            raise ValueError(f"initializationOptions {key} must be a list of strings")
+        lists[key] = getattr(options, key) + tuple(value)
+    return replace(options, dialect=dialect, **lists)
+
+
+def build_server(options=None) -> StvmLanguageServer:
+    server = StvmLanguageServer(options)
 
     def relevant(uri: str) -> Path | None:
         path = path_of(uri)
@@ -564,6 +584,10 @@ def build_server(overrides: list[str] | None = None) -> StvmLanguageServer:
     @server.feature(lsp.INITIALIZE)
     def initialize(ls: StvmLanguageServer, params: lsp.InitializeParams) -> None:
         options = params.initialization_options if isinstance(params.initialization_options, dict) else {}
+        try:
+            ls.driver.options = with_initialization_options(ls.driver.options, options)
+        except ValueError as exc:
+            ls.window_log_message(lsp.LogMessageParams(lsp.MessageType.Error, f"stvm: {exc}"))
         live = options.get("liveValues") if isinstance(options.get("liveValues"), dict) else {}
         endpoint = live.get("endpoint") if isinstance(live.get("endpoint"), str) else None
         ls.live = LiveValues(endpoint or os.environ.get("STVM_LIVE_ENDPOINT") or DEFAULT_ENDPOINT,
@@ -604,8 +628,9 @@ def build_server(overrides: list[str] | None = None) -> StvmLanguageServer:
     return server
 
 
-def serve(overrides: list[str] | None = None) -> None:
+def serve(options=None) -> None:
+    """Serve on stdio; `options` are the driver's `Options` from `stvm lsp`'s command line."""
     # pygls logs every failed message with its traceback on stderr; the client is told instead
     # (a JSON-RPC error, window/logMessage)
     logging.getLogger("pygls").setLevel(logging.CRITICAL)
-    build_server(overrides).start_io()
+    build_server(options).start_io()

@@ -12,7 +12,9 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-EXIT_OK, EXIT_COMPILE, EXIT_USAGE, EXIT_FAULT, EXIT_MISMATCH = 0, 1, 2, 3, 4
+from stvm.cli_support import (EXIT_COMPILE, EXIT_FAULT, EXIT_MISMATCH, EXIT_OK, EXIT_USAGE,  # noqa: F401 (API)
+                              UsageError, add_project_options, compile_errors, require_files, resolve_project,
+                              usage)
 
 
 def register(subparsers) -> None:
@@ -39,13 +41,8 @@ def register(subparsers) -> None:
     trace.add_argument("--max-columns", type=int, default=120, metavar="N", help="WaveDrom: at most N change points (default 120)")
     trace.add_argument("--no-writer", action="store_true", help="on a mismatch, do not replay to find the ST line that wrote the value")
     trace.add_argument("--no-cache", action="store_true", help="do not use the compile cache")
-    trace.add_argument("--sysmac", action="append", metavar="NAME=VALUE", help="override a Sysmac UNCERTAIN setting")
+    add_project_options(trace)
     trace.set_defaults(func=cmd_trace)
-
-
-def _usage(message: str) -> int:
-    print(f"stvm: error: {message}", file=sys.stderr)
-    return EXIT_USAGE
 
 
 def cmd_trace(args) -> int:
@@ -54,65 +51,64 @@ def cmd_trace(args) -> int:
     from stvm.trace.run import TraceSpec, run_trace
     from stvm.trace.signals import WatchError
     from stvm.trace.writers import SUFFIXES, TraceFormatError, read_trace, write_trace
-    from stvm.project import LoadError, load, project_settings   # lazy: start-up
+    from stvm.project import LoadError, load   # lazy: start-up
     from stvm.scenario import ScenarioError   # lazy: start-up
 
-    for f in args.files:
-        if not Path(f).exists():
-            return _usage(f"no such file: {f}")
+    try:
+        require_files(args.files)
+    except UsageError as exc:
+        return usage(str(exc))
     outputs = args.output or []
     if not outputs and not args.compare:
-        return _usage("give -o OUT (.jsonl .csv .vcd .json .svg .png) and/or --compare GOLDEN")
+        return usage("give -o OUT (.jsonl .csv .vcd .json .svg .png) and/or --compare GOLDEN")
     from stvm.trace.tcp_path import PICTURE_SUFFIXES   # lazy: start-up
     pictures = [o for o in outputs if Path(o).suffix.lower() in PICTURE_SUFFIXES]
     outputs = [o for o in outputs if o not in pictures]
     for out in outputs:
         if Path(out).suffix.lower() not in SUFFIXES:
-            return _usage(f"-o {out}: unknown trace format (use {', '.join(SUFFIXES + PICTURE_SUFFIXES)})")
+            return usage(f"-o {out}: unknown trace format (use {', '.join(SUFFIXES + PICTURE_SUFFIXES)})")
     if pictures:
         try:
             import matplotlib  # noqa: F401
         except ImportError:
-            return _usage("-o .svg/.png draws the TCP path with matplotlib: pip install 'stvm[plot]'")
+            return usage("-o .svg/.png draws the TCP path with matplotlib: pip install 'stvm[plot]'")
     if args.svg and not any(Path(o).suffix.lower() == ".json" for o in outputs):
-        return _usage("--svg renders the WaveDrom output: add -o NAME.json")
+        return usage("--svg renders the WaveDrom output: add -o NAME.json")
     if args.cycles is not None and args.cycles < 0:
-        return _usage("--cycles must be >= 0")
+        return usage("--cycles must be >= 0")
     if args.context < 0:
-        return _usage("--context must be >= 0")
+        return usage("--context must be >= 0")
     if args.latency_scans is not None and args.latency_scans < 0:
-        return _usage(f"--latency-scans must be >= 0, got {args.latency_scans}")
+        return usage(f"--latency-scans must be >= 0, got {args.latency_scans}")
     if args.max_columns < 1:
-        return _usage(f"--max-columns must be >= 1, got {args.max_columns}")
+        return usage(f"--max-columns must be >= 1, got {args.max_columns}")
     if args.scenario and not Path(args.scenario).exists():
-        return _usage(f"no such scenario: {args.scenario}")
+        return usage(f"no such scenario: {args.scenario}")
     if args.compare and not Path(args.compare).exists():
-        return _usage(f"no such golden trace: {args.compare} (record one with -o {args.compare})")
+        return usage(f"no such golden trace: {args.compare} (record one with -o {args.compare})")
     try:
-        settings = project_settings(args.files, args.sysmac or [])
+        resolved = resolve_project(args)
         if args.scan is not None:
             from stvm.project import parse_duration   # lazy: start-up
             if parse_duration(args.scan) <= 0:
-                return _usage("--scan must be positive")
+                return usage("--scan must be positive")
         from emulator import parse_faults   # lazy: start-up
         parse_faults(args.fault or [])
-    except ValueError as exc:
-        return _usage(str(exc))
+    except (ValueError, UsageError) as exc:
+        return usage(str(exc))
     watch = [p for group in (args.watch or []) for p in group]
     spec = TraceSpec(files=args.files, scan=args.scan, cycles=args.cycles, watch=watch, scenario=args.scenario,
                      latency_scans=args.latency_scans, faults=args.fault or [],
                      settings_overrides=args.sysmac or [], use_cache=not args.no_cache,
-                     record_tcp=bool(pictures))
+                     record_tcp=bool(pictures), resolved=resolved)
     try:
-        project = load(args.files, settings, use_cache=not args.no_cache)
+        project = load(resolved)
     except LoadError as exc:
-        sys.stderr.write(exc.render())
-        print(f"{sum(d.is_error for d in exc.diagnostics)} error(s)", file=sys.stderr)
-        return EXIT_COMPILE
+        return compile_errors(exc.diagnostics, exc.sources)
     try:
         run = run_trace(spec, project)
     except (WatchError, ScenarioError) as exc:
-        return _usage(str(exc))
+        return usage(str(exc))
     if run.fault is not None:
         sys.stderr.write(run.fault.render(project.sources))
     try:
@@ -125,14 +121,14 @@ def cmd_trace(args) -> int:
             name = Path(str(args.scenario or args.files[0])).stem
             print(f"wrote {render_tcp_path(run.tcp_path, out, title=f'TCP path of {name}')}", file=sys.stderr)
     except TraceFormatError as exc:
-        return _usage(str(exc))
+        return usage(str(exc))
     except OSError as exc:
-        return _usage(f"cannot write trace: {exc}")
+        return usage(f"cannot write trace: {exc}")
     if args.compare:
         try:
             golden = read_trace(args.compare)
         except TraceFormatError as exc:
-            return _usage(str(exc))
+            return usage(str(exc))
         divergence = compare(golden, run.trace)
         if divergence is None:
             print(f"trace matches {args.compare} ({run.trace.scans} scans)", file=sys.stderr)

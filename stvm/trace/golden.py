@@ -21,7 +21,7 @@ from dataclasses import dataclass, field
 
 from stvm.runtime.format import format_time
 from stvm.trace.model import Trace
-from stvm.trace.run import Prepared
+from stvm.trace.run import trace_session
 from stvm.trace.signals import WatchError, select_signals
 
 
@@ -237,7 +237,7 @@ def locate_writer(spec, actual: Trace, divergence: Divergence, project=None) -> 
     from stvm.runtime.vm import RuntimeFault   # lazy: start-up
     index = actual.index_of(divergence.variable)
     target_scan = actual.last_change(index, min(divergence.scan, actual.scans - 1))
-    prepared = Prepared(spec, project)
+    prepared = trace_session(spec, project)
     vm = prepared.vm
     try:
         signal = select_signals(vm, [divergence.variable])[0]

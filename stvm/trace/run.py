@@ -39,6 +39,9 @@ class TraceSpec:
     use_cache: bool = True
     record_frames: bool = True
     record_tcp: bool = False                   # sample the robot's TCP (stvm trace -o path.svg)
+    # the driver's resolution of `files` (stvm.project.resolve); None: resolved from `files`
+    # and `settings_overrides`, as `stvm trace` does
+    resolved: object = None
 
 
 @dataclass
@@ -53,58 +56,36 @@ class TraceRun:
     tcp_path: object = None                    # a TcpPathRecorder when `record_tcp`
 
 
-class Prepared:
-    """A VM wired to its robot and scenario, ready for scan 0 (shared by the recorder and the
-    writer search, which replays a run to a given scan)."""
+def trace_session(spec: TraceSpec, project=None):
+    """The session `spec` records (stvm/session.py: the lockstep robot, the scenario), not yet
+    wired; also what the writer search replays to a given scan. Loads the project through the
+    driver unless given."""
+    from stvm.project import Options, load, resolve   # lazy: start-up
+    from stvm.session import Session, SessionConfig   # lazy: start-up
+    if project is None:
+        resolved = spec.resolved or resolve(list(spec.files), Options(sysmac=tuple(spec.settings_overrides),
+                                                                       use_cache=spec.use_cache))
+        project = load(resolved)
+    config = SessionConfig(scan=spec.scan, default_scan="1ms", scenario=spec.scenario, robot="lockstep",
+                           latency_scans=spec.latency_scans, latency_ns=spec.latency_ns, faults=spec.faults,
+                           record_events=True)
+    return Session(project, config)
 
-    def __init__(self, spec: TraceSpec, project=None) -> None:
-        from stvm.lockstep import LOCKSTEP_HOST, LOCKSTEP_PORT, LockstepTransport   # lazy: start-up
-        from stvm.project import load, project_settings   # lazy: start-up
-        from stvm.scenario import Scenario, ScenarioDriver, load_scenario   # lazy: start-up
-        self.spec = spec
-        if project is None:
-            settings = project_settings(list(spec.files), list(spec.settings_overrides))
-            project = load(list(spec.files), settings, use_cache=spec.use_cache)
-        self.project = project
-        self.scenario = load_scenario(spec.scenario) if spec.scenario else Scenario()
-        scenario = self.scenario
-        emu_settings, plan = scenario.emulator_plan()
-        from emulator import parse_fault   # lazy: start-up
-        for text in spec.faults:
-            plan = parse_fault(text, plan)
-        latency_scans = spec.latency_scans if spec.latency_scans is not None else \
-            (scenario.latency_scans if scenario.latency_scans is not None else 1)
-        latency_ns = spec.latency_ns if spec.latency_ns is not None else scenario.latency_ns
-        self.transport = LockstepTransport(latency_scans=latency_scans, latency_ns=latency_ns,
-                                           settings=emu_settings, faults=plan)
-        scan = spec.scan if spec.scan is not None else (scenario.scan or "1ms")
-        self.vm = self.project.start(scan=scan, transport=self.transport)
-        self.cycles = spec.cycles if spec.cycles is not None else (
-            scenario.cycles if scenario.cycles is not None else DEFAULT_CYCLES)
-        self.events: list[tuple[int, str]] = []
-        self.driver = ScenarioDriver(scenario, self.vm, self.transport.inject_fault,
-                                     on_event=lambda event, scan: self.events.append((scan, event.describe())))
-        if scenario.robot_address:
-            self.driver._assign(scenario.robot_address, f"'{LOCKSTEP_HOST}'", "[robot]")
-        if scenario.robot_port:
-            self.driver._assign(scenario.robot_port, LOCKSTEP_PORT, "[robot]")
 
-    def wire(self, sampler: Callable | None = None) -> None:
-        vm = self.vm
-        if sampler is not None:
-            vm.on_scan_end.append(sampler)
-        vm.on_scan_end.append(self.driver.after_scan)
-        self.transport.attach(vm)   # appends the emulator step last
-        self.driver.apply_initial()
+def trace_cycles(spec: TraceSpec, session) -> int:
+    """Scans to run: the spec's, else the scenario's `[run] cycles`, else DEFAULT_CYCLES."""
+    if spec.cycles is not None:
+        return spec.cycles
+    return session.scenario.cycles if session.scenario.cycles is not None else DEFAULT_CYCLES
 
 
 def run_trace(spec: TraceSpec, project=None, progress: Callable[[int], None] | None = None) -> TraceRun:
     """Run `spec` in lockstep and record it. A runtime fault ends the run early; it is recorded
     as an event and returned in `TraceRun.fault` (not raised)."""
     from stvm.runtime.vm import RuntimeFault   # lazy: start-up
-    prepared = Prepared(spec, project)
-    vm = prepared.vm
-    patterns = list(spec.watch) or list(prepared.scenario.watch)
+    session = trace_session(spec, project)
+    vm = session.vm
+    patterns = list(spec.watch) or list(session.scenario.watch)
     if not patterns:
         raise WatchError("nothing to record: give --watch PATTERN (or [record] watch in the scenario)")
     signals = select_signals(vm, patterns)
@@ -112,19 +93,19 @@ def run_trace(spec: TraceSpec, project=None, progress: Callable[[int], None] | N
     tcp_path = None
     if spec.record_tcp:
         from stvm.trace.tcp_path import TcpPathRecorder   # lazy: start-up
-        tcp_path = TcpPathRecorder(prepared.transport)
+        tcp_path = TcpPathRecorder(session.transport)
 
         def sample(vm, recorder_sample=recorder.sample) -> None:
             recorder_sample(vm)
             tcp_path.sample(vm)
-        prepared.wire(sample)
+        session.wire(sample)
     else:
-        prepared.wire(recorder.sample)
+        session.wire(recorder.sample)
     if spec.record_frames:
-        prepared.transport.on_frame.append(recorder.on_frame)
+        session.transport.on_frame.append(recorder.on_frame)
     fault = None
     try:
-        for i in range(prepared.cycles):
+        for i in range(trace_cycles(spec, session)):
             vm.scan()
             if progress is not None and i % 1000 == 999:
                 progress(i + 1)
@@ -132,15 +113,15 @@ def run_trace(spec: TraceSpec, project=None, progress: Callable[[int], None] | N
         fault = exc
         recorder.sample(vm)   # the state the fault left, as the scan's sample
         where = f"{os.path.basename(exc.span.file)}:{exc.span.line}:{exc.span.column}: " if exc.span else ""
-        prepared.events.append((exc.scan, f"runtime fault: {where}{exc.message}"))
-    for scan, text in prepared.events:
+        session.events.append((exc.scan, f"runtime fault: {where}{exc.message}"))
+    for scan, text in session.events:
         recorder.event(text, scan)
     meta = {
         "files": [os.path.basename(str(f)) for f in spec.files],
         "scenario": os.path.basename(str(spec.scenario)) if spec.scenario else None,
-        "latency_ns": prepared.transport.latency_ns,
+        "latency_ns": session.transport.latency_ns,
         "watch": patterns,
     }
     trace = recorder.finish(meta)
-    vm.close()
-    return TraceRun(trace, vm, prepared.transport, prepared.project, fault, prepared.scenario, signals, tcp_path)
+    session.close()
+    return TraceRun(trace, vm, session.transport, session.project, fault, session.scenario, signals, tcp_path)

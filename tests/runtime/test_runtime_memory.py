@@ -62,10 +62,10 @@ def test_realtime_jitter_statistics_are_bounded(tmp_path):
 
 
 def test_lockstep_pnp_run_is_flat():
-    from stvm.trace.run import TraceSpec, Prepared
+    from stvm.trace.run import TraceSpec, trace_session
     spec = TraceSpec([ROOT / "st_src" / "PnP_Example.st"], scenario=ROOT / "st_src" / "scenarios" / "pnp_demo.toml",
                      scan="1ms")
-    prepared = Prepared(spec)
+    prepared = trace_session(spec)
     prepared.wire()
     vm = prepared.vm
     for _ in range(9_000):          # connected and one PnP cycle done: caches are warm

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 from stvm.lint.access import node_accesses
 from stvm.lint.context import PouContext
-from stvm.lint.facts import node_subexprs, iter_exprs, place_key, text_of
-from stvm.lint.ranges import fmt
+from stvm.lint.facts_view import node_subexprs, iter_exprs, place_key, text_of
+from stvm.lint.intervals import fmt
 from stvm.lint.findings import rule
 from stvm.semantics import types as t
 from stvm.syntax import nodes as n

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from stvm.lint.access import RESULT, node_accesses
 from stvm.lint.context import PouContext, solve_sets
-from stvm.lint.facts import INPUT, LOCAL, OUTPUT, TEMP, place_key, text_of
+from stvm.lint.facts_view import INPUT, LOCAL, OUTPUT, TEMP, place_key, text_of
 from stvm.lint.findings import rule
 from stvm.semantics import types as t
 from stvm.syntax import nodes as n

@@ -3,8 +3,8 @@
 from __future__ import annotations
 
 from stvm.lint.context import PouContext
-from stvm.lint.facts import node_calls, node_subexprs, iter_exprs, node_exprs, place_key, root_expr, text_of
-from stvm.lint.ranges import MAX_STRING_BYTES, fmt, is_point
+from stvm.lint.facts_view import node_calls, node_subexprs, iter_exprs, node_exprs, place_key, root_expr, text_of
+from stvm.lint.intervals import MAX_STRING_BYTES, fmt, is_point
 from stvm.lint.findings import rule
 from stvm.semantics import types as t
 from stvm.settings import ByteToStringFormat

@@ -1,14 +1,14 @@
 """SA2xx: ranges — array indices, integer overflow, narrowing conversions, division by zero.
 
-All four read the interval analysis (stvm.lint.ranges): the value ranges at the statement,
+All four read the interval analysis (stvm.lint.intervals): the value ranges at the statement,
 from declarations, subranges, assignments, loop bounds and the conditions on the path.
 """
 
 from __future__ import annotations
 
 from stvm.lint.context import PouContext
-from stvm.lint.facts import node_calls, node_subexprs, NOT_CONST, place_key, text_of
-from stvm.lint.ranges import excluded_key, fmt, type_range
+from stvm.lint.facts_view import node_calls, node_subexprs, NOT_CONST, place_key, text_of
+from stvm.lint.intervals import excluded_key, fmt, type_range
 from stvm.lint.findings import rule
 from stvm.semantics import types as t
 from stvm.settings import ToarybyteStringModel

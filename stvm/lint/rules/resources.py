@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from stvm.lint.context import PouContext
-from stvm.lint.facts import node_calls, place_key, text_of
+from stvm.lint.facts_view import node_calls, place_key, text_of
 from stvm.lint.machines import Resource, positive_members, leaks, nonlocal_flags, step_machines
 from stvm.lint.findings import rule
 

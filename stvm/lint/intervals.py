@@ -30,7 +30,7 @@ from bisect import bisect_left, bisect_right
 
 from stvm.lint.cfg import CFG, Edge, Node
 from stvm.lint.dataflow import Solution, solve
-from stvm.lint.facts import (EXTERNAL, GLOBAL, IN_OUT, LOCAL, NOT_CONST, OUTPUT, TEMP, FactsView,
+from stvm.lint.facts_view import (EXTERNAL, GLOBAL, IN_OUT, LOCAL, NOT_CONST, OUTPUT, TEMP, FactsView,
                              node_calls, node_subexprs, place_key,
                              root_expr)
 from stvm.semantics import types as t
