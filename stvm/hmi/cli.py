@@ -70,7 +70,7 @@ def start_hmi(project, vm, address: str, pose=None, run_parameters: dict[str, An
         limits = ServerLimits.from_table(table.get("server"))
     except ValueError as exc:
         raise HmiUsageError(f"stvm.toml {exc}") from None
-    from stvm.frontend.limits import LimitTable, LimitsError
+    from stvm.frontend.limits import LimitTable, LimitsError   # lazy: start-up (only a run with --hmi)
     try:
         limit_table = LimitTable.for_project(project, vm)
     except LimitsError as exc:

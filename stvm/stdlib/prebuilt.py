@@ -99,9 +99,9 @@ def main(argv: list[str]) -> int:
     if os.environ.get("PYTHONHASHSEED") != "0":   # reproducible: re-run with a fixed string hash
         return subprocess.run([sys.executable, "-m", "stvm.stdlib.prebuilt", *argv],
                               env={**os.environ, "PYTHONHASHSEED": "0"}).returncode
-    from stvm.syntax import tables   # first: the stdlib parse below uses them
-    if "--check" in argv:
-        stale = tables.main(["--check"]) != 0
+    from stvm.syntax import gen_tables   # lazy: the generator imports the parser (lark), only for this command
+    if "--check" in argv:   # the tables first: the stdlib parse below uses them
+        stale = gen_tables.main(["--check"]) != 0
         import tempfile
         with tempfile.TemporaryDirectory() as folder:
             copy = Path(folder) / FILE.name
@@ -111,7 +111,7 @@ def main(argv: list[str]) -> int:
                 print(f"{FILE} is not what the build writes: run `python -m stvm.stdlib.prebuilt`", file=sys.stderr)
                 stale = True
         return 1 if stale else 0
-    tables.main([])
+    gen_tables.main([])
     print(f"{'wrote' if build() else 'unchanged:'} {FILE}")
     return 0
 

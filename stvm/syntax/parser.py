@@ -68,12 +68,6 @@ def _built_parser(grammar: str, options: dict) -> Lark:
     return parser
 
 
-def build_shipped_tables() -> Path:
-    """Write the shipped tables for this grammar and these options (`python -m stvm.stdlib.prebuilt`)."""
-    tables.main([])
-    return tables.FILE
-
-
 _PRAGMAS = threading.local()   # the `{…}` tokens the lexer dropped during the current parse_text
 
 

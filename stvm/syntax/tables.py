@@ -24,7 +24,7 @@ options and Lark give the same bytes.
 Regenerate after changing the grammar or upgrading Lark (tests/syntax/test_tables.py fails when
 the file is stale or not what the generator writes):
 
-    python -m stvm.syntax.tables
+    python -m stvm.syntax.gen_tables [--check]
 """
 
 from __future__ import annotations
@@ -174,32 +174,7 @@ def generate(grammar: str, options: dict) -> str:
     child process when this one hashes strings otherwise), so the result is reproducible."""
     if os.environ.get("PYTHONHASHSEED") == "0":
         return to_text(grammar, options, serialise(Lark(grammar, **options)))
-    done = subprocess.run([sys.executable, "-m", "stvm.syntax.tables", "--print"],
+    done = subprocess.run([sys.executable, "-m", "stvm.syntax.gen_tables", "--print"],
                           env={**os.environ, "PYTHONHASHSEED": "0"}, capture_output=True, text=True,
                           check=True, cwd=Path(__file__).resolve().parents[2])
     return done.stdout
-
-
-def main(argv: list[str] | None = None) -> int:
-    from stvm.syntax.parser import grammar_text, parser_options   # the grammar stvm parses with
-    args = sys.argv[1:] if argv is None else argv
-    text = generate(grammar_text(), parser_options())
-    if "--print" in args:
-        sys.stdout.write(text)
-        return 0
-    if "--check" in args:
-        current = FILE.read_text(encoding="ascii") if FILE.exists() else ""
-        if current != text:
-            print(f"{FILE} is not what the generator writes: run `python -m stvm.syntax.tables`", file=sys.stderr)
-            return 1
-        return 0
-    if FILE.exists() and FILE.read_text(encoding="ascii") == text:
-        print(f"unchanged: {FILE}")
-        return 0
-    FILE.write_text(text, encoding="ascii")
-    print(f"wrote {FILE} ({len(text):,} bytes)")
-    return 0
-
-
-if __name__ == "__main__":
-    raise SystemExit(main())

@@ -20,7 +20,7 @@ ROOT = Path(__file__).resolve().parents[2]
 def test_the_shipped_tables_are_current_and_parse_as_freshly_built_ones():
     shipped = tables.load(P.grammar_text(), P.parser_options())
     assert shipped is not None, ("stvm/syntax/st_tables.json is stale (grammar, parser options or Lark "
-                                 "changed): regenerate it with `python -m stvm.syntax.tables`")
+                                 "changed): regenerate it with `python -m stvm.syntax.gen_tables`")
     fresh = Lark(P.grammar_text(), **P.parser_options())
     # (Lark numbers the states differently from one build to the next: compare what they parse)
     assert len(shipped.parser.parser.parser.parse_table.states) == len(fresh.parser.parser.parser.parse_table.states)
@@ -80,7 +80,7 @@ def test_the_text_form_round_trips_a_parser(tmp_path, monkeypatch):
 def test_the_shipped_file_is_exactly_what_the_generator_writes():
     # text, reproducible: the generator's output for the grammar of this checkout is the file,
     # byte for byte (a grammar edit without regenerating, or a generator that varies, fails here)
-    done = subprocess.run([sys.executable, "-m", "stvm.syntax.tables", "--check"], cwd=ROOT,
+    done = subprocess.run([sys.executable, "-m", "stvm.syntax.gen_tables", "--check"], cwd=ROOT,
                           capture_output=True, text=True, timeout=300)
     assert done.returncode == 0, done.stderr
 
