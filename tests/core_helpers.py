@@ -29,6 +29,7 @@ from typing import Any, Iterable, Mapping, Sequence
 import pytest
 
 import stvm
+from stvm.settings import SysmacSettings
 
 _WORK = Path(tempfile.mkdtemp(prefix="stvm-core-tests-"))
 atexit.register(shutil.rmtree, _WORK, ignore_errors=True)
@@ -95,11 +96,17 @@ def cli(argv: Sequence[str | os.PathLike]) -> tuple[int, str, str]:
     return rc, out.getvalue(), err.getvalue()
 
 
-def check_text(source: str, name: str = "case.st") -> tuple[int, str]:
-    """`stvm check` on one file (written to a fresh folder); (exit code, stderr)."""
+def check_text(source: str, name: str = "case.st", dialect: str | None = None) -> tuple[int, str]:
+    """`stvm check` on one file (written to a fresh folder); (exit code, stderr). Without
+    `dialect`, the default one (iec: a file without a manifest)."""
     path = write_st(source, name)
-    rc, _, err = cli(["check", path])
+    rc, _, err = cli(["check", path] + (["--dialect", dialect] if dialect else []))
     return rc, err
+
+
+# Tests of Omron behaviour (name rules, BYTE_TO_STRING in hex, STRING[n] counting the NUL, …) run
+# in the Sysmac dialect, as the thesis project does through its stvm.toml; the default is IEC.
+SYSMAC = SysmacSettings(dialect="sysmac")
 
 
 # ---------------------------------------------------------------- batched small programs

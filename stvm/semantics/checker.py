@@ -22,7 +22,7 @@ from stvm.semantics.facts import NOT_CONST, CallInfo, Facts, NameRef  # noqa: F4
 from stvm.semantics.qualified import resolve as resolve_qualified
 from stvm.semantics.model import (EXTERNAL, GLOBAL, IN_OUT, INPUT, LOCAL, OUTPUT, POUInfo,
                                   ProjectModel, PropertyInfo, TaskInfo, Variable)
-from stvm.settings import BareEnumerators, DEFAULT_SETTINGS, Dialect, StringOverflow, SysmacSettings
+from stvm.settings import BareEnumerators, DEFAULT_SETTINGS, Dialect, StringOverflow, StringSize, SysmacSettings
 from stvm.syntax import nodes as n
 from stvm.syntax.walk import calls_in
 
@@ -993,6 +993,12 @@ class Checker:
             size = self.const_int(spec.size, namespace)
             if size is None:
                 return t.STRING
+            if self.settings.string_size is StringSize.CHARACTERS:
+                # IEC ed. 3 / CODESYS / TwinCAT: STRING(n) holds n characters (n + 1 bytes with the NUL)
+                if not 1 <= size <= 1985:
+                    self.error(f"STRING size {size} is outside 1..1985", spec.span, "E019")
+                    return t.STRING
+                return t.string_type(size + 1, f"STRING({size})")
             if not 1 <= size <= 1986:
                 self.error(f"STRING size {size} is outside 1..1986", spec.span, "E019")
                 return t.STRING

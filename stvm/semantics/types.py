@@ -395,8 +395,9 @@ def time_type(family: str, long: bool) -> TimeType:
     return next(ty for ty in (LTIME, LDATE, LTOD, LDT) if ty.family == family)
 
 
-def string_type(size: int) -> StringType:
-    return STRING if size == 1986 else StringType(f"STRING[{size}]", size)
+def string_type(size: int, name: str | None = None) -> StringType:
+    """STRING of `size` bytes with the NUL; `name` as the source spells it (`STRING(5)`: size 6)."""
+    return STRING if size == 1986 else StringType(name or f"STRING[{size}]", size)
 
 
 def wstring_type(units: int) -> WStringType:
