@@ -22,6 +22,7 @@ from stvm.semantics.facts import NOT_CONST, CallInfo, Facts, NameRef  # noqa: F4
 from stvm.semantics.qualified import resolve as resolve_qualified
 from stvm.semantics.model import (EXTERNAL, GLOBAL, IN_OUT, INPUT, LOCAL, OUTPUT, POUInfo,
                                   ProjectModel, PropertyInfo, TaskInfo, Variable)
+from stvm.dialects import allows
 from stvm.settings import BareEnumerators, DEFAULT_SETTINGS, Dialect, StringOverflow, StringSize, SysmacSettings
 from stvm.syntax import nodes as n
 from stvm.syntax.walk import calls_in
@@ -345,10 +346,15 @@ class Checker:
                     if function_like and key == pou.name.lower():
                         self.error(f"'{name}' is the {info.kind.lower()}'s own name", span, "E010")
                         continue
-                    var = Variable(name, kind, vtype or t.DINT, block.constant, span)
+                    # TwinCAT/CODESYS: a VAR_INPUT CONSTANT without initial value is an input fixed
+                    # where the instance is declared or called, 0 by default (stvm/dialects.py
+                    # `input_constant`): an input, not a compile-time constant
+                    input_constant = (block.constant and kind == INPUT and decl.init is None
+                                      and allows(self.settings.dialect, "input_constant"))
+                    var = Variable(name, kind, vtype or t.DINT, block.constant and not input_constant, span)
                     if decl.init is None and kind not in (IN_OUT, EXTERNAL):
                         var.init = self.alias_init(decl.type_spec, namespace)
-                    if block.constant and decl.init is None and kind != EXTERNAL:
+                    if block.constant and decl.init is None and kind != EXTERNAL and not input_constant:
                         self.error(f"constant '{name}' needs an initial value", span, "E013")
                     info.variables[key] = var
                     if decl.fb_args is not None:

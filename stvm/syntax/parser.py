@@ -22,6 +22,7 @@ from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput
 from stvm.diagnostics import Diagnostic
 from stvm.folders import content_name, private_file
 from stvm.heap import collector_paused
+from stvm.dialects import allows
 from stvm.settings import DEFAULT_SETTINGS, Dialect, DoubleQuoteStrings, SysmacSettings
 from stvm.source import read_source
 from stvm.syntax import nodes as n
@@ -251,7 +252,11 @@ class _ToNodes:
         return str(items[0].type)
 
     def var_qualifier(self, meta, items):
-        return str(items[0]).upper()
+        word = str(items[0]).upper()
+        if word == "PERSISTENT" and not allows(self.settings.dialect, "persistent"):
+            self._error(f"PERSISTENT is a CODESYS/TwinCAT qualifier, not one of {self.settings.dialect.value} "
+                        "(use RETAIN, or --dialect codesys|twincat)", self._s(meta))
+        return word
 
     def var_decl(self, meta, items):
         names = items[0]

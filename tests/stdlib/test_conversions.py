@@ -53,7 +53,7 @@ def test_to_string(name, value, result):
 
 
 @pytest.mark.parametrize(("style", "value", "result"), [
-    ("hex_pad2", 0x0A, b"0A"), ("hex_pad2", 0x00, b"00"), ("decimal", 0x0A, b"10"),
+    ("hex_pad2", 0x0A, b"0A"), ("hex_pad2", 0x00, b"00"), ("decimal", 0x0A, b"10"), ("hex_nopad", 0x0A, b"A"),
 ])
 def test_byte_to_string_formats(style, value, result):
     assert call("BYTE_TO_STRING", make_ctx(byte_to_string_format=style), value) == result
