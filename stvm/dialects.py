@@ -21,10 +21,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
-from stvm.settings import (ByteToStringFormat, Dialect, OpenArrayBounds, RealToStringFormat, StringSize,
-                           SubrangeCheck)
-
-SYSMAC, IEC, CODESYS, TWINCAT = Dialect.SYSMAC, Dialect.IEC, Dialect.CODESYS, Dialect.TWINCAT
+# no import of stvm.settings: it reads this table while it builds its defaults. Setting rows give
+# the setting's spelling (as on the command line); dialects are named by their `--dialect` spelling.
+SYSMAC, IEC, CODESYS, TWINCAT = "sysmac", "iec", "codesys", "twincat"
 
 W501 = "Omron W501 (Sysmac Studio ST reference)"
 W502 = "Omron W502 (instructions reference)"
@@ -46,36 +45,37 @@ class Row:
     sources: str              # vendor references, one clause per dialect that differs
     setting: bool = False     # True: `key` is a field of SysmacSettings
 
-    def value(self, dialect: Dialect) -> Any:
-        return getattr(self, dialect.value)
+    def value(self, dialect) -> Any:
+        """The value in `dialect` (a Dialect member or its spelling)."""
+        return getattr(self, getattr(dialect, "value", dialect))
 
 
 ROWS: tuple[Row, ...] = (
     # ---- rows that set a setting ----------------------------------------------------------------
     Row("byte_to_string_format", "BYTE/WORD/DWORD/LWORD_TO_STRING (and TO_STRING of a bit string)",
-        ByteToStringFormat.HEX_NOPAD, ByteToStringFormat.DECIMAL, ByteToStringFormat.DECIMAL,
-        ByteToStringFormat.DECIMAL,
+        "hex_nopad", "decimal", "decimal",
+        "decimal",
         f"{W502} BYTE_TO_STRING: hexadecimal without leading zeros, BYTE#42 -> '2A'; {TC3} / {CDS} "
         "'TO_STRING conversions': the number in decimal, BYTE#42 -> '42'; IEC: as CODESYS (Choice: "
         "the standard gives no text form)", setting=True),
     Row("real_to_string_format", "REAL/LREAL_TO_STRING (and TO_STRING of a real)",
-        RealToStringFormat.C_EXP, RealToStringFormat.SHORTEST, RealToStringFormat.SHORTEST,
-        RealToStringFormat.SHORTEST,
+        "c_exp", "shortest", "shortest",
+        "shortest",
         "Sysmac: C %e with the type's digits, 3.5 -> '3.500000e+00' (stvm's choice, which the thesis "
         f"checksum relies on); {TC3} 'TO_STRING conversions' (LREAL_TO_STRING -> '1.4') and "
         "'REAL/LREAL_TO_<type>' (at most 16 significant digits): the shortest decimal text, "
         "3.5 -> '3.5'; IEC and CODESYS alike", setting=True),
     Row("string_size", "what n counts in STRING[n] / STRING(n)",
-        StringSize.WITH_NUL, StringSize.CHARACTERS, StringSize.CHARACTERS, StringSize.CHARACTERS,
+        "with_nul", "characters", "characters", "characters",
         f"{W501}: STRING[n] is n bytes including the NUL (holds n-1); {IEC3} 6.3.3, {TC3} 'STRING' "
         "(STRING(46) reserves 46+1 bytes for 46 characters) and CODESYS: holds n characters, so "
         "TwinCAT's T_MaxString = STRING(255) holds 255", setting=True),
     Row("open_array_bounds", "LOWER_BOUND/UPPER_BOUND of an ARRAY[*] parameter",
-        OpenArrayBounds.ZERO, OpenArrayBounds.ACTUAL, OpenArrayBounds.ACTUAL, OpenArrayBounds.ACTUAL,
+        "zero", "actual", "actual", "actual",
         f"{W501}: an array parameter numbers from 0; {IEC3} 6.5.3.2 and {CDS} 'LOWER_BOUND': the "
         "caller's bounds (ARRAY[2..5] gives 2 and 5); TwinCAT is CODESYS-based", setting=True),
     Row("subrange_check", "a subrange variable given a value outside its range at run time",
-        SubrangeCheck.FAULT, SubrangeCheck.FAULT, SubrangeCheck.STORE, SubrangeCheck.STORE,
+        "fault", "fault", "store", "store",
         f"{IEC3} 6.4.4.3: an error; {CDS} / {TC3} 'Subrange types': checked only by the implicit "
         "CheckRangeSigned/CheckRangeUnsigned functions, without them the value is stored", setting=True),
     # ---- rule rows ------------------------------------------------------------------------------
@@ -140,12 +140,12 @@ BY_KEY = {row.key: row for row in ROWS}
 PROFILE_FIELDS = frozenset(row.key for row in ROWS if row.setting)
 
 
-def profile_value(dialect: Dialect, name: str) -> Any:
-    """The value the profile of `dialect` gives setting `name`."""
+def profile_value(dialect, name: str) -> str:
+    """The value (its spelling) the profile of `dialect` gives setting `name`."""
     return BY_KEY[name].value(dialect)
 
 
-def allows(dialect: Dialect, rule: str) -> bool:
+def allows(dialect, rule: str) -> bool:
     """Whether `dialect` accepts the language rule `rule` (a boolean row)."""
     value = BY_KEY[rule].value(dialect)
     assert isinstance(value, bool), rule

@@ -468,7 +468,7 @@ class SysmacSettings:
     def __post_init__(self) -> None:
         # every value is checked (and a spelling turned into its Enum member) at construction,
         # so no code ever sees a value the declaration does not allow
-        from stvm.dialects import PROFILE_FIELDS, profile_value   # stvm.dialects imports this module
+        from stvm.dialects import PROFILE_FIELDS, profile_value   # lazy: start-up
         declared_all = _declarations()
         object.__setattr__(self, "dialect", declared_all["dialect"].coerce(self.dialect))
         explicit = set(self._explicit)
@@ -478,8 +478,9 @@ class SysmacSettings:
             if name in PROFILE_FIELDS and name not in explicit:
                 # not set by the user: None (a new instance), or the previous profile's value
                 # carried over by `replace`, becomes this dialect's value
-                if value is None or (previous is not None and declared.coerce(value) is profile_value(previous, name)):
-                    object.__setattr__(self, name, profile_value(self.dialect, name))
+                if value is None or (previous is not None
+                                     and declared.coerce(value) is declared.coerce(profile_value(previous, name))):
+                    object.__setattr__(self, name, declared.coerce(profile_value(self.dialect, name)))
                     continue
                 explicit.add(name)
             object.__setattr__(self, name, declared.coerce(value))
@@ -512,7 +513,7 @@ class SysmacSettings:
 
     def _changed(self, changes: dict[str, object]) -> "SysmacSettings":
         """A copy with `changes`, which the user made (a profile no longer decides them)."""
-        from stvm.dialects import PROFILE_FIELDS   # stvm.dialects imports this module
+        from stvm.dialects import PROFILE_FIELDS   # lazy: start-up
         explicit = self._explicit | (PROFILE_FIELDS & set(changes))
         return replace(self, **changes, _explicit=explicit)
 
@@ -638,8 +639,8 @@ def _declarations() -> dict[str, Declaration]:
                 continue
             default = f.default_factory() if f.default_factory is not MISSING else f.default
             if default is None:   # decided by the dialect: the default dialect's value
-                from stvm.dialects import profile_value   # stvm.dialects imports this module
-                default = profile_value(Dialect.IEC, f.name)
+                from stvm.dialects import profile_value   # lazy: start-up
+                default = globals()[f.type](profile_value(Dialect.IEC, f.name))   # the Enum, by its name
             # the kind is the default's type (an Enum class, int or dict): the same as the
             # annotation, without evaluating 50 annotation strings at every start-up
             kind = type(default)

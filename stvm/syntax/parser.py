@@ -555,8 +555,38 @@ class _ToNodes:
         return n.Index(items[0], tuple(items[1:]), self._s(meta))
 
     def call(self, meta, items):
-        args = tuple([a for a in items[1:] if a is not None])
-        return n.Call(items[0], args, self._s(meta))
+        args = []
+        for item in items[1:]:
+            if isinstance(item, n.Argument):
+                args.append(item)
+            elif item is not None:   # COMMA_END, or an unbound output (formal_output_empty)
+                self._call_extra(item)
+        return n.Call(items[0], tuple(args), self._s(meta))
+
+    def _call_extra(self, item) -> None:
+        """A trailing comma or an unbound output (`Q=> ,`): TwinCAT/CODESYS call syntax, dropped
+        there (stvm/dialects.py `call_syntax`), an error elsewhere."""
+        if allows(self.settings.dialect, "call_syntax"):
+            return
+        if isinstance(item, tuple):
+            what, span = f"an output with nothing bound ('{item[1]} =>')", item[2]
+        else:
+            what, span = "a comma before ')'", self._ts(item)
+        self._error(f"{what} is TwinCAT/CODESYS call syntax, not {self.settings.dialect.value} "
+                    "(use --dialect twincat|codesys)", span)
+
+    def formal_output_empty(self, meta, items):
+        return ("empty_output", str(items[0]), self._s(meta))
+
+    def set_reset_assignment(self, meta, items):
+        """`x S= c;` / `x R= c;` (CODESYS, TwinCAT): IF c THEN x := TRUE (FALSE); END_IF."""
+        span = self._s(meta)
+        setting = str(items[1]).upper().startswith("S")
+        if not allows(self.settings.dialect, "set_reset_assign"):
+            self._error(f"'{str(items[1]).upper()}' is CODESYS/TwinCAT syntax, not "
+                        f"{self.settings.dialect.value} (use --dialect twincat|codesys)", span)
+        store = n.Assign(items[0], n.BoolLiteral(setting, span), span)
+        return n.If(((items[2], (store,)),), None, span)
 
     def partial_access(self, meta, items):
         text = str(items[1])
