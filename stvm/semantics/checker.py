@@ -22,7 +22,7 @@ from stvm.semantics.facts import NOT_CONST, CallInfo, Facts, NameRef  # noqa: F4
 from stvm.semantics.qualified import resolve as resolve_qualified
 from stvm.semantics.model import (EXTERNAL, GLOBAL, IN_OUT, INPUT, LOCAL, OUTPUT, POUInfo,
                                   ProjectModel, PropertyInfo, TaskInfo, Variable)
-from stvm.dialects import allows
+from stvm.dialects import allows, known_library_prefix
 from stvm.settings import BareEnumerators, DEFAULT_SETTINGS, Dialect, StringOverflow, StringSize, SysmacSettings
 from stvm.syntax import nodes as n
 from stvm.syntax.walk import calls_in
@@ -823,6 +823,12 @@ class Checker:
 
     # ---- types
     def lookup_type_key(self, parts: tuple[str, ...], rooted: bool, namespace: tuple[str, ...]) -> str | None:
+        if len(parts) > 1 and self.settings.dialect is not Dialect.SYSMAC:
+            # `Tc2_System.T_MaxString`: as lookup_pou_key, one place for a library's namespace
+            parts = known_library_prefix(parts, lambda p: self._lookup_type_key(p, rooted, namespace) is not None)
+        return self._lookup_type_key(parts, rooted, namespace)
+
+    def _lookup_type_key(self, parts: tuple[str, ...], rooted: bool, namespace: tuple[str, ...]) -> str | None:
         key = "\\".join(parts).lower()
         if key in self.index.type_decls:
             return key
@@ -840,6 +846,12 @@ class Checker:
         return None
 
     def lookup_pou_key(self, parts: tuple[str, ...], namespace: tuple[str, ...]) -> str | None:
+        if len(parts) > 1 and self.settings.dialect is not Dialect.SYSMAC:
+            # `TcUnit.FB_TestSuite`: a library's namespace, taken off when only the POU is loaded
+            parts = known_library_prefix(parts, lambda p: self._lookup_pou_key(p, namespace) is not None)
+        return self._lookup_pou_key(parts, namespace)
+
+    def _lookup_pou_key(self, parts: tuple[str, ...], namespace: tuple[str, ...]) -> str | None:
         key = "\\".join(parts).lower()
         if key in self.index.pou_nodes:
             return key

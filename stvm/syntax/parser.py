@@ -535,6 +535,11 @@ class _ToNodes:
     def name(self, meta, items):
         return items[0]
 
+    def dotted_name(self, meta, items):
+        """`Library.Name` in EXTENDS, IMPLEMENTS or a type (CODESYS/TwinCAT library namespaces):
+        the same parts as `Library\\Name`; semantics/checker.py resolves it (lookup_*_key)."""
+        return n.Name(tuple(str(t) for t in items), False, self._s(meta))
+
     def qualified_name(self, meta, items):
         if len(items) == 1:                     # the common case: one IDENT
             return n.Name((items[0].value,), False, self._s(meta))

@@ -292,3 +292,40 @@ def test_errors_name_the_dialect_that_accepts_the_construct():
 ])
 def test_known_library_prefix(parts, known, expected):
     assert known_library_prefix(parts, lambda p: p in known) == expected
+
+
+LIBRARY_NAMES = """INTERFACE I_Runnable
+METHOD Run : BOOL
+END_METHOD
+END_INTERFACE
+FUNCTION_BLOCK FB_TestSuite
+VAR_OUTPUT n : INT; END_VAR
+n := n + 1;
+END_FUNCTION_BLOCK
+FUNCTION_BLOCK FB_Mine EXTENDS TcUnit.FB_TestSuite IMPLEMENTS FsCommon.I_Runnable
+METHOD Run : BOOL
+Run := TRUE;
+END_METHOD
+SUPER^();
+END_FUNCTION_BLOCK
+PROGRAM Main
+VAR t : TcUnit.FB_TestSuite; m : FB_Mine; END_VAR
+t(); m();
+END_PROGRAM
+"""
+
+
+@pytest.mark.parametrize("dialect", [Dialect.CODESYS, Dialect.TWINCAT, Dialect.IEC], ids=["codesys", "twincat", "iec"])
+def test_library_qualified_names_resolve_to_the_loaded_pou(dialect):
+    # `TcUnit.FB_TestSuite` in EXTENDS, IMPLEMENTS and a declaration: the POU of that name
+    assert outcome(LIBRARY_NAMES, dialect, ["Main.t.n", "Main.m.n"], cycles=2) == (2, 2)
+
+
+def test_library_qualified_names_stay_unknown_in_sysmac():
+    result = outcome(LIBRARY_NAMES, Dialect.SYSMAC, [])
+    assert any("unknown function block 'TcUnit\\FB_TestSuite'" in m for m in result[1])
+
+
+def test_a_library_prefix_of_an_unknown_pou_is_reported():
+    result = outcome("PROGRAM Main VAR t : TcUnit.FB_Nowhere; END_VAR END_PROGRAM", Dialect.TWINCAT, [])
+    assert any("unknown type 'TcUnit\\FB_Nowhere'" in m for m in result[1])
