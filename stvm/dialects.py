@@ -100,9 +100,13 @@ ROWS: tuple[Row, ...] = (
         False, False, True, True,
         f"{TC3} / {CDS} 'VAR_INPUT CONSTANT': an input that may be set only where the instance is "
         "declared; IEC and Sysmac require a constant's initial value"),
-    Row("pointer_arithmetic", "POINTER TO arithmetic (`p := p + 1`), assignment between pointer types, "
-        "ADR() of an input or a constant, SIZEOF(p^)", False, False, True, True,
+    Row("pointer_arithmetic", "POINTER TO arithmetic (`p := p + 1`) and assignment between pointer types",
+        False, False, True, True,
         f"{TC3} / {CDS} 'POINTER TO' and 'ADR': a pointer is an address-sized unsigned integer"),
+    Row("adr_of_constant", "ADR() of a constant (to read it through the pointer); SIZEOF(p^) of a pointer's target",
+        False, False, True, True,
+        f"{TC3} / {CDS} 'ADR': the address of any variable, constants included; SIZEOF of the "
+        "dereferenced pointer is its target type's size (accepted in every dialect that has POINTER TO)"),
     Row("shift_any_integer", "SHL/SHR/ROL/ROR on signed and unsigned integers, not only bit strings",
         False, False, True, True,
         f"{IEC3} table 29 and {W502}: ANY_BIT operands; {TC3} / {CDS} 'SHL': any integer type"),

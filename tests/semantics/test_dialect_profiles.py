@@ -127,6 +127,15 @@ def probe_pointer_arithmetic(dialect, value):
     assert (result == (2,)) is value
 
 
+def probe_adr_of_constant(dialect, value):
+    result = outcome("PROGRAM Main VAR CONSTANT k : INT := 5; END_VAR\n"
+                     "VAR pk : POINTER TO INT; v : INT; pr : POINTER TO REAL; n : DINT; END_VAR\n"
+                     "pk := ADR(k); v := pk^; n := SIZEOF(pr^); END_PROGRAM", dialect, ["Main.v", "Main.n"])
+    assert (result == (5, 4)) is value
+    if not value:
+        assert any("ADR() of constant 'k'" in m for m in result[1])
+
+
 def probe_shift_any_integer(dialect, value):
     result = outcome("PROGRAM Main VAR i : INT := -8; u : UINT := 16#8001; a, b : INT; c : UINT; END_VAR\n"
                      "a := SHL(i, 1); b := SHR(i, 1); c := ROR(u, 4); END_PROGRAM",
@@ -329,3 +338,10 @@ def test_library_qualified_names_stay_unknown_in_sysmac():
 def test_a_library_prefix_of_an_unknown_pou_is_reported():
     result = outcome("PROGRAM Main VAR t : TcUnit.FB_Nowhere; END_VAR END_PROGRAM", Dialect.TWINCAT, [])
     assert any("unknown type 'TcUnit\\FB_Nowhere'" in m for m in result[1])
+
+
+def test_the_docs_page_shows_every_row():
+    from pathlib import Path
+    page = (Path(__file__).resolve().parents[2] / "docs" / "dialects.md").read_text(encoding="utf-8")
+    for row in ROWS:
+        assert f"| `{row.key}`" in page, row.key
