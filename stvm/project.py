@@ -186,15 +186,16 @@ def _file_span(path: Path):
 
 
 def vendor_dialect(files: Sequence[Path]) -> str | None:
-    """The dialect vendor sources are read in unless told otherwise: `twincat` for TwinCAT files,
-    `codesys` for PLCopen XML (with or without TwinCAT files), None when there is an ST file."""
+    """The dialect vendor sources are read in unless told otherwise: `twincat` for TwinCAT files
+    (with or without PLCopen XML), `iec` for PLCopen XML alone, None when there is an ST file (the
+    default dialect, iec, unless the manifest names one)."""
     suffixes = {Path(p).suffix.lower() for p in files}
     if not suffixes:
         return None
-    if suffixes <= set(_VENDOR_SUFFIXES[:4]):
-        return "twincat"
+    if suffixes <= {".xml"}:
+        return "iec"
     if suffixes <= set(_VENDOR_SUFFIXES):
-        return "codesys"
+        return "twincat"
     return None
 
 

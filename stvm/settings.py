@@ -97,11 +97,23 @@ class StringOverflow(Enum):
 
 
 class Dialect(Enum):
-    """The vendor dialect: which name rules apply and which vendor base types exist (`--dialect`)."""
+    """The vendor dialect: its profile of language rules, conversions and vendor types (`--dialect`, stvm/dialects.py)."""
     SYSMAC = "sysmac"           # Omron Sysmac Studio: W501's name rules (no leading `_`, `P_`, trailing `_`, `__`)
     IEC = "iec"                 # IEC 61131-3 ed. 3 6.1.2: one leading `_` allowed, no `__`, no trailing `_`
     CODESYS = "codesys"         # CODESYS V3: any identifier that is not a keyword
     TWINCAT = "twincat"         # TwinCAT 3: as codesys, plus T_MaxString, PVOID, XWORD, XINT, UXINT (x64)
+
+
+class RealToStringFormat(Enum):
+    """REAL/LREAL_TO_STRING (and TO_STRING of a real)."""
+    C_EXP = "c_exp"             # Omron (Choice): C `%e` with the type's digits, 3.5 -> '3.500000e+00'
+    SHORTEST = "shortest"       # Beckhoff/CODESYS: the shortest text that reads back the same, 3.5 -> '3.5'
+
+
+class StringSize(Enum):
+    """What the n of STRING[n] / STRING(n) counts."""
+    WITH_NUL = "with_nul"       # Omron W501: n bytes of storage including the NUL; holds n-1
+    CHARACTERS = "characters"   # IEC 61131-3 ed. 3 6.3.3, Beckhoff, CODESYS: holds n (n+1 bytes with the NUL)
 
 
 class BareEnumerators(Enum):
@@ -382,15 +394,17 @@ class SysmacSettings:
     int_literal_type: IntLiteralType = setting(IntLiteralType.DINT, "2")
     string_length_unit: StringLengthUnit = setting(StringLengthUnit.UTF8, "2")
     string_overflow: StringOverflow = setting(StringOverflow.TRUNCATE_WARN, "2")
-    subrange_check: SubrangeCheck = setting(SubrangeCheck.FAULT, "2")
+    subrange_check: SubrangeCheck = setting(None, "2")
     # section 3: dialect
-    dialect: Dialect = setting(Dialect.SYSMAC, "3")
+    dialect: Dialect = setting(Dialect.IEC, "3")
+    string_size: StringSize = setting(None, "2")
+    real_to_string_format: RealToStringFormat = setting(None, "6")
     bare_enumerators: BareEnumerators = setting(BareEnumerators.RESOLVE_UNIQUE, "3 #3")
     dollar_n: DollarN = setting(DollarN.LF, "3 #7")
     invalid_dollar_escape: InvalidDollarEscape = setting(InvalidDollarEscape.ERROR, "3 #7")
     double_quote_strings: DoubleQuoteStrings = setting(DoubleQuoteStrings.ACCEPT_WARN, "3 #8")
     for_end_eval: ForEndEval = setting(ForEndEval.ONCE, "9")
-    open_array_bounds: OpenArrayBounds = setting(OpenArrayBounds.ZERO, "3 #4")
+    open_array_bounds: OpenArrayBounds = setting(None, "3 #4")
     # section 4/5: sockets
     skt_send_copy: SktSendCopy = setting(SktSendCopy.AT_START, "4 #2")
     skt_errorid_reset: SktErrorIdReset = setting(SktErrorIdReset.START_AND_CLEAR, "4 #2")
@@ -426,7 +440,7 @@ class SysmacSettings:
                                    doc="Largest RealToFormatString MinLen (`rtfs_limits`)")
     rtfs_max_decplace: int = setting(7, "6", lo=0, hi=255,        # DecPlace is a USINT
                                      doc="Largest RealToFormatString DecPlace (`rtfs_limits`)")
-    byte_to_string_format: ByteToStringFormat = setting(ByteToStringFormat.HEX_NOPAD, "6")
+    byte_to_string_format: ByteToStringFormat = setting(None, "6")
     stou_trailing: StouTrailing = setting(StouTrailing.ERROR, "6")
     stou_plus: StouPlus = setting(StouPlus.ACCEPT, "6")
     gettime_resolution_ns: int = setting(1_000_000, "6", lo=1, hi=86_400_000_000_000,
@@ -452,12 +466,32 @@ class SysmacSettings:
     # `stvm.toml` `[project] defines` and `--define` (stvm/syntax/conditional.py); carried here so
     # that every parse and every cache key sees them
     defines: tuple = field(default=(), metadata={"not_a_setting": True})
+    # the settings a dialect profile decides (stvm/dialects.py) that the user set, and the dialect
+    # the others were taken from: a change of dialect moves only those the user did not set
+    _explicit: frozenset = field(default=frozenset(), repr=False, compare=False, metadata={"not_a_setting": True})
+    _profile_dialect: Any = field(default=None, repr=False, compare=False, metadata={"not_a_setting": True})
 
     def __post_init__(self) -> None:
         # every value is checked (and a spelling turned into its Enum member) at construction,
         # so no code ever sees a value the declaration does not allow
-        for name, declared in _declarations().items():
-            object.__setattr__(self, name, declared.coerce(getattr(self, name)))
+        from stvm.dialects import PROFILE_FIELDS, profile_value   # lazy: start-up
+        declared_all = _declarations()
+        object.__setattr__(self, "dialect", declared_all["dialect"].coerce(self.dialect))
+        explicit = set(self._explicit)
+        previous = self._profile_dialect
+        for name, declared in declared_all.items():
+            value = getattr(self, name)
+            if name in PROFILE_FIELDS and name not in explicit:
+                # not set by the user: None (a new instance), or the previous profile's value
+                # carried over by `replace`, becomes this dialect's value
+                if value is None or (previous is not None
+                                     and declared.coerce(value) is declared.coerce(profile_value(previous, name))):
+                    object.__setattr__(self, name, declared.coerce(profile_value(self.dialect, name)))
+                    continue
+                explicit.add(name)
+            object.__setattr__(self, name, declared.coerce(value))
+        object.__setattr__(self, "_explicit", frozenset(explicit))
+        object.__setattr__(self, "_profile_dialect", self.dialect)
         object.__setattr__(self, "defines", _checked_defines(self.defines))
 
     def with_defines(self, items: list[str] | tuple[str, ...], where: str = "--define") -> "SysmacSettings":
@@ -481,7 +515,13 @@ class SysmacSettings:
             if not sep:
                 raise SettingError(f"--sysmac needs NAME=VALUE, got {item!r}")
             changes[name] = declaration(name).parse_text(text.strip())
-        return replace(self, **changes)
+        return self._changed(changes)
+
+    def _changed(self, changes: dict[str, object]) -> "SysmacSettings":
+        """A copy with `changes`, which the user made (a profile no longer decides them)."""
+        from stvm.dialects import PROFILE_FIELDS   # lazy: start-up
+        explicit = self._explicit | (PROFILE_FIELDS & set(changes))
+        return replace(self, **changes, _explicit=explicit)
 
     def with_table(self, table: Mapping[str, object], where: str = "[sysmac]") -> "SysmacSettings":
         """Return a copy with a TOML table applied (`[sysmac]` of `stvm.toml`); a table-valued
@@ -495,7 +535,7 @@ class SysmacSettings:
                 changes[name] = declared.coerce(value)
             except SettingError as exc:
                 raise SettingError(f"{where}: {exc}") from None
-        return replace(self, **changes)
+        return self._changed(changes)
 
 
 # ---- the declarations, read from the dataclass ---------------------------------------------------
@@ -604,6 +644,9 @@ def _declarations() -> dict[str, Declaration]:
             if f.metadata.get("not_a_setting"):
                 continue
             default = f.default_factory() if f.default_factory is not MISSING else f.default
+            if default is None:   # decided by the dialect: the default dialect's value
+                from stvm.dialects import profile_value   # lazy: start-up
+                default = globals()[f.type](profile_value(Dialect.IEC, f.name))   # the Enum, by its name
             # the kind is the default's type (an Enum class, int or dict): the same as the
             # annotation, without evaluating 50 annotation strings at every start-up
             kind = type(default)

@@ -29,6 +29,7 @@ from typing import Any, Iterable, Mapping, Sequence
 import pytest
 
 import stvm
+from stvm.settings import SysmacSettings
 
 _WORK = Path(tempfile.mkdtemp(prefix="stvm-core-tests-"))
 atexit.register(shutil.rmtree, _WORK, ignore_errors=True)
@@ -95,11 +96,17 @@ def cli(argv: Sequence[str | os.PathLike]) -> tuple[int, str, str]:
     return rc, out.getvalue(), err.getvalue()
 
 
-def check_text(source: str, name: str = "case.st") -> tuple[int, str]:
-    """`stvm check` on one file (written to a fresh folder); (exit code, stderr)."""
+def check_text(source: str, name: str = "case.st", dialect: str | None = None) -> tuple[int, str]:
+    """`stvm check` on one file (written to a fresh folder); (exit code, stderr). Without
+    `dialect`, the default one (iec: a file without a manifest)."""
     path = write_st(source, name)
-    rc, _, err = cli(["check", path])
+    rc, _, err = cli(["check", path] + (["--dialect", dialect] if dialect else []))
     return rc, err
+
+
+# Tests of Omron behaviour (name rules, BYTE_TO_STRING in hex, STRING[n] counting the NUL, …) run
+# in the Sysmac dialect, as the thesis project does through its stvm.toml; the default is IEC.
+SYSMAC = SysmacSettings(dialect="sysmac")
 
 
 # ---------------------------------------------------------------- batched small programs
@@ -153,9 +160,9 @@ def _snapshot(vm, case: StCase) -> dict[str, Any]:
     return out
 
 
-def _run_group(cases: list[StCase]) -> dict[str, CaseOutcome]:
+def _run_group(cases: list[StCase], settings: SysmacSettings | None = None) -> dict[str, CaseOutcome]:
     text = "\n".join(c.source for c in cases)
-    project = load_st(text)
+    project = load_st(text, settings=settings)
     vm = project.start(scan="10ms")
     results: dict[str, CaseOutcome] = {}
     done = 0
@@ -168,20 +175,22 @@ def _run_group(cases: list[StCase]) -> dict[str, CaseOutcome]:
     return results
 
 
-def run_cases(cases: Sequence[StCase]) -> dict[str, CaseOutcome]:
-    """Run all cases in one load; on a load error or fault, run each case on its own."""
+def run_cases(cases: Sequence[StCase], settings: SysmacSettings | None = None) -> dict[str, CaseOutcome]:
+    """Run all cases in one load; on a load error or fault, run each case on its own. The cases
+    are Sysmac code (STRING[n] counting the NUL, …) unless `settings` says otherwise."""
+    settings = settings or SYSMAC
     names = [c.name for c in cases]
     assert len(names) == len(set(names)), "duplicate case names"
     progs = [c.prog().lower() for c in cases]
     assert len(progs) == len(set(progs)), "duplicate PROGRAM names across cases"
     try:
-        return _run_group(list(cases))
+        return _run_group(list(cases), settings)
     except Exception:  # noqa: BLE001 - isolate the offender
         pass
     results = {}
     for c in cases:
         try:
-            results.update(_run_group([c]))
+            results.update(_run_group([c], settings))
         except stvm.LoadError as exc:
             results[c.name] = CaseOutcome(error="load error:\n" + exc.render())
         except Exception as exc:  # noqa: BLE001

@@ -23,8 +23,11 @@ import pytest
 
 import stvm
 from core_helpers import load_st, write_st
+from dataclasses import replace
+
+from stvm.dialects import PROFILE_FIELDS
 from stvm.settings import (
-    DEFAULT_SETTINGS, Declaration, SettingError, SysmacSettings, declarations,
+    DEFAULT_SETTINGS, Declaration, Dialect, SettingError, SysmacSettings, declarations,
 )
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -49,7 +52,8 @@ def test_every_setting_declares_its_values_default_and_spec(name):
 @pytest.mark.parametrize("name", [d.name for d in declarations() if d.choices])
 def test_an_unknown_value_lists_the_allowed_ones(name):
     d = DECLARED[name]
-    for bad in ("nonsense", True, None, 2.5):
+    # None is "the dialect's value" for a setting a dialect profile decides
+    for bad in ("nonsense", True, 2.5) + (() if name in PROFILE_FIELDS else (None,)):
         with pytest.raises(SettingError) as info:
             SysmacSettings(**{name: bad})
         message = str(info.value)
@@ -213,8 +217,8 @@ def probe_string_overflow_constant(settings):
 
 
 def probe_dialect(settings):
-    # names Sysmac reserves (`_`, `P_`) and a TwinCAT base type: errors or a run, by dialect
-    return _run_program("PROGRAM Main VAR _rmp : INT; p_count : INT; s : T_MaxString; END_VAR\n"
+    # names Sysmac reserves (`_`, `P_`) and one IEC refuses (`__`): errors or a run, by dialect
+    return _run_program("PROGRAM Main VAR _rmp : INT; p_count : INT; a__b : INT; END_VAR\n"
                         "_rmp := 2; p_count := _rmp + 1; END_PROGRAM\n", settings, ["Main.p_count"])
 
 
@@ -233,7 +237,19 @@ def probe_invalid_dollar_escape(settings):
 
 
 def probe_double_quote_strings(settings):
-    return _check_program('PROGRAM Main VAR s : STRING; END_VAR s := "x"; END_PROGRAM\n', settings)
+    # only Sysmac reads double-quoted text as a STRING (elsewhere it is a WSTRING literal)
+    return _check_program('PROGRAM Main VAR s : STRING; END_VAR s := "x"; END_PROGRAM\n',
+                          replace(settings, dialect=Dialect.SYSMAC))
+
+
+def probe_string_size(settings):
+    return _run_program("PROGRAM Main VAR s : STRING[5]; END_VAR s := 'abcdefgh'; END_PROGRAM\n",
+                        settings, ["Main.s"])
+
+
+def probe_real_to_string_format(settings):
+    return _run_program("PROGRAM Main VAR s : STRING; END_VAR s := REAL_TO_STRING(3.5); END_PROGRAM\n",
+                        settings, ["Main.s"])
 
 
 def probe_for_end_eval(settings):
@@ -276,15 +292,17 @@ OBSERVED: dict[tuple[str, str], Probe | StdlibTest] = {
         "tests/runtime/test_runtime_types.py::test_int_literal_type_lint_setting_removes_32_bit_wrap",
     ("string_length_unit", "bytes"): "tests/stdlib/test_strings.py::test_bytes_unit_counts_bytes",
     ("string_overflow", "error"): probe_string_overflow,
-    ("dialect", "iec"): probe_dialect,
+    ("dialect", "sysmac"): probe_dialect,
     ("dialect", "codesys"): probe_dialect,
+    ("string_size", "with_nul"): probe_string_size,
+    ("real_to_string_format", "c_exp"): probe_real_to_string_format,
     ("dialect", "twincat"): probe_dialect_twincat,
     ("bare_enumerators", "require_type"): probe_bare_enumerators,
     ("dollar_n", "crlf"): "tests/syntax/test_syntax_literals.py::test_dollar_n_setting",
     ("invalid_dollar_escape", "literal"): probe_invalid_dollar_escape,
     ("double_quote_strings", "error"): probe_double_quote_strings,
     ("for_end_eval", "each"): probe_for_end_eval,
-    ("open_array_bounds", "actual"): probe_open_array_bounds,
+    ("open_array_bounds", "zero"): probe_open_array_bounds,
     ("subrange_check", "store"): probe_subrange_check,
     ("skt_send_copy", "at_service"):
         "tests/stdlib/test_sockets.py::test_send_copies_the_data_when_the_setting_says",
@@ -316,7 +334,7 @@ OBSERVED: dict[tuple[str, str], Probe | StdlibTest] = {
     ("rtfs_max_minlen", "other"): "tests/stdlib/test_omron.py::test_real_to_format_string_specials_and_limits",
     ("rtfs_max_decplace", "other"): "tests/stdlib/test_omron.py::test_real_to_format_string_specials_and_limits",
     ("byte_to_string_format", "hex_pad2"): "tests/stdlib/test_conversions.py::test_byte_to_string_formats",
-    ("byte_to_string_format", "decimal"): "tests/stdlib/test_conversions.py::test_byte_to_string_formats",
+    ("byte_to_string_format", "hex_nopad"): "tests/stdlib/test_conversions.py::test_byte_to_string_formats",
     ("stou_trailing", "ignore_blanks"): "tests/stdlib/test_conversions.py::test_string_to_uint_settings",
     ("stou_plus", "error"): "tests/stdlib/test_conversions.py::test_string_to_uint_settings",
     ("gettime_resolution_ns", "other"):

@@ -19,6 +19,7 @@ from stvm.numeric import utf16_units
 from stvm.semantics.facts import NOT_CONST, CallInfo, NameRef
 from stvm.semantics.model import EXTERNAL, IN_OUT, INPUT, OUTPUT, POUInfo, Variable
 from stvm.syntax import nodes as n
+from stvm.dialects import allows
 from stvm.settings import IntLiteralType
 
 
@@ -952,7 +953,8 @@ class BodyChecker:
                 self.error(f"{word}() needs a variable; '{root.text}' is a value", arg.span, "E055")
                 return None
             var = ref.variable  # type: ignore[union-attr]
-            if var.constant:
+            # TwinCAT/CODESYS take the address of a constant (to read it through the pointer)
+            if var.constant and not (word == "ADR" and allows(self.settings.dialect, "adr_of_constant")):
                 self.error(f"{word}() of constant '{root.text}': a constant cannot be written through a reference",
                            arg.span, "E055")
                 return None

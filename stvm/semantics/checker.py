@@ -23,7 +23,8 @@ from stvm.semantics.facts import NOT_CONST, CallInfo, Facts, NameRef  # noqa: F4
 from stvm.semantics.qualified import resolve as resolve_qualified
 from stvm.semantics.model import (EXTERNAL, GLOBAL, IN_OUT, INPUT, LOCAL, OUTPUT, POUInfo,
                                   ProjectModel, PropertyInfo, TaskInfo, Variable)
-from stvm.settings import BareEnumerators, DEFAULT_SETTINGS, Dialect, StringOverflow, SysmacSettings
+from stvm.dialects import allows, known_library_prefix
+from stvm.settings import BareEnumerators, DEFAULT_SETTINGS, Dialect, StringOverflow, StringSize, SysmacSettings
 from stvm.syntax import nodes as n
 from stvm.syntax.walk import calls_in
 
@@ -346,10 +347,15 @@ class Checker:
                     if function_like and key == pou.name.lower():
                         self.error(f"'{name}' is the {info.kind.lower()}'s own name", span, "E010")
                         continue
-                    var = Variable(name, kind, vtype or t.DINT, block.constant, span)
+                    # TwinCAT/CODESYS: a VAR_INPUT CONSTANT without initial value is an input fixed
+                    # where the instance is declared or called, 0 by default (stvm/dialects.py
+                    # `input_constant`): an input, not a compile-time constant
+                    input_constant = (block.constant and kind == INPUT and decl.init is None
+                                      and allows(self.settings.dialect, "input_constant"))
+                    var = Variable(name, kind, vtype or t.DINT, block.constant and not input_constant, span)
                     if decl.init is None and kind not in (IN_OUT, EXTERNAL):
                         var.init = self.alias_init(decl.type_spec, namespace)
-                    if block.constant and decl.init is None and kind != EXTERNAL:
+                    if block.constant and decl.init is None and kind != EXTERNAL and not input_constant:
                         self.error(f"constant '{name}' needs an initial value", span, "E013")
                     info.variables[key] = var
                     if decl.fb_args is not None:
@@ -818,6 +824,12 @@ class Checker:
 
     # ---- types
     def lookup_type_key(self, parts: tuple[str, ...], rooted: bool, namespace: tuple[str, ...]) -> str | None:
+        if len(parts) > 1 and self.settings.dialect is not Dialect.SYSMAC:
+            # `Tc2_System.T_MaxString`: as lookup_pou_key, one place for a library's namespace
+            parts = known_library_prefix(parts, lambda p: self._lookup_type_key(p, rooted, namespace) is not None)
+        return self._lookup_type_key(parts, rooted, namespace)
+
+    def _lookup_type_key(self, parts: tuple[str, ...], rooted: bool, namespace: tuple[str, ...]) -> str | None:
         key = "\\".join(parts).lower()
         if key in self.index.type_decls:
             return key
@@ -835,6 +847,12 @@ class Checker:
         return None
 
     def lookup_pou_key(self, parts: tuple[str, ...], namespace: tuple[str, ...]) -> str | None:
+        if len(parts) > 1 and self.settings.dialect is not Dialect.SYSMAC:
+            # `TcUnit.FB_TestSuite`: a library's namespace, taken off when only the POU is loaded
+            parts = known_library_prefix(parts, lambda p: self._lookup_pou_key(p, namespace) is not None)
+        return self._lookup_pou_key(parts, namespace)
+
+    def _lookup_pou_key(self, parts: tuple[str, ...], namespace: tuple[str, ...]) -> str | None:
         key = "\\".join(parts).lower()
         if key in self.index.pou_nodes:
             return key
@@ -994,6 +1012,12 @@ class Checker:
             size = self.const_int(spec.size, namespace)
             if size is None:
                 return t.STRING
+            if self.settings.string_size is StringSize.CHARACTERS:
+                # IEC ed. 3 / CODESYS / TwinCAT: STRING(n) holds n characters (n + 1 bytes with the NUL)
+                if not 1 <= size <= 1985:
+                    self.error(f"STRING size {size} is outside 1..1985", spec.span, "E019")
+                    return t.STRING
+                return t.string_type(size + 1, f"STRING({size})")
             if not 1 <= size <= 1986:
                 self.error(f"STRING size {size} is outside 1..1986", spec.span, "E019")
                 return t.STRING

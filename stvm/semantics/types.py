@@ -284,6 +284,8 @@ class GenericType(Type):
             return k == "real"
         if n == "ANY_BIT":
             return k == "bool" or (k == "int" and other.bitstring)  # type: ignore[attr-defined]
+        if n == "ANY_BIT_OR_INT":   # stdlib only: TwinCAT/CODESYS SHL/SHR/ROL/ROR (stvm/dialects.py)
+            return k in ("bool", "int")
         if n == "ANY_STRING":
             return k == "string"
         if n == "ANY_DATE":
@@ -380,7 +382,7 @@ ELEMENTARY: dict[str, Type] = {
 GENERICS: dict[str, Type] = {
     name: GenericType(name)
     for name in ("ANY", "ANY_ELEMENTARY", "ANY_NUM", "ANY_MAGNITUDE", "ANY_INT", "ANY_REAL",
-                 "ANY_BIT", "ANY_STRING", "ANY_DATE")
+                 "ANY_BIT", "ANY_STRING", "ANY_DATE", "ANY_BIT_OR_INT")
 }
 
 SINT, INT, DINT, LINT = (ELEMENTARY[n] for n in ("SINT", "INT", "DINT", "LINT"))
@@ -395,8 +397,9 @@ def time_type(family: str, long: bool) -> TimeType:
     return next(ty for ty in (LTIME, LDATE, LTOD, LDT) if ty.family == family)
 
 
-def string_type(size: int) -> StringType:
-    return STRING if size == 1986 else StringType(f"STRING[{size}]", size)
+def string_type(size: int, name: str | None = None) -> StringType:
+    """STRING of `size` bytes with the NUL; `name` as the source spells it (`STRING(5)`: size 6)."""
+    return STRING if size == 1986 else StringType(name or f"STRING[{size}]", size)
 
 
 def wstring_type(units: int) -> WStringType:

@@ -13,10 +13,13 @@ R_TRIG's first call (`rtrig_first_call`) and the Omron pin aliases (`iec_pin_ali
 
 from __future__ import annotations
 
+import re
+
 import importlib
 from functools import lru_cache
 from importlib import resources
 
+from stvm.dialects import allows
 from stvm.settings import DEFAULT_SETTINGS, Dialect, IecPinAliases, RtrigFirstCall, SockaddrPortnoType, SysmacSettings
 
 from stvm.stdlib.registry import NATIVE_FBS, NATIVE_FUNCTIONS, native_fb, native_function
@@ -96,6 +99,11 @@ def _rewrite(text: str, marker_line: str, replacement: str) -> str:
 
 
 def _apply_settings(name: str, text: str, settings: SysmacSettings) -> str:
+    if name == "iec_functions.st" and allows(settings.dialect, "shift_any_integer"):
+        # TwinCAT/CODESYS shift and rotate any integer, not only bit strings (stvm/dialects.py)
+        text = _rewrite(text, "IN : ANY_BIT; (* dialect: shift_any_integer *)",
+                        "IN : ANY_BIT_OR_INT; (* dialect: shift_any_integer *)")
+        text = re.sub(r"FUNCTION (SHL|SHR|ROL|ROR) : ANY_BIT\n", r"FUNCTION \1 : ANY_BIT_OR_INT\n", text)
     if name == "iec_standard.st":
         if settings.rtrig_first_call is RtrigFirstCall.NO_FIRE:
             # M starting TRUE makes a first call with CLK TRUE see no rising edge

@@ -31,7 +31,7 @@ from stvm.semantics.types import ELEMENTARY, BoolType, EnumType, IntType, RealTy
 from stvm.stdlib.registry import native_function
 from stvm.stdlib.strings import text_from_wide, wide_from_text
 from stvm.stdlib.typeops import coerce, real_to_integer
-from stvm.settings import ByteToStringFormat, StouPlus, StouTrailing
+from stvm.settings import ByteToStringFormat, RealToStringFormat, StouPlus, StouTrailing
 
 NUMERIC_TYPES = ["BOOL", "SINT", "INT", "DINT", "LINT", "USINT", "UINT", "UDINT", "ULINT",
                  "BYTE", "WORD", "DWORD", "LWORD", "REAL", "LREAL"]
@@ -57,7 +57,10 @@ def bits_to_text(ctx, value: int, bits: int) -> bytes:
     return f"{value:X}".encode()
 
 
-def real_to_text(value: float, bits: int) -> bytes:
+def real_to_text(value: float, bits: int, style: RealToStringFormat = RealToStringFormat.C_EXP) -> bytes:
+    """REAL/LREAL_TO_STRING in the dialect's form (`real_to_string_format`, stvm/dialects.py)."""
+    if style is RealToStringFormat.SHORTEST:
+        return _shortest_real_text(value, bits)
     # Choice (no primary source): C `%e` with the digits the type carries (7 significant for REAL,
     # 15 for LREAL), e.g. REAL#-123.45 -> '-1.234500e+02'.
     if math.isnan(value):
@@ -65,6 +68,37 @@ def real_to_text(value: float, bits: int) -> bytes:
     if math.isinf(value):
         return b"inf" if value > 0 else b"-inf"
     return (f"{value:.6e}" if bits == 32 else f"{value:.14e}").encode()
+
+
+def _shortest_real_text(value: float, bits: int) -> bytes:
+    """The fewest significant digits that read back as the same REAL/LREAL (Beckhoff: 3.5 ->
+    '3.5', LREAL_TO_STRING -> '1.4'; at most 16 digits for LREAL, which the shortest form never
+    exceeds but for 17-digit doubles, cut to 16 as Beckhoff says). Choice where the vendors show no
+    example: plain notation for exponents -5..15, else mantissa and 'E+nn'/'E-nn'; '#INF', '-#INF'
+    and '#QNAN' as Beckhoff's LREAL_TO_FMTSTR writes them."""
+    if math.isnan(value):
+        return b"#QNAN"
+    if math.isinf(value):
+        return b"#INF" if value > 0 else b"-#INF"
+    if value == 0:
+        return b"0" if math.copysign(1.0, value) > 0 else b"-0"
+    limit = 9 if bits == 32 else 16
+    for digits in range(1, limit + 1):
+        text = f"{value:.{digits - 1}e}"
+        back = coerce(float(text), ELEMENTARY["REAL"]) if bits == 32 else float(text)
+        if back == value:
+            break
+    mantissa, exponent = text.split("e")
+    sign = "-" if mantissa.startswith("-") else ""
+    figures = mantissa.lstrip("-").replace(".", "").rstrip("0") or "0"
+    exp = int(exponent)
+    if -5 <= exp <= 15:     # the figures with the point placed: 3.5, 0.001, 120
+        if exp < 0:
+            return f"{sign}0.{'0' * (-exp - 1)}{figures}".encode()
+        whole, fraction = figures[: exp + 1].ljust(exp + 1, "0"), figures[exp + 1:]
+        return f"{sign}{whole}{'.' + fraction if fraction else ''}".encode()
+    point = f"{figures[0]}.{figures[1:]}" if len(figures) > 1 else figures
+    return f"{sign}{point}E{'-' if exp < 0 else '+'}{abs(exp):02d}".encode()
 
 
 def _fraction_text(ns: int) -> str:
@@ -119,7 +153,7 @@ def to_text(ctx, value, source: Type) -> bytes:
             return bits_to_text(ctx, value, source.bits)
         return str(value).encode()  # sysmac.md 6: plain decimal, '-' if negative, no '+'
     if isinstance(source, RealType):
-        return real_to_text(value, source.bits)
+        return real_to_text(value, source.bits, ctx.settings.real_to_string_format)
     text = TIME_TEXT_WRITERS[source.family](value)  # type: ignore[attr-defined]
     return b"L" + text if source.long else text     # type: ignore[attr-defined]  # LT#…, LDT#…
 

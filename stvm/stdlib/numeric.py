@@ -199,7 +199,15 @@ def _as_bits(value) -> int:
 
 
 def _bits_result(result_type: Type, bits: int):
-    return bool(bits) if isinstance(result_type, BoolType) else bits
+    if isinstance(result_type, BoolType):
+        return bool(bits)
+    if isinstance(result_type, IntType) and result_type.signed:
+        # TwinCAT/CODESYS shift a signed integer's two's complement bits (Choice: as unsigned,
+        # SHR fills with 0; Beckhoff documents no sign rule); the result reads back as signed
+        width = result_type.bits
+        bits &= (1 << width) - 1
+        return bits - (1 << width) if bits >> (width - 1) else bits
+    return bits
 
 
 @native_function("SHL", generic=True, result_rule=_first_argument_type)
@@ -212,7 +220,8 @@ def shl(ctx, result_type, value, count):
 @native_function("SHR", generic=True, result_rule=_first_argument_type)
 def shr(ctx, result_type, value, count):
     count = _shift_count("SHR", count)
-    return _bits_result(result_type, _as_bits(value) >> count)  # bit strings are unsigned: logical
+    bits = _as_bits(value) & ((1 << _bit_width(result_type)) - 1)   # a signed value's bits, as unsigned
+    return _bits_result(result_type, bits >> count)  # logical
 
 
 @native_function("ROL", generic=True, result_rule=_first_argument_type)

@@ -23,6 +23,7 @@ from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput
 from stvm.diagnostics import Diagnostic
 from stvm.folders import content_name
 from stvm.heap import collector_paused
+from stvm.dialects import allows
 from stvm.settings import DEFAULT_SETTINGS, Dialect, DoubleQuoteStrings, SysmacSettings
 from stvm.source import read_source
 from stvm.syntax import nodes as n
@@ -258,7 +259,11 @@ class _ToNodes:
         return str(items[0].type)
 
     def var_qualifier(self, meta, items):
-        return str(items[0]).upper()
+        word = str(items[0]).upper()
+        if word == "PERSISTENT" and not allows(self.settings.dialect, "persistent"):
+            self._error(f"PERSISTENT is a CODESYS/TwinCAT qualifier, not one of {self.settings.dialect.value} "
+                        "(use RETAIN, or --dialect codesys|twincat)", self._s(meta))
+        return word
 
     def var_decl(self, meta, items):
         names = items[0]
@@ -537,6 +542,11 @@ class _ToNodes:
     def name(self, meta, items):
         return items[0]
 
+    def dotted_name(self, meta, items):
+        """`Library.Name` in EXTENDS, IMPLEMENTS or a type (CODESYS/TwinCAT library namespaces):
+        the same parts as `Library\\Name`; semantics/checker.py resolves it (lookup_*_key)."""
+        return n.Name(tuple(str(t) for t in items), False, self._s(meta))
+
     def qualified_name(self, meta, items):
         if len(items) == 1:                     # the common case: one IDENT
             return n.Name((items[0].value,), False, self._s(meta))
@@ -557,8 +567,38 @@ class _ToNodes:
         return n.Index(items[0], tuple(items[1:]), self._s(meta))
 
     def call(self, meta, items):
-        args = tuple([a for a in items[1:] if a is not None])
-        return n.Call(items[0], args, self._s(meta))
+        args = []
+        for item in items[1:]:
+            if isinstance(item, n.Argument):
+                args.append(item)
+            elif item is not None:   # COMMA_END, or an unbound output (formal_output_empty)
+                self._call_extra(item)
+        return n.Call(items[0], tuple(args), self._s(meta))
+
+    def _call_extra(self, item) -> None:
+        """A trailing comma or an unbound output (`Q=> ,`): TwinCAT/CODESYS call syntax, dropped
+        there (stvm/dialects.py `call_syntax`), an error elsewhere."""
+        if allows(self.settings.dialect, "call_syntax"):
+            return
+        if isinstance(item, tuple):
+            what, span = f"an output with nothing bound ('{item[1]} =>')", item[2]
+        else:
+            what, span = "a comma before ')'", self._ts(item)
+        self._error(f"{what} is TwinCAT/CODESYS call syntax, not {self.settings.dialect.value} "
+                    "(use --dialect twincat|codesys)", span)
+
+    def formal_output_empty(self, meta, items):
+        return ("empty_output", str(items[0]), self._s(meta))
+
+    def set_reset_assignment(self, meta, items):
+        """`x S= c;` / `x R= c;` (CODESYS, TwinCAT): IF c THEN x := TRUE (FALSE); END_IF."""
+        span = self._s(meta)
+        setting = str(items[1]).upper().startswith("S")
+        if not allows(self.settings.dialect, "set_reset_assign"):
+            self._error(f"'{str(items[1]).upper()}' is CODESYS/TwinCAT syntax, not "
+                        f"{self.settings.dialect.value} (use --dialect twincat|codesys)", span)
+        store = n.Assign(items[0], n.BoolLiteral(setting, span), span)
+        return n.If(((items[2], (store,)),), None, span)
 
     def partial_access(self, meta, items):
         text = str(items[1])

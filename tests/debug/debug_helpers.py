@@ -101,7 +101,8 @@ def small_line(snippet: str, occurrence: int = 1) -> int:
 @functools.lru_cache(maxsize=None)
 def thesis_build():
     from stvm.debug.build import load_debug
-    return load_debug([str(THESIS_MAIN)])
+    from stvm.project import project_settings
+    return load_debug([str(THESIS_MAIN)], project_settings([str(THESIS_MAIN)]))   # the manifest's: sysmac
 
 
 @functools.lru_cache(maxsize=None)

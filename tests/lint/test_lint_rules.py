@@ -275,14 +275,15 @@ def test_every_rule_has_a_targeted_positive_and_negative_case():
 
 
 def test_setting_dependent_rules_follow_the_sysmac_settings():
-    from stvm.settings import DEFAULT_SETTINGS
+    from stvm.settings import SysmacSettings
+    DEFAULT_SETTINGS = SysmacSettings(dialect="sysmac")   # the rules are about Omron's conversions
     source = fb("VAR_INPUT b : BYTE; END_VAR VAR_OUTPUT s : STRING[8]; END_VAR", "s := BYTE_TO_STRING(b);")
-    [finding] = findings(source, "SA301")
+    [finding] = findings(source, "SA301", settings=DEFAULT_SETTINGS)
     assert "hexadecimal without leading zeros (byte_to_string_format=hex_nopad)" in finding.message
     padded = DEFAULT_SETTINGS.with_overrides(["byte_to_string_format=hex_pad2"])
     assert findings(source, "SA301", settings=padded) == []
     checksum = next(r for r in RULES if r.code == "SA201").example
-    [finding] = findings(checksum, "SA201")
+    [finding] = findings(checksum, "SA201", settings=DEFAULT_SETTINGS)
     assert "the terminating 16#00 ToAryByte adds (toarybyte_string_model=text_nul)" in finding.message
     stale = DEFAULT_SETTINGS.with_overrides(["toarybyte_string_model=text"])
     [finding] = findings(checksum, "SA201", settings=stale)

@@ -2,10 +2,16 @@
 
 from __future__ import annotations
 
+import functools
+
 import pytest
 
 import stvm
-from core_helpers import load_st, start_st, write_st
+from core_helpers import SYSMAC, load_st, start_st, write_st
+
+# these tests are about Sysmac behaviour (ARRAY[*] from 0, STRING[n] with the NUL): its dialect
+start_st = functools.partial(start_st, settings=SYSMAC)
+load_st = functools.partial(load_st, settings=SYSMAC)
 
 MS = 1_000_000
 

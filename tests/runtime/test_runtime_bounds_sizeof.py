@@ -3,9 +3,14 @@ numbering of ARRAY[*] parameters (`open_array_bounds`), run and checked as a use
 
 from __future__ import annotations
 
+import functools
+
 import pytest
 
-from core_helpers import check_text, cli, run_st, write_st
+from core_helpers import SYSMAC, check_text, cli, run_st, write_st
+
+# these tests are about Sysmac behaviour (ARRAY[*] from 0, STRING[n] with the NUL): its dialect
+run_st = functools.partial(run_st, settings=SYSMAC)
 from stvm.settings import SysmacSettings
 
 SUM_ALL = """

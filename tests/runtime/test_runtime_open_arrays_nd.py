@@ -3,9 +3,14 @@ with LOWER_BOUND(a, dim) / UPPER_BOUND(a, dim) numbered per `open_array_bounds`.
 
 from __future__ import annotations
 
+import functools
+
 import pytest
 
-from core_helpers import check_text, cli, run_st, write_st
+from core_helpers import SYSMAC, check_text, cli, run_st, write_st
+
+# these tests are about Sysmac behaviour (ARRAY[*] from 0, STRING[n] with the NUL): its dialect
+run_st = functools.partial(run_st, settings=SYSMAC)
 from stvm.settings import SysmacSettings
 
 SOURCE = """
@@ -59,10 +64,11 @@ def test_open_array_bounds_actual_keeps_each_dimensions_bounds():
 
 def test_the_parameter_prints_as_the_array_passed():
     path = write_st(SOURCE)
-    rc, out, err = cli(["run", path, "--cycles", "1", "--print", "Main.f.cells", "--print", "Main.f.cells[0, 2]"])
+    rc, out, err = cli(["run", path, "--cycles", "1", "--print", "Main.f.cells", "--print", "Main.f.cells[0, 2]",
+                        "--dialect", "sysmac"])
     assert rc == 0, err
     assert out.splitlines() == ["Main.f.cells = [[1, 2, 7], [4, 5, 6]]", "Main.f.cells[0, 2] = 7"]
-    rc, out, err = cli(["run", path, "--cycles", "1", "--print", "Main.f.cells[2, 0]"])
+    rc, out, err = cli(["run", path, "--cycles", "1", "--print", "Main.f.cells[2, 0]", "--dialect", "sysmac"])
     assert rc == 2 and "stvm: 'Main.f.cells[2, 0]': index 2 outside 0..1" in err and "Traceback" not in err
 
 

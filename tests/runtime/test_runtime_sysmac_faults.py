@@ -13,13 +13,13 @@ from stvm.settings import ArrayOob, IntDivZero, StringOverflow, SysmacSettings
 
 
 def run(source: str, cycles: int = 1, **settings):
-    vm = load_st(source, settings=SysmacSettings(**settings)).start()
+    vm = load_st(source, settings=SysmacSettings(**{"dialect": "sysmac", **settings})).start()
     vm.run(cycles=cycles)
     return vm
 
 
 def fault_of(source: str, **settings) -> stvm.RuntimeFault:
-    vm = load_st(source, settings=SysmacSettings(**settings)).start()
+    vm = load_st(source, settings=SysmacSettings(**{"dialect": "sysmac", **settings})).start()
     with pytest.raises(stvm.RuntimeFault) as info:
         vm.run(cycles=2)
     return info.value
@@ -71,7 +71,7 @@ def test_time_divisions_by_nonzero_are_unchanged():
 def test_a_misspelt_int_div_zero_is_a_usage_error_not_a_silent_zero():
     # the example: `zeroo` used to make `a / b` return 0 while DIV(a, b) faulted
     path = write_st(DIVISION_PROGRAM.format(statement="q := a / b; q := DIV(a, b);"))
-    rc, out, err = cli(["run", path, "--cycles", "1", "--no-cache", "--sysmac", "int_div_zero=zeroo"])
+    rc, out, err = cli(["run", path, "--dialect", "sysmac", "--cycles", "1", "--no-cache", "--sysmac", "int_div_zero=zeroo"])
     assert rc == 2
     assert "int_div_zero: 'zeroo' is not allowed; allowed: fault (default), zero" in err
     with pytest.raises(ValueError, match="allowed: fault"):
@@ -114,7 +114,7 @@ END_PROGRAM
 
 def test_constant_overflow_warns_at_check_time_and_truncates():
     path = write_st(CONSTANT_OVERFLOW)
-    rc, out, err = cli(["check", path])
+    rc, out, err = cli(["check", path, "--dialect", "sysmac"])
     assert rc == 0
     assert f"{path}:4:6: warning: a string of 14 bytes is truncated to the 3 bytes of STRING[4]" in err
     vm = run(CONSTANT_OVERFLOW, cycles=2)
@@ -123,7 +123,7 @@ def test_constant_overflow_warns_at_check_time_and_truncates():
 
 def test_constant_overflow_is_a_check_time_error_under_error():
     path = write_st(CONSTANT_OVERFLOW)
-    rc, out, err = cli(["check", path, "--sysmac", "string_overflow=error"])
+    rc, out, err = cli(["check", path, "--dialect", "sysmac", "--sysmac", "string_overflow=error"])
     assert rc == 1
     assert f"{path}:4:6: error: a string of 14 bytes does not fit STRING[4] (3 bytes; string_overflow=error)" in err
     assert "s := 'toolongliteral';" in err     # with the source excerpt
@@ -132,15 +132,15 @@ def test_constant_overflow_is_a_check_time_error_under_error():
 def test_initial_value_overflow_follows_the_setting():
     source = "PROGRAM Main\nVAR s : STRING[4] := 'initial'; END_VAR\nEND_PROGRAM\n"
     path = write_st(source)
-    rc, _, err = cli(["check", path])
+    rc, _, err = cli(["check", path, "--dialect", "sysmac"])
     assert rc == 0 and f"{path}:2:22: warning: initial value truncated to 3 bytes of STRING[4]" in err
-    rc, _, err = cli(["check", path, "--sysmac", "string_overflow=error"])
+    rc, _, err = cli(["check", path, "--dialect", "sysmac", "--sysmac", "string_overflow=error"])
     assert rc == 1 and f"{path}:2:22: error: a string of 7 bytes does not fit STRING[4]" in err
 
 
 def test_runtime_overflow_truncates_with_one_warning_per_site():
     path = write_st(RUNTIME_OVERFLOW)
-    rc, out, err = cli(["run", path, "--cycles", "3", "--no-cache", "--print", "Main.s", "--print", "Main.f",
+    rc, out, err = cli(["run", path, "--dialect", "sysmac", "--cycles", "3", "--no-cache", "--print", "Main.s", "--print", "Main.f",
                         "--print", "Main.o"])
     assert rc == 0, err
     # STRING[3] pins keep 'ab'; the function's STRING[4] result 'abxyz' becomes 'abx'
@@ -163,7 +163,7 @@ def test_fitting_runtime_strings_never_warn_or_fault():
     source = RUNTIME_OVERFLOW.replace("'abcdefghij'", "'a'").replace("'xyz'", "'y'").replace("'-done'", "'-'")
     path = write_st(source)
     for value in ("truncate_warn", "error"):
-        rc, out, err = cli(["run", path, "--cycles", "2", "--no-cache", "--sysmac", f"string_overflow={value}",
+        rc, out, err = cli(["run", path, "--dialect", "sysmac", "--cycles", "2", "--no-cache", "--sysmac", f"string_overflow={value}",
                             "--print", "Main.f"])
         assert (rc, out, err) == (0, "Main.f = 'ay'\n", "")
 
@@ -218,7 +218,7 @@ def test_array_oob_fault_in_an_array_star_parameter():
 
 def test_array_oob_skip_statement_skips_each_bad_statement_and_warns_once():
     path = write_st(OOB_PROGRAM)
-    rc, out, err = cli(["run", path, "--cycles", "3", "--no-cache", "--sysmac", "array_oob=skip_statement",
+    rc, out, err = cli(["run", path, "--dialect", "sysmac", "--cycles", "3", "--no-cache", "--sysmac", "array_oob=skip_statement",
                         "--print", "Main.n", "--print", "Main.a", "--print", "Main.x", "--print", "Main.y",
                         "--print", "Main.z", "--print", "Main.w"])
     assert rc == 0, err

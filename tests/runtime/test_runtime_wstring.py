@@ -133,7 +133,7 @@ def test_invalid_escape_in_a_wstring_literal_is_a_diagnostic():
 def test_sysmac_keeps_double_quoted_text_a_string():
     # Sysmac has no WSTRING: "…" stays a STRING literal with the `double_quote_strings` warning
     path = write_st('PROGRAM Main\nVAR s : STRING; END_VAR\ns := "x";\nEND_PROGRAM\n')
-    rc, _, err = cli(["check", path])
+    rc, _, err = cli(["check", path, "--dialect", "sysmac"])
     assert rc == 0 and "double-quoted string literal accepted as STRING" in err
 
 

@@ -113,7 +113,7 @@ def test_type_alias_cycle_is_a_diagnostic():
 
 @pytest.mark.parametrize("name", ["__import__", "_G", "a__b", "bad_", "P_x", "_x"])
 def test_sysmac_user_name_rules(name):
-    rc, err = check_text(f"PROGRAM Main\nVAR {name} : INT; END_VAR\n{name} := 1;\nEND_PROGRAM\n", "names.st")
+    rc, err = check_text(f"PROGRAM Main\nVAR {name} : INT; END_VAR\n{name} := 1;\nEND_PROGRAM\n", "names.st", "sysmac")
     assert rc == 1 and ": error:" in err
 
 
@@ -133,7 +133,7 @@ def test_sysmac_user_name_rules(name):
                  "PROGRAM __i WITH __T : Main; END_RESOURCE END_CONFIGURATION\nPROGRAM Main END_PROGRAM", id="task_and_instance"),
 ])
 def test_name_rules_apply_to_every_kind_of_name(source):
-    rc, err = check_text(source, "names_everywhere.st")
+    rc, err = check_text(source, "names_everywhere.st", "sysmac")
     assert rc == 1 and ": error:" in err and "Traceback" not in err
 
 

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import pytest
 
-from core_helpers import check_text, run_st
+from core_helpers import SYSMAC, check_text, run_st
 
 SOURCE = """
 TYPE Range : INT(5..10); R2 : Range; S : STRUCT a : INT(-3..3); b : Range; c : SINT(1..2) := 2; END_STRUCT; END_TYPE
@@ -37,7 +37,7 @@ END_PROGRAM
 
 
 def test_context_typing_runs():
-    values = run_st(SOURCE, prints=["Main.k", "Main.m", "Main.lim", "Main.mx", "Main.u", "Main.t", "Main.tt",
+    values = run_st(SOURCE, settings=SYSMAC, prints=["Main.k", "Main.m", "Main.lim", "Main.mx", "Main.u", "Main.t", "Main.tt",
                                     "Main.lt", "Main.j", "Main.arr", "Main.name"])
     assert values == {"Main.k": 0, "Main.m": 1.5, "Main.lim": 1.0, "Main.mx": 2.5, "Main.u": 3000000000,
                       "Main.t": 2, "Main.tt": -2, "Main.lt": 10 ** 12, "Main.j": 1, "Main.arr": [0, 0, 7],
@@ -45,7 +45,7 @@ def test_context_typing_runs():
 
 
 def test_subranges_start_at_their_lower_bound():
-    text = run_st(SOURCE, fmt=True, prints=["Main.sr", "Main.rr", "Main.r2", "Main.s", "Main.x", "g"])
+    text = run_st(SOURCE, settings=SYSMAC, fmt=True, prints=["Main.sr", "Main.rr", "Main.r2", "Main.s", "Main.x", "g"])
     assert text == {"Main.sr": "5", "Main.rr": "5", "Main.r2": "5", "Main.s": "(a := -3, b := 5, c := 2)",
                     "Main.x": "4", "g": "100"}
 

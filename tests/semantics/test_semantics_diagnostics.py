@@ -1,6 +1,6 @@
 """Diagnostics snapshots: tests/semantics/diagnostics/<case>.st next to <case>.stderr.
 
-`stvm check <case>.st` (run in that folder, so paths are stable) must print exactly the
+`stvm check <case>.st --dialect sysmac` (run in that folder, so paths are stable) must print exactly the
 snapshot. `(* error … *)` comments state intent: every line carrying one must get at least one
 error and no other line may. A mismatch writes `<case>.stderr.new` next to the snapshot;
 `pytest --update-goldens` (or STVM_UPDATE_GOLDENS=1) rewrites the snapshots instead.
@@ -29,7 +29,8 @@ ERROR_LINE = re.compile(r"^(?P<file>[^:\s][^:]*):(?P<line>\d+):(?P<col>\d+): (?P
 @pytest.mark.parametrize("case", CASES)
 def test_diagnostics_snapshot(case: Path, update_goldens: bool, monkeypatch):
     monkeypatch.chdir(HERE)
-    rc, out, err = cli(["check", case.name])
+    # the snapshots are of Sysmac code (STRING[n] counting the NUL, Omron's name rules)
+    rc, out, err = cli(["check", case.name, "--dialect", "sysmac"])
     assert "Traceback" not in err
     assert out == ""
     golden = case.with_suffix(".stderr")
@@ -62,7 +63,7 @@ def test_diagnostics_snapshot(case: Path, update_goldens: bool, monkeypatch):
 @pytest.mark.parametrize("case", CASES)
 def test_error_comments_state_intent(case: Path, monkeypatch):
     monkeypatch.chdir(HERE)
-    rc, _, err = cli(["check", case.name])
+    rc, _, err = cli(["check", case.name, "--dialect", "sysmac"])
     text = case.read_text(encoding="utf-8").splitlines()
     intended = {i + 1 for i, line in enumerate(text) if "(* error" in line}
     reported = {int(m["line"]) for m in map(ERROR_LINE.match, err.splitlines()) if m and m["kind"] == "error"}

@@ -49,11 +49,11 @@ DAY = 86_400 * S
     ("DATE_AND_TIME_TO_STRING", 0, b"DT#1970-01-01-00:00:00"),
 ])
 def test_to_string(name, value, result):
-    assert call(name, make_ctx(), value) == result
+    assert call(name, make_ctx(dialect="sysmac"), value) == result
 
 
 @pytest.mark.parametrize(("style", "value", "result"), [
-    ("hex_pad2", 0x0A, b"0A"), ("hex_pad2", 0x00, b"00"), ("decimal", 0x0A, b"10"),
+    ("hex_pad2", 0x0A, b"0A"), ("hex_pad2", 0x00, b"00"), ("decimal", 0x0A, b"10"), ("hex_nopad", 0x0A, b"A"),
 ])
 def test_byte_to_string_formats(style, value, result):
     assert call("BYTE_TO_STRING", make_ctx(byte_to_string_format=style), value) == result
@@ -137,7 +137,7 @@ def test_string_to_uint_settings():
     ("STRING_TO_DATE_AND_TIME", b"1970-01-01-00:00:01", S),
 ])
 def test_from_string(name, text, result):
-    assert call(name, make_ctx(), text) == result
+    assert call(name, make_ctx(dialect="sysmac"), text) == result
 
 
 @pytest.mark.parametrize(("name", "text"), [
@@ -149,7 +149,7 @@ def test_from_string(name, text, result):
 ])
 def test_from_string_errors(name, text):
     with pytest.raises(FunctionError):
-        call(name, make_ctx(), text)
+        call(name, make_ctx(dialect="sysmac"), text)
 
 
 @pytest.mark.parametrize(("name", "value", "result"), [

@@ -16,6 +16,7 @@ import pytest
 from stdlib_helpers import MS  # noqa: F401  (puts the checkout on sys.path)
 
 import stvm
+from stvm.settings import SysmacSettings
 
 SOURCE = r"""
 PROGRAM PEdges
@@ -143,7 +144,7 @@ END_PROGRAM
 def project(tmp_path_factory):
     path = Path(tmp_path_factory.mktemp("st_blocks")) / "blocks.st"
     path.write_text(SOURCE)
-    return stvm.load([str(path)])
+    return stvm.load([str(path)], settings=SysmacSettings(dialect="sysmac"))   # Omron's conversions
 
 
 def drive(vm, program: str, inputs: dict, outputs: list[str], rows):

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import pytest
 
-from core_helpers import check_text, run_st
+from core_helpers import SYSMAC, check_text, run_st
 from stvm.semantics.types import ELEMENTARY
 from stvm.stdlib.conversions import conversion_pairs, generic_conversion_functions
 
@@ -40,7 +40,7 @@ END_PROGRAM
 
 def test_to_type_picks_the_conversion_of_the_argument_type():
     names = ["s1", "s2", "ws", "d", "d2", "b", "x", "tt", "s4", "lr", "tod1", "bo", "lt"]
-    values = run_st(SOURCE, fmt=True, prints=[f"Main.{n}" for n in names])
+    values = run_st(SOURCE, fmt=True, prints=[f"Main.{n}" for n in names], settings=SYSMAC)   # Omron's REAL text
     assert values == {"Main.s1": "'5'", "Main.s2": "'2.500000e+00'", "Main.ws": '"5"', "Main.d": "2",
                       "Main.d2": "1500", "Main.b": "42", "Main.x": "5", "Main.tt": "T#2ms", "Main.s4": "'abc'",
                       "Main.lr": "1.5", "Main.tod1": "TOD#10:00:00", "Main.bo": "TRUE", "Main.lt": "LT#1s500ms"}

@@ -15,9 +15,11 @@ END_PROGRAM
 """
 
 
-def test_sysmac_is_the_default_and_keeps_its_name_rules():
-    assert DEFAULT_SETTINGS.dialect is Dialect.SYSMAC
+def test_iec_is_the_default_and_sysmac_keeps_its_name_rules():
+    assert DEFAULT_SETTINGS.dialect is Dialect.IEC
     rc, _, err = cli(["check", write_st(NAMES, "names.st")])
+    assert rc == 0, err                       # IEC: one leading '_' and 'p_' are ordinary names
+    rc, _, err = cli(["check", write_st(NAMES, "names.st"), "--dialect", "sysmac"])
     assert rc == 1
     assert "name '_rmp' may not start with '_'" in err and "name 'p_count' may not start with 'P_'" in err
 

@@ -134,8 +134,8 @@ def test_invalid_escapes_are_errors_by_default(text):
         decode_string(text, DEFAULT)
 
 
-def test_double_quoted_strings_are_accepted_as_string():
-    node, diags = parse_expression('"a$"b"')
+def test_double_quoted_strings_are_accepted_as_string_in_sysmac():
+    node, diags = parse_expression('"a$"b"', settings=SysmacSettings(dialect="sysmac"))
     assert isinstance(node, n.StringLiteral) and node.value == b'a"b'
     assert diags and all(not d.is_error for d in diags)   # a warning (double_quote_strings)
 
