@@ -25,10 +25,25 @@ class _Parser(argparse.ArgumentParser):
         raise SystemExit(EXIT_USAGE)
 
 
+def library_options(args) -> list:
+    """`--library NAME=DIR` options as stvm.libraries.Library values (a bad one: usage error)."""
+    if not getattr(args, "library", None):
+        return []
+    from stvm.libraries import LibraryError, parse_option   # lazy: start-up
+    try:
+        return [parse_option(text) for text in args.library]
+    except LibraryError as exc:
+        raise UsageError(str(exc)) from None
+
+
 def cmd_check(args) -> int:
-    from stvm.project import check   # lazy: start-up
+    from stvm.project import LoadError, check   # lazy: start-up
+    libraries = library_options(args)
     require_files(args.files)
-    analysis, diags, sources = check(args.files, run_settings(args), generate=True)
+    try:
+        analysis, diags, sources = check(args.files, run_settings(args), generate=True, libraries=libraries)
+    except LoadError as exc:
+        diags, sources = exc.diagnostics, exc.sources
     print_diagnostics(diags, sources)
     errors = sum(d.is_error for d in diags)
     if errors:
@@ -65,6 +80,8 @@ def build_parser() -> argparse.ArgumentParser:
     check.add_argument("--sysmac", action="append", metavar="NAME=VALUE", help=sysmac_help)
     check.add_argument("--dialect", choices=dialects, help=dialect_help)
     check.add_argument("--define", action="append", metavar="NAME[=VALUE]", help=define_help)
+    check.add_argument("--library", action="append", metavar="NAME=DIR",
+                       help="load the folder or .plcproj DIR as library NAME (its POUs reachable as NAME.X)")
     check.set_defaults(func=cmd_check)
 
     run = sub.add_parser("run", help="run ST programs on the VM")

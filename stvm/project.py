@@ -286,7 +286,7 @@ def read_files(paths: Sequence[Path], encoding: str = "utf-8") -> tuple[list[tup
 
 
 def check(paths: Sequence[str | Path], settings: SysmacSettings | None = None, generate: bool = False,
-          use_cache: bool = True):
+          use_cache: bool = True, libraries: Sequence = ()):
     """Parse and check: (analysis or None, diagnostics sorted, sources). With `generate`, also
     lower and compile, so limits that only code generation meets are reported too. Without
     `settings`, the project's own (`project_settings`).
@@ -296,9 +296,11 @@ def check(paths: Sequence[str | Path], settings: SysmacSettings | None = None, g
     checking and lowering. The analysis is then computed only if the caller reads it."""
     if settings is None:
         settings = project_settings(paths)
-    files, manifest, _ = expand_paths(paths)
+    files, manifest, root = expand_paths(paths)
     texts, diags = read_files(files, source_encoding(manifest))
-    cache_name = f"check-{_cache_key(texts, settings, 'check+generate' if generate else 'check')}.diag"
+    texts, spaces = _with_libraries(texts, diags, manifest, root, libraries)
+    kind = ('check+generate' if generate else 'check') + _spaces_key(spaces)
+    cache_name = f"check-{_cache_key(texts, settings, kind)}.diag"
     cacheable = use_cache and not diags      # an unreadable file is reported afresh every time
     if cacheable:
         payload = _cache().get(cache_name)
@@ -311,9 +313,9 @@ def check(paths: Sequence[str | Path], settings: SysmacSettings | None = None, g
             else:
                 sources = source_texts(texts)
                 sources.update(extra_sources)
-                analysis = _DeferredAnalysis(texts, settings) if ok else None
+                analysis = _DeferredAnalysis(texts, settings, spaces) if ok else None
                 return analysis, list(cached_diags), sources
-    analysis, diags, sources = _check_texts(texts, diags, settings, use_cache)
+    analysis, diags, sources = _check_texts(texts, diags, settings, use_cache, spaces=spaces)
     if generate and analysis is not None:
         try:
             _lower_and_compile(analysis, settings, texts, sources)
@@ -338,16 +340,17 @@ class _DeferredAnalysis:
     """The `Analysis` of a project whose verdict came from the cache: computed (parse from the
     unit cache, check) on first use, so `stvm check` of an unchanged project never builds it."""
 
-    def __init__(self, texts, settings) -> None:
+    def __init__(self, texts, settings, spaces=None) -> None:
         self._texts = texts
         self._settings = settings
+        self._spaces = spaces
         self._analysis = None
 
     def __getattr__(self, name):
         if name.startswith("_"):
             raise AttributeError(name)
         if self._analysis is None:
-            self._analysis, _, _ = _check_texts(list(self._texts), [], self._settings)
+            self._analysis, _, _ = _check_texts(list(self._texts), [], self._settings, spaces=self._spaces)
         return getattr(self._analysis, name)
 
 
@@ -429,12 +432,12 @@ def parse_unit(name: str, text: str, settings: SysmacSettings, use_cache: bool =
 _PRUNED: set[str] = set()
 
 
-def _check_texts(texts, diags, settings, use_cache: bool = True, unit_entries: bool = True):
+def _check_texts(texts, diags, settings, use_cache: bool = True, unit_entries: bool = True, spaces=None):
     with _collector_paused():
-        return _check_texts_unpaused(texts, diags, settings, use_cache, unit_entries)
+        return _check_texts_unpaused(texts, diags, settings, use_cache, unit_entries, spaces)
 
 
-def _check_texts_unpaused(texts, diags, settings, use_cache: bool = True, unit_entries: bool = True):
+def _check_texts_unpaused(texts, diags, settings, use_cache: bool = True, unit_entries: bool = True, spaces=None):
     from stvm.semantics import analyze   # lazy: start-up
     from stvm.stdlib import NATIVE_FUNCTIONS   # lazy: start-up
     sources = source_texts(texts)
@@ -444,8 +447,12 @@ def _check_texts_unpaused(texts, diags, settings, use_cache: bool = True, unit_e
     sources.update(stdlib_sources)
     for name, text in texts:
         unit, d = parse_unit(name, text, settings, use_cache, unit_entries)
+        if spaces and name in spaces:
+            unit = _libraries().namespaced(unit, spaces[name])
         units.append(unit)
         diags += d
+    if spaces:
+        units = _libraries().qualify(units, set(spaces.values()))
     analysis = None
     if not has_errors(diags):
         try:
@@ -497,16 +504,18 @@ def _too_deep(file: str) -> Diagnostic:
                             Span(file, 1, 1, 1, 2), "E003")
 
 
-def load(paths: Sequence[str | Path], settings: SysmacSettings | None = None, use_cache: bool = True) -> Project:
+def load(paths: Sequence[str | Path], settings: SysmacSettings | None = None, use_cache: bool = True,
+         libraries: Sequence = ()) -> Project:
     """Load a runnable project from ST files (raises LoadError with every diagnostic). Without
     `settings`, the project's own: `stvm.toml` `[sysmac]` over the defaults (`project_settings`)."""
     if settings is None:
         settings = project_settings(paths)
     files, manifest, root = expand_paths(paths)
     texts, read_diags = read_files(files, source_encoding(manifest))
+    texts, spaces = _with_libraries(texts, read_diags, manifest, root, libraries)
     if read_diags:
         raise LoadError(read_diags, source_texts(texts))
-    key = _cache_key(texts, settings, "load")
+    key = _cache_key(texts, settings, "load" + _spaces_key(spaces))
     cache_name = f"{key}.bin"
     payload = _cache().get(cache_name) if use_cache else None
     if payload is not None:
@@ -522,7 +531,8 @@ def load(paths: Sequence[str | Path], settings: SysmacSettings | None = None, us
     # later `stvm check` of the unchanged file its parse. Pickling it is a tenth of a first load
     # (1.0-1.4 s of a 100,000-line file, bench/bench_large.py). A file of a larger project keeps
     # its entry: an edit of another file re-parses only that one.
-    analysis, diags, sources = _check_texts(texts, [], settings, use_cache, unit_entries=len(texts) > 1)
+    analysis, diags, sources = _check_texts(texts, [], settings, use_cache, unit_entries=len(texts) > 1,
+                                            spaces=spaces)
     if analysis is None:
         raise LoadError(diags, sources)
     model = analysis.model
@@ -543,6 +553,32 @@ def load(paths: Sequence[str | Path], settings: SysmacSettings | None = None, us
             _cache().put(cache_name, payload)
             _cache().prune("*.bin", CACHE_MAX_ENTRIES)
     return project
+
+
+# ---- libraries with namespaces (stvm/libraries.py): `--library NAME=DIR`, `[libraries]`
+def _libraries():
+    import stvm.libraries   # lazy: start-up (projects without libraries never import it)
+    return stvm.libraries
+
+
+def _with_libraries(texts, diags, manifest, root, libraries):
+    """The texts of the project's libraries (`[libraries]` of stvm.toml, then `libraries`, each a
+    stvm.libraries.Library) before its own, and the namespace of each library file by name.
+    Raises LoadError for a library that cannot be used."""
+    if not libraries and "libraries" not in manifest:
+        return texts, {}
+    lib = _libraries()
+    try:
+        wanted = lib.from_manifest(manifest, root) + list(libraries)
+        lib_texts, spaces, lib_diags = lib.read_libraries(wanted, source_encoding(manifest))
+    except lib.LibraryError as exc:
+        raise LoadError([Diagnostic.error(str(exc), Span(str(root or "."), 0, 0, 0, 0))], {}) from None
+    diags += lib_diags
+    return lib_texts + list(texts), spaces
+
+
+def _spaces_key(spaces) -> str:
+    return "".join(f"|{name}={ns}" for name, ns in sorted(spaces.items()))
 
 
 def _native_modules(lowered) -> tuple[str, ...]:

@@ -24,7 +24,7 @@ from stvm.settings import IntLiteralType
 
 _ARITH = {"PLUS": "+", "MINUS": "-", "STAR": "*", "SLASH": "/", "MOD": "MOD", "POW": "**"}
 _COMPARE = {"EQ": "=", "NE": "<>", "LT": "<", "GT": ">", "LE": "<=", "GE": ">="}
-_LOGIC = {"AND": "AND", "AMP": "AND", "OR": "OR", "XOR": "XOR"}
+_LOGIC = {"AND": "AND", "AMP": "AND", "OR": "OR", "XOR": "XOR", "AND_THEN": "AND_THEN", "OR_ELSE": "OR_ELSE"}
 OP_TEXT = {**_ARITH, **_COMPARE, **_LOGIC, "NOT": "NOT"}
 # operators answered from their operand's type (a user POU of the same name wins)
 TYPE_QUERIES = ("LOWER_BOUND", "UPPER_BOUND", "SIZEOF", "XSIZEOF")
@@ -1142,6 +1142,9 @@ class BodyChecker:
         if op in _LOGIC:
             if isinstance(lt, t.BoolType) and isinstance(rt, t.BoolType):
                 return t.BOOL
+            if op in ("AND_THEN", "OR_ELSE"):
+                self.error(f"{sym} needs BOOL operands, not {lt.name} and {rt.name}", e.span, "E039")
+                return None
             if isinstance(lt, t.IntType) and isinstance(rt, t.IntType):
                 return self.operand_type(lt, rt, lu, ru, e)
             self.error(f"{sym} needs BOOL or bit-string operands, not {lt.name} and {rt.name}", e.span, "E039")
