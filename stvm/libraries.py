@@ -172,6 +172,16 @@ class _Qualifier:
         return dataclasses.replace(obj, **changes) if changes else obj
 
 
+def namespaces(spaces: Mapping[str, str], settings) -> set[str]:
+    """The library names `Lib.X` may start with: the project's libraries, and under the twincat
+    dialect the platform's namespaces (`IBaseLibrary.TypeClass`, `__SYSTEM.TYPE_CLASS`)."""
+    names = set(spaces.values())
+    if settings.dialect.value == "twincat":
+        from stvm.stdlib import TWINCAT_NAMESPACES   # lazy: start-up
+        names |= set(TWINCAT_NAMESPACES)
+    return names
+
+
 def read_libraries(libraries: Sequence[Library], encoding: str = "utf-8"):
     """(texts, namespace of each library file by its name, diagnostics) of `libraries`."""
     from stvm.project import read_files   # lazy: project imports this module

@@ -451,8 +451,8 @@ def _check_texts_unpaused(texts, diags, settings, use_cache: bool = True, unit_e
             unit = _libraries().namespaced(unit, spaces[name])
         units.append(unit)
         diags += d
-    if spaces:
-        units = _libraries().qualify(units, set(spaces.values()))
+    if spaces or settings.dialect.value == "twincat":
+        units = _libraries().qualify(units, _libraries().namespaces(spaces, settings))
     analysis = None
     if not has_errors(diags):
         try:

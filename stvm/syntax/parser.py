@@ -482,12 +482,15 @@ class _ToNodes:
 
     def case_name(self, meta, items):
         tok = items[0]
-        first, dot, member = str(tok).rpartition(".")
-        if dot:   # `Enum.member:`, `Lib.Enum.member:` (CODESYS/TwinCAT)
+        first, *rest = str(tok).split(".")
+        if rest:   # `Enum.member:`, `Lib.Enum.member:` (CODESYS/TwinCAT)
             span = self._ts(tok)
             self.member_bases.add(first.lower())
-            return n.Member(n.Name((first,), False, n.Span(self.file, span.line, span.column, span.line,
-                                                         span.column + len(first))), member, span)
+            expr = n.Name((first,), False, n.Span(self.file, span.line, span.column, span.line,
+                                                  span.column + len(first)))
+            for part in rest:
+                expr = n.Member(expr, part, span)
+            return expr
         return n.Name((str(tok),), False, self._ts(tok))
 
     def case_hash(self, meta, items):
