@@ -1218,6 +1218,11 @@ class BodyChecker:
             return lt.qualname.lower() == rt.qualname.lower()
         if isinstance(lt, t.BoolType) and isinstance(rt, t.BoolType):
             return True
+        if self.c.settings.dialect.value == "twincat" and \
+                {type(lt), type(rt)} <= {t.EnumType, t.IntType, t.SubrangeType} and t.EnumType in {type(lt), type(rt)}:
+            # TwinCAT: an enumeration without {attribute 'strict'} compares with integers as its
+            # value (Beckhoff, "Enumerations"); stvm does not read 'strict' yet: every one does
+            return True
         if isinstance(lt, t.TimeType) and isinstance(rt, t.TimeType):
             return lt.family == rt.family
         if (isinstance(lt, t.InterfaceType) or isinstance(rt, t.InterfaceType)) and op in ("EQ", "NE"):

@@ -117,3 +117,20 @@ END_PROGRAM
     vm.run(cycles=1)
     assert vm["Main.n"] == 116
     assert vm["Main.w"] == 5     # WLEN (Tc2_Standard) counts characters of a WSTRING
+
+
+def test_an_enumeration_compares_with_an_integer_under_twincat() -> None:
+    src = """
+PROGRAM Main
+VAR
+    cls : __SYSTEM.TYPE_CLASS := __SYSTEM.TYPE_CLASS.TYPE_INT;
+    code : UDINT := 7;
+    same, other : BOOL;
+END_VAR
+same := UDINT_TO_INT(code) = IBaseLibrary.TypeClass.TYPE_INT;
+other := cls <> 8;
+END_PROGRAM
+"""
+    vm = load(write_files({"main.st": src}), TWINCAT, use_cache=False).start()
+    vm.run(cycles=1)
+    assert vm["Main.same"] is True and vm["Main.other"] is True
