@@ -67,8 +67,12 @@ class Project:
         from stvm.stdlib import natives_for   # lazy: start-up (`import stvm.project`)
         scan_ns = parse_duration(scan) if isinstance(scan, str) else int(scan)
         functions, fbs = natives_for(self)   # only the stdlib modules the program calls, when cached
-        return VM(self, scan_ns=scan_ns, realtime=realtime, start_dt_ns=start_dt_ns, transport=transport,
-                  natives=functions, native_fbs=fbs)
+        vm = VM(self, scan_ns=scan_ns, realtime=realtime, start_dt_ns=start_dt_ns, transport=transport,
+                natives=functions, native_fbs=fbs)
+        if self.settings.dialect.value == "twincat":   # TwinCAT_SystemInfoVarList (stdlib/tc2_system.py)
+            from stvm.stdlib.tc2_system import install_system_info   # lazy: twincat projects only
+            install_system_info(vm, self)
+        return vm
 
 
 def parse_duration(text: str) -> int:

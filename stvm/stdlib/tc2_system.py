@@ -80,4 +80,50 @@ class CurrentTaskIndex:
     index of the task by its position in the configuration (1 when there is none)."""
 
     def call(self, inst, ctx) -> None:
-        inst.index = max(1, int(getattr(ctx, "task_index", 1) or 1))
+        indices = getattr(ctx, "task_indices", None) or {}
+        inst.index = indices.get(ctx.task, 1)
+
+
+MAX_TASKS = 8   # the bound of _TaskInfo in tc2_system.st
+
+
+class SystemInfo:
+    """Fills TwinCAT_SystemInfoVarList before each scan (a VM scan-start hook): for every task
+    due at this tick, CycleCount (cycles completed before this one) and FirstCycle; once, the
+    static members (cycle time, priority, names). The project name is the manifest's
+    `[project] name`, else the project folder's name."""
+
+    def __init__(self, vm, project_name: str) -> None:
+        self.vm = vm
+        self.cycles = [0] * len(vm.tasks)
+        self.index = {task.name: i + 1 for i, task in enumerate(vm.tasks[:MAX_TASKS])}
+        self.set = lambda path, value: vm.set(f"TwinCAT_SystemInfoVarList.{path}", value)
+        self.set("_AppInfo.TaskCnt", len(vm.tasks))
+        self.set("_AppInfo.ProjectName", project_name.encode("latin-1", "replace")[:63])
+        self.set("_AppInfo.AppName", b"Port_851")
+        for task in vm.tasks[:MAX_TASKS]:
+            at = f"_TaskInfo[{self.index[task.name]}]"
+            self.set(f"{at}.CycleTime", task.interval_ns // 100)
+            self.set(f"{at}.Priority", task.priority)
+            self.set(f"{at}.TaskName", task.name.encode("latin-1", "replace")[:63])
+
+    def __call__(self, vm) -> None:
+        tick = vm.scan_count
+        for i, task in enumerate(vm.tasks[:MAX_TASKS]):
+            if tick % task.every:
+                continue
+            at = f"_TaskInfo[{i + 1}]"
+            self.set(f"{at}.CycleCount", self.cycles[i] & 0xFFFFFFFF)
+            self.set(f"{at}.FirstCycle", self.cycles[i] == 0)
+            self.cycles[i] += 1
+
+
+def install_system_info(vm, project) -> None:
+    """Make `vm` keep TwinCAT_SystemInfoVarList current (twincat dialect only)."""
+    manifest = getattr(project, "manifest", {}) or {}
+    root = getattr(project, "root", None)
+    name = manifest.get("project", {}).get("name") or (root.name if root is not None else "stvm")
+    hook = SystemInfo(vm, str(name))
+    vm.on_scan_start.append(hook)
+    # GETCURTASKINDEX reads the index of the task whose code runs (ctx.task holds its name)
+    vm.ctx.task_indices = hook.index

@@ -134,3 +134,30 @@ END_PROGRAM
     vm = load(write_files({"main.st": src}), TWINCAT, use_cache=False).start()
     vm.run(cycles=1)
     assert vm["Main.same"] is True and vm["Main.other"] is True
+
+
+def test_the_system_info_list_counts_each_tasks_cycles() -> None:
+    src = """
+PROGRAM Main
+VAR
+    taskIdx : GETCURTASKINDEX;
+    count : UDINT;
+    first : BOOL;
+    firstSeen : INT;
+    name : STRING;
+    period : UDINT;
+END_VAR
+taskIdx();
+count := TwinCAT_SystemInfoVarList._TaskInfo[taskIdx.index].CycleCount;
+first := TwinCAT_SystemInfoVarList._TaskInfo[taskIdx.index].FirstCycle;
+IF first THEN firstSeen := firstSeen + 1; END_IF
+name := TwinCAT_SystemInfoVarList._AppInfo.ProjectName;
+period := TwinCAT_SystemInfoVarList._TaskInfo[1].CycleTime;
+END_PROGRAM
+"""
+    paths = write_files({"main.st": src})
+    vm = load(paths, TWINCAT, use_cache=False).start(scan="10ms")
+    vm.run(cycles=4)
+    assert vm["Main.count"] == 3 and vm["Main.first"] is False and vm["Main.firstSeen"] == 1
+    assert vm["Main.period"] == 100_000     # 10 ms in 100 ns units
+    assert vm["Main.name"] == b"stvm"       # no manifest: no project name
