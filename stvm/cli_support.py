@@ -43,6 +43,10 @@ DEFINE_HELP = ("define NAME for conditional compilation ({IF defined(NAME)}, {IF
                "beside stvm.toml's [project] defines")
 
 
+LIBRARY_HELP = ("load the folder or .plcproj DIR as library NAME, its POUs and types reachable as NAME.X "
+                "(beside stvm.toml's [libraries])")
+
+
 class UsageError(Exception):
     """A bad command line; printed as `stvm: error: message`, exit 2."""
 
@@ -85,6 +89,7 @@ def add_project_options(parser, defines: bool = True) -> None:
     parser.add_argument("--dialect", choices=DIALECTS, help=DIALECT_HELP)
     if defines:
         parser.add_argument("--define", action="append", metavar="NAME[=VALUE]", help=DEFINE_HELP)
+    parser.add_argument("--library", action="append", metavar="NAME=DIR", help=LIBRARY_HELP)
 
 
 def project_options(args) -> "Options":
@@ -106,8 +111,8 @@ def _libraries(items) -> tuple[tuple[str, str], ...]:
             pairs.append(item)
             continue
         name, sep, folder = str(item).partition("=")
-        if not sep or not name.strip() or not folder.strip():
-            raise UsageError(f"--library needs NAME=DIR, got {item!r}")
+        if not sep or not name.strip().isidentifier() or not folder.strip():
+            raise UsageError(f"--library {item!r}: expected NAME=DIR (NAME an identifier, DIR a folder or a .plcproj)")
         pairs.append((name.strip(), folder.strip()))
     return tuple(pairs)
 
@@ -117,8 +122,9 @@ def resolve_project(args, files=None) -> "ProjectSpec":
     a setting, dialect or manifest that cannot be used is a UsageError."""
     from stvm.project import resolve   # lazy: start-up
     paths = list(args.files if files is None else files)
+    options = project_options(args)   # a malformed option is reported before a missing file
     require_files(paths)
     try:
-        return resolve(paths, project_options(args))
+        return resolve(paths, options)
     except ValueError as exc:   # SettingError, ManifestError: they name the file and the value
         raise UsageError(str(exc)) from exc

@@ -64,6 +64,7 @@ _SCHEMA: dict[str, dict[str, tuple[Any, str]] | None] = {
     "hmi": None,        # the web HMI's pages, checked by stvm/hmi when it starts
     "opcua": None,      # front ends and tools that read their own table
     "lint": None,
+    "libraries": None,  # NAME = "folder or .plcproj", checked by stvm/libraries.py
     "demo": {
         "scenario": (lambda v: isinstance(v, str), "a scenario file name, relative to the manifest"),
         "step_variable": (lambda v: isinstance(v, str), "a variable path, e.g. \"Main.step\""),

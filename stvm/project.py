@@ -68,8 +68,12 @@ class Project:
         from stvm.stdlib import natives_for   # lazy: start-up (`import stvm.project`)
         scan_ns = parse_duration(scan) if isinstance(scan, str) else int(scan)
         functions, fbs = natives_for(self)   # only the stdlib modules the program calls, when cached
-        return VM(self, scan_ns=scan_ns, realtime=realtime, start_dt_ns=start_dt_ns, transport=transport,
-                  natives=functions, native_fbs=fbs)
+        vm = VM(self, scan_ns=scan_ns, realtime=realtime, start_dt_ns=start_dt_ns, transport=transport,
+                natives=functions, native_fbs=fbs)
+        if self.settings.dialect.value == "twincat":   # TwinCAT_SystemInfoVarList (stdlib/tc2_system.py)
+            from stvm.stdlib.tc2_system import install_system_info   # lazy: twincat projects only
+            install_system_info(vm, self)
+        return vm
 
 
 def parse_duration(text: str) -> int:
@@ -261,9 +265,36 @@ def resolve(paths: Sequence[str | Path], options: Options | None = None,
 
 
 def library_files(spec: ProjectSpec) -> list[Path]:
-    """The sources of the libraries `spec` loads, ahead of the project's own (none yet: library
-    loading, `--library NAME=DIR` and `[libraries]`, plugs in here)."""
+    """Sources read as the project's own ahead of its files: none. A library (`--library
+    NAME=DIR`, `[libraries]`) is read by `_with_libraries`, which also gives each of its files
+    the library's namespace."""
     return []
+
+
+def _libraries():
+    import stvm.libraries   # lazy: start-up (projects without libraries never import it)
+    return stvm.libraries
+
+
+def _with_libraries(texts, diags, spec: ProjectSpec):
+    """The texts of the project's libraries (`[libraries]` of stvm.toml, then `--library`) before
+    its own, and the namespace of each library file by name. Raises LoadError for a library that
+    cannot be used."""
+    if not spec.libraries and "libraries" not in spec.manifest:
+        return texts, {}
+    lib = _libraries()
+    try:
+        wanted = lib.from_manifest(spec.manifest, spec.root) + [lib.Library(name, Path(folder))
+                                                                for name, folder in spec.libraries]
+        lib_texts, spaces, lib_diags = lib.read_libraries(wanted, read_files, spec.encoding)
+    except lib.LibraryError as exc:
+        raise LoadError([Diagnostic.error(str(exc), Span(str(spec.root or "."), 0, 0, 0, 0))], {}) from None
+    diags += lib_diags
+    return lib_texts + list(texts), spaces
+
+
+def _spaces_key(spaces) -> str:
+    return "".join(f"|{name}={ns}" for name, ns in sorted(spaces.items()))
 
 
 def _manifest_settings(files: Sequence[Path], manifest: dict, root: Path | None) -> SysmacSettings:
@@ -292,11 +323,16 @@ def project_settings(paths: Sequence[str | Path], overrides: Sequence[str] = ())
     return resolve(paths, Options(sysmac=tuple(overrides))).settings
 
 
-def _spec(paths, settings, use_cache: bool = True) -> ProjectSpec:
-    """`paths` may already be a resolved spec (what the commands pass)."""
+def _spec(paths, settings, use_cache: bool = True, libraries: Sequence = ()) -> ProjectSpec:
+    """`paths` may already be a resolved spec (what the commands pass); `libraries`
+    (stvm.libraries.Library values, the API's) are loaded beside the spec's own."""
     if isinstance(paths, ProjectSpec):
-        return paths if settings is None else replace(paths, settings=settings)
-    return resolve(paths, Options(use_cache=use_cache), settings)
+        spec = paths if settings is None else replace(paths, settings=settings)
+    else:
+        spec = resolve(paths, Options(use_cache=use_cache), settings)
+    if libraries:
+        spec = replace(spec, libraries=spec.libraries + tuple((lib.name, Path(lib.path)) for lib in libraries))
+    return spec
 
 
 def _stdlib(settings: SysmacSettings = DEFAULT_SETTINGS) -> list[tuple[str, str]]:
@@ -383,7 +419,7 @@ def read_files(paths: Sequence[Path], encoding: str = "utf-8",
 
 
 def check(paths: "Sequence[str | Path] | ProjectSpec", settings: SysmacSettings | None = None, generate: bool = False,
-          use_cache: bool = True):
+          use_cache: bool = True, libraries: Sequence = ()):
     """Parse and check: (analysis or None, diagnostics sorted, sources). With `generate`, also
     lower and compile, so limits that only code generation meets are reported too. Without
     `settings`, the project's own (`project_settings`).
@@ -391,10 +427,12 @@ def check(paths: "Sequence[str | Path] | ProjectSpec", settings: SysmacSettings 
     The verdict (the diagnostics) of a project is cached by content hash (stvm's version and
     code, the settings, every file's name and text): an unchanged project skips parsing,
     checking and lowering. The analysis is then computed only if the caller reads it."""
-    spec = _spec(paths, settings, use_cache)
+    spec = _spec(paths, settings, use_cache, libraries)
     settings, use_cache = spec.settings, use_cache and spec.use_cache
     texts, diags = read_files(spec.sources_to_read, spec.encoding)
-    cache_name = f"check-{_cache_key(texts, settings, 'check+generate' if generate else 'check')}.diag"
+    texts, spaces = _with_libraries(texts, diags, spec)
+    kind = ('check+generate' if generate else 'check') + _spaces_key(spaces)
+    cache_name = f"check-{_cache_key(texts, settings, kind)}.diag"
     cacheable = use_cache and not diags      # an unreadable file is reported afresh every time
     if cacheable:
         payload = _cache().get(cache_name)
@@ -407,9 +445,9 @@ def check(paths: "Sequence[str | Path] | ProjectSpec", settings: SysmacSettings 
             else:
                 sources = source_texts(texts)
                 sources.update(extra_sources)
-                analysis = _DeferredAnalysis(texts, settings) if ok else None
+                analysis = _DeferredAnalysis(texts, settings, spaces) if ok else None
                 return analysis, list(cached_diags), sources
-    analysis, diags, sources = _check_texts(texts, diags, settings, use_cache)
+    analysis, diags, sources = _check_texts(texts, diags, settings, use_cache, spaces=spaces)
     if generate and analysis is not None:
         try:
             _lower_and_compile(analysis, settings, texts, sources)
@@ -434,16 +472,17 @@ class _DeferredAnalysis:
     """The `Analysis` of a project whose verdict came from the cache: computed (parse from the
     unit cache, check) on first use, so `stvm check` of an unchanged project never builds it."""
 
-    def __init__(self, texts, settings) -> None:
+    def __init__(self, texts, settings, spaces=None) -> None:
         self._texts = texts
         self._settings = settings
+        self._spaces = spaces
         self._analysis = None
 
     def __getattr__(self, name):
         if name.startswith("_"):
             raise AttributeError(name)
         if self._analysis is None:
-            self._analysis, _, _ = _check_texts(list(self._texts), [], self._settings)
+            self._analysis, _, _ = _check_texts(list(self._texts), [], self._settings, spaces=self._spaces)
         return getattr(self._analysis, name)
 
 
@@ -525,19 +564,20 @@ def parse_unit(name: str, text: str, settings: SysmacSettings, use_cache: bool =
 _PRUNED: set[str] = set()
 
 
-def _check_texts(texts, diags, settings, use_cache: bool = True, unit_entries: bool = True):
+def _check_texts(texts, diags, settings, use_cache: bool = True, unit_entries: bool = True, spaces=None):
     with _collector_paused():
-        return _check_texts_unpaused(texts, diags, settings, use_cache, unit_entries)
+        return _check_texts_unpaused(texts, diags, settings, use_cache, unit_entries, spaces)
 
 
-def _check_texts_unpaused(texts, diags, settings, use_cache: bool = True, unit_entries: bool = True):
-    units, diags, sources = _parse_units(texts, diags, settings, use_cache, unit_entries)
+def _check_texts_unpaused(texts, diags, settings, use_cache: bool = True, unit_entries: bool = True, spaces=None):
+    units, diags, sources = _parse_units(texts, diags, settings, use_cache, unit_entries, spaces)
     analysis, _, diags = _analyze(units, diags, settings)
     return analysis, diags, sources
 
 
-def _parse_units(texts, diags, settings, use_cache: bool = True, unit_entries: bool = True):
-    """(units: the stdlib's then the files', diagnostics, sources: stdlib included)."""
+def _parse_units(texts, diags, settings, use_cache: bool = True, unit_entries: bool = True, spaces=None):
+    """(units: the stdlib's then the files', diagnostics, sources: stdlib included). `spaces`:
+    the library namespace of each library file by name (`_with_libraries`)."""
     sources = source_texts(texts)
     units, stdlib_diags, stdlib_sources = stdlib_units(settings)
     units = list(units)
@@ -545,8 +585,12 @@ def _parse_units(texts, diags, settings, use_cache: bool = True, unit_entries: b
     sources.update(stdlib_sources)
     for name, text in texts:
         unit, d = parse_unit(name, text, settings, use_cache, unit_entries)
+        if spaces and name in spaces:
+            unit = _libraries().namespaced(unit, spaces[name])
         units.append(unit)
         diags += d
+    if spaces or getattr(settings.dialect, "value", settings.dialect) == "twincat":
+        units = _libraries().qualify(units, _libraries().namespaces(spaces or {}, settings))
     return units, diags, sources
 
 
@@ -621,8 +665,9 @@ def parse_stage(spec: ProjectSpec, overrides: dict[str, str] | None = None) -> P
     """Read and parse `spec`'s files (each file's tree from the cache when unchanged);
     `overrides`: texts that replace files' contents (an editor's unsaved buffers)."""
     texts, diags = read_files(spec.sources_to_read, spec.encoding, overrides)
+    texts, spaces = _with_libraries(texts, diags, spec)
     with _collector_paused():
-        units, diags, sources = _parse_units(texts, diags, spec.settings, spec.use_cache)
+        units, diags, sources = _parse_units(texts, diags, spec.settings, spec.use_cache, spaces=spaces)
     return Parsed(spec, texts, units, diags, sources)
 
 
@@ -692,15 +737,17 @@ def _too_deep(file: str) -> Diagnostic:
                             Span(file, 1, 1, 1, 2), "E003")
 
 
-def load(paths: "Sequence[str | Path] | ProjectSpec", settings: SysmacSettings | None = None, use_cache: bool = True) -> Project:
+def load(paths: "Sequence[str | Path] | ProjectSpec", settings: SysmacSettings | None = None, use_cache: bool = True,
+         libraries: Sequence = ()) -> Project:
     """Load a runnable project from ST files (raises LoadError with every diagnostic). Without
     `settings`, the project's own: `stvm.toml` `[sysmac]` over the defaults (`project_settings`)."""
-    spec = _spec(paths, settings, use_cache)
+    spec = _spec(paths, settings, use_cache, libraries)
     settings, use_cache, manifest, root = spec.settings, use_cache and spec.use_cache, spec.manifest, spec.root
     texts, read_diags = read_files(spec.sources_to_read, spec.encoding)
+    texts, spaces = _with_libraries(texts, read_diags, spec)
     if read_diags:
         raise LoadError(read_diags, source_texts(texts))
-    key = _cache_key(texts, settings, "load")
+    key = _cache_key(texts, settings, "load" + _spaces_key(spaces))
     cache_name = f"{key}.bin"
     payload = _cache().get(cache_name) if use_cache else None
     if payload is not None:
@@ -716,7 +763,8 @@ def load(paths: "Sequence[str | Path] | ProjectSpec", settings: SysmacSettings |
     # later `stvm check` of the unchanged file its parse. Pickling it is a tenth of a first load
     # (1.0-1.4 s of a 100,000-line file, bench/bench_large.py). A file of a larger project keeps
     # its entry: an edit of another file re-parses only that one.
-    analysis, diags, sources = _check_texts(texts, [], settings, use_cache, unit_entries=len(texts) > 1)
+    analysis, diags, sources = _check_texts(texts, [], settings, use_cache, unit_entries=len(texts) > 1,
+                                            spaces=spaces)
     if analysis is None:
         raise LoadError(diags, sources)
     model = analysis.model

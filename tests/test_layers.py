@@ -43,7 +43,7 @@ PACKAGES = ("stvm", "emulator")
 # An import may only go to the same layer or a lower one.
 LAYERS: list[tuple[str, ...]] = [
     ("emulator",),                       # the TM robot: knows nothing of stvm
-    ("stvm.version", "stvm.settings"),
+    ("stvm.version", "stvm.settings", "stvm.dialects"),   # the vendor profiles: data the settings read
     ("stvm.numeric",),                   # REAL rounding, STRING fitting: checker, lowering, runtime
     # spans, read_source, SourceError; the private cache folder and its signed entries; the collector's pause
     ("stvm.source", "stvm.folders", "stvm.cache", "stvm.heap"),
@@ -53,7 +53,7 @@ LAYERS: list[tuple[str, ...]] = [
     ("stvm.lower",),                     # Python source + line map
     ("stvm.runtime",),                   # VM, clock, tasks, faults
     ("stvm.stdlib",),                    # IEC + Omron natives, sockets, ST sources
-    ("stvm.manifest",),
+    ("stvm.manifest", "stvm.libraries"),   # stvm.toml; library folders and their namespaces
     ("stvm.project", "stvm.cli_support"),   # the driver: load, check, lower, start; the commands' conventions
     ("stvm.lockstep", "stvm.scenario"),
     ("stvm.demo", "stvm.trace", "stvm.session"),   # a run: VM, robot, scenario, front ends

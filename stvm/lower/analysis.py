@@ -241,7 +241,8 @@ class _Planner:
         """`hot_path_cache`: `hot_uses` of a body (loops already weigh their uses) and the names of
         its FOR variables (a range-FOR needs its variable in a Python local, so the hot-path rule
         always caches them)."""
-        return hot_uses(node.body), {s.variable.parts[0].lower() for s in fors if len(s.variable.parts) == 1}
+        return hot_uses(node.body), {s.variable.parts[0].lower() for s in fors
+                                     if isinstance(s.variable, n.Name) and len(s.variable.parts) == 1}
 
     # ---- one walk over a body: uses, calls, loops, assignments, statements that catch errors
     def scan_body(self, body) -> tuple[dict[str, int], list[n.Call], list[n.For], list[n.CallStatement], set[str]]:
@@ -536,7 +537,7 @@ class _Planner:
                 return False
             if isinstance(node, n.Assign) and root_name(node.target) == key:
                 return False
-            if isinstance(node, n.For) and node.variable.parts[0].lower() == key:
+            if isinstance(node, n.For) and root_name(node.variable) == key:
                 return False
             if isinstance(node, n.Argument) and node.kind != "input" and node.kind != "positional" \
                     and root_name(node.value) == key:

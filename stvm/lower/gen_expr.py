@@ -287,6 +287,9 @@ class ExpressionGenerator:
             pyop = {"EQ": "==", "NE": "!=", "LT": "<", "GT": ">", "LE": "<=", "GE": ">="}[op]
             return f"({left} {pyop} {right})"
         ty = self.facts.types[e.nid]
+        if op in ("AND_THEN", "OR_ELSE"):
+            # short-circuit: the right operand runs only when the left does not decide
+            return f"({self.expr_as(e.left, ty)} {'and' if op == 'AND_THEN' else 'or'} {self.expr_as(e.right, ty)})"
         if op in ("AND", "AMP", "OR", "XOR"):
             pyop = {"AND": "&", "AMP": "&", "OR": "|", "XOR": "^"}[op]
             return f"({self.expr_as(e.left, ty)} {pyop} {self.expr_as(e.right, ty)})"

@@ -25,7 +25,7 @@ from stvm.settings import IntLiteralType
 
 _ARITH = {"PLUS": "+", "MINUS": "-", "STAR": "*", "SLASH": "/", "MOD": "MOD", "POW": "**"}
 _COMPARE = {"EQ": "=", "NE": "<>", "LT": "<", "GT": ">", "LE": "<=", "GE": ">="}
-_LOGIC = {"AND": "AND", "AMP": "AND", "OR": "OR", "XOR": "XOR"}
+_LOGIC = {"AND": "AND", "AMP": "AND", "OR": "OR", "XOR": "XOR", "AND_THEN": "AND_THEN", "OR_ELSE": "OR_ELSE"}
 OP_TEXT = {**_ARITH, **_COMPARE, **_LOGIC, "NOT": "NOT"}
 # operators answered from their operand's type (a user POU of the same name wins)
 TYPE_QUERIES = ("LOWER_BOUND", "UPPER_BOUND", "SIZEOF", "XSIZEOF")
@@ -1144,6 +1144,9 @@ class BodyChecker:
         if op in _LOGIC:
             if isinstance(lt, t.BoolType) and isinstance(rt, t.BoolType):
                 return t.BOOL
+            if op in ("AND_THEN", "OR_ELSE"):
+                self.error(f"{sym} needs BOOL operands, not {lt.name} and {rt.name}", e.span, "E039")
+                return None
             if isinstance(lt, t.IntType) and isinstance(rt, t.IntType):
                 return self.operand_type(lt, rt, lu, ru, e)
             self.error(f"{sym} needs BOOL or bit-string operands, not {lt.name} and {rt.name}", e.span, "E039")
@@ -1216,6 +1219,11 @@ class BodyChecker:
         if isinstance(lt, t.EnumType) and isinstance(rt, t.EnumType):
             return lt.qualname.lower() == rt.qualname.lower()
         if isinstance(lt, t.BoolType) and isinstance(rt, t.BoolType):
+            return True
+        if self.c.settings.dialect.value == "twincat" and \
+                {type(lt), type(rt)} <= {t.EnumType, t.IntType, t.SubrangeType} and t.EnumType in {type(lt), type(rt)}:
+            # TwinCAT: an enumeration without {attribute 'strict'} compares with integers as its
+            # value (Beckhoff, "Enumerations"); stvm does not read 'strict' yet: every one does
             return True
         if isinstance(lt, t.TimeType) and isinstance(rt, t.TimeType):
             return lt.family == rt.family

@@ -324,7 +324,7 @@ class Checker:
 
     def declare_variables(self, pou, info: POUInfo, namespace: tuple[str, ...], native: bool = False) -> None:
         """Declare the variable blocks of a POU or METHOD (`pou`: its node) into `info`."""
-        early = self.declare_local_constants(pou, info)
+        early = self.declare_local_constants(pou, info, namespace)
         function_like = info.kind == "FUNCTION" or (info.kind == "METHOD" and info.return_type is not None)
         for block in pou.var_blocks:
             kind = block.kind
@@ -797,7 +797,7 @@ class Checker:
             self.error(f"signature of method '{method.name}' ({show(mine)}) does not match {what} "
                        f"({show(theirs)}), which it {verb}", span, "E067")
 
-    def declare_local_constants(self, pou: n.POU, info: POUInfo) -> set[int]:
+    def declare_local_constants(self, pou: n.POU, info: POUInfo, namespace: tuple[str, ...] = ()) -> set[int]:
         """Declare the POU's elementary VAR CONSTANT entries before anything else, so an array
         bound or STRING size may use a constant declared further down (IEC: declaration order
         does not matter). Returns the ids of the declarations done here."""
@@ -817,7 +817,7 @@ class Checker:
                 for name, span in fresh:
                     self.check_identifier(name, span)
                     var = Variable(name, LOCAL, vtype, True, span)
-                    var.init = self.initial_value(decl.init, vtype, pou.namespace, info)
+                    var.init = self.initial_value(decl.init, vtype, namespace, info)
                     info.variables[name.lower()] = var
                 done.add(decl.nid)
         return done
@@ -1059,7 +1059,11 @@ class Checker:
             if not isinstance(base, t.IntType):
                 self.error(f"subrange base must be an integer type, not {spec.base}", spec.span, "E019")
                 return None
-            low, high = spec.low, spec.high
+            low, high = (b if isinstance(b, int) else self.const_value(b, namespace, None)
+                         for b in (spec.low, spec.high))
+            if not (isinstance(low, int) and isinstance(high, int)):
+                self.error("a subrange bound must be a constant integer expression", spec.span, "E019")
+                return base
             if not base.lo <= low <= high <= base.hi:
                 self.error(f"subrange {low}..{high} is empty or outside {base.name} ({base.lo}..{base.hi})",
                            spec.span, "E019")

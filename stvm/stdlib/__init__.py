@@ -27,7 +27,7 @@ from stvm.stdlib.registry import NATIVE_FBS, NATIVE_FUNCTIONS, native_fb, native
 # Importing the implementation modules registers the natives: `load_natives()` imports them all
 # (the checker needs every declaration; `stdlib_sources` calls it), a VM from the cache imports
 # only the modules its program calls into (`Project.native_modules`). lazy: start-up
-IMPLEMENTATIONS = ("conversions", "numeric", "omron", "sockets", "strings", "timefns", "timers", "bcd")
+IMPLEMENTATIONS = ("conversions", "numeric", "omron", "sockets", "strings", "timefns", "timers", "bcd", "tc2_system")
 _SOCKET_NAMES = ("RealTcpTransport", "SocketTable", "Transport", "make_default_transport")
 
 
@@ -98,12 +98,36 @@ def _rewrite(text: str, marker_line: str, replacement: str) -> str:
     return text.replace(marker_line, replacement)
 
 
+TWINCAT_LIBRARIES = ("tc2_standard.st", "tc2_system.st", "tc2_utilities.st", "type_classes.st")
+# namespaces of the platform libraries, reached as `IBaseLibrary.TypeClass.TYPE_INT` (stvm/libraries.py)
+TWINCAT_NAMESPACES = ("IBaseLibrary", "__SYSTEM")
+
+# Beckhoff Tc2_Standard names the inputs of the string functions STR/STR1/STR2/SIZE/LEN/POS
+# (infosys.beckhoff.com, Tc2_Standard "CONCAT": `STR1 : STRING(255); STR2 : STRING(255);`, and
+# the pages of LEN, LEFT, RIGHT, MID, FIND, INSERT, DELETE, REPLACE): under the twincat dialect
+# they are aliases of the IEC inputs, so `CONCAT(STR1 := a, STR2 := b)` calls the same function.
+TC2_STANDARD_PINS = {
+    "CONCAT": "STR1=In1 STR2=In2", "LEN": "STR=In", "LEFT": "STR=In SIZE=L", "RIGHT": "STR=In SIZE=L",
+    "MID": "STR=In LEN=L POS=P", "FIND": "STR1=In1 STR2=In2", "INSERT": "STR1=In1 STR2=In2 POS=P",
+    "DELETE": "STR=In LEN=L POS=P", "REPLACE": "STR1=In1 STR2=In2 LEN=L POS=P",
+}
+
+
+def _tc2_standard_pins(text: str) -> str:
+    for function, pins in TC2_STANDARD_PINS.items():
+        marker = f"\nFUNCTION {function} : "
+        text = _rewrite(text, marker, f"\n{{alias {pins}}}{marker}")
+    return text
+
+
 def _apply_settings(name: str, text: str, settings: SysmacSettings) -> str:
     if name == "iec_functions.st" and allows(settings.dialect, "shift_any_integer"):
         # TwinCAT/CODESYS shift and rotate any integer, not only bit strings (stvm/dialects.py)
         text = _rewrite(text, "IN : ANY_BIT; (* dialect: shift_any_integer *)",
                         "IN : ANY_BIT_OR_INT; (* dialect: shift_any_integer *)")
         text = re.sub(r"FUNCTION (SHL|SHR|ROL|ROR) : ANY_BIT\n", r"FUNCTION \1 : ANY_BIT_OR_INT\n", text)
+    if name == "iec_functions.st" and settings.dialect is Dialect.TWINCAT:
+        text = _tc2_standard_pins(text)
     if name == "iec_standard.st":
         if settings.rtrig_first_call is RtrigFirstCall.NO_FIRE:
             # M starting TRUE makes a first call with CLK TRUE see no rising edge
@@ -149,6 +173,9 @@ def stdlib_sources(settings: SysmacSettings = DEFAULT_SETTINGS) -> list[tuple[st
     sources.append((f"{DISPLAY_PREFIX}bcd.st", bcd.bcd_declarations()))
     if settings.dialect is Dialect.TWINCAT:   # vendor extras exist only in their dialect
         sources.append((f"{DISPLAY_PREFIX}twincat_types.st", _packaged_text("twincat_types.st")))
+        # the Beckhoff platform libraries (docs/platform_libraries.md)
+        for name in TWINCAT_LIBRARIES:
+            sources.append((DISPLAY_PREFIX + name, _packaged_text(name)))
     return sources
 
 

@@ -100,8 +100,17 @@ def _tok_span(file: str, tok: Token) -> n.Span:
 
 
 # binding strength of each binary operator token (higher binds tighter)
-_PRECEDENCE = {"OR": 1, "XOR": 2, "AND": 3, "AMP": 3, "EQ": 4, "NE": 4, "LT": 5, "GT": 5, "LE": 5, "GE": 5,
+_PRECEDENCE = {"OR": 1, "OR_ELSE": 1, "XOR": 2, "AND": 3, "AND_THEN": 3, "AMP": 3, "EQ": 4, "NE": 4, "LT": 5, "GT": 5, "LE": 5, "GE": 5,
                "PLUS": 6, "MINUS": 6, "STAR": 7, "SLASH": 7, "MOD": 7, "POW": 8}
+
+
+def _int_bound(expr):
+    """A subrange bound: its int when it is a (signed) integer literal, else the expression."""
+    if isinstance(expr, n.IntLiteral):
+        return expr.value
+    if isinstance(expr, n.Unary) and expr.op in ("MINUS", "PLUS") and isinstance(expr.operand, n.IntLiteral):
+        return -expr.operand.value if expr.op == "MINUS" else expr.operand.value
+    return expr
 
 
 class _Modifier(str):
@@ -354,7 +363,10 @@ class _ToNodes:
         return None
 
     def subrange_spec(self, meta, items):
-        return n.SubrangeTypeSpec("\\".join(items[0].parts), items[1], items[2], self._s(meta))
+        # a literal bound is kept as its int; another constant expression (TwinCAT:
+        # `UINT(0..GVL_Param.Max)`) is left to the checker to fold
+        low, high = (_int_bound(x) for x in items[1:3])
+        return n.SubrangeTypeSpec("\\".join(items[0].parts), low, high, self._s(meta))
 
     def ref_spec(self, meta, items):
         return n.RefTypeSpec(items[-1], "REF_TO", self._s(meta))
@@ -482,20 +494,23 @@ class _ToNodes:
 
     def case_name(self, meta, items):
         tok = items[0]
-        first, dot, member = str(tok).partition(".")
-        if dot:   # `Enum.member:` (CODESYS/TwinCAT)
+        first, *rest = str(tok).split(".")
+        if rest:   # `Enum.member:`, `Lib.Enum.member:` (CODESYS/TwinCAT)
             span = self._ts(tok)
             self.member_bases.add(first.lower())
-            return n.Member(n.Name((first,), False, n.Span(self.file, span.line, span.column, span.line,
-                                                         span.column + len(first))), member, span)
+            expr = n.Name((first,), False, n.Span(self.file, span.line, span.column, span.line,
+                                                  span.column + len(first)))
+            for part in rest:
+                expr = n.Member(expr, part, span)
+            return expr
         return n.Name((str(tok),), False, self._ts(tok))
 
     def case_hash(self, meta, items):
         return self._hash(items[0])
 
     def for_statement(self, meta, items):
-        var_tok, start, end, step, body = items
-        return n.For(n.Name((str(var_tok),), False, self._ts(var_tok)), start, end, step, body, self._s(meta))
+        var, start, end, step, body = items
+        return n.For(var, start, end, step, body, self._s(meta))
 
     def while_statement(self, meta, items):
         return n.While(items[0], items[1], self._s(meta))
@@ -752,7 +767,7 @@ _FRIENDLY = {
     "STRING_LITERAL": "a string", "CASE_NAME": "a case label",
 }
 # tokens that may continue an expression: noise in "expected …" lists when a ';' or keyword fits
-_CONTINUATIONS = {"PLUS", "MINUS", "STAR", "SLASH", "MOD", "POW", "AND", "AMP", "OR", "XOR", "EQ", "NE",
+_CONTINUATIONS = {"PLUS", "MINUS", "STAR", "SLASH", "MOD", "POW", "AND", "AMP", "OR", "XOR", "AND_THEN", "OR_ELSE", "EQ", "NE",
                   "LT", "GT", "LE", "GE", "DOT", "LSQB", "LPAR", "CIRCUMFLEX", "NS_SEP"}
 
 
