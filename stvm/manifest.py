@@ -62,6 +62,7 @@ _SCHEMA: dict[str, dict[str, tuple[Any, str]] | None] = {
     },
     "sysmac": None,     # NAME = VALUE, checked by stvm.settings (names and allowed values)
     "hmi": None,        # the web HMI's pages, checked by stvm/hmi when it starts
+    "limits": None,     # operator limits of variables, checked by stvm/frontend/limits.py
     "opcua": None,      # front ends and tools that read their own table
     "lint": None,
     "libraries": None,  # NAME = "folder or .plcproj", checked by stvm/libraries.py

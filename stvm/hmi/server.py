@@ -450,6 +450,13 @@ class HmiServer:
             if isinstance(ty, (t.IntType, t.RealType)) and not isinstance(ty, t.BoolType) and text and \
                     (text[0].isdigit() or text[0] in "+-.,"):
                 text = self._decimal(label, path, text, ty)
+                # the operator's range first: -1 for a 0..4500 field is "below the minimum 0",
+                # not the UINT's 0..65535 the literal reader would name
+                number = float(text)
+                problem = self._limit_problem(limits, path, number, text) or \
+                    self.limit_table.limits_for(path).check(number)
+                if problem:
+                    raise Refused(422, f"{label}: {problem}", path)
             try:
                 value = self.bridge.parse(path, text)
             except WriteRejected as exc:

@@ -90,3 +90,16 @@ def test_mistakes_in_a_limits_table_are_reported_with_their_key(entry, message):
         LimitTable({"Main.Speed": entry}, where="limits.toml")
     assert message in str(err.value)
     assert "limits.toml 'Main.Speed'" in str(err.value)
+
+
+def test_a_limits_table_in_the_manifest_is_read(tmp_path):
+    (tmp_path / "main.st").write_text("PROGRAM Main VAR Speed : UINT; Out : BOOL; END_VAR Out := Speed > 5; END_PROGRAM\n")
+    (tmp_path / "stvm.toml").write_text('[project]\nfiles = ["main.st"]\n\n[limits]\n'
+                                        '"Main.Speed" = { min = 1, max = 90, unit = "mm/s", writable = true }\n')
+    project = stvm.load([str(tmp_path / "main.st")])
+    vm = project.start(scan="1ms")
+    table = LimitTable.for_project(project, vm)
+    lim = table.limits_for("main.speed")
+    assert (lim.min, lim.max, lim.unit, lim.writable) == (1, 90, "mm/s", True)   # an exact entry opens a VAR
+    assert not table.limits_for("Main.Out").writable                              # a program's VAR: status
+    vm.close()

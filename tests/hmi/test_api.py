@@ -139,7 +139,7 @@ def test_each_writing_widget_kind(live, values, expected):
     ({"Speed": "101"}, 422, "above the maximum 100"),
     ({"Speed": "9"}, 422, "below the minimum 10"),
     ({"Speed": "abc"}, 422, "Speed:"),
-    ({"Speed": "-1"}, 422, "out of range"),
+    ({"Speed": "-1"}, 422, "below the minimum 10"),           # the page's range, not UINT's
     ({"Pose": "2"}, 422, "not one of the choices 0, 1"),
     ({"M": "Walk"}, 422, "'Walk' is not one of the choices (Idle, Run, Stop)"),
     ({"Name": "'" + "x" * 11 + "'"}, 422, "text too long (11 characters; at most 10)"),

@@ -222,3 +222,30 @@ def test_a_60kb_nested_json_body_is_a_4xx(served):
         assert 400 <= response.status_code < 500, response.text
         assert "nested too deeply" in response.json()["error"]
     assert "Traceback" not in served.stderr
+
+
+def test_token_mode_on_every_interface_prints_addresses_an_operator_can_open(tmp_path):
+    from stvm.hmi.server import machine_addresses
+    main = write_project(tmp_path)
+    proc = subprocess.Popen([sys.executable, "-m", "stvm", "run", str(main), "--scan", "1ms", "--realtime",
+                             "--hmi", "0.0.0.0:0"], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+                            text=True, env=dict(os.environ, PYTHONPATH=str(Path.cwd())))
+    lines = []
+    try:
+        deadline = time.monotonic() + 60
+        while time.monotonic() < deadline:
+            line = proc.stderr.readline()
+            lines.append(line)
+            if line.startswith("HMI: ") and "token=" in line:
+                break
+        first = next(x for x in lines if x.startswith("HMI: ")).split()[1]   # the URL
+        assert "0.0.0.0" not in first and "127.0.0.1" not in first, lines
+        assert "?token=" in first
+        expected = machine_addresses()
+        assert expected and any(a in first for a in expected), (first, expected)
+    finally:
+        proc.send_signal(signal.SIGINT)
+        try:
+            proc.wait(20)
+        except subprocess.TimeoutExpired:
+            proc.kill()
