@@ -1,6 +1,6 @@
 """Every behaviour the TM spec leaves open, as one named setting each.
 
-The reference is ``shared/spec/tm_protocol.md``; section 11 lists the UNCERTAIN points and their
+The reference is `docs/tm_protocol.md`; section 11 lists the UNCERTAIN points and their
 recommended defaults.  Each field below cites the section it settles.  The defaults answer as a
 real robot would as far as the spec knows; a field that makes the emulator *more* lenient than the
 default is always off by default, so nothing the default says a robot rejects is silently accepted.

@@ -1,4 +1,4 @@
-"""Settings for every point the Sysmac spec marks UNCERTAIN (shared/spec/sysmac.md, section 9).
+"""Settings for every point the Sysmac spec marks UNCERTAIN (docs/sysmac.md, section 9).
 
 Each UNCERTAIN behaviour is exactly one field of `SysmacSettings`, declared once: its type (an
 Enum of the allowed values, a bounded integer, or a table), its default (the spec's) and its spec

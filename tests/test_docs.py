@@ -32,3 +32,17 @@ def test_readme_links_point_at_files_of_the_repository():
 def test_readme_is_short():
     # the manual lives in docs/; the README is what stvm is, the two commands and a tour
     assert len(README.read_text(encoding="utf-8").splitlines()) <= 300
+
+
+def test_no_page_or_source_sends_a_reader_outside_the_repository():
+    # a user's clone has only the repository: the specs and seeds stvm was built from are restated
+    # in docs/ (sysmac.md, tm_protocol.md) and named by their titles, never by a path beside it
+    outside = re.compile(r"\.\./shared|shared/(?:spec|seeds|vendor)/")
+    places = [README, *sorted((ROOT / "docs").glob("*.md"))]
+    for folder, suffixes in (("st_src", (".st", ".md", ".toml")), ("stvm", (".py", ".st", ".lark")),
+                             ("emulator", (".py",)), ("editors", (".json", ".js", ".md"))):
+        places += [p for p in sorted((ROOT / folder).rglob("*")) if p.suffix in suffixes and "node_modules" not in p.parts]
+    found = [f"{p.relative_to(ROOT)}:{n}" for p in places
+             for n, line in enumerate(p.read_text(encoding="utf-8", errors="replace").splitlines(), 1)
+             if outside.search(line)]
+    assert found == []

@@ -1,6 +1,6 @@
 """Type checking of POU bodies: statements, expressions, calls (IEC 61131-3 + Sysmac rules).
 
-Typing rules follow shared/spec/sysmac.md section 2:
+Typing rules follow docs/sysmac.md section 2:
 * integer results take the highest-ranked operand type (signed+unsigned of one rank → unsigned) and
   wrap at that width *before* any widening for the assignment;
 * an untyped integer literal takes the other operand's type when it fits, else DINT (LINT when
