@@ -1017,7 +1017,7 @@ class Checker:
                 if not 1 <= size <= 1985:
                     self.error(f"STRING size {size} is outside 1..1985", spec.span, "E019")
                     return t.STRING
-                return t.string_type(size + 1, f"STRING({size})")
+                return t.string_type(size + 1, f"STRING[{size}]")
             if not 1 <= size <= 1986:
                 self.error(f"STRING size {size} is outside 1..1986", spec.span, "E019")
                 return t.STRING

@@ -212,7 +212,10 @@ def test_warnings_go_to_stderr_and_do_not_change_the_exit_code(tmp_path):
     path = tmp_path / "warn.st"
     path.write_text("PROGRAM Main\nVAR s : STRING[3] := 'abcdef'; END_VAR\nEND_PROGRAM\n")
     rc, out, err = cli(["run", path, "--cycles", "1", "--no-cache", "--print", "Main.s"])
-    assert (rc, out) == (0, "Main.s = 'ab'\n")
+    assert (rc, out) == (0, "Main.s = 'abc'\n")          # IEC (the default): STRING[3] holds 3
+    assert f"{path}:2:" in err and ": warning:" in err
+    rc, out, err = cli(["run", path, "--cycles", "1", "--no-cache", "--print", "Main.s", "--dialect", "sysmac"])
+    assert (rc, out) == (0, "Main.s = 'ab'\n")           # Sysmac: 3 bytes with the NUL
     assert f"{path}:2:" in err and ": warning:" in err
 
 

@@ -43,6 +43,7 @@ from pathlib import Path
 from typing import Any, Callable, Iterable
 
 import stvm
+from stvm.settings import SysmacSettings
 
 REPO = Path(__file__).resolve().parents[2]
 ST_SRC = REPO / "st_src"
@@ -187,7 +188,9 @@ def harness_project():
     folder = Path(tempfile.mkdtemp(prefix="stvm-thesis-harness-"))
     harness = folder / "Harness.st"
     harness.write_text(HARNESS_ST, encoding="utf-8")
-    return stvm.load([str(ST_SRC / name) for name in FB_FILES] + [str(harness)])
+    # several files: no manifest applies, so the thesis's dialect is named here (st_src/stvm.toml's)
+    return stvm.load([str(ST_SRC / name) for name in FB_FILES] + [str(harness)],
+                     settings=SysmacSettings(dialect="sysmac"))
 
 
 @lru_cache(maxsize=None)
