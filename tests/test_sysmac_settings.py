@@ -350,6 +350,7 @@ OBSERVED: dict[tuple[str, str], Probe | StdlibTest] = {
     ("string_fn_range", "clamp"): "tests/stdlib/test_strings.py::test_position_clamped",
     ("concat_arity", "two_or_more"): "tests/stdlib/test_strings.py::test_concat_one_input_error_when_two_required",
     ("find_empty", "1"): "tests/stdlib/test_strings.py::test_find_empty_setting",
+    ("max_array_elements", "other"): "tests/security/test_input_limits.py::test_the_array_limit_is_a_setting",
 }
 
 # settings whose probe needs more than the one alternative it is keyed by
