@@ -105,7 +105,7 @@ def test_set_accepts_iec_literals(prog, value):
 
 
 @pytest.mark.parametrize("args", [
-    ["--set", "Main.b=1"],                        # a BOOL takes TRUE/FALSE (issue 17)
+    ["--set", "Main.b=2"],                        # a BOOL takes TRUE/FALSE, 0 or 1 (IEC 61131-3 table 5)
     ["--set", "Main.t=5"],                        # a TIME takes T#5ms, not 5 (ns)
     ["--set", "Main.s='open"],                    # an unterminated string
     ["--set", "Main.r=1e40"],                     # beyond REAL
