@@ -134,6 +134,8 @@ def program() -> int:
         _quiet_stdout()
         print(f"stvm: error: cannot write the output: {exc.strerror or exc}", file=sys.stderr)
         return code or EXIT_COMPILE
+    except ValueError:   # the command closed stdout itself (the language server at the end of its session)
+        pass
     return code
 
 

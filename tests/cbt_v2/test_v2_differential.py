@@ -24,6 +24,7 @@ import pytest
 
 import emulator
 import stvm
+from core_helpers import SYSMAC
 from robotlibs_helpers import ST_SRC, V2, Cell, free_high_port, load_library, script_of, tm_frame
 from thesis_harness import (CHECK_LISTEN, LISTEN_OK, RESET, FakeRobot, Runner, frame_checksum, harness_project,
                             thesis_frame, tmsct_reply)
@@ -152,7 +153,7 @@ def v1_as_printed():
                                                 encoding="utf-8")
     (folder / "Harness.st").write_text(HARNESS_ST, encoding="utf-8")
     files = [str(folder / f) if f == "CBT_MoveAbsolute.st" else str(ST_SRC / f) for f in FB_FILES]
-    return stvm.load(files + [str(folder / "Harness.st")])
+    return stvm.load(files + [str(folder / "Harness.st")], settings=SYSMAC)   # the thesis's Omron code
 
 
 def test_quoted_data_formats(benches, v1_as_printed):

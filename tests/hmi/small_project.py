@@ -28,6 +28,7 @@ END_PROGRAM
 MANIFEST = """
 [project]
 files = ["main.st"]
+dialect = "sysmac"   # a thesis-style project: Omron's STRING[n] (n - 1 bytes of text) and conversions
 
 [hmi]
 pages = ["hmi/Test.toml", "hmi/Main.toml"]

@@ -23,7 +23,6 @@ ALLOWED: dict[tuple[str, str], tuple[int, str]] = {
     # the compile cache: checked project, parsed units, stdlib units, lowered model + code objects
     ("stvm/project.py", "pickle.loads"): (4, SIGNED),
     ("stvm/project.py", "marshal.loads"): (1, SIGNED),
-    ("stvm/lint/loader.py", "pickle.loads"): (1, SIGNED),       # lint's parse cache
     ("stvm/stdlib/prebuilt.py", "pickle.loads"): (1, SHIPPED),  # prebuilt_units.pickle.z
     ("stvm/syntax/tables.py", "._load"): (1, (
         "Lark's loader given plain data decoded from JSON (the shipped st_tables.json, or a "

@@ -34,9 +34,18 @@ def declarations(settings: SysmacSettings = DEFAULT_SETTINGS):
     return found
 
 
+def _every_dialects_declarations():
+    # a vendor's platform library (TwinCAT's ADSLOG*, ...) is in the stdlib of its dialect only
+    from stvm.settings import Dialect
+    found = []
+    for dialect in Dialect:
+        found += declarations(DEFAULT_SETTINGS.with_overrides([f"dialect={dialect.value}"]))
+    return found
+
+
 def test_every_native_declaration_has_an_implementation_and_back():
     declared_functions, declared_fbs = set(), set()
-    for words, kind, name, _ in declarations():
+    for words, kind, name, _ in _every_dialects_declarations():
         if words and words[0] == "native":
             (declared_fbs if kind == "FUNCTION_BLOCK" else declared_functions).add(name.upper())
     assert declared_functions == set(NATIVE_FUNCTIONS)

@@ -11,7 +11,7 @@ from stvm.syntax import nodes as n
 ROOT = Path(__file__).resolve().parents[2]
 # the stages that keep facts about syntax nodes
 FACT_KEEPERS = [*sorted((ROOT / "stvm" / "semantics").glob("*.py")), *sorted((ROOT / "stvm" / "lower").glob("*.py")),
-                ROOT / "stvm" / "debug" / "scope.py", ROOT / "stvm" / "lint" / "facts.py"]
+                ROOT / "stvm" / "debug" / "scope.py", ROOT / "stvm" / "lint" / "facts_view.py"]
 
 
 def test_equal_nodes_have_distinct_ids_that_stay():
