@@ -285,6 +285,14 @@ class StvmLanguageServer(LanguageServer):
         for uri, diags in by_uri.items():
             self.text_document_publish_diagnostics(lsp.PublishDiagnosticsParams(uri, diags))
 
+    def symbol_request(self, params):
+        """(context, symbol at the request's position or None) of a positional request; (None,
+        None) when the file has no context (what every positional feature starts with)."""
+        ctx = self.context(params.text_document.uri)
+        if ctx is None:
+            return None, None
+        return ctx, f.symbol_at(ctx[1], ctx[0], params.position.line, params.position.character)
+
     def context(self, uri: str) -> tuple[str, Index] | None:
         """(file name, index) for a request on `uri`, checking its project first if needed."""
         path = path_of(uri)
@@ -431,10 +439,9 @@ def build_server(options=None) -> StvmLanguageServer:
 
     @server.feature(lsp.TEXT_DOCUMENT_HOVER)
     def hover(ls: StvmLanguageServer, params: lsp.HoverParams) -> lsp.Hover | None:
-        ctx = ls.context(params.text_document.uri)
+        ctx, found = ls.symbol_request(params)
         if ctx is None:
             return None
-        found = f.symbol_at(ctx[1], ctx[0], params.position.line, params.position.character)
         if found is None:
             return None
         sym, occ = found
@@ -442,10 +449,9 @@ def build_server(options=None) -> StvmLanguageServer:
                          f.rng(occ.line, occ.col, occ.end))
 
     def goto(ls: StvmLanguageServer, params) -> list[lsp.Location] | None:
-        ctx = ls.context(params.text_document.uri)
+        ctx, found = ls.symbol_request(params)
         if ctx is None:
             return None
-        found = f.symbol_at(ctx[1], ctx[0], params.position.line, params.position.character)
         if found is None or found[0].line < 0:
             return None
         sym = found[0]
@@ -461,10 +467,9 @@ def build_server(options=None) -> StvmLanguageServer:
 
     @server.feature(lsp.TEXT_DOCUMENT_TYPE_DEFINITION)
     def type_definition(ls: StvmLanguageServer, params: lsp.TypeDefinitionParams):
-        ctx = ls.context(params.text_document.uri)
+        ctx, found = ls.symbol_request(params)
         if ctx is None:
             return None
-        found = f.symbol_at(ctx[1], ctx[0], params.position.line, params.position.character)
         tsym = ctx[1].type_symbol(found[0].type) if found else None
         if tsym is None or tsym.line < 0:
             return None
@@ -473,10 +478,9 @@ def build_server(options=None) -> StvmLanguageServer:
     @server.feature(lsp.TEXT_DOCUMENT_IMPLEMENTATION)
     def implementation(ls: StvmLanguageServer, params: lsp.ImplementationParams):
         """From an interface (or its method/property): the FBs implementing it (their method/property)."""
-        ctx = ls.context(params.text_document.uri)
+        ctx, found = ls.symbol_request(params)
         if ctx is None:
             return None
-        found = f.symbol_at(ctx[1], ctx[0], params.position.line, params.position.character)
         if found is None:
             return []
         return [lsp.Location(ls.uri_of(sym.file), f.rng(sym.line, sym.col, sym.end_col))
@@ -484,10 +488,9 @@ def build_server(options=None) -> StvmLanguageServer:
 
     @server.feature(lsp.TEXT_DOCUMENT_REFERENCES)
     def references(ls: StvmLanguageServer, params: lsp.ReferenceParams) -> list[lsp.Location] | None:
-        ctx = ls.context(params.text_document.uri)
+        ctx, found = ls.symbol_request(params)
         if ctx is None:
             return None
-        found = f.symbol_at(ctx[1], ctx[0], params.position.line, params.position.character)
         if found is None:
             return []
         include = params.context.include_declaration
@@ -496,10 +499,9 @@ def build_server(options=None) -> StvmLanguageServer:
 
     @server.feature(lsp.TEXT_DOCUMENT_DOCUMENT_HIGHLIGHT)
     def highlight(ls: StvmLanguageServer, params: lsp.DocumentHighlightParams):
-        ctx = ls.context(params.text_document.uri)
+        ctx, found = ls.symbol_request(params)
         if ctx is None:
             return None
-        found = f.symbol_at(ctx[1], ctx[0], params.position.line, params.position.character)
         if found is None:
             return []
         return [lsp.DocumentHighlight(f.rng(o.line, o.col, o.end),
@@ -538,10 +540,9 @@ def build_server(options=None) -> StvmLanguageServer:
 
     @server.feature(lsp.TEXT_DOCUMENT_PREPARE_RENAME)
     def prepare_rename(ls: StvmLanguageServer, params: lsp.PrepareRenameParams):
-        ctx = ls.context(params.text_document.uri)
+        ctx, found = ls.symbol_request(params)
         if ctx is None:
             return None
-        found = f.symbol_at(ctx[1], ctx[0], params.position.line, params.position.character)
         if found is None:
             return None
         sym, occ = found
@@ -551,10 +552,9 @@ def build_server(options=None) -> StvmLanguageServer:
 
     @server.feature(lsp.TEXT_DOCUMENT_RENAME, lsp.RenameOptions(prepare_provider=True))
     def rename(ls: StvmLanguageServer, params: lsp.RenameParams):
-        ctx = ls.context(params.text_document.uri)
+        ctx, found = ls.symbol_request(params)
         if ctx is None:
             return None
-        found = f.symbol_at(ctx[1], ctx[0], params.position.line, params.position.character)
         if found is None:
             raise RequestFailed("nothing to rename here")
         sym = found[0]
