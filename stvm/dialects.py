@@ -107,6 +107,15 @@ ROWS: tuple[Row, ...] = (
         False, False, True, True,
         f"{TC3} / {CDS} 'ADR': the address of any variable, constants included; SIZEOF of the "
         "dereferenced pointer is its target type's size (accepted in every dialect that has POINTER TO)"),
+    Row("any_input", "ANY as the type of a VAR_INPUT of user code (read as .TypeClass, .pValue, .diSize)",
+        False, False, True, True,
+        f"{TC3} 'ANY and ANY_<type>' / {CDS} 'ANY': the compiler passes a structure of the argument's "
+        "type class, address and size; IEC 61131-3 and Sysmac keep generic types to library functions"),
+    Row("enum_integer", "an enumeration value assigned to an integer variable and an integer to an enumeration",
+        False, False, False, True,
+        f"{TC3} 'Enumerations': without {{attribute 'strict'}} an enumeration converts implicitly to and "
+        "from its integer base type (stvm reads no 'strict' attribute yet: every enumeration does); "
+        "IEC 61131-3 and Sysmac: enumerations are distinct types; CODESYS left strict in stvm"),
     Row("shift_any_integer", "SHL/SHR/ROL/ROR on signed and unsigned integers, not only bit strings",
         False, False, True, True,
         f"{IEC3} table 29 and {W502}: ANY_BIT operands; {TC3} / {CDS} 'SHL': any integer type"),

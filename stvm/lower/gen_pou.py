@@ -312,11 +312,12 @@ class PouGenerator:
             prologue = [f"{var_attr(v.name)} = {self.var_default(v)}" for v in pou.variables.values()
                         if v.section not in (INPUT, IN_OUT, "VAR_INST")]
             prologue.append(f"_r = {self.default_expr(pou.return_type)}" if pou.return_type is not None else "_r = None")
+            prologue += ["_rb = _Box(_r)"] if self.result_boxed() else []
             epilogue = [f"if o_{var_attr(o.name)} is not None: o_{var_attr(o.name)}.set({var_attr(o.name)})"
                         for o in outputs]
             self.cached_body(pou, node, every, prologue, epilogue, frameless=True)
             w.blank_span()
-            w.line("return _r")
+            w.line("return _rb.value" if self.result_boxed() else "return _r")
             w.indent -= 1
             return
         # every variable lives on the frame `_f` (so in-outs can reference it); the often used
@@ -328,12 +329,13 @@ class PouGenerator:
             if var.section not in (INPUT, IN_OUT, EXTERNAL, "VAR_INST"):
                 prologue.append(f"_f.{var_attr(var.name)} = {self.var_default(var)}")
         prologue.append(f"_r = {self.default_expr(pou.return_type)}" if pou.return_type is not None else "_r = None")
+        prologue += ["_rb = _Box(_r)"] if self.result_boxed() else []
         # VAR_OUTPUT of a function: written through the caller's references when it returns
         epilogue = [f"if o_{var_attr(o.name)} is not None: o_{var_attr(o.name)}.set(_f.{var_attr(o.name)})"
                     for o in outputs]
         self.cached_body(pou, node, dict(plan.cached), prologue, epilogue)
         w.blank_span()
-        w.line("return _r")
+        w.line("return _rb.value" if self.result_boxed() else "return _r")
         w.indent -= 1
 
     def cached_body(self, pou: POUInfo, node: n.POU, cached: dict[str, Variable], prologue_extra: list[str],

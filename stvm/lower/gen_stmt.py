@@ -331,7 +331,8 @@ class StatementGenerator:
         self.w.line("continue")
 
     def st_Return(self, s: n.Return) -> None:
-        self.w.line("return _r" if self.pou and self.pou.kind in ("FUNCTION", "METHOD") else "return")
+        self.w.line(("return _rb.value" if self.result_boxed() else "return _r")
+                    if self.pou and self.pou.kind in ("FUNCTION", "METHOD") else "return")
 
     def st_Empty(self, s: n.Empty) -> None:
         self.w.line("pass")
@@ -354,7 +355,8 @@ class StatementGenerator:
         if isinstance(target, n.Name):
             ref = self.facts.names[target.nid]
             if ref.kind == "result":
-                return [f"_r = {value}" if not aggregate else f"_r = _copy_value({value})"]
+                result = "_rb.value" if self.result_boxed() else "_r"
+                return [f"{result} = {value}" if not aggregate else f"{result} = _copy_value({value})"]
             var = ref.variable
             assert var is not None
             place = self.name_place(ref)
@@ -365,6 +367,8 @@ class StatementGenerator:
             if var.section == IN_OUT and not aggregate:
                 return [f"{place}.set({value})"]
             return [self.assign_into(place, value, ty)]
+        if isinstance(target, n.Index) and isinstance(self.facts.types.get(target.base.nid), t.RefType):
+            return [f"{self.pointer_index(target)}.set({value})"]   # TwinCAT/CODESYS `p[i] := v`
         if isinstance(target, n.Deref):
             held = self.held_local(target.base)
             if held is not None:

@@ -9,6 +9,7 @@ import math
 
 from stvm.numeric import f32, strfit
 from stvm.runtime.values import ArrayIndexError, ArrayRef, AttrRef, FunctionError, ItemRef, MapRef, OpenArray, STFault
+from stvm.runtime.memory import MEMORY_HELPERS
 from stvm.runtime.unions import UNION_HELPERS
 
 
@@ -194,5 +195,6 @@ HELPERS = {
     "_STFault": STFault, "_null_ref": _null_ref, "_null_itf": _null_itf, "_query_itf": _query_itf, "_same_ref": _same_ref, "_ArrayIndexError": ArrayIndexError,
 }
 HELPERS.update(UNION_HELPERS)   # the base class and member descriptor of generated UNION classes
+HELPERS.update(MEMORY_HELPERS)  # byte-addressed pointers of the TwinCAT/CODESYS profiles
 HELPERS["_OpenArray"] = OpenArray   # ARRAY[*, *] arguments
 HELPERS["_en_call"] = _en_call      # EN/ENO inside an expression

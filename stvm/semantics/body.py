@@ -59,6 +59,16 @@ def real_for(int_type: t.IntType) -> t.RealType:
     return t.REAL if int_type.bits <= 16 else t.LREAL
 
 
+def is_any_descriptor(ty: t.Type | None) -> bool:
+    """The structure an ANY input of user code holds (`__SYSTEM.AnyType`, TwinCAT/CODESYS)."""
+    return isinstance(ty, t.StructType) and ty.qualname.lower().replace("\\", ".") == "__system.anytype"
+
+
+# the key under which `facts.addressed` records that ADR() takes the address of the POU's result
+# (no variable has this name)
+RESULT_KEY = "<result>"
+
+
 def implicit_ok(src: t.Type, dst: t.Type) -> bool:
     """May a value of `src` be assigned/passed to `dst` without a conversion function?"""
     if src == dst:
@@ -450,6 +460,12 @@ class BodyChecker:
 
     # ---- assignability
     def require_assignable(self, expr: n.Expr, src: t.Type, dst: t.Type, span: n.Span) -> None:
+        if is_any_descriptor(dst) and not is_any_descriptor(src):
+            # an ANY input (TwinCAT/CODESYS) takes any value that has bytes: the call passes its
+            # type class, address and size
+            if isinstance(src, (t.FBType, t.InterfaceType, t.VoidType)) or t.byte_size(src) is None:
+                self.error(f"an ANY input takes a value with a size in bytes, not {src.name}", span, "E052")
+            return
         if isinstance(dst, t.InterfaceType) or isinstance(src, t.InterfaceType):
             self.interface_assignable(expr, src, dst, span)
             return
@@ -487,6 +503,10 @@ class BodyChecker:
             return
         if implicit_ok(src, dst):
             return
+        if allows(self.settings.dialect, "enum_integer") and (
+                isinstance(src, t.EnumType) and isinstance(dst, t.IntType)
+                or isinstance(src, t.IntType) and isinstance(dst, t.EnumType)):
+            return   # TwinCAT: an enumeration converts to and from its integer value
         if isinstance(src, t.IntType) and isinstance(dst, t.IntType):
             self.error(f"cannot assign {src.name} to {dst.name} implicitly (value may not fit){conversion_hint(src, dst)}", span, "E052")
             return
@@ -877,6 +897,8 @@ class BodyChecker:
                 self.error(f"array index must be an integer, not {ity.name}", ix.span, "E036")
         if base is None:
             return None
+        if self.byte_pointer(base) and len(e.indices) == 1:
+            return self.canonical(base.target)   # TwinCAT/CODESYS `p[i]`: the i-th element from p
         if not isinstance(base, t.ArrayType):
             self.error(f"'{self.describe(e.base)}' is {base.name}, not an array", e.span, "E036")
             return None
@@ -949,6 +971,11 @@ class BodyChecker:
         if isinstance(root, n.Name):
             ref = self.facts.names.get(root.nid)
             kind = getattr(ref, "kind", None)
+            if kind == "result" and word == "ADR" and allows(self.settings.dialect, "pointer_arithmetic"):
+                # TwinCAT/CODESYS: the function's (method's) result is a variable with an address
+                self.facts.addressed.add((self.pou.key, RESULT_KEY))
+                self.facts.ref_calls.add(e.nid)
+                return t.ref_type(ty, "POINTER")
             if kind in ("enum", "null", "result"):
                 self.error(f"{word}() needs a variable; '{root.text}' is a value", arg.span, "E055")
                 return None
@@ -1077,7 +1104,15 @@ class BodyChecker:
     def refs_assignable(self, src: t.RefType, dst: t.Type) -> bool:
         if not isinstance(dst, t.RefType):
             return False
+        if self.byte_pointer(src) and self.byte_pointer(dst):
+            return True   # TwinCAT/CODESYS: an address is an address (`pointer_arithmetic`)
         return src.is_null or t.same_type(src.target, dst.target)
+
+    def byte_pointer(self, ty: t.Type | None) -> bool:
+        """A POINTER TO of a profile with byte-addressed pointers (`pointer_arithmetic`:
+        TwinCAT, CODESYS; docs/memory_model.md)."""
+        return isinstance(ty, t.RefType) and ty.flavour == "POINTER" and not ty.is_null \
+            and allows(self.settings.dialect, "pointer_arithmetic")
 
     def expr_Unary(self, e: n.Unary, expected) -> t.Type | None:
         ty = self.expr(e.operand, expected)
@@ -1169,6 +1204,11 @@ class BodyChecker:
                 return t.LREAL
         if isinstance(lt, t.TimeType) or isinstance(rt, t.TimeType):
             return self.time_arith(e, lt, rt)
+        if op in ("PLUS", "MINUS") and self.byte_pointer(lt) and isinstance(rt, t.IntType) \
+                or op == "PLUS" and isinstance(lt, t.IntType) and self.byte_pointer(rt):
+            # TwinCAT/CODESYS: `p + n` is the address n bytes further, of p's type
+            self.facts.untyped.discard(e.nid)
+            return lt if isinstance(lt, t.RefType) else rt
         if isinstance(lt, (t.IntType, t.RealType)) and isinstance(rt, (t.IntType, t.RealType)):
             if op == "MOD" and not (isinstance(lt, t.IntType) and isinstance(rt, t.IntType)):
                 self.error(f"MOD needs integers, not {lt.name} and {rt.name}", e.span, "E039")
@@ -1232,7 +1272,11 @@ class BodyChecker:
             return all(isinstance(ty, t.FBType) or (isinstance(ty, t.RefType) and ty.is_null) or self.is_zero_literal(ex)
                        for ty, ex in others)
         if isinstance(lt, t.RefType) and isinstance(rt, t.RefType) and op in ("EQ", "NE"):
-            return lt.is_null or rt.is_null or t.same_type(lt.target, rt.target)
+            return lt.is_null or rt.is_null or t.same_type(lt.target, rt.target) \
+                or (self.byte_pointer(lt) and self.byte_pointer(rt))
+        if op in ("EQ", "NE") and (self.byte_pointer(lt) and self.is_zero_literal(re_)
+                                   or self.byte_pointer(rt) and self.is_zero_literal(le)):
+            return True   # TwinCAT/CODESYS: `p = 0` tests for the NULL address
         return False
 
     def time_arith(self, e: n.Binary, lt: t.Type, rt: t.Type) -> t.Type | None:

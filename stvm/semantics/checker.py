@@ -336,7 +336,12 @@ class Checker:
             for decl in block.decls:
                 if decl.nid in early:
                     continue
-                vtype = self.resolve_type_spec(decl.type_spec, namespace, allow_generic=native,
+                spec = decl.type_spec
+                if not native and kind == INPUT and isinstance(spec, n.NamedTypeSpec) \
+                        and [p.upper() for p in spec.parts] == ["ANY"] and allows(self.settings.dialect, "any_input"):
+                    # TwinCAT/CODESYS: an ANY input is the descriptor __SYSTEM.AnyType (docs/memory_model.md)
+                    spec = n.NamedTypeSpec(("__SYSTEM", "AnyType"), False, spec.span)
+                vtype = self.resolve_type_spec(spec, namespace, allow_generic=native,
                                                allow_open_array=kind in (IN_OUT, INPUT))
                 for name, span in decl.names:
                     self.check_identifier(name, span)
