@@ -1101,7 +1101,9 @@ class Checker:
         if isinstance(expr, n.Call):
             # LOWER_BOUND/UPPER_BOUND of a declared array, SIZEOF: constants once checked
             word, value = self.facts.type_queries.get(expr.nid, ("", None))
-            return value if word == "CONST" else NOT_CONST
+            if word == "CONST":
+                return value
+            return self.declared_sizeof(expr, namespace, pou)
         if isinstance(expr, (n.IntLiteral, n.BoolLiteral, n.StringLiteral)):
             return expr.value
         if isinstance(expr, n.RealLiteral):
@@ -1157,6 +1159,28 @@ class Checker:
             if enum is not None:
                 return enum[1]
         return NOT_CONST
+
+    def declared_sizeof(self, expr: n.Call, namespace: tuple[str, ...], pou: POUInfo | None) -> object:
+        """SIZEOF(T) / SIZEOF(v) in a declaration (an array bound: `ARRAY[0..n * SIZEOF(ST_X) - 1]`),
+        before any body is checked: the size of the named type, or of a declared variable's type."""
+        callee = expr.callee
+        if not (isinstance(callee, n.Name) and len(callee.parts) == 1 and callee.parts[0].upper() in ("SIZEOF", "XSIZEOF")
+                and len(expr.args) == 1 and expr.args[0].kind == "positional" and isinstance(expr.args[0].value, n.Name)):
+            return NOT_CONST
+        arg = expr.args[0].value
+        var = None
+        if len(arg.parts) == 1:
+            key = arg.parts[0].lower()
+            var = (pou.variables.get(key) if pou else None) or self.globals.get(key)
+        if var is not None:
+            ty = var.type
+        elif (len(arg.parts) == 1 and arg.parts[0].upper() in t.ELEMENTARY) \
+                or self.lookup_type_key(arg.parts, False, namespace) is not None:
+            ty = self.resolve_type_spec(n.NamedTypeSpec(arg.parts, False, arg.span), namespace)
+        else:
+            return NOT_CONST
+        size = t.byte_size(ty) if ty is not None else None
+        return NOT_CONST if size is None else size
 
     def bare_enumerator(self, name: str, span: n.Span, report: bool = True) -> tuple[t.EnumType, int] | None:
         cands = self.enumerators.get(name.lower(), [])
