@@ -294,10 +294,13 @@ class ExpressionGenerator:
             # `p = 0`: the NULL address
             side = e.right if e.left.nid in self.facts.untyped else e.left
             return f"({self.expr(side)} {'is' if op == 'EQ' else 'is not'} None)"
-        if op in ("EQ", "NE") and isinstance(lt, t.RefType) and self.byte_pointers() \
-                and self.pointer_cast(lt, self.facts.types.get(e.right.nid)):
+        if op in ("EQ", "NE") and isinstance(lt, t.RefType) and lt.flavour == "POINTER" and not lt.is_null \
+                and self.byte_pointers() and isinstance(self.facts.types.get(e.right.nid), t.RefType) \
+                and not self.facts.types[e.right.nid].is_null:
+            # byte-addressed pointers: the same byte of the same variable, whatever the pointers' types
+            target = self.type_const(lt.target)  # type: ignore[attr-defined]
             left, right = self.expr(e.left), self.expr_as(e.right, lt)
-            same = f"_same_ref(_as_ptr({left}, {self.type_const(lt.target)}), {right})"  # type: ignore[attr-defined]
+            same = f"_same_ref(_as_ptr({left}, {target}), _as_ptr({right}, {target}))"
             return same if op == "EQ" else f"(not {same})"
         if op in ("EQ", "NE") and isinstance(lt, t.RefType):
             rt = self.facts.types[e.right.nid]

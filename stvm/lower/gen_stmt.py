@@ -270,6 +270,9 @@ class StatementGenerator:
             item_ok = " and ".join([f"type({ref}) is _ItemRef"] + ([f"type({ref}.lst) is list"] if lists else [])
                                    + [f"{ref}.lst is not {code}" for code in lists])
             self.w.line(f"if not ({attr_ok} or {item_ok}):")
+        elif self.byte_pointers():
+            # a byte-addressed pointer (docs/memory_model.md) may overlap anything: never held
+            self.w.line(f"if {ref} is None or type({ref}) is _Ptr:")
         else:
             self.w.line(f"if {ref} is None:")
         self.w.indent += 1

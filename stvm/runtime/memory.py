@@ -43,10 +43,13 @@ _CODECS: dict[t.Type, tuple[Encode, Decode]] = {}
 def codec(ty: t.Type) -> tuple[Encode, Decode]:
     """Write a value of `ty` at an offset of a bytearray, and read one back (an aggregate is read
     into the existing list or object given, so that it keeps its identity)."""
+    if isinstance(ty, (t.StructType, t.ArrayType, t.EnumType)):
+        # not cached: a struct or enum type compares by name only (two projects of one process may
+        # declare different ST_X), and building an aggregate's codec is cheap beside using it
+        return _build_codec(ty)
     found = _CODECS.get(ty)
-    if found is None or (isinstance(ty, t.StructType) and not ty.fields):
-        found = _build_codec(ty)
-        _CODECS[ty] = found
+    if found is None:
+        found = _CODECS[ty] = _build_codec(ty)
     return found
 
 
@@ -83,8 +86,6 @@ def _build_codec(ty: t.Type) -> tuple[Encode, Decode]:
         return _nested_union_codec(ty)
     if isinstance(ty, t.StructType):
         return _struct_codec(ty)
-    if isinstance(ty, t.RefType):
-        return _pointer_codec()
     raise TypeError(f"{ty.name} has no byte image")   # the checker refuses such members
 
 
@@ -195,30 +196,6 @@ def _nested_union_codec(ty: t.UnionType) -> tuple[Encode, Decode]:
         old._vals[index] = old._codecs[index][1](old._data, 0, old._vals[index])
         old._dirty = old._aggregate[index]
         return old
-    return encode, decode
-
-
-# A pointer stored in memory (a POINTER member of a struct copied with MEMCPY): its bytes are a
-# number that stands for the pointer object, kept in this table for the run (an address has no
-# meaning outside the process either). Choice: ids from 1, 0 is NULL.
-_POINTERS: dict[int, Any] = {}
-_POINTER_IDS: dict[int, int] = {}   # not a node: id() of the pointer object -> its number
-
-
-def _pointer_codec() -> tuple[Encode, Decode]:
-    def encode(value, buf, at):
-        number = 0
-        if value is not None:
-            number = _POINTER_IDS.get(id(value))
-            if number is None or _POINTERS.get(number) is not value:
-                number = len(_POINTERS) + 1
-                _POINTERS[number] = value
-                _POINTER_IDS[id(value)] = number
-        buf[at:at + 8] = number.to_bytes(8, "little")
-
-    def decode(buf, at, old):
-        number = int.from_bytes(buf[at:at + 8], "little")
-        return _POINTERS.get(number) if number else None
     return encode, decode
 
 
@@ -409,7 +386,7 @@ class Box:
 
 
 MEMORY_HELPERS = {"_ptr_cast": cast, "_ptr_add": add, "_ptr_index": index, "_ptr_deref_agg": deref_aggregate,
-                  "_as_ptr": as_ptr, "_Box": Box}
+                  "_as_ptr": as_ptr, "_Box": Box, "_Ptr": Ptr}
 
 __all__ = ["AttrRef", "Box", "MEMORY_HELPERS", "MemoryFault", "Ptr", "add", "as_ptr", "cast", "codec",
            "image", "index", "memcmp", "memcpy", "memset"]
