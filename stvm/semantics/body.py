@@ -465,6 +465,8 @@ class BodyChecker:
             # type class, address and size
             if isinstance(src, (t.FBType, t.InterfaceType, t.VoidType)) or t.byte_size(src) is None:
                 self.error(f"an ANY input takes a value with a size in bytes, not {src.name}", span, "E052")
+            else:
+                self.mark_addressed(expr)   # the call passes its address (pValue)
             return
         if isinstance(dst, t.InterfaceType) or isinstance(src, t.InterfaceType):
             self.interface_assignable(expr, src, dst, span)
@@ -511,6 +513,21 @@ class BodyChecker:
             self.error(f"cannot assign {src.name} to {dst.name} implicitly (value may not fit){conversion_hint(src, dst)}", span, "E052")
             return
         self.error(f"type mismatch: cannot assign {src.name} to {dst.name}{conversion_hint(src, dst)}", span, "E052")
+
+    def mark_addressed(self, expr: n.Expr) -> None:
+        """The variable under `expr` (a name, field, element) has its address taken: lowering keeps
+        it where a reference can reach it (never in a Python local)."""
+        root = expr
+        while isinstance(root, (n.Member, n.Index)):
+            if isinstance(root, n.Member):
+                base_type = self.facts.types.get(root.base.nid)
+                if isinstance(base_type, t.FBType):
+                    self.facts.addressed.add((base_type.qualname.lower(), root.name.lower()))
+            root = root.base
+        if isinstance(root, n.Name):
+            ref = self.facts.names.get(root.nid)
+            if getattr(ref, "kind", None) == "var":
+                self.facts.addressed.add((self.pou.key, ref.variable.key))  # type: ignore[union-attr]
 
     def interface_assignable(self, expr: n.Expr, src: t.Type, dst: t.Type, span: n.Span) -> None:
         """`itf := fbInstance` (its FB implements the interface), `itf := itf2` (the same or an

@@ -239,3 +239,72 @@ def test_ring_buffer_record_split_across_the_end_of_the_buffer():
     assert values["okC"] is True and values["outB"] == [7, 8] and values["outC"] == [11, 12, 13, 14, 15, 16]
     assert values["sizeC"] == 6 and values["rb.nCount"] == 0
     assert values["buf"][:6] == [11, 12, 13, 14, 15, 16] and values["buf"][16:] == [6, 0, 0, 0]
+
+
+# TcUnit's pattern (FB_TestSuite.AssertEquals, F_AnyToUnionValue): ANY inputs copied with MEMCPY
+# into a member of the function's UNION result through ADR(F.member), compared with MEMCMP
+ASSERT_EQUALS = """TYPE U_Val : UNION
+    b : BOOL; i : INT; r : REAL; s : T_MaxString; w : WSTRING(255); t : TIME;
+END_UNION
+END_TYPE
+FUNCTION F_ToUnion : U_Val
+VAR_INPUT
+    AnySize : UDINT;
+    AnyTypeClass : IBaseLibrary.TypeClass;
+    AnyValue : POINTER TO BYTE;
+END_VAR
+CASE AnyTypeClass OF
+    IBaseLibrary.TypeClass.TYPE_INT :
+        MEMCPY(destaddr := ADR(F_ToUnion.i), srcAddr := AnyValue, n := AnySize);
+    IBaseLibrary.TypeClass.TYPE_REAL :
+        MEMCPY(destaddr := ADR(F_ToUnion.r), srcAddr := AnyValue, n := AnySize);
+    IBaseLibrary.TypeClass.TYPE_STRING :
+        MEMCPY(destaddr := ADR(F_ToUnion.s), srcAddr := AnyValue, n := AnySize);
+    IBaseLibrary.TypeClass.TYPE_WSTRING :
+        MEMCPY(destaddr := ADR(F_ToUnion.w), srcAddr := AnyValue, n := AnySize);
+    IBaseLibrary.TypeClass.TYPE_TIME :
+        MEMCPY(destaddr := ADR(F_ToUnion.t), srcAddr := AnyValue, n := AnySize);
+END_CASE
+END_FUNCTION
+
+FUNCTION_BLOCK FB_Suite
+METHOD AssertEquals : BOOL
+VAR_INPUT
+    Expected : ANY;
+    Actual : ANY;
+END_VAR
+VAR
+    e, a : U_Val;
+    stringExpected, stringActual : T_MaxString;
+END_VAR
+IF Expected.TypeClass <> Actual.TypeClass THEN RETURN; END_IF
+IF UDINT_TO_INT(Expected.TypeClass) = IBaseLibrary.TypeClass.TYPE_STRING THEN
+    MEMCPY(destAddr := ADR(stringExpected), srcAddr := Expected.pValue, n := DINT_TO_UDINT(Expected.diSize));
+    MEMCPY(destAddr := ADR(stringActual), srcAddr := Actual.pValue, n := DINT_TO_UDINT(Actual.diSize));
+    AssertEquals := stringExpected = stringActual;
+    RETURN;
+END_IF
+e := F_ToUnion(AnySize := DINT_TO_UDINT(Expected.diSize), AnyTypeClass := UDINT_TO_INT(Expected.TypeClass), AnyValue := Expected.pValue);
+a := F_ToUnion(AnySize := DINT_TO_UDINT(Actual.diSize), AnyTypeClass := UDINT_TO_INT(Actual.TypeClass), AnyValue := Actual.pValue);
+AssertEquals := MEMCMP(ADR(e), ADR(a), SIZEOF(e)) = 0;
+END_METHOD
+END_FUNCTION_BLOCK
+
+"""
+
+
+def test_a_tcunit_style_assert_equals_on_any_inputs():
+    values = run(program(
+        "suite : FB_Suite; i : INT := 42; r : REAL := 2.5; s : STRING(80) := 'abc'; w : WSTRING(80) := \"wide\";"
+        "tm : TIME := T#1500MS; ok1, ok2, ok3, ok4, ok5, bad1, bad2, bad3 : BOOL;",
+        "ok1 := suite.AssertEquals(Expected := INT#42, Actual := i);\n"
+        "ok2 := suite.AssertEquals(Expected := REAL#2.5, Actual := r);\n"
+        "ok3 := suite.AssertEquals(Expected := 'abc', Actual := s);\n"
+        "ok4 := suite.AssertEquals(Expected := \"wide\", Actual := w);\n"
+        "ok5 := suite.AssertEquals(Expected := T#1.5S, Actual := tm);\n"
+        "bad1 := suite.AssertEquals(Expected := INT#41, Actual := i);\n"
+        "bad2 := suite.AssertEquals(Expected := 'abd', Actual := s);\n"
+        "bad3 := suite.AssertEquals(Expected := i, Actual := r);", ASSERT_EQUALS),
+        ["ok1", "ok2", "ok3", "ok4", "ok5", "bad1", "bad2", "bad3"])
+    assert values == {"ok1": True, "ok2": True, "ok3": True, "ok4": True, "ok5": True,
+                      "bad1": False, "bad2": False, "bad3": False}
