@@ -111,6 +111,11 @@ ROWS: tuple[Row, ...] = (
         False, False, True, True,
         f"{TC3} 'ANY and ANY_<type>' / {CDS} 'ANY': the compiler passes a structure of the argument's "
         "type class, address and size; IEC 61131-3 and Sysmac keep generic types to library functions"),
+    Row("short_times", "TIME and TIME_OF_DAY take 4 bytes (milliseconds), DATE and DATE_AND_TIME 4 bytes (seconds)",
+        False, False, True, True,
+        f"{TC3} 'TIME', 'TIME_OF_DAY', 'DATE', 'DATE_AND_TIME' and {CDS}: 32-bit values in ms / s (LTIME "
+        f"64-bit ns); {W501}: TIME, DATE, TOD and DT are 64-bit nanoseconds; IEC 61131-3 leaves the "
+        "size open (stvm keeps 64 bits there). Seen by SIZEOF, MEMCPY, cast pointers and UNION members"),
     Row("enum_integer", "an enumeration value assigned to an integer variable and an integer to an enumeration",
         False, False, False, True,
         f"{TC3} 'Enumerations': without {{attribute 'strict'}} an enumeration converts implicitly to and "

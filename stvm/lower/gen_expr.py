@@ -74,7 +74,7 @@ class ExpressionGenerator:
             return code
         if self.pointer_cast(src, dst):
             # TwinCAT/CODESYS: POINTER TO A into a POINTER TO B reads A's bytes as B's
-            return f"_ptr_cast({code}, {self.type_const(src.target)}, {self.type_const(dst.target)})"  # type: ignore[attr-defined]
+            return f"_ptr_cast({code}, {self.type_const(src.target)}, {self.type_const(dst.target)}{self.short_arg()})"  # type: ignore[attr-defined]
         if isinstance(dst, t.SubrangeType) and isinstance(src, t.IntType):
             code = code if int_contains(dst, src) else wrap_int(code, dst)
             if isinstance(src, t.SubrangeType) and dst.low <= src.low and src.high <= dst.high:
@@ -262,7 +262,7 @@ class ExpressionGenerator:
         """`p[i]` (TwinCAT/CODESYS): a pointer to the i-th element from p."""
         ty = self.facts.types[e.base.nid]
         return (f"_ptr_index({self.expr(e.base)}, {self.expr(e.indices[0])}, "
-                f"{self.type_const(ty.target)})")  # type: ignore[attr-defined]
+                f"{self.type_const(ty.target)}{self.short_arg()})")  # type: ignore[attr-defined]
 
     def ex_Unary(self, e: n.Unary) -> str:
         ty = self.facts.types[e.nid]
@@ -300,7 +300,7 @@ class ExpressionGenerator:
             # byte-addressed pointers: the same byte of the same variable, whatever the pointers' types
             target = self.type_const(lt.target)  # type: ignore[attr-defined]
             left, right = self.expr(e.left), self.expr_as(e.right, lt)
-            same = f"_same_ref(_as_ptr({left}, {target}), _as_ptr({right}, {target}))"
+            same = f"_same_ref(_as_ptr({left}, {target}{self.short_arg()}), _as_ptr({right}, {target}{self.short_arg()}))"
             return same if op == "EQ" else f"(not {same})"
         if op in ("EQ", "NE") and isinstance(lt, t.RefType):
             rt = self.facts.types[e.right.nid]
@@ -326,7 +326,7 @@ class ExpressionGenerator:
             # TwinCAT/CODESYS pointer arithmetic: bytes further (or back)
             ptr, delta = (e.left, e.right) if isinstance(lt, t.RefType) else (e.right, e.left)
             amount = self.expr(delta) if op == "PLUS" else f"-({self.expr(delta)})"
-            return f"_ptr_add({self.expr(ptr)}, {amount}, {self.type_const(ty.target)})"  # type: ignore[attr-defined]
+            return f"_ptr_add({self.expr(ptr)}, {amount}, {self.type_const(ty.target)}{self.short_arg()})"  # type: ignore[attr-defined]
         if isinstance(ty, t.TimeType):
             return self.time_binary(e, ty)
         if op == "POW":
@@ -529,8 +529,9 @@ class ExpressionGenerator:
             ref = f"_copy_value({self.expr(value)})"
         else:
             ref = f"_Box({self.expr(value)})"
-        pointer = f"_ptr_cast({ref}, {self.type_const(vtype)}, {self.type_const(t.BYTE)})"  # type: ignore[attr-defined]
-        fields = {"TypeClass": type_class(vtype), "pValue": pointer, "diSize": t.byte_size(vtype) or 0}
+        pointer = f"_ptr_cast({ref}, {self.type_const(vtype)}, {self.type_const(t.BYTE)}{self.short_arg()})"  # type: ignore[attr-defined]
+        size = t.byte_size(vtype, allows(self.settings.dialect, "short_times")) or 0
+        fields = {"TypeClass": type_class(vtype), "pValue": pointer, "diSize": size}
         names = {name.lower(): name for name, _ in descriptor.fields}
         binds = ", ".join(f"{var_attr(names[key.lower()])}={code}" for key, code in fields.items())
         return f"_with({self.default_expr(descriptor)}, {binds})"  # type: ignore[attr-defined]
@@ -538,6 +539,10 @@ class ExpressionGenerator:
     def byte_pointers(self) -> bool:
         """The profile's pointers are byte addresses (`pointer_arithmetic`, docs/memory_model.md)."""
         return allows(self.settings.dialect, "pointer_arithmetic")
+
+    def short_arg(self) -> str:
+        """The time-layout argument of the memory helpers: `, True` under `short_times`."""
+        return ", True" if allows(self.settings.dialect, "short_times") else ""
 
     def pointer_cast(self, src: t.Type | None, dst: t.Type | None) -> bool:
         return (isinstance(src, t.RefType) and isinstance(dst, t.RefType) and src.flavour == dst.flavour == "POINTER"

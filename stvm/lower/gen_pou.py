@@ -179,7 +179,7 @@ class PouGenerator:
         w.line(f"class {cls}(_Union):")
         w.indent += 1
         w.line("__slots__ = ()")
-        w.line(f"_size, _codecs, _aggregate = _union_codecs({self.type_const(st)})")
+        w.line(f"_size, _codecs, _aggregate = _union_codecs({self.type_const(st)}{self.short_arg()})")
         for index, (name, _) in enumerate(st.fields):
             w.line(f"{var_attr(name)} = _UnionMember({index})")
         w.line("def __init__(self):")

@@ -12,7 +12,8 @@ back from them, so the variable keeps its usual Python representation.
 
 The byte image of each type (`codec`) is TwinCAT's on x86/x64, little-endian: BOOL one byte
 (0/1; any non-zero byte reads TRUE), integers, enumerations in their width, REAL/LREAL IEEE 754,
-TIME-family values in `stvm.semantics.types.byte_size`'s width, STRING(n) n+1 bytes up to a NUL,
+TIME/TOD 32-bit milliseconds and DATE/DT 32-bit seconds (the `short_times` row; 64-bit
+nanoseconds in the other profiles and for LTIME & co.), STRING(n) n+1 bytes up to a NUL,
 WSTRING(n) 2(n+1) bytes, arrays row-major, structs with each member at a multiple of its own
 alignment (at most 8) and the whole padded to its largest member's alignment — the layout of
 `byte_size`, which SIZEOF reports, so SIZEOF and the bytes agree.
@@ -37,23 +38,25 @@ class MemoryFault(STFault):
 
 
 # ---- the serialiser ------------------------------------------------------------------------------
-_CODECS: dict[t.Type, tuple[Encode, Decode]] = {}
+_CODECS: dict[tuple[t.Type, bool], tuple[Encode, Decode]] = {}
+_MS, _S = 1_000_000, 1_000_000_000   # nanoseconds in a millisecond, in a second
 
 
-def codec(ty: t.Type) -> tuple[Encode, Decode]:
+def codec(ty: t.Type, short: bool = False) -> tuple[Encode, Decode]:
     """Write a value of `ty` at an offset of a bytearray, and read one back (an aggregate is read
-    into the existing list or object given, so that it keeps its identity)."""
+    into the existing list or object given, so that it keeps its identity). `short`: the
+    TwinCAT/CODESYS time layout (`short_times`: TIME/TOD 32-bit ms, DATE/DT 32-bit s)."""
     if isinstance(ty, (t.StructType, t.ArrayType, t.EnumType)):
         # not cached: a struct or enum type compares by name only (two projects of one process may
         # declare different ST_X), and building an aggregate's codec is cheap beside using it
-        return _build_codec(ty)
-    found = _CODECS.get(ty)
+        return _build_codec(ty, short)
+    found = _CODECS.get((ty, short))
     if found is None:
-        found = _CODECS[ty] = _build_codec(ty)
+        found = _CODECS[ty, short] = _build_codec(ty, short)
     return found
 
 
-def _build_codec(ty: t.Type) -> tuple[Encode, Decode]:
+def _build_codec(ty: t.Type, short: bool) -> tuple[Encode, Decode]:
     if isinstance(ty, t.BoolType):
         def encode(value, buf, at):
             buf[at] = 1 if value else 0
@@ -62,11 +65,13 @@ def _build_codec(ty: t.Type) -> tuple[Encode, Decode]:
             return buf[at] != 0
         return encode, decode
     if isinstance(ty, t.EnumType):
-        return codec(ty.base if ty.base is not None else t.INT)
+        return codec(ty.base if ty.base is not None else t.INT, short)
     if isinstance(ty, t.IntType):
         return _int_codec(ty.bits // 8, ty.signed)
     if isinstance(ty, t.TimeType):
-        return _int_codec(t.byte_size(ty) or 8, True)
+        if short and not ty.long:
+            return _scaled_codec(_MS if ty.family in ("TIME", "TIME_OF_DAY") else _S)
+        return _int_codec(8, True)
     if isinstance(ty, t.RealType):
         packer = struct.Struct("<f" if ty.bits == 32 else "<d")
 
@@ -81,11 +86,11 @@ def _build_codec(ty: t.Type) -> tuple[Encode, Decode]:
     if isinstance(ty, t.StringType):
         return _string_codec(ty)
     if isinstance(ty, t.ArrayType):
-        return _array_codec(ty)
+        return _array_codec(ty, short)
     if isinstance(ty, t.UnionType):
-        return _nested_union_codec(ty)
+        return _nested_union_codec(ty, short)
     if isinstance(ty, t.StructType):
-        return _struct_codec(ty)
+        return _struct_codec(ty, short)
     raise TypeError(f"{ty.name} has no byte image")   # the checker refuses such members
 
 
@@ -95,6 +100,18 @@ def _int_codec(size: int, signed: bool) -> tuple[Encode, Decode]:
 
     def decode(buf, at, old):
         return int.from_bytes(buf[at:at + size], "little", signed=signed)
+    return encode, decode
+
+
+def _scaled_codec(unit: int) -> tuple[Encode, Decode]:
+    """A time held in nanoseconds, stored as a 32-bit unsigned count of `unit` (TwinCAT TIME/TOD:
+    milliseconds, DATE/DT: seconds); what does not fit a whole unit is dropped, as TwinCAT's
+    32-bit value cannot hold it."""
+    def encode(value, buf, at):
+        buf[at:at + 4] = ((int(value) // unit) & 0xFFFFFFFF).to_bytes(4, "little")
+
+    def decode(buf, at, old):
+        return int.from_bytes(buf[at:at + 4], "little") * unit
     return encode, decode
 
 
@@ -128,10 +145,10 @@ def _wstring_codec(ty: t.StringType) -> tuple[Encode, Decode]:
     return encode, decode
 
 
-def _array_codec(ty: t.ArrayType) -> tuple[Encode, Decode]:
+def _array_codec(ty: t.ArrayType, short: bool) -> tuple[Encode, Decode]:
     element = ty.element
-    step = t.byte_size(element) or 0
-    encode_one, decode_one = codec(element)
+    step = t.byte_size(element, short) or 0
+    encode_one, decode_one = codec(element, short)
     counts = [hi - lo + 1 for lo, hi in ty.dims or ()]
     strides = [step] * len(counts)
     for d in range(len(counts) - 2, -1, -1):
@@ -159,15 +176,15 @@ def _array_codec(ty: t.ArrayType) -> tuple[Encode, Decode]:
     return encode, decode
 
 
-def _struct_codec(ty: t.StructType) -> tuple[Encode, Decode]:
+def _struct_codec(ty: t.StructType, short: bool) -> tuple[Encode, Decode]:
     members = []
     offset = 0
     for slot in struct_layout(ty):   # the storage names of the struct's members, in order
         fty = slot.type
-        align = t.alignment(fty) or 1
+        align = t.alignment(fty, short) or 1
         offset = -(-offset // align) * align
-        members.append((slot.storage, offset, *codec(fty), isinstance(fty, (t.ArrayType, t.StructType))))
-        offset += t.byte_size(fty) or 0
+        members.append((slot.storage, offset, *codec(fty, short), isinstance(fty, (t.ArrayType, t.StructType))))
+        offset += t.byte_size(fty, short) or 0
 
     def encode(value, buf, at):
         for attr, where, encode_one, _, _ in members:
@@ -183,8 +200,8 @@ def _struct_codec(ty: t.StructType) -> tuple[Encode, Decode]:
     return encode, decode
 
 
-def _nested_union_codec(ty: t.UnionType) -> tuple[Encode, Decode]:
-    size = t.byte_size(ty) or 0
+def _nested_union_codec(ty: t.UnionType, short: bool) -> tuple[Encode, Decode]:
+    size = t.byte_size(ty, short) or 0
 
     def encode(value, buf, at):
         value._sync()
@@ -199,10 +216,10 @@ def _nested_union_codec(ty: t.UnionType) -> tuple[Encode, Decode]:
     return encode, decode
 
 
-def image(value, ty: t.Type) -> bytearray:
+def image(value, ty: t.Type, short: bool = False) -> bytearray:
     """The bytes of a value of `ty`."""
-    buf = bytearray(t.byte_size(ty) or 0)
-    codec(ty)[0](value, buf, 0)
+    buf = bytearray(t.byte_size(ty, short) or 0)
+    codec(ty, short)[0](value, buf, 0)
     return buf
 
 
@@ -210,15 +227,16 @@ def image(value, ty: t.Type) -> bytearray:
 class Ptr:
     """A pointer `offset` bytes into a variable, read as `view`. `base` is a reference (get/set) to
     a scalar variable, or an aggregate object (a list for an array, a struct or union object) that
-    is changed in place; `base_type` is the variable's type."""
+    is changed in place; `base_type` is the variable's type; `short`: the time layout (`codec`)."""
 
-    __slots__ = ("base", "base_type", "offset", "view")
+    __slots__ = ("base", "base_type", "offset", "view", "short")
 
-    def __init__(self, base, base_type: t.Type, offset: int, view: t.Type) -> None:
+    def __init__(self, base, base_type: t.Type, offset: int, view: t.Type, short: bool = False) -> None:
         self.base = base
         self.base_type = base_type
         self.offset = offset
         self.view = view
+        self.short = short
 
     # the variable's bytes
     def _aggregate(self) -> bool:
@@ -226,17 +244,17 @@ class Ptr:
 
     def load(self) -> bytearray:
         value = self.base if self._aggregate() else self.base.get()
-        return image(value, self.base_type)
+        return image(value, self.base_type, self.short)
 
     def store(self, buf: bytearray) -> None:
-        decode = codec(self.base_type)[1]
+        decode = codec(self.base_type, self.short)[1]
         if self._aggregate():
             decode(buf, 0, self.base)
         else:
             self.base.set(decode(buf, 0, None))
 
     def span(self, count: int) -> tuple[int, int]:
-        size = t.byte_size(self.base_type) or 0
+        size = t.byte_size(self.base_type, self.short) or 0
         if self.offset < 0 or self.offset + count > size:
             raise MemoryFault(f"access to {count} byte(s) at offset {self.offset} of a {size}-byte "
                               f"{self.base_type.name}: outside the variable the pointer points into")
@@ -259,26 +277,26 @@ class Ptr:
         if t.is_aggregate(self.view):
             raise MemoryFault(f"a {self.base_type.name} read as {self.view.name} through a pointer: "
                               "stvm reads only elementary values and strings through a cast pointer")
-        size = t.byte_size(self.view) or 0
+        size = t.byte_size(self.view, self.short) or 0
         lo, _ = self.span(size)
-        return codec(self.view)[1](self.load(), lo, None)
+        return codec(self.view, self.short)[1](self.load(), lo, None)
 
     def set(self, value) -> None:
         if self.offset == 0 and t.same_type(self.view, self.base_type) and not self._aggregate():
             self.base.set(value)
             return
-        size = t.byte_size(self.view) or 0
+        size = t.byte_size(self.view, self.short) or 0
         lo, _ = self.span(size)
         buf = self.load()
-        codec(self.view)[0](value, buf, lo)
+        codec(self.view, self.short)[0](value, buf, lo)
         self.store(buf)
 
     def same(self, other) -> bool:
-        other = as_ptr(other, self.view)
+        other = as_ptr(other, self.view, self.short)
         return type(other) is Ptr and other.offset == self.offset and _same_base(self.base, other.base)
 
     def moved(self, delta: int, view: t.Type) -> "Ptr":
-        return Ptr(self.base, self.base_type, self.offset + delta, view)
+        return Ptr(self.base, self.base_type, self.offset + delta, view, self.short)
 
 
 def _same_base(a, b) -> bool:
@@ -288,7 +306,7 @@ def _same_base(a, b) -> bool:
     return same is not None and same(b)
 
 
-def as_ptr(p, target: t.Type):
+def as_ptr(p, target: t.Type, short: bool = False):
     """The pointer value `p` of static type POINTER TO `target` as a `Ptr` (None stays None).
     A value that is not a `Ptr` points to a variable of exactly `target` (the invariant the
     generated code keeps: every cast makes a `Ptr`); an array element's pointer is widened to
@@ -296,34 +314,34 @@ def as_ptr(p, target: t.Type):
     if p is None or type(p) is Ptr:
         return p
     if type(p) is ItemRef and type(p.lst) is list:
-        size = t.byte_size(target) or 0
+        size = t.byte_size(target, short) or 0
         array = t.ArrayType(f"ARRAY[0..{len(p.lst) - 1}] OF {target.name}", target, ((0, len(p.lst) - 1),))
-        return Ptr(p.lst, array, p.index * size, target)
-    return Ptr(p, target, 0, target)
+        return Ptr(p.lst, array, p.index * size, target, short)
+    return Ptr(p, target, 0, target, short)
 
 
-def cast(p, source: t.Type, target: t.Type):
+def cast(p, source: t.Type, target: t.Type, short: bool = False):
     """`POINTER TO target := POINTER TO source` (TwinCAT/CODESYS accept it: an address is an
     address); the result reads the same bytes as `target`."""
     if p is None:
         return None
-    ptr = as_ptr(p, source)
-    return Ptr(ptr.base, ptr.base_type, ptr.offset, target)
+    ptr = as_ptr(p, source, short)
+    return Ptr(ptr.base, ptr.base_type, ptr.offset, target, ptr.short)
 
 
-def add(p, delta: int, target: t.Type):
+def add(p, delta: int, target: t.Type, short: bool = False):
     """`p + delta` / `p - delta` on a POINTER TO `target`: `delta` bytes further (TwinCAT and
     CODESYS add bytes, not elements: 'ADR(x) + 1' is the next byte)."""
     if p is None:
         raise MemoryFault("pointer arithmetic on a NULL pointer (address 0)")
-    ptr = as_ptr(p, target)
+    ptr = as_ptr(p, target, short)
     return ptr.moved(delta, target)
 
 
-def index(p, i: int, target: t.Type):
+def index(p, i: int, target: t.Type, short: bool = False):
     """`p[i]` on a POINTER TO `target`: the i-th element from the pointer (CODESYS/TwinCAT scale
     the index by the target's size, unlike `+`)."""
-    return add(p, i * (t.byte_size(target) or 0), target)
+    return add(p, i * (t.byte_size(target, short) or 0), target, short)
 
 
 def deref_aggregate(p):

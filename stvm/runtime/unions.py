@@ -99,10 +99,11 @@ def _copied(value):
     return copy() if copy is not None else value
 
 
-def union_codecs(ty: t.UnionType) -> tuple[int, tuple[tuple[Encode, Decode], ...], tuple[bool, ...]]:
-    """(size in bytes, (encode, decode) per member, is-aggregate per member) of a union type."""
-    size = t.byte_size(ty) or 0
-    codecs = tuple(codec(fty) for _, fty in ty.fields)
+def union_codecs(ty: t.UnionType, short: bool = False) -> tuple[int, tuple[tuple[Encode, Decode], ...], tuple[bool, ...]]:
+    """(size in bytes, (encode, decode) per member, is-aggregate per member) of a union type
+    (`short`: the TwinCAT/CODESYS time layout, `stvm.runtime.memory.codec`)."""
+    size = t.byte_size(ty, short) or 0
+    codecs = tuple(codec(fty, short) for _, fty in ty.fields)
     aggregate = tuple(isinstance(fty, (t.ArrayType, t.StructType)) for _, fty in ty.fields)
     return size, codecs, aggregate
 

@@ -1022,7 +1022,7 @@ class BodyChecker:
         ty = self.sizeof_operand(arg)
         if ty is None:
             return None
-        size = t.byte_size(ty)
+        size = t.byte_size(ty, allows(self.settings.dialect, "short_times"))
         if size is None:
             self.error(f"{word}() of {ty.name}: its size in bytes is not defined here "
                        "(stvm does not model the memory of function blocks or references)", arg.span, "E070")

@@ -1179,7 +1179,7 @@ class Checker:
             ty = self.resolve_type_spec(n.NamedTypeSpec(arg.parts, False, arg.span), namespace)
         else:
             return NOT_CONST
-        size = t.byte_size(ty) if ty is not None else None
+        size = t.byte_size(ty, allows(self.settings.dialect, "short_times")) if ty is not None else None
         return NOT_CONST if size is None else size
 
     def bare_enumerator(self, name: str, span: n.Span, report: bool = True) -> tuple[t.EnumType, int] | None:

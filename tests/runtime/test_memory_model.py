@@ -308,3 +308,14 @@ def test_a_tcunit_style_assert_equals_on_any_inputs():
         ["ok1", "ok2", "ok3", "ok4", "ok5", "bad1", "bad2", "bad3"])
     assert values == {"ok1": True, "ok2": True, "ok3": True, "ok4": True, "ok5": True,
                       "bad1": False, "bad2": False, "bad3": False}
+
+
+def test_time_types_have_twincats_32_bit_layout():
+    values = run(program("t : TIME := T#1500MS; tod : TOD := TOD#00:00:02.5; d : DATE := D#1970-01-02;"
+                         "lt : LTIME := LTIME#1US; a, b, c : UDINT; l : LWORD; n1, n2 : DINT; back : TIME;",
+                         "MEMCPY(ADR(a), ADR(t), SIZEOF(t)); MEMCPY(ADR(b), ADR(tod), 4); MEMCPY(ADR(c), ADR(d), 4);\n"
+                         "MEMCPY(ADR(l), ADR(lt), 8); n1 := SIZEOF(t); n2 := SIZEOF(lt); a := a + 1;\n"
+                         "MEMCPY(ADR(back), ADR(a), 4);"),
+                 ["a", "b", "c", "l", "n1", "n2", "back"])
+    # Beckhoff: TIME and TOD in milliseconds, DATE in seconds (32 bits), LTIME in nanoseconds (64)
+    assert values == {"a": 1501, "b": 2500, "c": 86400, "l": 1000, "n1": 4, "n2": 8, "back": 1_501_000_000}

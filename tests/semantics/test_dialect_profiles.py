@@ -146,6 +146,21 @@ def probe_any_input(dialect, value):
         assert any("generic type ANY" in m for m in result[1])
 
 
+def probe_short_times(dialect, value):
+    result = outcome("TYPE U : UNION t : TIME; d : LWORD; END_UNION END_TYPE\n"
+                     "PROGRAM Main VAR t : TIME := T#1500MS; a, b, c, e : DINT; u : U; w : LWORD; END_VAR\n"
+                     "a := SIZEOF(t); b := SIZEOF(TOD); c := SIZEOF(LTIME); e := SIZEOF(DT);\n"
+                     "u.t := t; w := u.d; END_PROGRAM"
+                     if dialect in (Dialect.CODESYS, Dialect.TWINCAT, Dialect.IEC) else
+                     "PROGRAM Main VAR t : TIME := T#1500MS; a, b, c, e : DINT; w : LWORD; END_VAR\n"
+                     "a := SIZEOF(t); b := SIZEOF(TOD); c := SIZEOF(LTIME); e := SIZEOF(DT); w := 1500; END_PROGRAM",
+                     dialect, ["Main.a", "Main.b", "Main.c", "Main.e", "Main.w"])
+    # TwinCAT/CODESYS: T#1500MS is 1500 (ms) in 4 bytes; 64-bit ns elsewhere
+    assert (result == (4, 4, 8, 4, 1500)) is value
+    if not value and dialect is not Dialect.SYSMAC:
+        assert result == (8, 8, 8, 8, 1_500_000_000)
+
+
 def probe_enum_integer(dialect, value):
     result = outcome("TYPE E : (A := 3, B := 5); END_TYPE\n"
                      "PROGRAM Main VAR x : E := E.B; i : INT; f : E; END_VAR i := x; f := 3; END_PROGRAM",
