@@ -914,7 +914,7 @@ class BodyChecker:
                 self.error(f"array index must be an integer, not {ity.name}", ix.span, "E036")
         if base is None:
             return None
-        if self.byte_pointer(base) and len(e.indices) == 1:
+        if self.byte_pointer(base) and len(e.indices) == 1 and t.byte_size(base.target) is not None:  # type: ignore[union-attr]
             return self.canonical(base.target)   # TwinCAT/CODESYS `p[i]`: the i-th element from p
         if not isinstance(base, t.ArrayType):
             self.error(f"'{self.describe(e.base)}' is {base.name}, not an array", e.span, "E036")
@@ -1121,8 +1121,11 @@ class BodyChecker:
     def refs_assignable(self, src: t.RefType, dst: t.Type) -> bool:
         if not isinstance(dst, t.RefType):
             return False
-        if self.byte_pointer(src) and self.byte_pointer(dst):
-            return True   # TwinCAT/CODESYS: an address is an address (`pointer_arithmetic`)
+        if self.byte_pointer(src) and self.byte_pointer(dst) and not isinstance(src.target, t.FBType) \
+                and not isinstance(dst.target, t.FBType):  # type: ignore[union-attr]
+            # TwinCAT/CODESYS: an address is an address (`pointer_arithmetic`); stvm has no byte
+            # image of an FB instance, so FB pointers keep their type (docs/memory_model.md)
+            return True
         return src.is_null or t.same_type(src.target, dst.target)
 
     def byte_pointer(self, ty: t.Type | None) -> bool:
@@ -1221,8 +1224,9 @@ class BodyChecker:
                 return t.LREAL
         if isinstance(lt, t.TimeType) or isinstance(rt, t.TimeType):
             return self.time_arith(e, lt, rt)
-        if op in ("PLUS", "MINUS") and self.byte_pointer(lt) and isinstance(rt, t.IntType) \
-                or op == "PLUS" and isinstance(lt, t.IntType) and self.byte_pointer(rt):
+        if (op in ("PLUS", "MINUS") and self.byte_pointer(lt) and isinstance(rt, t.IntType)
+                or op == "PLUS" and isinstance(lt, t.IntType) and self.byte_pointer(rt)) \
+                and t.byte_size((lt if isinstance(lt, t.RefType) else rt).target) is not None:  # type: ignore[union-attr]
             # TwinCAT/CODESYS: `p + n` is the address n bytes further, of p's type
             self.facts.untyped.discard(e.nid)
             return lt if isinstance(lt, t.RefType) else rt
