@@ -120,6 +120,11 @@ ROWS: tuple[Row, ...] = (
         False, False, True, True, f"{CDS} / {TC3} 'Assignment as expression' (value: the value assigned)"),
     Row("method_recursion", "a method calling itself (directly or through others)",
         False, False, True, True, f"{CDS} / {TC3} allow recursion with a warning; Sysmac and IEC refuse it"),
+    Row("void_function", "a FUNCTION without a return type, called as a statement (`FUNCTION RUN`)",
+        False, False, True, True,
+        f"{CDS} 'Function' / {TC3} 'Function': the return type may be left out; such a function "
+        "returns nothing and is called as a statement (TcUnit's RUN, TEST, ...); IEC 61131-3 and "
+        "Sysmac require one"),
     Row("int_div_zero", "integer division or MOD by zero",
         "fault", "fault", "fault", "fault",
         f"{W501}: an instruction error stops the task; {TC3} 'Division by zero': an exception (the "

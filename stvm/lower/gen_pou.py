@@ -302,7 +302,7 @@ class PouGenerator:
         w.indent += 1
         self.pou = pou
         self.owner = "_f"
-        assert node is not None and (pou.return_type is not None or method)
+        assert node is not None   # a FUNCTION or METHOD without a result returns None
         plan = self.plan.pous[pou.key]
         if method and plan.frameless:
             # a METHOD none of whose variables is passed by reference keeps them all in Python

@@ -332,8 +332,8 @@ class BodyChecker:
                     g = self.c.globals.get(key)
                     return NameRef("global", g) if g is not None else None
                 return NameRef("var", var)
-            if key == self.pou.name.lower() and (self.pou.kind == "FUNCTION" or (
-                    self.pou.kind == "METHOD" and self.pou.return_type is not None)):
+            if key == self.pou.name.lower() and self.pou.kind in ("FUNCTION", "METHOD") \
+                    and self.pou.return_type is not None:
                 return NameRef("result", pou=self.pou)
             if self.fb is not None and self.fb is not self.pou:
                 var = self.fb.variables.get(key)   # a method sees its instance's variables
@@ -1343,6 +1343,8 @@ class BodyChecker:
             self.call_expected = outer
         self.facts.calls[e.nid] = info
         ret = pou.return_type
+        if ret is None:
+            return t.VOID   # a FUNCTION without a result (TwinCAT/CODESYS `void_function`)
         if isinstance(ret, t.GenericType):
             ret = info.generic_type
             if ret is None:

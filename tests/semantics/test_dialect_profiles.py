@@ -175,6 +175,14 @@ def probe_method_recursion(dialect, value):
     assert (result == (120,)) is value
 
 
+def probe_void_function(dialect, value):
+    # the function's name is no result variable, so a local may share it (TcUnit's TEST has `Test`)
+    result = outcome("FUNCTION Bump VAR_INPUT n : INT; END_VAR VAR bump2 : INT; END_VAR G := G + n; END_FUNCTION\n"
+                     "VAR_GLOBAL G : INT; END_VAR\n"
+                     "PROGRAM Main Bump(n := 2); Bump(3); END_PROGRAM", dialect, ["G"])
+    assert (result == (5,)) is value
+
+
 def probe_int_div_zero(dialect, value):
     result = outcome("PROGRAM Main VAR a : INT := 7; z : INT; q : INT; END_VAR q := a / z; END_PROGRAM",
                      dialect, ["Main.q"])
