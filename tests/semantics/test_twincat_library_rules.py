@@ -6,7 +6,7 @@ from __future__ import annotations
 from stvm.settings import SysmacSettings
 from tests.core_helpers import run_st
 
-TWINCAT = SysmacSettings(settings=TWINCAT)
+TWINCAT = SysmacSettings(dialect="twincat")
 
 
 def test_a_method_variable_shadows_a_qualified_only_enumerator():
