@@ -125,6 +125,11 @@ ROWS: tuple[Row, ...] = (
         f"{CDS} 'Function' / {TC3} 'Function': the return type may be left out; such a function "
         "returns nothing and is called as a statement (TcUnit's RUN, TEST, ...); IEC 61131-3 and "
         "Sysmac require one"),
+    Row("mixed_arguments", "formal arguments followed by positional ones (`FIND(STR1 := s, '.')`)",
+        False, False, True, True,
+        f"{TC3} / {CDS}: the compiler accepts a call that names some inputs and gives the rest by "
+        "position (public TwinCAT code such as TcUnit uses it); the positional ones take, in order, "
+        "the inputs not named. IEC 61131-3 6.6.1.4 and Sysmac: all formal or all positional"),
     Row("int_div_zero", "integer division or MOD by zero",
         "fault", "fault", "fault", "fault",
         f"{W501}: an instruction error stops the task; {TC3} 'Division by zero': an exception (the "

@@ -1362,10 +1362,24 @@ class BodyChecker:
         params = pou.params()
         positional = [a for a in e.args if a.kind == "positional"]
         formal = [a for a in e.args if a.kind != "positional"]
-        if positional and formal:
-            self.error("mix of formal (name := value) and positional arguments", e.span, "E047")
         generic_types: list[t.Type] = []
         bound: set[str] = set()
+        if positional and formal:
+            if fb or not allows(self.settings.dialect, "mixed_arguments"):
+                self.error("mix of formal (name := value) and positional arguments", e.span, "E047")
+            else:
+                # TwinCAT/CODESYS: the positional arguments take, in order, the inputs no formal
+                # argument names (`FIND(STR1 := s, '.')`, TcUnit)
+                named = {pou.pin(a.name).key for a in formal if a.kind == "input" and a.name
+                         and pou.pin(a.name) is not None}
+                free = [p for p in params if p.key not in named]
+                if len(positional) > len(free):
+                    self.error(f"{self.display(pou)} takes {len(params)} argument(s), got "
+                               f"{len(positional) + len(named)}", e.span, "E048")
+                for param, arg in zip(free, positional):
+                    self.bind_one(pou, param, arg, info, generic_types)
+                    bound.add(param.key)
+                positional = []
         if not positional and not formal and pou.variadic and not fb:
             self.error(f"{self.display(pou)} takes at least {max(len(params) - 1, 1)} arguments, got 0", e.span, "E048")
         if positional:

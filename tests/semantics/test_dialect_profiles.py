@@ -183,6 +183,13 @@ def probe_void_function(dialect, value):
     assert (result == (5,)) is value
 
 
+def probe_mixed_arguments(dialect, value):
+    result = outcome("FUNCTION Sub3 : INT VAR_INPUT a, b, c : INT; END_VAR Sub3 := a - b - c; END_FUNCTION\n"
+                     "PROGRAM Main VAR r : INT; END_VAR r := Sub3(b := 1, 10, 2); END_PROGRAM",
+                     dialect, ["Main.r"])
+    assert (result == (7,)) is value
+
+
 def probe_int_div_zero(dialect, value):
     result = outcome("PROGRAM Main VAR a : INT := 7; z : INT; q : INT; END_VAR q := a / z; END_PROGRAM",
                      dialect, ["Main.q"])
