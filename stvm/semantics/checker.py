@@ -358,7 +358,9 @@ class Checker:
                     var = Variable(name, kind, vtype or t.DINT, block.constant and not input_constant, span)
                     if decl.init is None and kind not in (IN_OUT, EXTERNAL):
                         var.init = self.alias_init(decl.type_spec, namespace)
-                    if block.constant and decl.init is None and kind != EXTERNAL and not input_constant:
+                    # VAR_IN_OUT CONSTANT (CODESYS/TwinCAT): an in-out the POU may not write; its
+                    # value is the caller's
+                    if block.constant and decl.init is None and kind not in (EXTERNAL, IN_OUT) and not input_constant:
                         self.error(f"constant '{name}' needs an initial value", span, "E013")
                     info.variables[key] = var
                     if decl.fb_args is not None:
