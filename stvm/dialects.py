@@ -134,6 +134,31 @@ ROWS: tuple[Row, ...] = (
         False, False, True, True, f"{CDS} / {TC3} 'Assignment as expression' (value: the value assigned)"),
     Row("method_recursion", "a method calling itself (directly or through others)",
         False, False, True, True, f"{CDS} / {TC3} allow recursion with a warning; Sysmac and IEC refuse it"),
+    Row("void_function", "a FUNCTION without a return type, called as a statement (`FUNCTION RUN`)",
+        False, False, True, True,
+        f"{CDS} 'Function' / {TC3} 'Function': the return type may be left out; such a function "
+        "returns nothing and is called as a statement (TcUnit's RUN, TEST, ...); IEC 61131-3 and "
+        "Sysmac require one"),
+    Row("mixed_arguments", "formal arguments followed by positional ones (`FIND(STR1 := s, '.')`)",
+        False, False, True, True,
+        f"{TC3} / {CDS}: the compiler accepts a call that names some inputs and gives the rest by "
+        "position (public TwinCAT code such as TcUnit uses it); the positional ones take, in order, "
+        "the inputs not named. IEC 61131-3 6.6.1.4 and Sysmac: all formal or all positional"),
+    Row("fb_assign", "assigning a function block instance to another of its type (a copy of its variables)",
+        False, False, True, True,
+        f"{TC3} / {CDS}: an FB instance is assigned like a structure (its memory is copied) unless "
+        "the FB has {{attribute 'no_assign'}}; a METHOD may return an FB (TcUnit's GetTestByPosition). "
+        "IEC 61131-3 and Sysmac: an instance cannot be assigned"),
+    Row("fb_input_assign", "writing an input of an FB instance outside its call (`fbTimer.IN := TRUE;`)",
+        False, False, True, True,
+        f"{TC3} / {CDS}: an instance's inputs are read and written from outside like variables (the "
+        "next call uses the value); IEC 61131-3 6.6.1.2 and Sysmac: inputs are set in the call only"),
+    Row("fb_internal_read", "reading a VAR (internal) variable of an FB instance from outside (`fb.counter`)",
+        False, False, False, True,
+        f"{TC3}: TwinCAT 3 compiles read access to an instance's internal variables (TcUnit reads "
+        "FB_TestSuite's Tests and FB_Test's TestName); writing them stays an error. IEC 61131-3, "
+        "Sysmac and CODESYS (stvm's choice: not confirmed for CODESYS): only inputs and outputs are "
+        "visible outside"),
     Row("int_div_zero", "integer division or MOD by zero",
         "fault", "fault", "fault", "fault",
         f"{W501}: an instruction error stops the task; {TC3} 'Division by zero': an exception (the "

@@ -117,7 +117,10 @@ class ExpressionGenerator:
         if ref.kind == "enum":
             return py_literal(ref.value)
         if ref.kind == "result":
-            return "_rb.value" if self.result_boxed() else "_r"
+            result = "_rb.value" if self.result_boxed() else "_r"
+            if e.nid in self.facts.auto_deref:   # a result REFERENCE TO: read through it
+                return self.deref_code(result, self.pou.return_type.target)
+            return result
         if ref.kind == "null":
             return "None"
         if ref.kind in ("this", "super"):
@@ -175,7 +178,8 @@ class ExpressionGenerator:
     def raw_place(self, target: n.Expr) -> str:
         """The storage of a Name/Member itself (for a REFERENCE TO variable: the reference)."""
         if isinstance(target, n.Name):
-            return self.name_place(self.facts.names[target.nid])
+            ref = self.facts.names[target.nid]
+            return "_r" if ref.kind == "result" else self.name_place(ref)
         assert isinstance(target, n.Member)
         base_type = self.facts.types[target.base.nid]
         return f"{self.expr(target.base)}.{var_attr(self.member_name(base_type, target.name))}"
@@ -187,6 +191,8 @@ class ExpressionGenerator:
             return self.expr(value.base)
         if isinstance(value, (n.Name, n.Member)) and value.nid in self.facts.auto_deref:
             return self.raw_place(value)
+        if isinstance(value, n.Call) and value.nid in self.facts.auto_deref:
+            return self.call_code(value)   # a call's REFERENCE TO result: the reference itself
         if isinstance(ty, t.RefType) and ty.is_null:
             return "None"
         if t.is_aggregate(ty):
@@ -460,8 +466,15 @@ class ExpressionGenerator:
         if self.facts.intrinsics and e.nid in self.facts.intrinsics:
             what, key = self.facts.intrinsics[e.nid]
             if what == "valid":
-                return f"({self.expr(e.args[0].value)} is not None)"
+                arg = e.args[0].value   # a REFERENCE TO variable: the reference, not its target
+                code = self.raw_place(arg) if arg.nid in self.facts.auto_deref else self.expr(arg)
+                return f"({code} is not None)"
             return f"_query_itf({self.expr(e.args[0].value)}, {key!r}, {self.ref_code(e.args[1].value)})"
+        if e.nid in self.facts.auto_deref:   # a result REFERENCE TO: read through it
+            return self.deref_code(self.call_code(e), self.facts.types[e.nid])
+        return self.call_code(e)
+
+    def call_code(self, e: n.Call) -> str:
         info = self.facts.calls[e.nid]
         if info.nested_en:
             return self.nested_en_call(e, info)

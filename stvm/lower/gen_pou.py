@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from stvm.semantics import types as t
 from stvm.semantics.model import EXTERNAL, GLOBAL, IN_OUT, INPUT, OUTPUT, TEMP, POUInfo, Variable
+from stvm.dialects import allows
 from stvm.lower.names import method_attr, var_attr
 from stvm.lower.pycode import CodeWriter, py_literal
 from stvm.syntax import nodes as n
@@ -251,6 +252,13 @@ class PouGenerator:
         if not attrs:
             w.line("pass")
         w.indent -= 1
+        if allows(self.settings.dialect, "fb_assign"):
+            # `fb := other` and FB results (TwinCAT/CODESYS): the instance's variables copied; the
+            # nested instances, STRUCTs and ARRAYs it owns copied deeply (stvm/runtime/helpers.py)
+            owned = tuple(var_attr(v.name) for v in own if v.section != IN_OUT and t.is_aggregate(v.type))
+            w.line(f"_owned = {owned!r}")
+            w.line("def _copy(self): return _copy_fb(self)")
+            w.line("def _assign(self, src): _assign_fb(self, src)")
         w.line("def __call__(self):")
         w.indent += 1
         self.pou = pou
@@ -302,7 +310,7 @@ class PouGenerator:
         w.indent += 1
         self.pou = pou
         self.owner = "_f"
-        assert node is not None and (pou.return_type is not None or method)
+        assert node is not None   # a FUNCTION or METHOD without a result returns None
         plan = self.plan.pous[pou.key]
         if method and plan.frameless:
             # a METHOD none of whose variables is passed by reference keeps them all in Python

@@ -352,13 +352,15 @@ class StatementGenerator:
 
     def store_code(self, target: n.Expr, value: str, ty: t.Type | None) -> list[str]:
         """Python statements that store `value` (already converted to `ty`) into `target`."""
-        aggregate = isinstance(ty, (t.StructType, t.ArrayType))
+        aggregate = isinstance(ty, (t.StructType, t.ArrayType, t.FBType))   # an FB: `fb_assign`
         if self.facts.props and target.nid in self.facts.props:
             return [f"{self.property_target(target, 'SET')}({value})"]
         if isinstance(target, n.Name):
             ref = self.facts.names[target.nid]
             if ref.kind == "result":
                 result = "_rb.value" if self.result_boxed() else "_r"
+                if target.nid in self.facts.auto_deref:   # a result REFERENCE TO: store through it
+                    return self.store_through(result, value, ty)
                 return [f"{result} = {value}" if not aggregate else f"{result} = _copy_value({value})"]
             var = ref.variable
             assert var is not None
@@ -408,7 +410,7 @@ class StatementGenerator:
         return [f"({ref} or _null_ref()).set({value})"]
 
     def assign_into(self, place: str, value: str, ty: t.Type | None) -> str:
-        if isinstance(ty, t.StructType):
+        if isinstance(ty, (t.StructType, t.FBType)):   # an FB: `fb_assign` (TwinCAT/CODESYS)
             return f"{place}._assign({value})"
         if isinstance(ty, t.ArrayType):
             return f"_assign_array({place}, {value})"

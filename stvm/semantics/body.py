@@ -342,8 +342,8 @@ class BodyChecker:
                     g = self.c.globals.get(key)
                     return NameRef("global", g) if g is not None else None
                 return NameRef("var", var)
-            if key == self.pou.name.lower() and (self.pou.kind == "FUNCTION" or (
-                    self.pou.kind == "METHOD" and self.pou.return_type is not None)):
+            if key == self.pou.name.lower() and self.pou.kind in ("FUNCTION", "METHOD") \
+                    and self.pou.return_type is not None:
                 return NameRef("result", pou=self.pou)
             if self.fb is not None and self.fb is not self.pou:
                 var = self.fb.variables.get(key)   # a method sees its instance's variables
@@ -397,12 +397,13 @@ class BodyChecker:
             if kind == "prop":
                 return self.property_store(target, ref.value, "self")  # type: ignore[attr-defined]
             if kind == "result":
-                self.facts.types[target.nid] = self.pou.return_type  # type: ignore[assignment]
-                return self.pou.return_type
+                ty = self.implicit_deref(target, self.pou.return_type) if self.pou.return_type else None
+                self.facts.types[target.nid] = ty  # type: ignore[assignment]
+                return ty
             var: Variable = ref.variable  # type: ignore[attr-defined]
             if var.constant:
                 self.error(f"cannot assign to constant '{target.text}'", target.span, "E050")
-            if isinstance(var.type, t.FBType):
+            if isinstance(var.type, t.FBType) and not allows(self.settings.dialect, "fb_assign"):
                 self.error(f"cannot assign to function block instance '{target.text}'", target.span, "E050")
                 return None
             self.facts.types[target.nid] = self.implicit_deref(target, var.type)
@@ -421,10 +422,18 @@ class BodyChecker:
             if isinstance(base_type, t.FBType) and not self.inside_own(target.base, base_type):
                 fb = self.c.pous.get(base_type.qualname.lower())
                 pin = fb.pin(target.name) if fb else None
-                if pin is not None and pin.section in (INPUT, OUTPUT, IN_OUT):
+                if pin is not None and pin.section in (INPUT, OUTPUT, IN_OUT) and not (
+                        pin.section == INPUT and allows(self.settings.dialect, "fb_input_assign")):
                     what = {INPUT: "an input", OUTPUT: "an output", IN_OUT: "an in-out"}[pin.section]
                     self.error(f"cannot assign to '{target.name}', {what} of function block {base_type.name}; "
                                f"pass it in the call instead", target.span, "E051")
+                    return None
+                inner = fb.variables.get(target.name.lower()) if fb else None
+                if inner is not None and inner.section not in (INPUT, OUTPUT, IN_OUT) \
+                        and not base_type.is_program and allows(self.settings.dialect, "fb_internal_read"):
+                    # `fb_internal_read` lets TwinCAT code read an instance's internals, not write them
+                    self.error(f"cannot assign to '{target.name}', internal to {base_type.name}",
+                               target.span, "E034")
                     return None
             ty = self.expr(target)
             if ty is not None and self.is_constant_path(target.base):
@@ -472,7 +481,9 @@ class BodyChecker:
             self.interface_assignable(expr, src, dst, span)
             return
         if isinstance(dst, t.FBType) or isinstance(src, t.FBType):
-            self.error("function block instances cannot be assigned", span, "E052")
+            if not (allows(self.settings.dialect, "fb_assign") and isinstance(dst, t.FBType)
+                    and isinstance(src, t.FBType) and src.qualname.lower() == dst.qualname.lower()):
+                self.error("function block instances cannot be assigned", span, "E052")
             return
         if isinstance(src, t.VoidType):
             self.error("this call has no result value", span, "E052")
@@ -564,7 +575,7 @@ class BodyChecker:
         if ty is None:
             return None
         if word == "__ISVALIDREF":
-            if not isinstance(ty, (t.InterfaceType, t.RefType)):
+            if not isinstance(ty, (t.InterfaceType, t.RefType)) and args[0].value.nid not in self.facts.auto_deref:
                 self.error(f"__ISVALIDREF needs an interface or a reference, not {ty.name}", args[0].value.span, "E052")
                 return None
             self.facts.intrinsics[e.nid] = ("valid", None)
@@ -601,7 +612,12 @@ class BodyChecker:
         method = self._expr_methods.get(e.__class__)
         if method is None:
             method = self._method(self._expr_methods, "expr_", e.__class__)
-        ty = method(self, e, expected) if not isinstance(e, n.Call) else self.expr_Call(e, expected, statement)
+        if isinstance(e, n.Call):
+            ty = self.expr_Call(e, expected, statement)
+            if isinstance(ty, t.RefType) and ty.flavour == "REFERENCE" and e.nid in self.facts.calls:
+                ty = self.implicit_deref(e, ty)   # a METHOD/FUNCTION result REFERENCE TO: its target
+        else:
+            ty = method(self, e, expected)
         if ty is not None:
             self.facts.types[e.nid] = ty
         return ty
@@ -662,7 +678,7 @@ class BodyChecker:
             self.facts.consts[e.nid] = ref.value  # type: ignore[attr-defined]
             return ref.variable.type  # type: ignore[attr-defined]
         if ref.kind == "result":  # type: ignore[attr-defined]
-            return self.pou.return_type
+            return self.implicit_deref(e, self.pou.return_type) if self.pou.return_type is not None else None
         if ref.kind == "prop":  # type: ignore[attr-defined]
             return self.property_load(e, ref.value, "self")  # type: ignore[attr-defined]
         var: Variable = ref.variable  # type: ignore[attr-defined]
@@ -706,7 +722,8 @@ class BodyChecker:
 
     def member_visible(self, base: t.FBType, var: Variable, e: n.Member) -> bool:
         """IEC: outside an FB only its inputs and outputs are visible (the debugger sees all)."""
-        if var.section not in (INPUT, OUTPUT) and not base.is_program:
+        if var.section not in (INPUT, OUTPUT) and not base.is_program and not \
+                allows(self.settings.dialect, "fb_internal_read"):
             self.error(f"'{e.name}' is internal to {base.name}; only inputs and outputs are visible outside", e.span, "E034")
             return False
         return True
@@ -1081,7 +1098,9 @@ class BodyChecker:
         if isinstance(target, (n.Name, n.Member)):
             self.lvalue(target)
             if target.nid in self.facts.auto_deref:
-                if isinstance(target, n.Name):
+                if isinstance(target, n.Name) and self.facts.names[target.nid].kind == "result":  # type: ignore[attr-defined]
+                    raw = self.pou.return_type   # `Get REF= x;` in a METHOD ... : REFERENCE TO
+                elif isinstance(target, n.Name):
                     raw = self.facts.names[target.nid].variable.type  # type: ignore[attr-defined]
                 else:
                     raw = self.member_raw_type(target)
@@ -1095,7 +1114,8 @@ class BodyChecker:
             return
         if isinstance(value_type, t.RefType) and value_type.is_null:
             return
-        if not isinstance(s.value, (n.Name, n.Member, n.Index, n.Deref)):
+        if not isinstance(s.value, (n.Name, n.Member, n.Index, n.Deref)) and not (
+                isinstance(s.value, n.Call) and s.value.nid in self.facts.auto_deref):
             self.error("REF= needs a variable; this expression is a temporary value", s.value.span, "E055")
             return
         if not t.same_type(value_type, raw.target):
@@ -1408,6 +1428,8 @@ class BodyChecker:
             self.call_expected = outer
         self.facts.calls[e.nid] = info
         ret = pou.return_type
+        if ret is None:
+            return t.VOID   # a FUNCTION without a result (TwinCAT/CODESYS `void_function`)
         if isinstance(ret, t.GenericType):
             ret = info.generic_type
             if ret is None:
@@ -1425,10 +1447,24 @@ class BodyChecker:
         params = pou.params()
         positional = [a for a in e.args if a.kind == "positional"]
         formal = [a for a in e.args if a.kind != "positional"]
-        if positional and formal:
-            self.error("mix of formal (name := value) and positional arguments", e.span, "E047")
         generic_types: list[t.Type] = []
         bound: set[str] = set()
+        if positional and formal:
+            if fb or not allows(self.settings.dialect, "mixed_arguments"):
+                self.error("mix of formal (name := value) and positional arguments", e.span, "E047")
+            else:
+                # TwinCAT/CODESYS: the positional arguments take, in order, the inputs no formal
+                # argument names (`FIND(STR1 := s, '.')`, TcUnit)
+                named = {pou.pin(a.name).key for a in formal if a.kind == "input" and a.name
+                         and pou.pin(a.name) is not None}
+                free = [p for p in params if p.key not in named]
+                if len(positional) > len(free):
+                    self.error(f"{self.display(pou)} takes {len(params)} argument(s), got "
+                               f"{len(positional) + len(named)}", e.span, "E048")
+                for param, arg in zip(free, positional):
+                    self.bind_one(pou, param, arg, info, generic_types)
+                    bound.add(param.key)
+                positional = []
         if not positional and not formal and pou.variadic and not fb:
             self.error(f"{self.display(pou)} takes at least {max(len(params) - 1, 1)} arguments, got 0", e.span, "E048")
         if positional:

@@ -306,8 +306,11 @@ class Checker:
             return info
         if pou.kind == "FUNCTION":
             if pou.return_type is None:
-                self.error(f"function '{pou.name}' needs a return type", pou.span, "E014")
-                info.return_type = t.VOID
+                # TwinCAT/CODESYS: a function without a result, called as a statement (like a METHOD
+                # without one: return_type None, so its name is no result variable)
+                if not allows(self.settings.dialect, "void_function"):
+                    self.error(f"function '{pou.name}' needs a return type", pou.span, "E014")
+                    info.return_type = t.VOID
             else:
                 info.return_type = self.resolve_type_spec(pou.return_type, pou.namespace, allow_generic=native) or t.DINT
         elif pou.return_type is not None:
@@ -325,7 +328,7 @@ class Checker:
     def declare_variables(self, pou, info: POUInfo, namespace: tuple[str, ...], native: bool = False) -> None:
         """Declare the variable blocks of a POU or METHOD (`pou`: its node) into `info`."""
         early = self.declare_local_constants(pou, info, namespace)
-        function_like = info.kind == "FUNCTION" or (info.kind == "METHOD" and info.return_type is not None)
+        function_like = info.kind in ("FUNCTION", "METHOD") and info.return_type is not None
         for block in pou.var_blocks:
             kind = block.kind
             if kind == "VAR_STAT":
@@ -360,7 +363,9 @@ class Checker:
                     var = Variable(name, kind, vtype or t.DINT, block.constant and not input_constant, span)
                     if decl.init is None and kind not in (IN_OUT, EXTERNAL):
                         var.init = self.alias_init(decl.type_spec, namespace)
-                    if block.constant and decl.init is None and kind != EXTERNAL and not input_constant:
+                    # VAR_IN_OUT CONSTANT (CODESYS/TwinCAT): an in-out the POU may not write; its
+                    # value is the caller's
+                    if block.constant and decl.init is None and kind not in (EXTERNAL, IN_OUT) and not input_constant:
                         self.error(f"constant '{name}' needs an initial value", span, "E013")
                     info.variables[key] = var
                     if decl.fb_args is not None:

@@ -207,6 +207,44 @@ def probe_method_recursion(dialect, value):
     assert (result == (120,)) is value
 
 
+def probe_void_function(dialect, value):
+    # the function's name is no result variable, so a local may share it (TcUnit's TEST has `Test`)
+    result = outcome("FUNCTION Bump VAR_INPUT n : INT; END_VAR VAR bump2 : INT; END_VAR G := G + n; END_FUNCTION\n"
+                     "VAR_GLOBAL G : INT; END_VAR\n"
+                     "PROGRAM Main Bump(n := 2); Bump(3); END_PROGRAM", dialect, ["G"])
+    assert (result == (5,)) is value
+
+
+def probe_mixed_arguments(dialect, value):
+    result = outcome("FUNCTION Sub3 : INT VAR_INPUT a, b, c : INT; END_VAR Sub3 := a - b - c; END_FUNCTION\n"
+                     "PROGRAM Main VAR r : INT; END_VAR r := Sub3(b := 1, 10, 2); END_PROGRAM",
+                     dialect, ["Main.r"])
+    assert (result == (7,)) is value
+
+
+def probe_fb_assign(dialect, value):
+    # a copy, not an alias: changing the copy leaves the original
+    result = outcome("FUNCTION_BLOCK FB VAR_INPUT x : INT; END_VAR VAR a : ARRAY[1..2] OF INT; END_VAR END_FUNCTION_BLOCK\n"
+                     "PROGRAM Main VAR f, g : FB; r, q : INT; END_VAR\n"
+                     "f(x := 4); g := f; g(x := 9); r := g.x; q := f.x; END_PROGRAM", dialect, ["Main.r", "Main.q"])
+    assert (result == (9, 4)) is value
+
+
+def probe_fb_input_assign(dialect, value):
+    result = outcome("PROGRAM Main VAR t : TON; q : BOOL; END_VAR\n"
+                     "t.IN := TRUE; t.PT := T#20MS; t(); q := t.Q; END_PROGRAM", dialect, ["Main.q"], cycles=3)
+    assert (result == (True,)) is value
+
+
+def probe_fb_internal_read(dialect, value):
+    result = outcome("FUNCTION_BLOCK FB VAR n : INT; END_VAR n := n + 1; END_FUNCTION_BLOCK\n"
+                     "PROGRAM Main VAR f : FB; r : INT; END_VAR f(); f(); r := f.n; END_PROGRAM", dialect, ["Main.r"])
+    assert (result == (2,)) is value
+    written = outcome("FUNCTION_BLOCK FB VAR n : INT; END_VAR END_FUNCTION_BLOCK\n"
+                      "PROGRAM Main VAR f : FB; END_VAR f.n := 3; END_PROGRAM", dialect, [])
+    assert not accepted(written)
+
+
 def probe_int_div_zero(dialect, value):
     result = outcome("PROGRAM Main VAR a : INT := 7; z : INT; q : INT; END_VAR q := a / z; END_PROGRAM",
                      dialect, ["Main.q"])
