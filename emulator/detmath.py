@@ -240,9 +240,18 @@ def matmul(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     left = np.asarray(a, dtype=float).tolist()
     right = np.asarray(b, dtype=float).tolist()
     if right and not isinstance(right[0], list):     # matrix @ vector
-        return np.array([dot(row, right) for row in left])
+        return np.array([_dot_floats(row, right) for row in left])
     columns = list(zip(*right))
-    return np.array([[dot(row, col) for col in columns] for row in left])
+    return np.array([[_dot_floats(row, col) for col in columns] for row in left])
+
+
+def _dot_floats(a: Sequence[float], b: Sequence[float]) -> float:
+    """`dot` of two sequences of Python floats (what `tolist()` of a float array holds): the
+    same products and sums in the same order, without `dot`'s float() conversions."""
+    total = 0.0
+    for x, y in zip(a, b):
+        total += x * y
+    return total
 
 
 def trace3(m: np.ndarray) -> float:
