@@ -45,70 +45,74 @@ def trace_cpu_per_scan(project, cycles: int) -> tuple[float, float]:
     return (whole - startup) / (cycles - 1) * 1e6, startup * 1e3
 
 
-class _Timed:
-    """A hook wrapped with perf_counter_ns; `ns` accumulates its time."""
+_PARTS = (  # (where the innermost matching frame's code lives, the part): first match wins
+    ("/emulator/", "emulator"),
+    ("/stvm/lockstep.py", "lockstep glue (link, clock hook)"),
+    ("/stvm/stdlib/sockets.py", "socket FBs' natives"),
+    ("/stvm/trace/", "trace recorder"),
+    ("<stvm-trace-sampler>", "trace recorder"),
+    ("/stvm/scenario.py", "scenario"),
+    ("<stvm-generated>", "ST programs (generated code, stdlib natives)"),
+)
+GLUE = "VM scan loop and the rest"
 
-    def __init__(self, fn) -> None:
-        self.fn, self.ns = fn, 0
 
-    def __call__(self, *args) -> None:
-        clock = time.perf_counter_ns
-        started = clock()
-        self.fn(*args)
-        self.ns += clock() - started
+def _classify(frame) -> str:
+    while frame is not None:
+        name = frame.f_code.co_filename
+        for needle, part in _PARTS:
+            if needle in name:
+                return part
+        frame = frame.f_back
+    return GLUE
 
 
-def parts(project, cycles: int, record: bool = True) -> dict[str, float]:
-    """µs per scan of each part of the recorded run (perf_counter_ns around each hook, the
-    timer's own cost subtracted); "loop" is the whole `vm.scan()` as the caller sees it."""
+def parts(project, cycles: int, record: bool = True, interval_s: float = 0.0002, runs: int = 1) -> dict[str, float]:
+    """CPU µs per scan of each part of the recorded (or bare) run: the loop's CPU time
+    (`process_time`) shared out by a statistical profile on the process's CPU clock (SIGPROF
+    every `interval_s` of CPU time; each sample goes to the part of the innermost frame that
+    belongs to one, see `_PARTS`): time the process waits for a core is in neither, so the
+    shares hold on a loaded machine (the kernel delivers SIGPROF at its tick, ~4 ms here, whatever
+    `interval_s` asks: `runs` repeats the run for more samples). "loop" is the whole loop's CPU µs
+    per scan."""
+    import signal
     from stvm.trace import Recorder, TraceSpec, select_signals
     from stvm.trace.run import trace_session
-    session = trace_session(TraceSpec(FILES, scenario=SCENARIO, watch=WATCH, cycles=cycles), project)
-    vm = session.vm
-    recorder = Recorder(vm, select_signals(vm, WATCH)) if record else None
-    session.wire(recorder.sample if recorder else None)
-    frames = None
-    if recorder is not None:
-        frames = _Timed(recorder.on_frame)
-        session.transport.on_frame.append(frames)
-    hooks = [_Timed(h) for h in vm.on_scan_end]
-    vm.on_scan_end[:] = hooks
-    names = {}
-    for hook in hooks:
-        owner = getattr(hook.fn, "__self__", None)
-        names[id(hook)] = {"Recorder": "recorder sample", "ScenarioDriver": "scenario",
-                           "LockstepTransport": "emulator step"}.get(type(owner).__name__, type(owner).__name__)
-    clock = time.perf_counter_ns
-    overhead = min(_timer_cost() for _ in range(3))
-    started = clock()
-    for _ in range(cycles):
-        vm.scan()
-    loop = clock() - started
-    st = vm.scan_durations_ns.total
-    out = {"ST programs": st / cycles / 1000}
-    for hook in hooks:
-        out[names[id(hook)]] = max(0.0, hook.ns / cycles - overhead) / 1000
-    if frames is not None:
-        out["recorder frames (inside the emulator step)"] = frames.ns / cycles / 1000
-        out["emulator step"] -= out["recorder frames (inside the emulator step)"]
-        out["recorder sample"] += out["recorder frames (inside the emulator step)"]
-    accounted = sum(v for k, v in out.items() if not k.startswith("recorder frames"))
-    # the VM's scan method: schedule, ctx, the stats, the hook loop, minus the timers we added
-    out["VM scan loop (glue)"] = max(0.0, loop / cycles / 1000 - accounted - overhead * (len(hooks) + 1) / 1000)
-    out["loop"] = loop / cycles / 1000
-    session.close()
+    counts: dict[str, int] = {}
+
+    def on_sample(signum, frame) -> None:
+        part = _classify(frame)
+        counts[part] = counts.get(part, 0) + 1
+
+    cpu = 0.0
+    for _ in range(runs):
+        session = trace_session(TraceSpec(FILES, scenario=SCENARIO, watch=WATCH, cycles=cycles), project)
+        vm = session.vm
+        vm.collect_stats = False
+        if record:
+            recorder = Recorder(vm, select_signals(vm, WATCH))
+            session.wire(recorder.sample)
+            session.transport.on_frame.append(recorder.on_frame)
+        else:
+            session.wire()
+        previous = signal.signal(signal.SIGPROF, on_sample)
+        clock = time.process_time
+        started = clock()
+        signal.setitimer(signal.ITIMER_PROF, interval_s, interval_s)
+        try:
+            for _ in range(cycles):
+                vm.scan()
+        finally:
+            signal.setitimer(signal.ITIMER_PROF, 0, 0)
+            signal.signal(signal.SIGPROF, previous)
+        cpu += clock() - started
+        session.close()
+    loop = cpu / runs / cycles * 1e6
+    total = sum(counts.values()) or 1
+    out = {part: loop * n / total for part, n in sorted(counts.items(), key=lambda kv: -kv[1])}
+    out["loop"] = loop
+    out["samples"] = total
     return out
-
-
-def _timer_cost() -> float:
-    """ns of one `_Timed` wrapper around an empty function."""
-    t = _Timed(lambda vm: None)
-    n = 20000
-    clock = time.perf_counter_ns
-    started = clock()
-    for _ in range(n):
-        t(None)
-    return (clock() - started) / n
 
 
 @figure("stvm trace PnP golden, 1 watched", item="issue 33 item 2", tags=("trace",))
@@ -120,19 +124,21 @@ def trace_figure(smoke: bool) -> list[Row]:
     yard = min(yard, for_loop_us())
     rows = [Row("stvm trace PnP golden (1 watched var), CPU per scan", per_scan, "us", "FOR-100", yard, "us",
                 "<= 2x", note=f"{cycles} scans; set-up + finish {startup:.0f} ms CPU subtracted")]
-    p = parts(project, cycles)
-    bare = parts(project, cycles, record=False)
+    runs = 1 if smoke else 4
+    p = parts(project, cycles, runs=runs)
+    bare = parts(project, cycles, record=False, runs=runs)
     yard = min(yard, for_loop_us())
+    samples = p.pop("samples")
     for name, value in p.items():
-        if name == "loop" or name.startswith("recorder frames"):
-            continue
-        rows.append(Row(f"  part: {name}", value, "us", "FOR-100", yard, "us", "",
-                        note=f"{100 * value / p['loop']:.0f} % of the traced loop"))
-    rows.append(Row("bare lockstep loop (scenario + emulator, no recorder)", bare["loop"], "us", "FOR-100", yard,
-                    "us", "<= 4 us", note="median-free mean, perf_counter"))
-    outside = bare["loop"] - bare["ST programs"]
-    rows.append(Row("  bare loop outside the ST programs", outside, "us", "FOR-100", yard, "us", "",
-                    note="emulator + scenario + VM glue"))
+        if name != "loop":
+            rows.append(Row(f"  part: {name}", value, "us", "FOR-100", yard, "us", "",
+                            note=f"{100 * value / p['loop']:.0f} % of the traced loop ({samples} CPU samples)"))
+    bare.pop("samples")
+    rows.append(Row("bare lockstep loop (scenario + emulator, no recorder), CPU per scan", bare["loop"], "us",
+                    "FOR-100", yard, "us", "<= 4 us"))
+    st = sum(v for k, v in bare.items() if k.startswith("ST programs"))
+    rows.append(Row("  bare loop outside the ST programs", bare["loop"] - st, "us", "FOR-100", yard, "us", "",
+                    note="emulator, lockstep glue, socket natives, scenario, VM loop"))
     return rows
 
 
@@ -142,5 +148,5 @@ if __name__ == "__main__":
     project = _project()
     print(f"FOR-100 yardstick {for_loop_us():.2f} us")
     for label, record in (("traced", True), ("bare", False)):
-        p = parts(project, CYCLES, record)
+        p = parts(project, CYCLES, record, runs=4)
         print(f"{label}: " + ", ".join(f"{k} {v:.2f}" for k, v in p.items()))
