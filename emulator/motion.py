@@ -141,6 +141,7 @@ class Kinematics:
         # (link index, joint angle) -> that link's rows: the pure-Python trigonometry of detmath
         # is most of an fk, and a Jacobian's six fks differ from the base in one joint each
         self._link_rows: dict[tuple[int, float], tuple] = {}
+        self._ik_results: dict[tuple, np.ndarray | None] = {}   # see `ik`
 
     def fk(self, joints_deg: Sequence[float], tool: np.ndarray | None = None) -> np.ndarray:
         """4x4 pose of the TCP in the robot base (``tool`` = flange -> TCP transform)."""
@@ -190,7 +191,26 @@ class Kinematics:
            max_iterations: int = 100) -> np.ndarray | None:
         """Joint angles (deg) whose TCP pose is ``target`` (4x4, robot base), starting from
         ``seed_deg``; None if it does not converge within 0.01 mm / 0.01 deg or leaves the joint
-        limits (the target is then unreachable)."""
+        limits (the target is then unreachable).
+
+        A pure function of its arguments (and the arm's constants), so its results are kept by
+        the exact bytes of the arguments: a cycle that repeats its motions (a PnP loop) solves
+        each target once, with the same bits every time."""
+        seed_array, target_array = np.asarray(seed_deg), np.asarray(target)
+        key = (target_array.dtype.str, target_array.shape, target_array.tobytes(), seed_array.dtype.str,
+               seed_array.shape, seed_array.tobytes(), None if tool is None else np.asarray(tool).tobytes(),
+               max_iterations)
+        if key in self._ik_results:
+            found = self._ik_results[key]
+            return None if found is None else found.copy()
+        found = self._ik(target, seed_deg, tool, max_iterations)
+        if len(self._ik_results) >= 1024:   # bounded: a long run with ever new targets
+            self._ik_results.clear()
+        self._ik_results[key] = None if found is None else found.copy()
+        return found
+
+    def _ik(self, target: np.ndarray, seed_deg: Sequence[float], tool: np.ndarray | None,
+            max_iterations: int) -> np.ndarray | None:
         q = np.asarray(seed_deg, dtype=float) * dm.RAD_PER_DEG
         damping = 1.0
         for _ in range(max_iterations):
