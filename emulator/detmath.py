@@ -240,9 +240,27 @@ def matmul(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     left = np.asarray(a, dtype=float).tolist()
     right = np.asarray(b, dtype=float).tolist()
     if right and not isinstance(right[0], list):     # matrix @ vector
-        return np.array([dot(row, right) for row in left])
+        return np.array([_dot_floats(row, right) for row in left])
     columns = list(zip(*right))
-    return np.array([[dot(row, col) for col in columns] for row in left])
+    inner = len(right)
+    # the rotations and poses (3x3, 4x4): the sums written out, in the loop's order
+    # (((0.0 + p0) + p1) + p2) + p3, so the bits are _dot_floats's, without a call per element
+    if inner == 4 and all(len(row) == 4 for row in left):
+        return np.array([[0.0 + r0 * c0 + r1 * c1 + r2 * c2 + r3 * c3 for c0, c1, c2, c3 in columns]
+                         for r0, r1, r2, r3 in left])
+    if inner == 3 and all(len(row) == 3 for row in left):
+        return np.array([[0.0 + r0 * c0 + r1 * c1 + r2 * c2 for c0, c1, c2 in columns]
+                         for r0, r1, r2 in left])
+    return np.array([[_dot_floats(row, col) for col in columns] for row in left])
+
+
+def _dot_floats(a: Sequence[float], b: Sequence[float]) -> float:
+    """`dot` of two sequences of Python floats (what `tolist()` of a float array holds): the
+    same products and sums in the same order, without `dot`'s float() conversions."""
+    total = 0.0
+    for x, y in zip(a, b):
+        total += x * y
+    return total
 
 
 def trace3(m: np.ndarray) -> float:

@@ -138,19 +138,50 @@ class Kinematics:
         # per link: alpha, a, d, theta offset and the (constant) cos/sin of alpha
         self._links = [(float(al), float(a), float(d), float(off), dm.cos(dm.radians(al)), dm.sin(dm.radians(al)))
                        for al, a, d, off in dh]
+        # (link index, joint angle) -> that link's rows: the pure-Python trigonometry of detmath
+        # is most of an fk, and a Jacobian's six fks differ from the base in one joint each
+        self._link_rows: dict[tuple[int, float], tuple] = {}
+        self._ik_results: dict[tuple, np.ndarray | None] = {}   # see `ik`
 
     def fk(self, joints_deg: Sequence[float], tool: np.ndarray | None = None) -> np.ndarray:
         """4x4 pose of the TCP in the robot base (``tool`` = flange -> TCP transform)."""
-        out = [[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0]]
-        for (alpha, a, d, offset, ca, sa), q in zip(self._links, joints_deg):
-            th = dm.radians(float(q) + offset)
-            ct, st = dm.cos(th), dm.sin(th)
-            link = ((ct, -st * ca, st * sa, a * ct), (st, ct * ca, -ct * sa, a * st), (0.0, sa, ca, d))
-            # out = out @ link, row by row; the implicit last rows are (0, 0, 0, 1)
-            out = [[r[0] * link[0][j] + r[1] * link[1][j] + r[2] * link[2][j] + (r[3] if j == 3 else 0.0)
-                    for j in range(4)] for r in out]
-        result = np.array(out + [[0.0, 0.0, 0.0, 1.0]])
+        result = np.array(self._chain(joints_deg) + [[0.0, 0.0, 0.0, 1.0]])
         return dm.matmul(result, tool) if tool is not None else result
+
+    _IDENTITY_ROWS = [[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0]]
+
+    def _link(self, index: int, q: float) -> tuple:
+        """The first three rows of link `index`'s DH transform at joint angle `q` (degrees)."""
+        key = (index, q)
+        rows = self._link_rows.get(key) if q != 0.0 else None   # (-0.0 == 0.0: not cached)
+        if rows is None:
+            alpha, a, d, offset, ca, sa = self._links[index]
+            th = dm.radians(q + offset)
+            ct, st = dm.cos(th), dm.sin(th)
+            rows = ((ct, -st * ca, st * sa, a * ct), (st, ct * ca, -ct * sa, a * st), (0.0, sa, ca, d))
+            if q != 0.0:
+                if len(self._link_rows) >= 4096:   # bounded: a long run visits many angles
+                    self._link_rows.clear()
+                self._link_rows[key] = rows
+        return rows
+
+    def _chain(self, joints_deg: Sequence[float], start: int = 0, out: list | None = None,
+               prefixes: list | None = None) -> list:
+        """The product of the links `start`.. (three rows), multiplied onto `out` (the product of
+        the links before `start`; default the identity) in the same order as always, so a chain
+        resumed from a prefix gives the same bits as one from the base. `prefixes` collects the
+        product after each link."""
+        if out is None:
+            out = self._IDENTITY_ROWS
+        for index in range(start, min(len(self._links), len(joints_deg))):
+            link = self._link(index, float(joints_deg[index]))
+            l0, l1, l2 = link
+            # out = out @ link, row by row; the implicit last rows are (0, 0, 0, 1)
+            out = [[r[0] * l0[j] + r[1] * l1[j] + r[2] * l2[j] + (r[3] if j == 3 else 0.0)
+                    for j in range(4)] for r in out]
+            if prefixes is not None:
+                prefixes.append(out)
+        return out
 
     def within_limits(self, joints_deg: Sequence[float]) -> bool:
         q = np.asarray(joints_deg)
@@ -160,7 +191,26 @@ class Kinematics:
            max_iterations: int = 100) -> np.ndarray | None:
         """Joint angles (deg) whose TCP pose is ``target`` (4x4, robot base), starting from
         ``seed_deg``; None if it does not converge within 0.01 mm / 0.01 deg or leaves the joint
-        limits (the target is then unreachable)."""
+        limits (the target is then unreachable).
+
+        A pure function of its arguments (and the arm's constants), so its results are kept by
+        the exact bytes of the arguments: a cycle that repeats its motions (a PnP loop) solves
+        each target once, with the same bits every time."""
+        seed_array, target_array = np.asarray(seed_deg), np.asarray(target)
+        key = (target_array.dtype.str, target_array.shape, target_array.tobytes(), seed_array.dtype.str,
+               seed_array.shape, seed_array.tobytes(), None if tool is None else np.asarray(tool).tobytes(),
+               max_iterations)
+        if key in self._ik_results:
+            found = self._ik_results[key]
+            return None if found is None else found.copy()
+        found = self._ik(target, seed_deg, tool, max_iterations)
+        if len(self._ik_results) >= 1024:   # bounded: a long run with ever new targets
+            self._ik_results.clear()
+        self._ik_results[key] = None if found is None else found.copy()
+        return found
+
+    def _ik(self, target: np.ndarray, seed_deg: Sequence[float], tool: np.ndarray | None,
+            max_iterations: int) -> np.ndarray | None:
         q = np.asarray(seed_deg, dtype=float) * dm.RAD_PER_DEG
         damping = 1.0
         for _ in range(max_iterations):
@@ -194,13 +244,19 @@ class Kinematics:
 
     def _jacobian(self, q_deg: np.ndarray, tool: np.ndarray | None) -> np.ndarray:
         """Geometric Jacobian per radian (numeric differences of fk)."""
-        base = self.fk(q_deg, tool)
+        prefixes = [self._IDENTITY_ROWS]    # prefixes[i]: the product of links 0..i-1
+        base = np.array(self._chain(q_deg, prefixes=prefixes) + [[0.0, 0.0, 0.0, 1.0]])
+        if tool is not None:
+            base = dm.matmul(base, tool)
         jac = np.zeros((6, 6))
         h = 1e-6
         for i in range(6):
             dq = np.array(q_deg, dtype=float)
             dq[i] += dm.degrees(h)
-            moved = self.fk(dq, tool)
+            # fk(dq): links before i are the base's (same angles), so resume from their product
+            moved = np.array(self._chain(dq, i, prefixes[i]) + [[0.0, 0.0, 0.0, 1.0]])
+            if tool is not None:
+                moved = dm.matmul(moved, tool)
             jac[:3, i] = (moved[:3, 3] - base[:3, 3]) / h
             r_d = dm.matmul(moved[:3, :3], base[:3, :3].T)
             jac[3:, i] = np.array([r_d[2, 1] - r_d[1, 2], r_d[0, 2] - r_d[2, 0], r_d[1, 0] - r_d[0, 1]]) / (2 * h)

@@ -68,6 +68,40 @@ class Snapshot:
     version: int                # increases with every new snapshot of this watch
 
 
+class SnapshotValues(Mapping):
+    """The values of one snapshot as a read-only mapping path -> value. The VM thread only keeps
+    the sampled tuple (one step, no dict per scan); the dict is built on the first look, in the
+    front end's thread."""
+
+    __slots__ = ("_paths", "_values", "_dict")
+
+    def __init__(self, paths: list[str], values: tuple) -> None:
+        self._paths = paths
+        self._values = values
+        self._dict: dict[str, Any] | None = None
+
+    def _mapping(self) -> dict[str, Any]:
+        mapping = self._dict
+        if mapping is None:   # two threads may both build it: the same dict either way
+            mapping = self._dict = dict(zip(self._paths, self._values))
+        return mapping
+
+    def __getitem__(self, path: str) -> Any:
+        return self._mapping()[path]
+
+    def __iter__(self):
+        return iter(self._mapping())
+
+    def __len__(self) -> int:
+        return len(self._mapping())
+
+    def items(self):
+        return self._mapping().items()
+
+    def __repr__(self) -> str:
+        return repr(self._mapping())
+
+
 class Watch:
     """A set of paths sampled by the VM thread; `latest()` is safe from any thread."""
 
@@ -102,7 +136,7 @@ class Watch:
                 return          # nothing changed: no snapshot, nothing handed over
             self._last = values
         self._version += 1
-        snapshot = Snapshot(scan, now_ns, dict(zip(self.paths, values)), self._version)
+        snapshot = Snapshot(scan, now_ns, SnapshotValues(self.paths, values), self._version)
         self._latest = snapshot   # one reference assignment: readers see the old or the new one
         if self.on_snapshot is not None:
             self.on_snapshot(snapshot)
@@ -239,7 +273,7 @@ class VariableBridge:
                     watch._next_wall_ns = wall + watch.every_wall_ns
                 watch._next_ns = now + watch.every_ns
                 watch._sample(vm.scan_count, now)
-        if not self._samples.empty():
+        if self._samples.queue:   # (the deque itself: `empty()` takes the queue's lock every scan)
             self._answer_samples(vm.scan_count, now)
 
     def _answer_samples(self, scan: int, now_ns: int) -> None:
@@ -304,6 +338,8 @@ class VariableBridge:
 
     def _apply_pending(self, vm: VM) -> None:
         pending = self._pending
+        if not pending.queue:   # the common case, without `qsize()`'s lock (a deque's length is atomic)
+            return
         # only the batches queued before this scan started: one submitted while these are applied
         # (say, in reply to an earlier one being done) waits for the next scan
         for _ in range(pending.qsize()):

@@ -85,6 +85,7 @@ def run_trace(spec: TraceSpec, project=None, progress: Callable[[int], None] | N
     from stvm.runtime.vm import RuntimeFault   # lazy: start-up
     session = trace_session(spec, project)
     vm = session.vm
+    vm.collect_stats = False   # a trace reports no scan times: two clock reads a scan saved
     patterns = list(spec.watch) or list(session.scenario.watch)
     if not patterns:
         raise WatchError("nothing to record: give --watch PATTERN (or [record] watch in the scenario)")
