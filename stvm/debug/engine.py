@@ -38,6 +38,7 @@ from types import CodeType, FrameType
 from typing import Any, Callable
 
 from stvm.debug.build import DebugBuild
+from stvm.debug.hooks import BreakpointHooks, ThreadKicker
 from stvm.debug.scope import Compiled, CompiledStore, DebugError, Scope, ScopeCompiler
 from stvm.lower.layout import PouLayout
 from stvm.runtime.format import format_time, format_value
@@ -188,6 +189,12 @@ class Engine:
         self._stops = self.statements.stops
         self.vm.on_scan_end.insert(0, self._force_all)
         self._make_tracers()
+        # breakpoints as calls in the generated code (hooks.py); the frame a trace function
+        # already handled at a hooked line, so that the hook call that follows does not
+        self._hooks = BreakpointHooks(build.project.lowered.source, self.vm.namespace, self._hook)
+        self._handled: FrameType | None = None
+        self._kicker: ThreadKicker | None = None
+        self._trace_wanted_always = False   # a breakpoint line no hook could take: trace it
 
     # ================================================================ front-end API
     def start(self, stop_on_entry: bool = True) -> None:
@@ -239,13 +246,13 @@ class Engine:
             return
         self._pause = True
         self._attention = True
-        self._arm_running_frames()
+        self._kick()
 
     def terminate(self, timeout: float = 5.0) -> None:
         """End the session: the worker unwinds, the VM closes its sockets."""
         self._terminate = True
         self._attention = True
-        self._arm_running_frames()
+        self._kick()
         if self._thread is None:
             self._finish_session()
             return
@@ -314,9 +321,12 @@ class Engine:
         for bp in self.breakpoints.values():
             for gen_line in bp.gen_lines:
                 index.setdefault(gen_line, []).append(bp)
+        self._hooks.update(set(index))
+        self._trace_wanted_always = bool(self._hooks.unhooked)
         self._bp_lines = index   # one assignment: the worker sees the old or the new table
         if self.state == RUNNING:
-            self._arm_running_frames()
+            # frames running code compiled before this change: armed by the trace function
+            self._kick()
 
     # ---- inspection (while stopped)
     def frames(self) -> list[StackFrame]:
@@ -407,7 +417,8 @@ class Engine:
     # ================================================================ worker thread
     def _worker(self, stop_on_entry: bool) -> None:
         vm = self.vm
-        sys.settrace(self._trace_call)
+        self._kicker = ThreadKicker(self._kicked)
+        self._apply_tracing(None)
         try:
             if stop_on_entry:
                 self._stop(ENTRY, None)
@@ -426,6 +437,7 @@ class Engine:
             pass
         finally:
             sys.settrace(None)
+            self._kicker.close()
             self._finish_session()
 
     def _finish_session(self) -> None:
@@ -440,6 +452,8 @@ class Engine:
                 listener(None)
 
     def _scan_ended(self) -> None:
+        if not self._attention and sys.gettrace() is not None:
+            self._apply_tracing(None)   # a kick for a breakpoint change has done its work
         mode = self._mode
         if self._pause:
             self._stop(PAUSED, None)
@@ -453,10 +467,13 @@ class Engine:
             self._stop(STEPPED, None)   # a scan without statements (nothing to step to)
 
     # ---- tracing
-    # Only frames that may stop get line events: with a plain `continue`, the frames of POUs
-    # with a breakpoint; while stepping (or asked to pause or end), every POU frame. A frame
-    # already running when that changes is armed by setting its `f_trace` (the thread's global
-    # trace function stays installed, so the interpreter honours it at the next line).
+    # The worker runs untraced unless something needs line events: stepping, a pause, the end
+    # of the session (`_attention`), or a breakpoint line no hook could take. Breakpoints are
+    # calls compiled into the generated code (`_hook`, stvm/debug/hooks.py). When tracing is on,
+    # only frames that may stop get line events: while stepping (or asked to pause or end),
+    # every POU frame; otherwise the frames whose code has a breakpoint line without a hook. A
+    # frame already running when that changes is armed by setting its `f_trace`; a running
+    # worker is reached through `ThreadKicker`, which makes it install the trace function itself.
     def _make_tracers(self) -> None:
         """`_trace_call` (the thread's trace function) and `_trace_line` (a frame's), as closures
         over their tables: they run on every call and every traced line."""
@@ -465,8 +482,11 @@ class Engine:
         def trace_line(frame: FrameType, event: str, arg: Any):
             if event == "line":
                 line = frame.f_lineno
-                if line in stops and (engine._attention or line in engine._bp_lines):
-                    engine._statement(frame, line)
+                if line in stops:
+                    if line in engine._hooks.hooked.get(frame.f_code, ()):
+                        engine._handled = frame   # the hook call that runs next: already handled
+                    if engine._attention or line in engine._bp_lines:
+                        engine._statement(frame, line)
             return trace_line
 
         def trace_call(frame: FrameType, event: str, arg: Any):
@@ -478,12 +498,49 @@ class Engine:
                 lines = code_lines[code] = engine._pou_code_lines(code)
             if lines is None:
                 return None
-            if engine._attention or not lines.isdisjoint(engine._bp_lines):
+            if engine._attention:
+                return trace_line
+            hooked = engine._hooks.hooked.get(code)
+            if not (lines - hooked if hooked else lines).isdisjoint(engine._bp_lines):
                 return trace_line
             return None
 
         self._trace_call = trace_call
         self._trace_line = trace_line
+
+    def _hook(self, line: int) -> None:
+        """A breakpoint line's compiled-in call (runs in the worker, in the ST frame's call)."""
+        frame = sys._getframe(1)
+        if self._handled is frame:     # the trace function saw this line first
+            self._handled = None
+            return
+        if self._attention or line in self._bp_lines:
+            self._statement(frame, line)
+
+    def _apply_tracing(self, frame: FrameType | None) -> None:
+        """(Worker thread) install or remove the trace function for what runs next."""
+        if self._attention or self._trace_wanted_always or self._kicker is None or not self._kicker.available:
+            sys.settrace(self._trace_call)
+            if self._attention:
+                self._arm(frame)
+        else:
+            sys.settrace(None)
+
+    def _kick(self) -> None:
+        """(Front-end thread) make a running worker look at `_attention` and the breakpoints now."""
+        thread = self._thread
+        if thread is None or thread.ident is None or threading.current_thread() is thread:
+            return
+        kicker = self._kicker
+        if kicker is not None and kicker.available:
+            kicker.kick()
+        else:
+            self._arm_running_frames()
+
+    def _kicked(self) -> None:
+        """(Worker thread, at the line it was running) the trace function on, its frames armed."""
+        sys.settrace(self._trace_call)
+        self._arm(sys._getframe(1))
 
     def _pou_code_lines(self, code: CodeType) -> frozenset[int] | None:
         """Statement lines of a POU body's code object (None for helper code: struct copies,
@@ -565,8 +622,7 @@ class Engine:
             self._mode = SCAN
         self._scans_left = count if mode == SCAN else 0
         self._attention = mode in (STEP, NEXT, FINISH) or self._pause or self._terminate
-        if self._attention:
-            self._arm(frame)
+        self._apply_tracing(frame)
 
     def _wait_between_scans(self) -> tuple[str, int]:
         """The next command; meanwhile the VM's idle hooks run (front ends beside the debugger,
@@ -703,11 +759,15 @@ class Engine:
 
 def _untraced(hook: Callable, tracer: Callable) -> Callable:
     def run_untraced(vm: Any) -> None:
+        tracing = sys.gettrace()
+        if tracing is None:
+            hook(vm)
+            return
         sys.settrace(None)
         try:
             hook(vm)
         finally:
-            sys.settrace(tracer)
+            sys.settrace(tracing)
     return run_untraced
 
 
