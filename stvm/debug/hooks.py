@@ -226,6 +226,7 @@ class ThreadKicker:
     def __init__(self, on_kick: Callable[[], None]) -> None:
         self._on_kick = on_kick
         self._thread_id = threading.get_ident()
+        self._lock = threading.Lock()   # no kick once the worker closed it (its thread state goes)
         self._pending = False
         self._mode = ""
         self._tstate = None
@@ -241,8 +242,10 @@ class ThreadKicker:
             set_trace.restype = ctypes.c_int
             api.PyThreadState_Get.restype = ctypes.c_void_p
             self._tstate = api.PyThreadState_Get()   # this (the worker) thread's state
-            tracefunc = ctypes.CFUNCTYPE(ctypes.c_int, ctypes.py_object, ctypes.c_void_p, ctypes.c_int,
-                                         ctypes.py_object)
+            # int (*)(PyObject *obj, PyFrameObject *frame, int what, PyObject *arg); pointers
+            # only (a `return` event during an exception passes a NULL arg)
+            tracefunc = ctypes.CFUNCTYPE(ctypes.c_int, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_int,
+                                         ctypes.c_void_p)
             self._callback = tracefunc(self._c_trace)
             self._set_trace = set_trace
             self._callback_ptr = ctypes.cast(self._callback, ctypes.c_void_p)
@@ -260,18 +263,21 @@ class ThreadKicker:
         return bool(self._mode)
 
     def kick(self) -> None:
-        if self._mode == "ctypes":
-            self._set_trace(self._tstate, self._callback_ptr, None)
-        elif self._mode == "monitoring":   # pragma: no cover - Python ≥ 3.12 without the C entry
-            self._pending = True
-            sys.monitoring.set_events(self._tool, sys.monitoring.events.LINE)
+        with self._lock:
+            if self._mode == "ctypes":
+                self._set_trace(self._tstate, self._callback_ptr, None)
+            elif self._mode == "monitoring":   # pragma: no cover - Python ≥ 3.12 without the C entry
+                self._pending = True
+                sys.monitoring.set_events(self._tool, sys.monitoring.events.LINE)
 
     def close(self) -> None:
-        if self._mode == "monitoring":   # pragma: no cover
-            sys.monitoring.set_events(self._tool, 0)
-            sys.monitoring.register_callback(self._tool, sys.monitoring.events.LINE, None)
-            sys.monitoring.free_tool_id(self._tool)
-        self._mode = ""
+        """(Worker thread, before it ends) no kick after this."""
+        with self._lock:
+            if self._mode == "monitoring":   # pragma: no cover
+                sys.monitoring.set_events(self._tool, 0)
+                sys.monitoring.register_callback(self._tool, sys.monitoring.events.LINE, None)
+                sys.monitoring.free_tool_id(self._tool)
+            self._mode = ""
 
     def _c_trace(self, obj: Any, frame: Any, what: int, arg: Any) -> int:
         # runs in the worker, as its C trace function; the engine's `sys.settrace` replaces it
