@@ -6,9 +6,10 @@ A cell of N robots (N = 1, 2, 4, 8, 16) is one VM at a 1 ms task running one pro
 CBT_Connect and N PnP_Sequence instances of the V2 library (st_src/cbt_v2, as
 tests/cbt_v2/test_v2_four_robots.py runs four), and N TM emulators in lockstep on the VM's clock,
 each at its own port. Every robot runs the demo's Pick-and-Place cycle for ever (its six targets,
-shifted sideways per robot). After the connections are up (warm-up scans), the same window of
-scans is measured for every N, in CPU time (`time.process_time`), split into the ST scan (the
-program) and the lockstep hook (frame delivery and the N emulators).
+shifted sideways by -75, -25, +25 or +75 mm, the offsets tests/cbt_v2/test_v2_four_robots.py
+drives). After the connections are up (warm-up scans), the same window of scans is measured for
+every N, in CPU time (`time.process_time`), split into the ST scan (the program) and the lockstep
+hook (frame delivery and the N emulators).
 
 A second series keeps one robot and adds idle copies of the per-robot FBs (CBT_Connect and
 PnP_Sequence called every scan with Execute FALSE): scan cost against program size, in FB
@@ -137,7 +138,7 @@ def start_cell(project, robots: int):
             vm.set(f"{prefix}.AccelTime", target["AccelTime"])
             vm.set(f"{prefix}.PrecisePositioning", True)
             for k, v in target["TargetPosition"].items():
-                vm.set(f"{prefix}.TargetPosition.{k}", v + (50.0 * r - 75.0 if k == "Y" else 0.0))
+                vm.set(f"{prefix}.TargetPosition.{k}", v + (50.0 * ((r - 1) % 4) - 75.0 if k == "Y" else 0.0))
     vm.set("Cell.Execute", True)
     return vm, transport
 
@@ -268,9 +269,13 @@ def run(smoke: bool) -> list[dict]:
 
 
 def profile(robots: int, scans: int) -> None:
-    """cProfile of the measured window (where the scan's time goes)."""
+    """cProfile of the measured window (where the scan's time goes): the busiest functions, then
+    the generated code's own time summed per POU (its class or function in the generated module,
+    named by the POU it lowers) and the rest per Python module."""
+    import bisect
     import cProfile
     import pstats
+    from stvm.runtime.vm import GENERATED_FILENAME
     project = load_cell(robots)
     vm, _ = start_cell(project, robots)
     vm.run(cycles=300)
@@ -279,7 +284,26 @@ def profile(robots: int, scans: int) -> None:
     vm.run(cycles=scans)
     profiler.disable()
     vm.close()
-    pstats.Stats(profiler).sort_stats("tottime").print_stats(25)
+    stats = pstats.Stats(profiler)
+    stats.sort_stats("tottime").print_stats(20)
+    lines = project.lowered.source.splitlines()
+    starts = [(i + 1, text.split()[1].split("(")[0].split(":")[0]) for i, text in enumerate(lines)
+              if text.startswith(("class ", "def "))]
+    keys = [s[0] for s in starts]
+    names = {py: key for key, py in project.lowered.classes.items()}
+    by_unit: dict[str, float] = {}
+    for (file, line, _), (_, _, tottime, _, _) in stats.stats.items():   # type: ignore[attr-defined]
+        if file == GENERATED_FILENAME:
+            unit = starts[bisect.bisect_right(keys, line) - 1][1]
+            label = "ST " + names.get(unit, unit)
+        else:
+            label = "Python " + file.replace(str(ROOT) + "/", "")
+        by_unit[label] = by_unit.get(label, 0.0) + tottime
+    total = sum(by_unit.values())
+    print(f"own time per POU (generated code) and per Python file, {robots} robot(s), profiled "
+          f"(cProfile inflates calls; shares, not µs, are the figure):")
+    for label, spent in sorted(by_unit.items(), key=lambda kv: -kv[1])[:25]:
+        print(f"  {spent / total * 100:5.1f} %  {spent / scans * 1e6:8.1f} µs/scan  {label}")
 
 
 def main() -> None:
