@@ -39,7 +39,7 @@ from typing import Any, Callable
 
 from stvm.debug.build import DebugBuild
 from stvm.debug.hooks import BreakpointHooks, ThreadKicker
-from stvm.debug.scope import Compiled, CompiledStore, DebugError, Scope, ScopeCompiler
+from stvm.debug.scope import Compiled, CompiledStore, DebugError, Scope, ScopeCompiler, run_guarded
 from stvm.lower.layout import PouLayout
 from stvm.runtime.format import format_time, format_value
 from stvm.runtime.helpers import copy_value
@@ -193,6 +193,8 @@ class Engine:
         # already handled at a hooked line, so that the hook call that follows does not
         self._hooks = BreakpointHooks(build.project.lowered.source, self.vm.namespace, self._hook)
         self._handled: FrameType | None = None
+        self._frame_kinds: dict[CodeType, str] = {}            # code object → its POU's kind
+        self._condition_names: dict[str, Any] | None = None   # _T and _G of condition evaluation
         self._kicker: ThreadKicker | None = None
         self._trace_wanted_always = False   # a breakpoint line no hook could take: trace it
 
@@ -573,8 +575,7 @@ class Engine:
         for bp in self._bp_lines.get(line, ()):
             if bp.compiled is not None:
                 try:
-                    scope = self._frame_scope(frame)
-                    if not self.compiler.evaluate(self.vm, scope, bp.compiled):
+                    if not self._condition_holds(bp.compiled, frame):
                         continue
                 except DebugError as exc:
                     message = f"breakpoint {bp.id}: condition {bp.condition!r} failed: {exc}"
@@ -595,6 +596,26 @@ class Engine:
         elif mode == FINISH:
             if _depth(frame) < self._depth:
                 self._stop(STEPPED, frame)
+
+    def _condition_holds(self, compiled: Compiled, frame: FrameType) -> Any:
+        """A breakpoint condition in `frame`: what `compiler.evaluate` in the frame's scope gives,
+        with the frame's kind looked up once per code object and the names bound directly (a
+        condition on a hot line runs at every pass)."""
+        kind = self._frame_kinds.get(frame.f_code)
+        if kind is None:
+            scope = self._frame_scope(frame)
+            kind = self._frame_kinds[frame.f_code] = scope.pou.kind if scope.pou is not None else ""
+        local_vars = frame.f_locals
+        names = self._condition_names
+        if names is None:
+            names = self._condition_names = self.compiler.namespace(self.vm, Scope())
+        if kind == "FUNCTION":
+            bound = dict(names, self=None, _f=local_vars.get("_f"), _r=local_vars.get("_r"))
+        elif kind == "METHOD":
+            bound = dict(names, self=local_vars.get("self"), _f=local_vars.get("_f"), _r=local_vars.get("_r"))
+        else:
+            bound = dict(names, self=local_vars.get("self"), _f=None, _r=None)
+        return run_guarded(lambda: eval(compiled.code, self.vm.namespace, bound))
 
     def _stop(self, reason: str, frame: FrameType | None, breakpoints: list[int] | None = None,
               message: str = "") -> None:
