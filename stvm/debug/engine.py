@@ -1,10 +1,13 @@
 """The debug engine: the VM in a worker thread, stopping on ST statements.
 
-The worker runs scans of a debug build (`build.py`) with `sys.settrace` installed in that thread
+The worker runs scans of a debug build (`build.py`). Breakpoints are calls compiled into the
+generated code at their lines (`hooks.py`), so `continue` and `scan N` run untraced; while
+stepping, or when a pause or the end is asked, `sys.settrace` is installed in the worker thread
 only. The trace function follows generated frames (file `<stvm-generated>`) and looks at line
 events on statement starts (`StatementMap.stops`); everything else returns at once. At a stop the
-worker blocks inside the trace function until a front end (console or DAP, in another thread)
-resumes it, so the stopped frames, and every variable, stay exactly as the ST code left them.
+worker blocks inside the breakpoint call or the trace function until a front end (console or
+DAP, in another thread) resumes it, so the stopped frames, and every variable, stay exactly as
+the ST code left them.
 
 Nothing of this runs in `stvm run`: a normal build has no trace function and keeps its locals
 cache (see bench/bench_debug_overhead.py).
