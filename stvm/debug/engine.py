@@ -528,8 +528,30 @@ class Engine:
             sys.settrace(self._trace_call)
             if self._attention:
                 self._arm(frame)
+            return
+        stale = self._stale_frames(frame)
+        if stale:
+            # running code compiled before a breakpoint set while stopped: those frames are
+            # traced until the scan ends (new calls run the new code, untraced)
+            sys.settrace(self._trace_call)
+            for stale_frame in stale:
+                stale_frame.f_trace = self._trace_line
         else:
             sys.settrace(None)
+
+    def _stale_frames(self, frame: FrameType | None) -> list[FrameType]:
+        """Frames on the stack whose code has a breakpoint line without its compiled call."""
+        out = []
+        bp_lines = self._bp_lines
+        while frame is not None and bp_lines:
+            code = frame.f_code
+            lines = self._code_lines.get(code, ())
+            if lines == ():
+                lines = self._code_lines[code] = self._pou_code_lines(code)
+            if lines and not (lines - self._hooks.hooked.get(code, frozenset())).isdisjoint(bp_lines):
+                out.append(frame)
+            frame = frame.f_back
+        return out
 
     def _kick(self) -> None:
         """(Front-end thread) make a running worker look at `_attention` and the breakpoints now."""

@@ -88,3 +88,20 @@ def test_stepping_traces_and_continue_drops_the_trace_function_again():
         assert traces[0] is None and traces[1] is not None and traces[2] is None
     finally:
         engine.terminate()
+
+
+def test_a_breakpoint_set_while_stopped_hits_later_in_the_same_call():
+    engine = start_engine(small_build())
+    try:
+        engine.add_breakpoint(str(small_path()), small_line("c(Enable := run);"))
+        event = engine.run(CONTINUE, timeout=T)
+        assert event.scan == 0
+        # the running call of Main has the code built before this breakpoint: traced till it ends
+        engine.add_breakpoint(str(small_path()), small_line("grid[2, 3] := i;"))
+        event = engine.run(CONTINUE, timeout=T)
+        assert event.reason == BREAKPOINT and event.scan == 0
+        assert event.span.line == small_line("grid[2, 3] := i;")
+        event = engine.run(CONTINUE, timeout=T)     # the next scan: the first breakpoint, untraced
+        assert event.scan == 1 and event.span.line == small_line("c(Enable := run);")
+    finally:
+        engine.terminate()
