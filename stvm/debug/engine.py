@@ -274,8 +274,9 @@ class Engine:
         return self.state in (STOPPED, FAULTED)
 
     # ---- breakpoints
-    def add_breakpoint(self, file: str, line: int, condition: str | None = None) -> Breakpoint:
-        """A breakpoint on the first statement at or after `file:line`."""
+    def add_breakpoint(self, file: str, line: int, condition: str | None = None, _index: bool = True) -> Breakpoint:
+        """A breakpoint on the first statement at or after `file:line`. (`_index` False: the
+        caller recompiles the breakpoint calls once for several.)"""
         span_file = self.build.span_file(file)
         if span_file is None:
             known = ", ".join(sorted(self.statements.st_lines)) or "none"
@@ -296,7 +297,8 @@ class Engine:
                         list(self.statements.by_st_line[(span_file, actual)]), condition, compiled)
         self._next_bp += 1
         self.breakpoints[bp.id] = bp
-        self._index_breakpoints()
+        if _index:
+            self._index_breakpoints()
         return bp
 
     def delete_breakpoint(self, bp_id: int | None = None) -> None:
@@ -315,7 +317,7 @@ class Engine:
         results: list[Breakpoint | DebugError] = []
         for line, condition in specs:
             try:
-                results.append(self.add_breakpoint(file, line, condition))
+                results.append(self.add_breakpoint(file, line, condition, _index=False))
             except DebugError as exc:
                 results.append(exc)
         self._index_breakpoints()
