@@ -16,8 +16,9 @@ build is a separate lowering that `stvm run` never uses) and no trace function i
 the expected difference is noise.
 
 Part 2 (for information) shows what debugging costs: the same programs, and the thesis PnP
-scenario with the robot in lockstep, run by the debug engine (debug build, `sys.settrace` on; no
-breakpoint / one conditional breakpoint that never stops) against the normal VM, in-process.
+scenario with the robot in lockstep, run by the debug engine (debug build, breakpoints compiled in;
+no breakpoint / one conditional breakpoint that never stops) against the normal VM, in-process.
+bench/bench_debug_speed.py is the figure of issue 33 (CPU time, more programs).
 """
 
 from __future__ import annotations
@@ -121,7 +122,7 @@ def bench_engine() -> None:
     move_abs = str(ROOT / "st_src" / "CBT_MoveAbsolute.st")
     cases = [("BOOL toggle", str(ST / "bool_toggle.st"), 20000), ("FOR sum 100", str(ST / "for_sum.st"), 500),
              ("bubble sort 1000", str(ST / "bubble_sort.st"), 1), ("thesis PnP, lockstep", thesis, 3000)]
-    print("\nPart 2 (information): µs per scan under the debugger, in-process (debug build, sys.settrace).")
+    print("\nPart 2 (information): µs per scan under the debugger, in-process (debug build, breakpoints compiled in).")
     print("'1 bp': a breakpoint with the condition FALSE (never stops, evaluated at every pass) on the")
     print("program's last statement (the thesis: CBT_MoveAbsolute line 103, two instances per scan)")
     print(f"{'program':22} {'stvm run':>10} {'debug, no bp':>13} {'ratio':>6} {'debug, 1 bp':>12} {'ratio':>6}")

@@ -1,10 +1,13 @@
 """The debug engine: the VM in a worker thread, stopping on ST statements.
 
-The worker runs scans of a debug build (`build.py`) with `sys.settrace` installed in that thread
+The worker runs scans of a debug build (`build.py`). Breakpoints are calls compiled into the
+generated code at their lines (`hooks.py`), so `continue` and `scan N` run untraced; while
+stepping, or when a pause or the end is asked, `sys.settrace` is installed in the worker thread
 only. The trace function follows generated frames (file `<stvm-generated>`) and looks at line
 events on statement starts (`StatementMap.stops`); everything else returns at once. At a stop the
-worker blocks inside the trace function until a front end (console or DAP, in another thread)
-resumes it, so the stopped frames, and every variable, stay exactly as the ST code left them.
+worker blocks inside the breakpoint call or the trace function until a front end (console or
+DAP, in another thread) resumes it, so the stopped frames, and every variable, stay exactly as
+the ST code left them.
 
 Nothing of this runs in `stvm run`: a normal build has no trace function and keeps its locals
 cache (see bench/bench_debug_overhead.py).
@@ -38,7 +41,8 @@ from types import CodeType, FrameType
 from typing import Any, Callable
 
 from stvm.debug.build import DebugBuild
-from stvm.debug.scope import Compiled, CompiledStore, DebugError, Scope, ScopeCompiler
+from stvm.debug.hooks import BreakpointHooks, ThreadKicker
+from stvm.debug.scope import Compiled, CompiledStore, DebugError, Scope, ScopeCompiler, run_guarded
 from stvm.lower.layout import PouLayout
 from stvm.runtime.format import format_time, format_value
 from stvm.runtime.helpers import copy_value
@@ -188,6 +192,14 @@ class Engine:
         self._stops = self.statements.stops
         self.vm.on_scan_end.insert(0, self._force_all)
         self._make_tracers()
+        # breakpoints as calls in the generated code (hooks.py); the frame a trace function
+        # already handled at a hooked line, so that the hook call that follows does not
+        self._hooks = BreakpointHooks(build.project.lowered.source, self.vm.namespace, self._hook)
+        self._handled: FrameType | None = None
+        self._frame_kinds: dict[CodeType, str] = {}            # code object → its POU's kind
+        self._condition_names: dict[str, Any] | None = None   # _T and _G of condition evaluation
+        self._kicker: ThreadKicker | None = None
+        self._trace_wanted_always = False   # a breakpoint line no hook could take: trace it
 
     # ================================================================ front-end API
     def start(self, stop_on_entry: bool = True) -> None:
@@ -239,13 +251,13 @@ class Engine:
             return
         self._pause = True
         self._attention = True
-        self._arm_running_frames()
+        self._kick()
 
     def terminate(self, timeout: float = 5.0) -> None:
         """End the session: the worker unwinds, the VM closes its sockets."""
         self._terminate = True
         self._attention = True
-        self._arm_running_frames()
+        self._kick()
         if self._thread is None:
             self._finish_session()
             return
@@ -262,8 +274,9 @@ class Engine:
         return self.state in (STOPPED, FAULTED)
 
     # ---- breakpoints
-    def add_breakpoint(self, file: str, line: int, condition: str | None = None) -> Breakpoint:
-        """A breakpoint on the first statement at or after `file:line`."""
+    def add_breakpoint(self, file: str, line: int, condition: str | None = None, _index: bool = True) -> Breakpoint:
+        """A breakpoint on the first statement at or after `file:line`. (`_index` False: the
+        caller recompiles the breakpoint calls once for several.)"""
         span_file = self.build.span_file(file)
         if span_file is None:
             known = ", ".join(sorted(self.statements.st_lines)) or "none"
@@ -284,7 +297,8 @@ class Engine:
                         list(self.statements.by_st_line[(span_file, actual)]), condition, compiled)
         self._next_bp += 1
         self.breakpoints[bp.id] = bp
-        self._index_breakpoints()
+        if _index:
+            self._index_breakpoints()
         return bp
 
     def delete_breakpoint(self, bp_id: int | None = None) -> None:
@@ -303,7 +317,7 @@ class Engine:
         results: list[Breakpoint | DebugError] = []
         for line, condition in specs:
             try:
-                results.append(self.add_breakpoint(file, line, condition))
+                results.append(self.add_breakpoint(file, line, condition, _index=False))
             except DebugError as exc:
                 results.append(exc)
         self._index_breakpoints()
@@ -314,9 +328,12 @@ class Engine:
         for bp in self.breakpoints.values():
             for gen_line in bp.gen_lines:
                 index.setdefault(gen_line, []).append(bp)
+        self._hooks.update(set(index))
+        self._trace_wanted_always = bool(self._hooks.unhooked)
         self._bp_lines = index   # one assignment: the worker sees the old or the new table
         if self.state == RUNNING:
-            self._arm_running_frames()
+            # frames running code compiled before this change: armed by the trace function
+            self._kick()
 
     # ---- inspection (while stopped)
     def frames(self) -> list[StackFrame]:
@@ -407,7 +424,8 @@ class Engine:
     # ================================================================ worker thread
     def _worker(self, stop_on_entry: bool) -> None:
         vm = self.vm
-        sys.settrace(self._trace_call)
+        self._kicker = ThreadKicker(self._kicked)
+        self._apply_tracing(None)
         try:
             if stop_on_entry:
                 self._stop(ENTRY, None)
@@ -426,6 +444,7 @@ class Engine:
             pass
         finally:
             sys.settrace(None)
+            self._kicker.close()
             self._finish_session()
 
     def _finish_session(self) -> None:
@@ -440,6 +459,8 @@ class Engine:
                 listener(None)
 
     def _scan_ended(self) -> None:
+        if not self._attention and sys.gettrace() is not None:
+            self._apply_tracing(None)   # a kick for a breakpoint change has done its work
         mode = self._mode
         if self._pause:
             self._stop(PAUSED, None)
@@ -453,10 +474,13 @@ class Engine:
             self._stop(STEPPED, None)   # a scan without statements (nothing to step to)
 
     # ---- tracing
-    # Only frames that may stop get line events: with a plain `continue`, the frames of POUs
-    # with a breakpoint; while stepping (or asked to pause or end), every POU frame. A frame
-    # already running when that changes is armed by setting its `f_trace` (the thread's global
-    # trace function stays installed, so the interpreter honours it at the next line).
+    # The worker runs untraced unless something needs line events: stepping, a pause, the end
+    # of the session (`_attention`), or a breakpoint line no hook could take. Breakpoints are
+    # calls compiled into the generated code (`_hook`, stvm/debug/hooks.py). When tracing is on,
+    # only frames that may stop get line events: while stepping (or asked to pause or end),
+    # every POU frame; otherwise the frames whose code has a breakpoint line without a hook. A
+    # frame already running when that changes is armed by setting its `f_trace`; a running
+    # worker is reached through `ThreadKicker`, which makes it install the trace function itself.
     def _make_tracers(self) -> None:
         """`_trace_call` (the thread's trace function) and `_trace_line` (a frame's), as closures
         over their tables: they run on every call and every traced line."""
@@ -465,8 +489,11 @@ class Engine:
         def trace_line(frame: FrameType, event: str, arg: Any):
             if event == "line":
                 line = frame.f_lineno
-                if line in stops and (engine._attention or line in engine._bp_lines):
-                    engine._statement(frame, line)
+                if line in stops:
+                    if line in engine._hooks.hooked.get(frame.f_code, ()):
+                        engine._handled = frame   # the hook call that runs next: already handled
+                    if engine._attention or line in engine._bp_lines:
+                        engine._statement(frame, line)
             return trace_line
 
         def trace_call(frame: FrameType, event: str, arg: Any):
@@ -478,12 +505,71 @@ class Engine:
                 lines = code_lines[code] = engine._pou_code_lines(code)
             if lines is None:
                 return None
-            if engine._attention or not lines.isdisjoint(engine._bp_lines):
+            if engine._attention:
+                return trace_line
+            hooked = engine._hooks.hooked.get(code)
+            if not (lines - hooked if hooked else lines).isdisjoint(engine._bp_lines):
                 return trace_line
             return None
 
         self._trace_call = trace_call
         self._trace_line = trace_line
+
+    def _hook(self, line: int) -> None:
+        """A breakpoint line's compiled-in call (runs in the worker, in the ST frame's call)."""
+        frame = sys._getframe(1)
+        if self._handled is frame:     # the trace function saw this line first
+            self._handled = None
+            return
+        if self._attention or line in self._bp_lines:
+            self._statement(frame, line)
+
+    def _apply_tracing(self, frame: FrameType | None) -> None:
+        """(Worker thread) install or remove the trace function for what runs next."""
+        if self._attention or self._trace_wanted_always or self._kicker is None or not self._kicker.available:
+            sys.settrace(self._trace_call)
+            if self._attention:
+                self._arm(frame)
+            return
+        stale = self._stale_frames(frame)
+        if stale:
+            # running code compiled before a breakpoint set while stopped: those frames are
+            # traced until the scan ends (new calls run the new code, untraced)
+            sys.settrace(self._trace_call)
+            for stale_frame in stale:
+                stale_frame.f_trace = self._trace_line
+        else:
+            sys.settrace(None)
+
+    def _stale_frames(self, frame: FrameType | None) -> list[FrameType]:
+        """Frames on the stack whose code has a breakpoint line without its compiled call."""
+        out = []
+        bp_lines = self._bp_lines
+        while frame is not None and bp_lines:
+            code = frame.f_code
+            lines = self._code_lines.get(code, ())
+            if lines == ():
+                lines = self._code_lines[code] = self._pou_code_lines(code)
+            if lines and not (lines - self._hooks.hooked.get(code, frozenset())).isdisjoint(bp_lines):
+                out.append(frame)
+            frame = frame.f_back
+        return out
+
+    def _kick(self) -> None:
+        """(Front-end thread) make a running worker look at `_attention` and the breakpoints now."""
+        thread = self._thread
+        if thread is None or thread.ident is None or threading.current_thread() is thread:
+            return
+        kicker = self._kicker
+        if kicker is not None and kicker.available:
+            kicker.kick()
+        else:
+            self._arm_running_frames()
+
+    def _kicked(self) -> None:
+        """(Worker thread, at the line it was running) the trace function on, its frames armed."""
+        sys.settrace(self._trace_call)
+        self._arm(sys._getframe(1))
 
     def _pou_code_lines(self, code: CodeType) -> frozenset[int] | None:
         """Statement lines of a POU body's code object (None for helper code: struct copies,
@@ -516,8 +602,7 @@ class Engine:
         for bp in self._bp_lines.get(line, ()):
             if bp.compiled is not None:
                 try:
-                    scope = self._frame_scope(frame)
-                    if not self.compiler.evaluate(self.vm, scope, bp.compiled):
+                    if not self._condition_holds(bp.compiled, frame):
                         continue
                 except DebugError as exc:
                     message = f"breakpoint {bp.id}: condition {bp.condition!r} failed: {exc}"
@@ -538,6 +623,26 @@ class Engine:
         elif mode == FINISH:
             if _depth(frame) < self._depth:
                 self._stop(STEPPED, frame)
+
+    def _condition_holds(self, compiled: Compiled, frame: FrameType) -> Any:
+        """A breakpoint condition in `frame`: what `compiler.evaluate` in the frame's scope gives,
+        with the frame's kind looked up once per code object and the names bound directly (a
+        condition on a hot line runs at every pass)."""
+        kind = self._frame_kinds.get(frame.f_code)
+        if kind is None:
+            scope = self._frame_scope(frame)
+            kind = self._frame_kinds[frame.f_code] = scope.pou.kind if scope.pou is not None else ""
+        local_vars = frame.f_locals
+        names = self._condition_names
+        if names is None:
+            names = self._condition_names = self.compiler.namespace(self.vm, Scope())
+        if kind == "FUNCTION":
+            bound = dict(names, self=None, _f=local_vars.get("_f"), _r=local_vars.get("_r"))
+        elif kind == "METHOD":
+            bound = dict(names, self=local_vars.get("self"), _f=local_vars.get("_f"), _r=local_vars.get("_r"))
+        else:
+            bound = dict(names, self=local_vars.get("self"), _f=None, _r=None)
+        return run_guarded(lambda: eval(compiled.code, self.vm.namespace, bound))
 
     def _stop(self, reason: str, frame: FrameType | None, breakpoints: list[int] | None = None,
               message: str = "") -> None:
@@ -565,8 +670,7 @@ class Engine:
             self._mode = SCAN
         self._scans_left = count if mode == SCAN else 0
         self._attention = mode in (STEP, NEXT, FINISH) or self._pause or self._terminate
-        if self._attention:
-            self._arm(frame)
+        self._apply_tracing(frame)
 
     def _wait_between_scans(self) -> tuple[str, int]:
         """The next command; meanwhile the VM's idle hooks run (front ends beside the debugger,
@@ -703,11 +807,15 @@ class Engine:
 
 def _untraced(hook: Callable, tracer: Callable) -> Callable:
     def run_untraced(vm: Any) -> None:
+        tracing = sys.gettrace()
+        if tracing is None:
+            hook(vm)
+            return
         sys.settrace(None)
         try:
             hook(vm)
         finally:
-            sys.settrace(tracer)
+            sys.settrace(tracing)
     return run_untraced
 
 

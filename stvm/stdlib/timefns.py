@@ -42,6 +42,9 @@ def sub_time(ctx, first: int, second: int) -> int:
 def mul_time(ctx, duration: int, factor: float) -> int:
     if not math.isfinite(factor):
         raise FunctionError(f"MUL_TIME: the factor {factor} is not a finite number")
+    whole = int(factor)
+    if whole == factor:   # a whole factor (`MUL_TIME(T#1s, TimeOutSeconds)`, every scan): exact as it is
+        return _time(duration * whole)
     # exact: the ns nearest to duration x the REAL's value (ties to even), on every machine
     return _time(round(Fraction(duration) * Fraction(factor)))  # Choice: to the nearest ns
 
