@@ -249,8 +249,9 @@ def rows_of(by_robots: list[dict], by_size: list[dict], yard: float) -> list[dic
     slope, intercept, r2 = fit([r["robots"] for r in by_robots], [r["scan_us"] for r in by_robots])
     rows.append(_row("scale: growth per robot (least-squares slope)", slope, yard, "linear",
                      f"intercept {intercept:.1f} µs, R² {r2:.4f}"))
-    rows.append({"figure": "scale: R² of the linear fit against robots", "value": r2, "unit": "", "yard_name": "",
-                 "yard": 0.0, "yard_unit": "", "target": "linear (≈ 1)", "ratio": None, "note": ""})
+    rows.append({"figure": "scale: R² of the linear fit against robots", "value": r2, "unit": "",
+                 "yard_name": "a perfect straight line", "yard": 1.0, "yard_unit": "", "target": "linear (≈ 1)",
+                 "ratio": r2, "note": ""})
     slope_k, intercept_k, r2_k = fit([r["fbs"] for r in by_size], [r["scan_us"] for r in by_size])
     rows.append(_row("scale: growth per FB instance (1 robot, idle FBs added)", slope_k, yard, "linear",
                      f"intercept {intercept_k:.1f} µs, R² {r2_k:.4f}, "
