@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import re
 from dataclasses import dataclass
-from typing import Any, Callable, Iterator
+from typing import Any, Callable
 
 from stvm.lower.layout import is_storage_name
 from stvm.runtime.catalog import Catalog, listed_slots
