@@ -122,7 +122,6 @@ def soak(seconds: float) -> None:
     server = OpcUaServer(vm, config)
     url = server.start()
     marks: list[tuple[float, float]] = []
-    t0 = [None]
 
     def started(vm_):
         marks.append((time.perf_counter(), 0.0))

@@ -146,7 +146,7 @@ def main() -> None:
     for label, size, t_parse, t_lark in rows:
         print(f"{label:34} {size:7.0f} {size / t_parse:7.0f} KiB/s {size / t_lark:5.0f} KiB/s {t_lark / t_parse:8.1f}x")
     st_kib, dense_kib, small_kib = kib(project_files), kib([dense]), kib([small])
-    print(f"\nparse+check (stvm.project.check, no cache, stdlib memoised):")
+    print("\nparse+check (stvm.project.check, no cache, stdlib memoised):")
     print(f"  st_src projects {', '.join(p.split('/')[-1] for p in PROJECTS)} ({st_kib:.0f} KiB): "
           f"{st_kib / t_check_st:.0f} KiB/s")
     print(f"  dense 10k lines ({dense_kib:.0f} KiB): {dense_kib / t_check_dense:.0f} KiB/s   (target >= 400)")
@@ -161,7 +161,7 @@ def main() -> None:
         size, seconds, ok, failed = blark_st
         same = [p for p in st_files if p not in failed]
         t_same = cpu(lambda: parse_all(same))
-        print(f"\nblark 0.8.3 parse (Earley), same files:")
+        print("\nblark 0.8.3 parse (Earley), same files:")
         print(f"  st_src: parses {ok} of {len(st_files)} files (the rest use Sysmac namespaces, `\\` paths, OO): "
               f"{size:.0f} KiB at {size / seconds:.1f} KiB/s; stvm parse of those files {size / t_same:.0f} KiB/s "
               f"({seconds / t_same:.0f}x); stvm parse+check of the st_src projects {st_kib / t_check_st:.0f} KiB/s "
@@ -172,7 +172,7 @@ def main() -> None:
                   f"({seconds / rows[2][2]:.0f}x), parse+check {small_kib / t_check_small:.0f} KiB/s "
                   f"= {small_kib / t_check_small / (size / seconds):.0f}x blark's parse   (target >= 50x)")
         else:
-            print(f"  dense 1k lines: blark failed to parse it")
+            print("  dense 1k lines: blark failed to parse it")
 
     wall, cpu_s, rss, rc, what = big_check(args.lines, folder, front_end_only=True)
     print(f"\nlarge input, generated {what}, each in a fresh process (no cache):   (target <= 10 s, <= 400 MB)")

@@ -267,7 +267,7 @@ def socket_scan_time(cycles: int = 10000, repeat: int = 3, baseline: Path | None
               + ", ".join(f"{v:.1f}" for v in st_p50) + " us; p99 "
               + ", ".join(f"{figures['st'][2]:.0f}" for figures, _ in rows) + " us")
         if service:
-            print(f"      socket service between scans, median per scan: " + ", ".join(f"{v:.1f}" for v in service) + " us")
+            print("      socket service between scans, median per scan: " + ", ".join(f"{v:.1f}" for v in service) + " us")
     for paced, how in ((False, "back to back"), (True, "each scan released at its 1 ms deadline by the real-time pacer")):
         rows = lockstep[paced]
         st, yard = min(rows)

@@ -14,7 +14,6 @@ Run alone: `python -m bench --only trace`; the part table: `python bench/fig_tra
 from __future__ import annotations
 
 import time
-from pathlib import Path
 
 from bench.registry import ROOT, Row, figure, for_loop_us
 

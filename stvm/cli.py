@@ -27,6 +27,8 @@ class _Parser(argparse.ArgumentParser):
 
 
 def cmd_check(args) -> int:
+    if args.emit_python or args.pou:
+        return _emit_python(args)
     from stvm.project import check   # lazy: start-up
     analysis, diags, sources = check(resolve_project(args), generate=True)
     print_diagnostics(diags, sources)
@@ -34,6 +36,30 @@ def cmd_check(args) -> int:
     if errors:
         print(f"{errors} error(s)", file=sys.stderr)
         return EXIT_COMPILE
+    return EXIT_OK
+
+
+def _emit_python(args) -> int:
+    """`stvm check --emit-python`: check, lower through the driver's stages, then print the
+    generated Python of the project's POUs (or the `--pou` named) beside their ST lines."""
+    from stvm.lower.listing import render, select   # lazy: start-up
+    from stvm.project import LoadError, check_stage, compile_stage, parse_stage   # lazy: start-up
+    checked = check_stage(parse_stage(resolve_project(args)))
+    print_diagnostics(checked.diagnostics, checked.sources)
+    errors = sum(d.is_error for d in checked.diagnostics)
+    if errors:
+        print(f"{errors} error(s)", file=sys.stderr)
+        return EXIT_COMPILE
+    try:
+        compiled = compile_stage(checked)
+    except LoadError as exc:    # a limit only code generation meets (nesting, size)
+        print_diagnostics(exc.diagnostics, checked.sources)
+        print(f"{sum(d.is_error for d in exc.diagnostics)} error(s)", file=sys.stderr)
+        return EXIT_COMPILE
+    chosen, titles = select(compiled.lowered, checked.analysis, checked.parsed.files, args.pou or ())
+    if args.pou and not chosen:
+        raise UsageError(f"--pou {', '.join(args.pou)}: no such POU, STRUCT or VAR_GLOBAL in the project")
+    sys.stdout.write(render(compiled.lowered, chosen, titles))
     return EXIT_OK
 
 
@@ -56,6 +82,11 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", parser_class=_Parser)
     check = sub.add_parser("check", help="check ST files and print diagnostics")
     check.add_argument("files", nargs="+")
+    check.add_argument("--emit-python", action="store_true",
+                       help="also print the generated Python of each POU with the ST file:line of every line")
+    check.add_argument("--pou", action="append", metavar="NAME",
+                       help="with --emit-python: only this POU (repeatable; stdlib POUs too, e.g. TON; "
+                            "VAR_GLOBAL for the globals)")
     add_project_options(check)
     check.set_defaults(func=cmd_check)
 

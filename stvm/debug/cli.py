@@ -13,7 +13,6 @@ Exit codes: 0 ok, 1 compile errors, 2 usage error.
 from __future__ import annotations
 
 import sys
-from pathlib import Path
 
 from stvm.cli_support import (EXIT_COMPILE, EXIT_OK, EXIT_USAGE, UsageError,  # noqa: F401 (API)
                               add_project_options, compile_errors, error, print_diagnostics, require_files)

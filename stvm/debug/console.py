@@ -13,7 +13,9 @@ from typing import Callable, TextIO
 from stvm.debug.engine import (CONTINUE, FAULTED, FINISH, NEXT, SCAN, STEP, TERMINATED, Engine,
                                StopEvent)
 from stvm.debug.scope import DebugError
+from stvm.runtime.catalog import ELEMENTARY_KINDS, Catalog
 from stvm.syntax import parse_expression
+from stvm.trace.signals import compile_pattern
 
 HELP = """\
 Commands (ST expressions in ST syntax, evaluated in the selected frame's scope):
@@ -34,6 +36,8 @@ Commands (ST expressions in ST syntax, evaluated in the selected frame's scope):
   frame N / up / down         select a frame of the call stack for print/set/list
   list [FILE:]LINE            ST source around the current line or LINE (l)
   info breakpoints|watch|force
+  info variables [PATTERN]    every variable (the variable catalog: globals, then the programs),
+                              or those whose path matches PATTERN (the trace's globs: Main.*, **.Q)
   help, quit (q)"""
 
 _ALIASES = {"b": "break", "d": "delete", "c": "continue", "cont": "continue", "s": "step", "n": "next",
@@ -331,8 +335,26 @@ class Console:
                 self.write("Nothing is forced.")
             for forced in self.engine.forces.values():
                 self.write(f"forced {forced.describe()}")
+        elif what.startswith("v"):
+            self.list_variables(rest.strip().partition(" ")[2].strip())
         else:
-            raise DebugError("info breakpoints | watch | force")
+            raise DebugError("info breakpoints | watch | force | variables [PATTERN]")
+
+    def list_variables(self, pattern: str = "") -> None:
+        """`info variables`: the nodes of the one variable catalog (stvm/runtime/catalog.py), a
+        leaf with its value; a PATTERN keeps the paths it matches (the trace's glob syntax)."""
+        regex = compile_pattern(pattern) if pattern else None
+        shown = 0
+        for node in Catalog(self.engine.vm).walk():
+            if regex is not None and not regex.fullmatch(node.path):
+                continue
+            shown += 1
+            if node.type.kind in ELEMENTARY_KINDS:
+                self.write(f"{node.path} : {node.type.name} = {self.engine.format(node.read(), node.type)}")
+            else:
+                self.write(f"{node.path} : {node.type.name}")
+        if not shown:
+            self.write(f"No variable matches {pattern!r}." if pattern else "No variables.")
 
     def do_help(self, rest: str) -> None:
         self.write(HELP)

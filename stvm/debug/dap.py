@@ -28,8 +28,9 @@ from stvm.debug.engine import (BREAKPOINT, CONTINUE, ENTRY, FAULT, FAULTED, FINI
 from stvm.debug.scope import DebugError, is_scalar_ref
 from stvm.diagnostics import printable
 from stvm.lower.layout import VarSlot
+from stvm.runtime.catalog import Catalog, call_slots, element_path
 from stvm.semantics import types as t
-from stvm.semantics.model import EXTERNAL, IN_OUT, INPUT, OUTPUT
+from stvm.semantics.model import IN_OUT, INPUT, OUTPUT
 from stvm.project import LoadError
 from stvm.diagnostics import render
 from stvm.debug.console import parse_assignment
@@ -480,9 +481,7 @@ class DapServer:
             scope, pou = frame.scope, frame.pou
             holder = scope.frame if pou.kind in ("FUNCTION", "METHOD") else scope.instance
             wanted = (INPUT, OUTPUT, IN_OUT) if node.kind == "io" else None
-            for slot in vm.layouts.pous[pou.key]:
-                if slot.section in (EXTERNAL, "VAR_INST"):   # (a method's VAR_INST shows under THIS)
-                    continue
+            for slot in call_slots(vm.layouts.pous[pou.key]):   # the frame's own variables
                 if (wanted is None) == (slot.section in (INPUT, OUTPUT, IN_OUT)):
                     continue
                 out.append((slot.name, _read(holder, slot), slot.type, slot.name, ()))
@@ -493,12 +492,11 @@ class DapServer:
                 # a METHOD's instance, expandable like any FB instance
                 out.append(("THIS", scope.instance, t.FBType(owner.name, owner.qualname, owner.kind == "PROGRAM"),
                             "THIS^", ()))
-        elif node.kind == "globals":
-            for slot in vm.layouts.globals:
-                out.append((slot.name, getattr(vm.globals, slot.storage), slot.type, slot.name, ()))
-        elif node.kind == "programs":
-            for name, inst, qual in vm.instances.values():
-                out.append((name, inst, t.FBType(qual.split("\\")[-1], qual, True), name, ()))
+        elif node.kind in ("globals", "programs"):   # the roots of the one variable catalog
+            kind = "global" if node.kind == "globals" else "program"
+            for root in Catalog(vm).roots:
+                if root.kind == kind:
+                    out.append((root.name, root.read(), root.type, root.path, ()))
         elif node.kind == "value":
             out = _value_children(engine, node)
         return out
@@ -685,11 +683,8 @@ def _value_children(engine: Engine, node: _Node) -> list[tuple[str, Any, t.Type,
     ty, value = _open_as_fixed(ty, value)
     out: list[tuple[str, Any, t.Type, str | None, tuple]] = []
     if isinstance(ty, (t.StructType, t.FBType)):
-        layout = engine.vm.layouts.of(ty)
-        for slot in (layout if layout is not None else ()):
-            if slot.section != EXTERNAL:
-                out.append((slot.name, _read(value, slot), slot.type,
-                            f"{path}.{slot.name}" if path else None, ()))
+        for slot in Catalog(engine.vm).members(ty):   # the catalog's members (its skip rules)
+            out.append((slot.name, _read(value, slot), slot.type, f"{path}.{slot.name}" if path else None, ()))
     elif isinstance(ty, t.ArrayType):
         if ty.dims is None:
             for i in range(len(value)):
@@ -702,7 +697,7 @@ def _value_children(engine: Engine, node: _Node) -> list[tuple[str, Any, t.Type,
                 indices = node.indices + (i,)
                 child_path = None
                 if path is not None and not rest:
-                    child_path = f"{path}[{', '.join(map(str, indices))}]"
+                    child_path = element_path(path, indices)
                 elif path is not None:
                     child_path = path
                 out.append((f"[{i}]", value[i - lo], child_type, child_path, indices if rest else ()))

@@ -43,7 +43,7 @@ from typing import Any, Callable
 from stvm.debug.build import DebugBuild
 from stvm.debug.hooks import BreakpointHooks, ThreadKicker
 from stvm.debug.scope import Compiled, CompiledStore, DebugError, Scope, ScopeCompiler, run_guarded
-from stvm.lower.layout import PouLayout
+from stvm.runtime.catalog import Catalog
 from stvm.runtime.format import format_time, format_value
 from stvm.runtime.helpers import copy_value
 from stvm.runtime.vm import GENERATED_FILENAME, RuntimeFault
@@ -765,26 +765,16 @@ class Engine:
         return Scope(pou, node, instance, None, None, self._paths.get(id(instance), ""))
 
     def _instance_paths(self) -> dict[int, str]:
-        """id of every ST FB instance → its path from a program instance."""
+        """id of every ST FB instance → its path, from the one variable catalog (only the nodes
+        that can hold an FB instance are expanded)."""
         paths: dict[int, str] = {}
-        layouts = self.vm.layouts
-
-        def visit_value(value: Any, ty: t.Type, path: str) -> None:
-            if isinstance(ty, t.FBType):
-                layout = layouts.of(ty)
-                if layout is not None and value is not None:
-                    visit(value, layout, path)
-            elif isinstance(ty, t.ArrayType) and ty.dims and isinstance(ty.element, t.FBType):
-                for index, item in _array_items(value, ty.dims):
-                    visit_value(item, ty.element, f"{path}[{index}]")
-
-        def visit(obj: Any, layout: PouLayout, path: str) -> None:
-            paths[id(obj)] = path
-            for slot in layout.owned():
-                visit_value(getattr(obj, slot.storage, None), slot.type, f"{path}.{slot.name}")
-
-        for name, inst, qual in self.vm.instances.values():
-            visit(inst, layouts.pous[qual.lower()], name)
+        stack = [root for root in Catalog(self.vm).roots if root.kind == "program"]
+        while stack:
+            node = stack.pop()
+            if isinstance(node.type, t.FBType):
+                paths[id(node.read())] = node.path   # not a node: one path per instance object
+            if _may_hold_instances(node.type):
+                stack.extend(child for child in node.children if _may_hold_instances(child.type))
         return paths
 
     # ---- forcing
@@ -829,16 +819,8 @@ def _depth(frame: FrameType | None) -> int:
     return depth
 
 
-def _array_items(value: Any, dims) -> list[tuple[str, Any]]:
-    """(index text, element) for every element of a (nested-list) array."""
-    out: list[tuple[str, Any]] = []
-
-    def walk(v: Any, rest, prefix: list[int]) -> None:
-        lo, hi = rest[0]
-        for i in range(hi - lo + 1):
-            if len(rest) == 1:
-                out.append((",".join(map(str, prefix + [lo + i])), v[i]))
-            else:
-                walk(v[i], rest[1:], prefix + [lo + i])
-    walk(value, list(dims), [])
-    return out
+def _may_hold_instances(ty: t.Type) -> bool:
+    """An FB instance, or a struct or array that may contain one."""
+    while isinstance(ty, t.ArrayType):
+        ty = ty.element
+    return isinstance(ty, (t.FBType, t.StructType))

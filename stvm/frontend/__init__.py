@@ -7,11 +7,12 @@
     bridge.sample(["Main.y"])                # one snapshot at the next point between scans
     control = RunControl(vm)                 # pause / resume / step(n) from another thread
 
-`catalog(vm)` lists every variable a front end may publish, as a tree of `VariableInfo`.
+`catalog(vm)` lists every variable a front end may publish, as a tree of `VariableInfo` (the one
+variable catalog of `stvm.runtime.catalog`, which the trace and the debugger list too).
 """
 
 from stvm.frontend.bridge import Snapshot, VariableBridge, Watch, WriteRejected
-from stvm.frontend.catalog import VariableInfo, catalog
+from stvm.runtime.catalog import VariableInfo, catalog
 from stvm.frontend.control import RunControl
 
 __all__ = ["Snapshot", "VariableBridge", "Watch", "WriteRejected", "VariableInfo", "catalog", "RunControl"]

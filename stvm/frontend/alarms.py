@@ -73,7 +73,7 @@ class Alarm:
 
 def find_sources(vm: Any) -> list[AlarmSource]:
     """Every FB instance of the running project with a BOOL output `Error`, in catalog order."""
-    from stvm.frontend.catalog import catalog   # lazy: start-up (the catalog imports the VM)
+    from stvm.runtime.catalog import catalog   # lazy: start-up
     sources = []
     for root in catalog(vm):
         for node in root.walk():

@@ -36,11 +36,12 @@ from concurrent.futures import Future
 from dataclasses import dataclass
 from typing import Any, Callable, Iterable, Mapping
 
+from stvm.runtime.catalog import Catalog
 from stvm.runtime.format import format_value
 from stvm.runtime.vm import VM, PathError, UnboundInOut, coerce_python_value
 from stvm.semantics import types as t
 from stvm.semantics.literals import literal_value   # Choice: the one literal reader `--set` uses
-from stvm.trace.signals import Signal, all_nodes, make_sampler
+from stvm.trace.signals import Signal, make_sampler
 
 MAX_PENDING_WRITES = 1024
 """Write batches queued for the next scan; more are rejected (a front end cannot stall the VM)."""
@@ -200,8 +201,8 @@ class VariableBridge:
         program instance (~0.05 µs a value instead of a path lookup per value); the rest (paths
         through a VAR_IN_OUT) through their accessors."""
         if self._routes is None:
-            self._routes = {name.lower().replace(" ", ""): (ty, root, steps)
-                            for name, ty, root, steps in all_nodes(self.vm)}
+            self._routes = {node.path.lower(): (node.type, node.root, node.steps)
+                            for node in Catalog(self.vm).walk() if node.kind != "program"}
         fast: list[Signal] = []
         slow: list[int] = []
         for index, path in enumerate(paths):

@@ -294,7 +294,7 @@ def _sections(vm: Any) -> Callable[[str], tuple[str | None, bool, bool] | None]:
     def section_of(norm: str):
         nonlocal info
         if info is None:
-            from stvm.frontend.catalog import catalog   # lazy: start-up (the catalog imports the VM)
+            from stvm.runtime.catalog import catalog   # lazy: start-up
             info = {}
             for root in catalog(vm):
                 for node in root.walk():

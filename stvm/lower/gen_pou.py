@@ -9,7 +9,7 @@ the sibling generators."""
 from __future__ import annotations
 
 from stvm.semantics import types as t
-from stvm.semantics.model import EXTERNAL, GLOBAL, IN_OUT, INPUT, OUTPUT, TEMP, POUInfo, Variable
+from stvm.semantics.model import EXTERNAL, IN_OUT, INPUT, OUTPUT, TEMP, POUInfo, Variable
 from stvm.dialects import allows
 from stvm.lower.names import method_attr, var_attr
 from stvm.lower.pycode import CodeWriter, py_literal

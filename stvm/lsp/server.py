@@ -19,7 +19,6 @@ from __future__ import annotations
 
 import asyncio
 import os
-import functools
 import logging
 import concurrent.futures
 import threading

@@ -29,7 +29,7 @@ from typing import Any, Iterator
 from asyncua import ua
 from asyncua.server.address_space import AttributeValue, NodeData
 
-from stvm.frontend.catalog import VariableInfo
+from stvm.runtime.catalog import VariableInfo
 from stvm.opcua.config import OpcUaConfig, OpcUaConfigError
 from stvm.opcua.datatypes import UaType, ua_type
 from stvm.semantics import types as t

@@ -22,12 +22,11 @@ from __future__ import annotations
 
 import re
 from dataclasses import dataclass
-from typing import Any, Callable, Iterator
+from typing import Any, Callable
 
 from stvm.lower.layout import is_storage_name
+from stvm.runtime.catalog import Catalog, listed_slots
 from stvm.semantics import types as t
-
-_SKIPPED_SECTIONS = ("VAR_IN_OUT", "VAR_EXTERNAL", "VAR_TEMP")
 
 
 class WatchError(ValueError):
@@ -85,43 +84,6 @@ def compile_pattern(pattern: str) -> re.Pattern[str]:
     return re.compile("".join(out), re.IGNORECASE)
 
 
-def _leaves(vm, name: str, ty: t.Type, root: Any, steps: tuple, depth: int = 0) -> Iterator[tuple[str, t.Type, Any, tuple]]:
-    """(name, type, root, steps) of the node and every node below it, pre-order, in declaration
-    order (callers keep the elementary ones)."""
-    yield name, ty, root, steps
-    if depth > 16:
-        return
-    if isinstance(ty, (t.StructType, t.FBType)):
-        layout = vm.layouts.of(ty)
-        for slot in (layout if layout is not None else ()):
-            if slot.section in _SKIPPED_SECTIONS:
-                continue
-            yield from _leaves(vm, f"{name}.{slot.name}", slot.type, root, steps + (slot.storage,), depth + 1)
-    elif isinstance(ty, t.ArrayType) and ty.dims:
-        yield from _array_leaves(vm, name, ty, list(ty.dims), root, steps, depth)
-
-
-def _array_leaves(vm, name, ty, dims, root, steps, depth, indices=()):
-    (lo, hi), rest = dims[0], dims[1:]
-    for index in range(lo, hi + 1):
-        if rest:   # nested lists, one per dimension; named `a[i,j]` as ST writes it
-            yield from _array_leaves(vm, name, ty, rest, root, steps + (index - lo,), depth, indices + (index,))
-        else:
-            label = ",".join(str(i) for i in indices + (index,))
-            yield from _leaves(vm, f"{name}[{label}]", ty.element, root, steps + (index - lo,), depth + 1)
-
-
-def all_nodes(vm) -> Iterator[tuple[str, t.Type, Any, tuple]]:
-    """Every variable node of a running VM (globals first, then the program instances)."""
-    for slot in vm.layouts.globals:
-        yield from _leaves(vm, slot.name, slot.type, vm.globals, (slot.storage,))
-    for inst_name, inst, qualname in vm.instances.values():
-        for slot in vm.layouts.pous[qualname.lower()]:
-            if slot.section in _SKIPPED_SECTIONS:
-                continue
-            yield from _leaves(vm, f"{inst_name}.{slot.name}", slot.type, inst, (slot.storage,))
-
-
 _ELEMENTARY = ("bool", "int", "real", "time", "string", "enum")
 
 
@@ -130,6 +92,7 @@ def select_signals(vm, patterns: list[str]) -> list[Signal]:
 
     Raises WatchError for a pattern that matches nothing (with close names as a hint).
     """
+    catalog = Catalog(vm)   # the one list of variables (stvm.runtime.catalog): order, skip rules, paths
     nodes = None
     chosen: dict[str, Signal] = {}
     for pattern in patterns:
@@ -138,10 +101,11 @@ def select_signals(vm, patterns: list[str]) -> list[Signal]:
             continue
         found: list[Signal] = []
         if not any(ch in pattern for ch in "*?"):
-            found = _exact(vm, pattern)
+            found = _exact(vm, catalog, pattern)
         else:
-            if nodes is None:
-                nodes = list(all_nodes(vm))
+            if nodes is None:   # a program instance itself is not a variable
+                nodes = [(node.path, node.type, node.root, node.steps) for node in catalog.walk()
+                         if node.kind != "program"]
             regex = compile_pattern(pattern)
             matched_prefixes: list[str] = []
             for name, ty, root, steps in nodes:
@@ -162,47 +126,17 @@ def select_signals(vm, patterns: list[str]) -> list[Signal]:
     return list(chosen.values())
 
 
-def _exact(vm, path: str) -> list[Signal]:
+def _exact(vm, catalog: Catalog, path: str) -> list[Signal]:
     from stvm.runtime.vm import PathError   # lazy: start-up
     try:
         container, key, ty = vm.resolve(path)
     except PathError as exc:
         raise WatchError(f"--watch {path!r}: {exc}{_hint(vm, path)}") from exc
-    root, steps = container, (key,)
-    name = _canonical_name(vm, path)
-    if ty.kind in _ELEMENTARY:
-        return [Signal(name, ty, root, steps)]
-    # an aggregate: every leaf below it
-    return [Signal(n, lt, r, s) for n, lt, r, s in _leaves(vm, name, ty, root, steps)
-            if lt.kind in _ELEMENTARY]
-
-
-def _canonical_name(vm, path: str) -> str:
-    """The path with the declared spelling of each name where the globs would give it."""
-    for name, _ty, _root, _steps in _iter_prefix(vm, path):
-        return name
-    return re.sub(r"\s+", "", path)
-
-
-def _iter_prefix(vm, path: str):
-    compact = re.sub(r"\s+", "", path).lower()
-    first = re.split(r"[.\[]", compact, maxsplit=1)[0]
-    for slot in vm.layouts.globals:
-        if slot.name.lower() == first:
-            for node in _leaves(vm, slot.name, slot.type, vm.globals, (slot.storage,)):
-                if node[0].lower() == compact:
-                    yield node
-                    return
-    for inst_name, inst, qualname in vm.instances.values():
-        if inst_name.lower() != first:
-            continue
-        for slot in vm.layouts.pous[qualname.lower()]:
-            if slot.section in _SKIPPED_SECTIONS:
-                continue
-            for node in _leaves(vm, f"{inst_name}.{slot.name}", slot.type, inst, (slot.storage,)):
-                if node[0].lower() == compact:
-                    yield node
-                    return
+    # a path the catalog lists takes its spelling and its route from there; one through a
+    # VAR_IN_OUT is not listed: its leaves are read from the container the path resolves to
+    node = catalog.node(path) or catalog.detached(re.sub(r"\s+", "", path), ty, container, (key,))
+    return [Signal(leaf.path, leaf.type, leaf.root, leaf.steps) for leaf in node.walk()
+            if leaf.type.kind in _ELEMENTARY]
 
 
 def _hint(vm, pattern: str) -> str:
@@ -224,7 +158,7 @@ def _hint(vm, pattern: str) -> str:
     for part in parts[1:]:
         if layout is None:
             return ""
-        members = {slot.name.lower(): slot for slot in layout if slot.section not in _SKIPPED_SECTIONS}
+        members = {slot.name.lower(): slot for slot in listed_slots(layout)}
         slot = members.get(part.lower())
         if slot is None:
             close = difflib.get_close_matches(part, [m.name for m in members.values()], n=3, cutoff=0.6)

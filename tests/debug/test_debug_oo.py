@@ -4,7 +4,6 @@ its result so far and the instance's variables (also through THIS^)."""
 
 from __future__ import annotations
 
-from pathlib import Path
 
 import pytest
 

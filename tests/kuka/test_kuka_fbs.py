@@ -12,7 +12,7 @@ import pytest
 
 from emulator.motion import euler_to_matrix
 from kuka_harness import KukaBench
-from robotlibs_helpers import motion_commands, script_of, statements
+from robotlibs_helpers import motion_commands, script_of
 
 
 @pytest.fixture

@@ -69,7 +69,7 @@ def test_string_literals_cannot_inject(sentinel):
         checks[f"Main.s{i}"] = payload.encode()
     body = "\n".join(f"t{i} := CONCAT(s{i}, {st_string(p)});" for i, p in enumerate(payloads(sentinel)))
     tdecls = "\n".join(f"t{i} : STRING;" for i in range(len(payloads(sentinel))))
-    src = f"PROGRAM Main\nVAR\n" + "\n".join(decls) + "\n" + tdecls + "\nEND_VAR\n" + body + "\nEND_PROGRAM\n"
+    src = "PROGRAM Main\nVAR\n" + "\n".join(decls) + "\n" + tdecls + "\nEND_VAR\n" + body + "\nEND_PROGRAM\n"
     project = load_st(src)
     vm = project.start()
     vm.run(cycles=2)

@@ -3,6 +3,5 @@ a checkout without the pytest11 entry point) and each library's project, loaded 
 
 from __future__ import annotations
 
-import pytest
 
 from stvm.pytest_plugin import golden_trace  # noqa: F401  (fixture)

@@ -9,11 +9,10 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
 import pytest
 
 import emulator
-from emulator.motion import Kinematics, matrix_to_pose, pose_to_matrix
+from emulator.motion import Kinematics, matrix_to_pose
 from robotlibs_helpers import PNP_TARGETS, motion_commands, script_of, tm_frame
 from rockwell_harness import RockwellBench, cartesian, joints, pnp_point
 

@@ -120,7 +120,7 @@ VAR arr : ARRAY[1..5] OF INT; i : INT; d : DINT; fb1 : FB; r : REF_TO INT; s : S
 END_PROGRAM
 """)
     assert rc == 1
-    assert f"case.st:4:" in err and f"error: {message}" in err, err
+    assert "case.st:4:" in err and f"error: {message}" in err, err
     assert "Traceback" not in err
 
 

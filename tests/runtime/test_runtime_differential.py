@@ -61,7 +61,7 @@ def f32(x) -> float:
 
 def common(a: str, b: str) -> str:
     if is_int(a) and is_int(b):
-        (ba, sa, bsa), (bb, sb, bsb) = INT_TYPES[a], INT_TYPES[b]
+        (ba, sa, _bsa), (bb, _sb, _bsb) = INT_TYPES[a], INT_TYPES[b]
         if RANK[ba] != RANK[bb]:
             return a if RANK[ba] > RANK[bb] else b
         if a == b:

@@ -59,7 +59,7 @@ VAR lt : LTIME; t : TIME; d : LDATE; ton1 : TON; END_VAR
 {line}
 END_PROGRAM
 """)
-    assert rc == 1 and f"case.st:3:" in err and message in err, err
+    assert rc == 1 and "case.st:3:" in err and message in err, err
 
 
 def test_a_long_literal_cannot_initialise_the_short_type():

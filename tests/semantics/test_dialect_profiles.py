@@ -13,7 +13,7 @@ import pytest
 
 import stvm
 from core_helpers import load_st
-from stvm.dialects import BY_KEY, PROFILE_FIELDS, ROWS, allows, known_library_prefix, profile_value
+from stvm.dialects import BY_KEY, PROFILE_FIELDS, ROWS, known_library_prefix, profile_value
 from stvm.settings import (ByteToStringFormat, DEFAULT_SETTINGS, Dialect, OpenArrayBounds, RealToStringFormat,
                            StringSize, SubrangeCheck, SysmacSettings)
 

@@ -39,7 +39,6 @@ def test_the_limit_runs_under_run_and_debug(tmp_path, make, expected):
     rc, out, err = cli(["run", str(path), "--cycles", "1", "--print", "Main.x", "--no-cache"])
     assert (rc, out.strip()) == (0, expected), err
     from stvm.debug.console import Console
-    from stvm.debug.engine import Engine
     from stvm.debug.session import SessionOptions, open_session
     session = open_session(SessionOptions([str(path)]))
     try:
