@@ -16,6 +16,7 @@ E057–E073 namespaces and object-oriented features, E080–E089 loading a proje
 
 from __future__ import annotations
 
+import textwrap
 from dataclasses import dataclass
 
 
@@ -609,7 +610,7 @@ def lookup(code: str) -> ErrorCode | None:
 
 def explain(entry: ErrorCode) -> str:
     """`stvm check --explain E031`: the entry as plain text."""
-    lines = [f"{entry.code} {entry.title} ({entry.severity})", "", entry.explanation, "",
+    lines = [f"{entry.code} {entry.title} ({entry.severity})", "", textwrap.fill(entry.explanation, 100), "",
              "Example (reported):" if entry.checked else "Example (reported), described:", "",
              _indent(entry.wrong), "", "Instead:", "", _indent(entry.right)]
     if entry.settings:
