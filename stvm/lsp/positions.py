@@ -91,6 +91,13 @@ def _walk(value, text_of, uri, encoding, seen) -> None:
     if isinstance(value, lsp.Position):
         value.character = to_client(text_of(uri), value.line, value.character, encoding)
         return
+    if isinstance(value, lsp.CompletionItem):
+        # hundreds per answer: only their edits hold positions
+        _walk(value.text_edit, text_of, uri, encoding, seen)
+        _walk(value.additional_text_edits, text_of, uri, encoding, seen)
+        return
+    if isinstance(value, (lsp.MarkupContent, lsp.SignatureHelp)):
+        return
     if isinstance(value, lsp.Location):
         uri = value.uri
     elif isinstance(value, lsp.LocationLink):
