@@ -32,6 +32,7 @@ ROOT = Path(__file__).resolve().parents[1]
 DEBOUNCE_MS = 80   # stvm/lsp/server.py DEBOUNCE_SECONDS
 ST = ROOT / "st_src"
 FILES = ["PnP_Example.st", "CBT_MoveAbsolute.st", "Program_Example.st"]
+TIMEOUT = 120      # seconds to wait for one message (--timeout: a loaded machine needs more)
 
 
 class Client:
@@ -66,7 +67,7 @@ class Client:
         self.next_id += 1
         sent = self.send({"jsonrpc": "2.0", "id": self.next_id, "method": method, "params": params})
         while True:
-            at, msg = self.messages.get(timeout=120)
+            at, msg = self.messages.get(timeout=TIMEOUT)
             if msg.get("id") == self.next_id and "method" not in msg:
                 return at - sent, msg
 
@@ -75,7 +76,7 @@ class Client:
 
     def wait_diagnostics(self, uri: str, ready) -> tuple[float, list]:
         while True:
-            at, msg = self.messages.get(timeout=120)
+            at, msg = self.messages.get(timeout=TIMEOUT)
             if msg.get("method") == "textDocument/publishDiagnostics" and msg["params"]["uri"] == uri \
                     and ready(msg["params"]["diagnostics"]):
                 return at, msg["params"]["diagnostics"]
@@ -119,7 +120,10 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--samples", type=int, default=200, help="positions per request kind")
     parser.add_argument("--edits", type=int, default=20, help="edit/restore pairs")
+    parser.add_argument("--timeout", type=float, default=120, help="seconds to wait for one message")
     args = parser.parse_args()
+    global TIMEOUT
+    TIMEOUT = args.timeout
     print(f"load average {os.getloadavg()[0]:.2f} on {os.cpu_count()} CPUs")
     client = Client()
     client.request("initialize", {"processId": os.getpid(), "rootUri": ST.as_uri(), "capabilities": {}})
@@ -172,7 +176,9 @@ def main() -> int:
     ok &= report("diagnostics after edit", times, 300)
     _, reply = client.request("workspace/executeCommand", {"command": "stvm.timings", "arguments": []})
     cpu = [t["check_cpu"] for t in reply.get("result") or []]
+    focused = sum(bool(t.get("focused")) for t in reply.get("result") or [])
     if cpu:
+        print(f"{'':<22} {focused} of {len(cpu)} checks after an edit were focused (stvm/lsp/driver.py)")
         ms = [c * 1000 for c in cpu]
         print(f"{'  server CPU per check':<22} n={len(ms):<4} p50 {statistics.median(ms):7.1f} ms   "
               f"p95 {percentile(ms, 95):7.1f} ms   (parse of the edited file + checker, without the "

@@ -27,6 +27,11 @@ class _Parser(argparse.ArgumentParser):
 
 
 def cmd_check(args) -> int:
+    if args.explain:
+        return _explain(args.explain)
+    if not args.files:
+        print("stvm: error: check needs FILE or DIR arguments (or --explain CODE)", file=sys.stderr)
+        return EXIT_USAGE
     if args.emit_python or args.pou:
         return _emit_python(args)
     from stvm.project import check   # lazy: start-up
@@ -63,6 +68,21 @@ def _emit_python(args) -> int:
     return EXIT_OK
 
 
+def _explain(code: str) -> int:
+    """`stvm check --explain E031` (ALL: every entry), as `stvm lint --explain SA102`."""
+    from stvm.diagnostics.codes import CODES, explain, lookup   # lazy: start-up
+    if code.strip().upper() == "ALL":
+        sys.stdout.write("\n".join(explain(entry) for entry in CODES.values()))
+        return EXIT_OK
+    entry = lookup(code)
+    if entry is None:
+        print(f"stvm: error: unknown error code {code[:40]!r} (codes are E001…, W001…; "
+              f"`stvm check --explain ALL` lists them; lint's SA codes: `stvm lint --explain`)", file=sys.stderr)
+        return EXIT_USAGE
+    sys.stdout.write(explain(entry))
+    return EXIT_OK
+
+
 def _watchdog_seconds(text: str) -> float | None:
     """`--watchdog SECONDS` (a positive finite number) or `off`."""
     if text.strip().lower() == "off":
@@ -81,7 +101,8 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version="stvm " + __version__)
     sub = parser.add_subparsers(dest="command", parser_class=_Parser)
     check = sub.add_parser("check", help="check ST files and print diagnostics")
-    check.add_argument("files", nargs="+")
+    check.add_argument("files", nargs="*")
+    check.add_argument("--explain", metavar="CODE", help="print what an error code means (ALL: every code)")
     check.add_argument("--emit-python", action="store_true",
                        help="also print the generated Python of each POU with the ST file:line of every line")
     check.add_argument("--pou", action="append", metavar="NAME",

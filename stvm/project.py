@@ -119,14 +119,14 @@ def expand_paths(paths: Sequence[str | Path]) -> tuple[list[Path], dict, Path | 
             found = listed or sorted(p for p in path.glob("*.st") if p.is_file()) or _vendor_sources(path)
             if not found:
                 raise LoadError([Diagnostic.error(f"no .st files (nor TwinCAT or PLCopen XML sources) in {path}",
-                                                  _file_span(path))], {})
+                                                  _file_span(path), "E080")], {})
             out += found
         elif path.suffix.lower() == ".plcproj":   # a TwinCAT PLC project: the sources it lists
             from stvm.syntax.vendor_xml import plcproj_items   # lazy: start-up (vendor XML projects only)
             items = plcproj_items(path)
             if not items:
                 raise LoadError([Diagnostic.error(f"{path} lists no TwinCAT sources (<Compile Include=\"….TcPOU\">)",
-                                                  _file_span(path))], {})
+                                                  _file_span(path), "E080")], {})
             out += items
         else:
             out.append(path)
@@ -288,7 +288,7 @@ def _with_libraries(texts, diags, spec: ProjectSpec):
                                                                 for name, folder in spec.libraries]
         lib_texts, spaces, lib_diags = lib.read_libraries(wanted, read_files, spec.encoding)
     except lib.LibraryError as exc:
-        raise LoadError([Diagnostic.error(str(exc), Span(str(spec.root or "."), 0, 0, 0, 0))], {}) from None
+        raise LoadError([Diagnostic.error(str(exc), Span(str(spec.root or "."), 0, 0, 0, 0), "E081")], {}) from None
     diags += lib_diags
     return lib_texts + list(texts), spaces
 
@@ -411,10 +411,11 @@ def read_files(paths: Sequence[Path], encoding: str = "utf-8",
             else:
                 texts.append((str(path), exc.text))
             diags.append(Diagnostic.error(exc.message, Span(str(path), exc.line, exc.column, exc.line,
-                                                             exc.column + 1), "E001"))
+                                                             exc.column + 1), exc.code))
         except OSError as exc:
             texts.append((str(path), ""))
-            diags.append(Diagnostic.error(f"cannot read file: {exc.strerror or exc}", Span(str(path), 0, 0, 0, 0)))
+            diags.append(Diagnostic.error(f"cannot read file: {exc.strerror or exc}", Span(str(path), 0, 0, 0, 0),
+                                          "E006"))
     return texts, diags
 
 

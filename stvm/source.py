@@ -119,8 +119,9 @@ class SourceError(Exception):
     `line`/`column` locate the offending byte (0 when the whole file is the problem);
     `text` is what can be shown of it (decoded with replacement characters)."""
 
-    def __init__(self, message: str, line: int = 0, column: int = 0, text: str = "") -> None:
+    def __init__(self, message: str, line: int = 0, column: int = 0, text: str = "", code: str = "E006") -> None:
         super().__init__(message)
+        self.code = code   # stvm/diagnostics/codes.py: E006 unreadable file, E007 vendor XML
         self.message = message
         self.line = line
         self.column = column

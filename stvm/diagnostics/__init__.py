@@ -2,7 +2,7 @@
 
 One `render()` (used by the CLI and the tests) prints the contract format::
 
-    FILE:LINE:COL: error: message
+    FILE:LINE:COL: error: message [E031]
         <the source line>
         ^^^^
 
@@ -102,11 +102,16 @@ def excerpt(span: Span, sources: Mapping[str, str]) -> str:
 
 
 def render(diagnostic: Diagnostic, sources: Mapping[str, str], kind: str | None = None) -> str:
-    """`FILE:LINE:COL: error: message` plus the source excerpt; `kind` overrides the severity word."""
+    """`FILE:LINE:COL: error: message [E031]` plus the source excerpt.
+
+    The code (stvm/diagnostics/codes.py) ends the message line, as GCC and Clang append
+    `[-Wname]`, so the `FILE:LINE:COL: error: ` prefix every log parser reads stays as it is.
+    `kind` overrides the severity word (lint: `warning[SA102]`, which then names the code)."""
     word = kind or diagnostic.severity.value
     span = diagnostic.span
     where = f"{printable(span.file, None)}:{span.line}:{span.column}" if span.line > 0 else printable(span.file, None)
-    return f"{where}: {word}: {printable(diagnostic.message)}\n" + excerpt(span, sources)
+    code = f" [{diagnostic.code}]" if diagnostic.code and kind is None else ""
+    return f"{where}: {word}: {printable(diagnostic.message)}{code}\n" + excerpt(span, sources)
 
 
 def sort_key(diagnostic: Diagnostic) -> tuple:

@@ -9,8 +9,15 @@ driver's API changes, this module is the only one to adapt.
 
 Incremental where the pipeline allows: each file's parsed unit is kept in memory with the text
 it came from, so an edit re-parses only the file edited (the stdlib is parsed once per
-settings); the checker itself runs over the whole project (it is not incremental, ~70-170 ms on
-st_src/), which is what re-checks the edited file's dependents.
+settings). A full check runs the checker over the whole project. While typing, a *focused*
+check (`Driver.check(..., focus=file, previous=last full result)`) gives the edited file's
+diagnostics sooner: every declaration of the project is still indexed and checked (so names,
+types and signatures resolve as in the full check), but only the bodies of the edited file and
+of its dependents are checked; the other files' bodies are left out and their diagnostics are
+the previous check's. A dependent is a file whose text names something the edited file
+declares, and it is only re-checked when the edited file's declarations changed (an edit inside
+a body changes what no other file sees). The server then runs the full check (recursion through
+another file's body, which a focused check cannot see, and the index), as before.
 """
 
 from __future__ import annotations
@@ -77,6 +84,7 @@ class CheckResult:
     seconds: float = 0.0
     units: dict[str, object] = field(default_factory=dict)
     originals: dict[str, str] = field(default_factory=dict)   # each file's own text (vendor XML: the XML)
+    focused: frozenset = frozenset()   # a focused check: the files whose bodies were checked (else all)
 
 
 class Driver:
@@ -97,16 +105,19 @@ class Driver:
         from stvm.project import expand_paths   # lazy: start-up
         return expand_paths(paths)
 
-    def check(self, path: Path, buffers: dict[str, str]) -> CheckResult:
+    def check(self, path: Path, buffers: dict[str, str], focus: bool = False,
+              previous: CheckResult | None = None) -> CheckResult:
         """Check the project of the open file `path`; `buffers` (file name → editor text) replace
-        the files' content. The collector is paused meanwhile, as `stvm check` does: the checker
-        builds many small objects that live as long as the result, and collecting them while
-        they are built doubled the time of a check of st_src/."""
+        the files' content. With `focus` and the `previous` full result of the same project, a
+        focused check of `path` (module docstring) when one can be made, else a full one. The
+        collector is paused meanwhile, as `stvm check` does: the checker builds many small
+        objects that live as long as the result, and collecting them while they are built
+        doubled the time of a check of st_src/."""
         from stvm.heap import collector_paused   # lazy: start-up
         with collector_paused(age_survivors=True):
-            return self._check(path, buffers)
+            return self._check(path, buffers, previous if focus else None)
 
-    def _check(self, path: Path, buffers: dict[str, str]) -> CheckResult:
+    def _check(self, path: Path, buffers: dict[str, str], previous: CheckResult | None = None) -> CheckResult:
         from stvm.project import parse_unit, read_source_text, stdlib_units   # lazy: start-up
         from stvm.semantics import analyze   # lazy: start-up
         from stvm.stdlib import NATIVE_FUNCTIONS   # lazy: start-up
@@ -139,11 +150,11 @@ class Driver:
                     text = read_source_text(file, encoding)
             except SourceError as exc:
                 diags.append(Diagnostic.error(exc.message, Span(name, exc.line, exc.column, exc.line,
-                                                                 exc.column + 1), "E001"))
+                                                                 exc.column + 1), exc.code))
                 texts[name] = exc.text
                 continue
             except OSError as exc:
-                diags.append(Diagnostic.error(f"cannot read file: {exc.strerror or exc}", Span(name, 0, 0, 0, 0)))
+                diags.append(Diagnostic.error(f"cannot read file: {exc.strerror or exc}", Span(name, 0, 0, 0, 0), "E006"))
                 continue
             texts[name] = str(text)
             originals[name] = getattr(text, "original", None) or str(text)
@@ -159,16 +170,26 @@ class Driver:
             unit_of[name] = unit
             diags += d
         analysis = None
+        focused = frozenset()
+        if not has_errors(diags) and previous is not None:
+            bodies = _bodies_to_check(str(path), previous, names, unit_of, texts, settings)
+            if bodies is not None:
+                focused = frozenset(bodies)
+                units = [u if getattr(u, "path", None) in bodies else declarations_of(u) for u in units]
         if not has_errors(diags):
             try:
                 analysis = analyze(units, settings, NATIVE_FUNCTIONS)
                 diags += analysis.diagnostics
             except RecursionError:
                 diags.append(Diagnostic.error("the program is nested too deeply to analyse",
-                                              Span(names[-1] if names else "<input>", 1, 1, 1, 2)))
+                                              Span(names[-1] if names else "<input>", 1, 1, 1, 2), "E003"))
+        if focused:
+            # the files whose bodies were left out keep the verdict of the last full check
+            diags = [d for d in diags if d.span.file in focused] + \
+                    [d for d in previous.diagnostics if d.span.file not in focused]
         diags.sort(key=sort_key)
         return CheckResult(analysis, diags, texts, names, settings, manifest, root,
-                           time.perf_counter() - started, unit_of, originals)
+                           time.perf_counter() - started, unit_of, originals, focused)
 
     def lint_findings(self, result: CheckResult, only: set[str] | None = None) -> list:
         """The lint findings of a checked project (the files `only`, else the project's), with the
@@ -183,6 +204,62 @@ class Driver:
         findings = lint_analysis(result.analysis, result.settings, rules, False,
                                  only if only is not None else set(result.files))
         return [f for f in findings if not suppressed(f, result.texts, config)]
+
+
+def declarations_of(unit):
+    """`unit` without the statements of its POUs, methods and property accessors: what the
+    other files of a project see of it (nodes compare without their spans, so two versions of a
+    file whose declarations are the same compare equal however its lines moved)."""
+    from dataclasses import replace   # lazy: start-up
+    pous = tuple(replace(pou, body=(), methods=tuple(replace(m, body=()) for m in pou.methods),
+                         properties=tuple(replace(prop, getter=prop.getter and replace(prop.getter, body=()),
+                                                  setter=prop.setter and replace(prop.setter, body=()))
+                                          for prop in pou.properties))
+                 for pou in unit.pous)
+    return replace(unit, pous=pous)
+
+
+_IDENT = None
+
+
+def _names_in(text: str) -> set[str]:
+    global _IDENT
+    if _IDENT is None:
+        import re   # lazy: start-up
+        _IDENT = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
+    return {m.lower() for m in _IDENT.findall(text)}
+
+
+def _declared_names(unit) -> set[str]:
+    """The global names `unit` declares: its POUs, its global variables and their list's name."""
+    out = {pou.name.lower() for pou in unit.pous}
+    for block in unit.globals:
+        out |= {name.lower() for decl in block.block.decls for name, _ in decl.names}
+        if block.gvl:
+            out.add(block.gvl.lower())
+    return out
+
+
+def _bodies_to_check(focus: str, previous: CheckResult, names: list[str], unit_of: dict,
+                     texts: dict[str, str], settings) -> set[str] | None:
+    """The files whose bodies a focused check of `focus` checks, or None when a full check is
+    needed (no full previous check of the same files and settings, another file changed too)."""
+    if previous.analysis is None or previous.focused or previous.files != names \
+            or repr(previous.settings) != repr(settings) or focus not in unit_of:
+        return None
+    if any(previous.texts.get(name) != texts.get(name) for name in names if name != focus):
+        return None
+    old = previous.units.get(focus)
+    if old is None:
+        return None
+    new = unit_of[focus]
+    if declarations_of(old) == declarations_of(new):
+        return {focus}
+    if old.types or new.types:
+        return None     # a TYPE's enumerators are used bare: no cheap test finds its dependents
+    # the declarations changed: the files that name something it declares (before or after)
+    declared = _declared_names(old) | _declared_names(new)
+    return {focus} | {name for name in names if name != focus and declared & _names_in(texts.get(name, ""))}
 
 
 def _digest(text: str) -> str:

@@ -531,6 +531,56 @@ def rename_problem(ix: Index, sym: Symbol, new_name: str) -> str | None:
     return None
 
 
+def rename_family(ix: Index, sym: Symbol) -> list[Symbol]:
+    """The symbols one rename changes together. An interface's METHOD or PROPERTY and its
+    implementation in every FB that IMPLEMENTS the interface (directly, through a base FB or
+    an interface it extends) are one name: renaming any of them renames all, else the FBs would
+    no longer implement the interface (E068). Anything else is renamed alone."""
+    members: list[Symbol] = []
+    if sym.key[0] == POU and sym.pou is not None and sym.pou.kind == "METHOD":
+        owner, name = ix.pou_by_key.get(sym.pou.owner), sym.pou.key.rsplit(".", 1)[-1]
+    elif sym.key[0] == PROP:
+        owner, name = ix.pou_by_key.get(sym.key[1]), sym.key[2]
+    else:
+        return [sym]
+    if owner is None:
+        return [sym]
+    for pou in ix.lineage(owner.key):   # the owner itself if it is an interface, else its interfaces
+        if pou.kind != "INTERFACE":
+            continue
+        if sym.key[0] == PROP:
+            member = ix.symbols.get((PROP, pou.key, name)) if name in pou.properties else None
+        else:
+            member = ix.symbols.get((POU, pou.methods[name].key)) if name in pou.methods else None
+        if member is not None:
+            members.append(member)
+    family = {sym.key: sym}
+    for member in members:
+        family.setdefault(member.key, member)
+        for impl in implementations(ix, member):
+            family.setdefault(impl.key, impl)
+    return list(family.values())
+
+
+def rename_all(ix: Index, sym: Symbol, new_name: str) -> dict[str, list[tuple[int, int, int]]] | str:
+    """The edits that rename `sym` (and its family, `rename_family`) to `new_name` per file, or
+    why it cannot be renamed (a clash in any FB of the family, the stdlib, a bad name)."""
+    family = rename_family(ix, sym)
+    for member in family:
+        problem = rename_problem(ix, member, new_name)
+        if problem:
+            return problem
+    out: dict[str, list[tuple[int, int, int]]] = {}
+    for member in family:
+        edits = rename_edits(ix, member)
+        if isinstance(edits, str):
+            return edits
+        for file, spots in edits.items():
+            have = out.setdefault(file, [])
+            have += [spot for spot in spots if spot not in have]
+    return out
+
+
 def rename_edits(ix: Index, sym: Symbol) -> dict[str, list[tuple[int, int, int]]] | str:
     """(line, col, end) of every occurrence per file, or why one cannot be edited (its text is
     not the name: an XML entity, a macro)."""

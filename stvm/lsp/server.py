@@ -7,9 +7,10 @@ updates its dependents), and the position index (stvm/lsp/index.py) is rebuilt. 
 (hover, definition, references, completion, …) read the last index that was built from a
 project without syntax errors, so they keep answering while a line is half typed.
 
-Diagnostics carry `source` "stvm" (checker) or "stvm-lint", the rule code, and for lint findings
-`codeDescription.href` = the rule's page (docs/lint.md#saNNN of the repository holding the file,
-or the `stvm-rule:` URI the VS Code extension resolves with `stvm lint --explain`).
+Diagnostics carry `source` "stvm" (checker) or "stvm-lint", the code (E…/W… of
+stvm/diagnostics/codes.py, SA… of lint), and `codeDescription.href` = the code's page
+(docs/error_codes.md#eNNN or docs/lint.md#saNNN of the repository holding the file, or the
+`stvm-error:`/`stvm-rule:` URI the VS Code extension resolves with `stvm check|lint --explain`).
 
 Documents are published under the URI the client used for them (`file://host/share/a.st` keeps
 its host, `file:///a/../b.st` stays as sent); other files under their resolved path's URI.
@@ -18,6 +19,7 @@ its host, `file:///a/../b.st` stays as sent); other files under their resolved p
 from __future__ import annotations
 
 import asyncio
+import json
 import os
 import logging
 import concurrent.futures
@@ -33,6 +35,7 @@ from pygls.lsp.server import LanguageServer
 from pygls.protocol import LanguageServerProtocol
 
 from stvm.lsp import features as f
+from stvm.lsp import positions as pos
 from stvm.lsp.driver import CheckResult, Driver, is_source, project_identity, stdlib_path
 from stvm.lsp.index import Index, build_index
 from stvm.lsp.live import DEFAULT_ENDPOINT, LiveValues, format_value, instance_paths
@@ -69,16 +72,23 @@ def _norm(path: Path) -> str:
         return str(path)
 
 
-def rule_href(code: str, path: Path) -> str:
-    """docs/lint.md#code of the repository that holds `path`, else a stvm-rule: URI."""
+def rule_href(code: str, path: Path, page_name: str = "lint.md") -> str:
+    """docs/<page_name>#code of the repository that holds `path`, else a stvm-rule: URI."""
     for folder in [path.parent, *path.parents]:
-        page = folder / "docs" / "lint.md"
+        page = folder / "docs" / page_name
         try:
             if page.exists():
                 return page.as_uri() + f"#{code.lower()}"
         except OSError:
             break
     return f"stvm-rule:{code}"
+
+
+def error_href(code: str, path: Path) -> str:
+    """docs/error_codes.md#e031 of the repository that holds `path`, else `stvm-error:E031`
+    (what `stvm check --explain E031` prints)."""
+    href = rule_href(code, path, "error_codes.md")
+    return f"stvm-error:{code}" if href.startswith("stvm-rule:") else href
 
 
 def _range(span) -> lsp.Range:
@@ -122,30 +132,69 @@ class RequestFailed(JsonRpcException):
 
 _DROPPED = object()
 
+# JSON-RPC 2.0 error codes (section 5.1 of the specification)
+PARSE_ERROR, INVALID_REQUEST, METHOD_NOT_FOUND, INVALID_PARAMS = -32700, -32600, -32601, -32602
+
+
+class _Refused:
+    """A message answered with a JSON-RPC error before any handler sees it."""
+
+    def __init__(self, msg_id, code: int, message: str) -> None:
+        self.msg_id, self.code, self.message = msg_id, code, message
+
+
+def _valid_id(value) -> bool:
+    return isinstance(value, (int, str)) and not isinstance(value, bool)
+
 
 class GuardedProtocol(LanguageServerProtocol):
-    """pygls, except that a request whose params do not fit the method's schema is answered
-    with a JSON-RPC InvalidParams error (-32602) carrying its id, instead of being dropped with a
-    traceback on stderr, and a notification with bad params is ignored (logged to the client)."""
+    """pygls, answering what is not a well-formed request as JSON-RPC 2.0 says, never with a
+    traceback: a body that is not JSON gets Parse error (-32700, id null: `report_parse_error`);
+    JSON that is not a request, notification or response (a number, an array, an object
+    without `"jsonrpc": "2.0"` or with an id that is not a number or string) gets Invalid
+    Request (-32600); an unknown method, Method not found (-32601); params that do not fit
+    the method's schema, Invalid params (-32602), each with the request's id. A notification
+    with bad params is ignored (logged to the client), as a notification has no answer."""
 
     def structure_message(self, data):
+        # json.loads calls this for every object, innermost first: only a message is judged
+        if not isinstance(data, dict) or "jsonrpc" not in data:
+            return data
+        msg_id = data.get("id") if _valid_id(data.get("id")) else None
+        if data.get("jsonrpc") != "2.0":
+            return _Refused(msg_id, INVALID_REQUEST, "not a JSON-RPC 2.0 message (\"jsonrpc\" must be \"2.0\")")
+        if "id" in data and data["id"] is not None and msg_id is None:
+            return _Refused(None, INVALID_REQUEST, "a request id is a number or a string")
+        method = data.get("method")
+        if "method" in data and not isinstance(method, str):
+            return _Refused(msg_id, INVALID_REQUEST, "a method name is a string")
+        if method is not None and "id" in data and method not in self.fm.builtin_features \
+                and method not in self.fm.features:
+            return _Refused(msg_id, METHOD_NOT_FOUND, f"unknown method {method[:80]!r}")
         try:
             return super().structure_message(data)
         except (JsonRpcInvalidParams, JsonRpcInternalError) as exc:
-            if not isinstance(data, dict) or "method" not in data:
+            if method is None:
                 raise
-            method = data.get("method")
-            if "id" in data and isinstance(data["id"], (int, str)) and not isinstance(data["id"], bool):
-                self._send_response(data["id"], error=JsonRpcInvalidParams(
-                    f"invalid params for {method!s:.80}: they do not match the LSP schema").to_response_error())
-            else:
-                self._server.window_log_message(lsp.LogMessageParams(
-                    lsp.MessageType.Warning, f"stvm: ignored {method!s:.80} notification: invalid params ({type(exc).__name__})"))
+            if msg_id is not None:
+                return _Refused(msg_id, INVALID_PARAMS, f"invalid params for {method[:80]}: they do not match the LSP schema")
+            self._server.window_log_message(lsp.LogMessageParams(
+                lsp.MessageType.Warning, f"stvm: ignored {method[:80]} notification: invalid params ({type(exc).__name__})"))
             return _DROPPED
+
+    def refuse(self, msg_id, code: int, message: str) -> None:
+        # written as a plain object: pygls's response types drop an `"id": null`, which
+        # JSON-RPC requires when the request's id could not be read
+        self._send_data({"jsonrpc": "2.0", "id": msg_id, "error": {"code": code, "message": message}})
 
     def handle_message(self, message):
         if message is _DROPPED:
             return None
+        if isinstance(message, _Refused):
+            return self.refuse(message.msg_id, message.code, message.message)
+        if not hasattr(message, "jsonrpc"):     # valid JSON, but no message
+            msg_id = message.get("id") if isinstance(message, dict) and _valid_id(message.get("id")) else None
+            return self.refuse(msg_id, INVALID_REQUEST, "not a JSON-RPC message (an object with \"jsonrpc\": \"2.0\")")
         return super().handle_message(message)
 
 
@@ -156,6 +205,7 @@ class ProjectState:
     published: frozenset = frozenset()
     lint: dict = field(default_factory=dict)        # file → its last lint findings
     indexed: object = None                          # the CheckResult `index` was built from
+    full: CheckResult | None = None                 # the last full (not focused) check
 
 
 class StvmLanguageServer(LanguageServer):
@@ -175,6 +225,15 @@ class StvmLanguageServer(LanguageServer):
         self.problems: list[str] = []               # errors met off the event loop, logged on it
         self.live = LiveValues(DEFAULT_ENDPOINT)     # replaced at `initialize` (its options)
         self.refresh_hints = False
+
+    def report_server_error(self, error: Exception, source) -> None:
+        """pygls's reader hands a body it cannot decode here (ValueError: not JSON, not UTF-8):
+        the client gets JSON-RPC's Parse error; any other error is logged to the client."""
+        if isinstance(error, ValueError) and isinstance(self.protocol, GuardedProtocol) \
+                and isinstance(error, (json.JSONDecodeError, UnicodeDecodeError)):
+            self.protocol.refuse(None, PARSE_ERROR, f"parse error: the message body is not JSON ({str(error)[:80]})")
+            return
+        super().report_server_error(error, source)
 
     # ---- files and projects ------------------------------------------------------------------
 
@@ -206,15 +265,19 @@ class StvmLanguageServer(LanguageServer):
         self.reindex(state)
         return state
 
-    def compute(self, path: Path, buffers: dict[str, str], lint: str = "all") -> tuple[ProjectState, dict]:
+    def compute(self, path: Path, buffers: dict[str, str], lint: str = "all",
+                focus: bool = False) -> tuple[ProjectState, dict]:
         """Check the project of `path` with `buffers` (any thread): the diagnostics per URI.
         `lint` "all" lints every file of the project, "none" none: the findings of the files
         not edited are kept from their last lint, the edited file's are dropped until
-        `relint` (its lines may have moved)."""
+        `relint` (its lines may have moved). `focus`: a focused check of `path` when the driver
+        can make one (stvm/lsp/driver.py), its result marked `focused`."""
         key = self.project_key(path)
         with self.lock:
-            result = self.driver.check(path, buffers)
             state = self.projects.setdefault(key, ProjectState())
+            result = self.driver.check(path, buffers, focus, state.full)
+            if not result.focused:
+                state.full = result
             state.result = result
             for file in result.files:
                 self.project_of_file[file] = key
@@ -228,7 +291,7 @@ class StvmLanguageServer(LanguageServer):
         """Lint the edited file again (any thread); the diagnostics per URI, None if it cannot be."""
         with self.lock:
             result = state.result
-            if result is None or result.analysis is None:
+            if result is None or result.analysis is None or result.focused:
                 return None
             file = _norm(path)
             state.lint.update(self.lint_of(result, {file}))
@@ -238,7 +301,8 @@ class StvmLanguageServer(LanguageServer):
     def reindex(self, state: ProjectState) -> None:
         """Rebuild the position index from the last check (kept when that check had no analysis)."""
         result = state.result
-        if result is not None and result.analysis is not None and state.indexed is not result:
+        if result is not None and result.analysis is not None and state.indexed is not result \
+                and not result.focused:    # a focused analysis lacks the other files' bodies
             state.index = build_index(result.analysis, result.texts, result.files, result.originals)
             state.indexed = result
 
@@ -257,15 +321,22 @@ class StvmLanguageServer(LanguageServer):
         result = state.result
         out: dict[str, list[lsp.Diagnostic]] = {self.uri_of(file): [] for file in result.files}
 
+        encoding = self.encoding
+
         def add(file: str, diag: lsp.Diagnostic) -> None:
             if file.startswith("<"):
                 return
+            if encoding != pos.UTF32:
+                text = result.originals.get(file) or result.texts.get(file)
+                for p in (diag.range.start, diag.range.end):
+                    p.character = pos.to_client(text, p.line, p.character, encoding)
             out.setdefault(self.uri_of(_norm(Path(file))), []).append(diag)
 
         for d in result.diagnostics:
             severity = lsp.DiagnosticSeverity.Error if d.is_error else lsp.DiagnosticSeverity.Warning
             add(d.span.file, lsp.Diagnostic(_range(d.span), d.message, severity=severity, code=d.code or None,
-                                            source=SOURCE_CHECK))
+                                            source=SOURCE_CHECK, code_description=lsp.CodeDescription(
+                                                href=error_href(d.code, path)) if d.code else None))
         for findings in state.lint.values():
             for fnd in findings:
                 add(fnd.span.file, lsp.Diagnostic(_range(fnd.span), fnd.message, severity=lsp.DiagnosticSeverity.Warning,
@@ -314,6 +385,78 @@ class StvmLanguageServer(LanguageServer):
 
     def text_of(self, uri: str) -> str:
         return self.workspace.get_text_document(uri).source
+
+    @property
+    def encoding(self) -> str:
+        """The negotiated LSP position encoding (stvm/lsp/positions.py)."""
+        chosen = getattr(self.workspace, "position_encoding", None) if self._workspace_ready() else None
+        return str(getattr(chosen, "value", chosen) or pos.UTF16)
+
+    def _workspace_ready(self) -> bool:
+        try:
+            return self.workspace is not None
+        except RuntimeError:    # before `initialize` pygls has no workspace
+            return False
+
+    def text_for_positions(self, uri: str | None) -> str | None:
+        """The text whose lines a position of `uri` counts in: the editor's buffer, else the
+        checked text of the file (the original of a vendor XML file), else the file on disk."""
+        if uri is None:
+            return None
+        path = path_of(uri)
+        file = _norm(path) if path is not None else None
+        if file is not None and file not in self.open_files:
+            name = self.stdlib_views.get(file, file)
+            for state in self.projects.values():
+                result = state.result
+                if result is not None and name in result.texts:
+                    return result.originals.get(name) or result.texts[name]
+        try:
+            return self.workspace.get_text_document(uri).source
+        except Exception:   # an unreadable file: columns stay as they are
+            return None
+
+    def to_client(self, value, uri: str | None):
+        """`value` with its positions in the client's units (see positions.convert_out)."""
+        encoding = self.encoding
+        if encoding == pos.UTF32:
+            return value
+        memo: dict = {}
+
+        def text_of(u):
+            if u not in memo:
+                memo[u] = self.text_for_positions(u)
+            return memo[u]
+        return pos.convert_out(value, text_of, uri, encoding)
+
+    def from_client(self, params) -> None:
+        """A positional request's `position` converted from the client's units to code points."""
+        position = getattr(params, "position", None)
+        document = getattr(params, "text_document", None)
+        if position is None or document is None or self.encoding == pos.UTF32:
+            return
+        text = self.text_for_positions(document.uri)
+        params.position = lsp.Position(position.line, pos.from_client(text, position.line, position.character,
+                                                                       self.encoding))
+
+
+def positioned(fn):
+    """A request handler whose params arrive, and whose answer leaves, in the client's
+    position encoding (the handler itself works in code points, as the index does)."""
+    if asyncio.iscoroutinefunction(fn):
+        @functools.wraps(fn)
+        async def run_async(ls, params):
+            ls.from_client(params)
+            doc = getattr(params, "text_document", None)
+            return ls.to_client(await fn(ls, params), doc.uri if doc else None)
+        return run_async
+
+    @functools.wraps(fn)
+    def run(ls, params):
+        ls.from_client(params)
+        doc = getattr(params, "text_document", None)
+        return ls.to_client(fn(ls, params), doc.uri if doc else None)
+    return run
 
 
 def with_initialization_options(options, given):
@@ -403,17 +546,29 @@ def build_server(options=None) -> StvmLanguageServer:
 
         async def run() -> None:
             buffers = ls.buffers()
-            def timed():
+            def timed(focus: bool):
                 cpu = time.thread_time()
-                out = safely(ls.compute, path, buffers, "none")
+                out = safely(ls.compute, path, buffers, "none", focus)
                 return out, time.thread_time() - cpu
 
-            done, cpu = await loop.run_in_executor(ls.executor, timed)
+            done, cpu = await loop.run_in_executor(ls.executor, timed, True)
             if done is None:
                 return
             state, by_uri = done
             ls.publish(state, by_uri)     # on the event loop: the transport is not thread-safe
-            ls.timings.append({"edit_to_publish": time.perf_counter() - edited, "check_cpu": cpu})
+            ls.timings.append({"edit_to_publish": time.perf_counter() - edited, "check_cpu": cpu,
+                               "focused": bool(state.result.focused)})
+            if state.result.focused:
+                # the full check: what a focused one cannot see (recursion through another
+                # file's body), and the analysis the index and lint need
+                if key in ls.pending:     # typing went on: the next check supersedes this one
+                    return
+                done, _ = await loop.run_in_executor(ls.executor, timed, False)
+                if done is None or key in ls.pending:
+                    return
+                state, full = done
+                if full != by_uri:
+                    ls.publish(state, full)
             # then the index (hover & co. see the edit) and the edited file's lint findings
             await loop.run_in_executor(ls.executor, lambda: safely(ls.reindex, state))
             if key in ls.pending:         # typing went on: the next check supersedes this one
@@ -437,6 +592,7 @@ def build_server(options=None) -> StvmLanguageServer:
         ls.text_document_publish_diagnostics(lsp.PublishDiagnosticsParams(params.text_document.uri, []))
 
     @server.feature(lsp.TEXT_DOCUMENT_HOVER)
+    @positioned
     def hover(ls: StvmLanguageServer, params: lsp.HoverParams) -> lsp.Hover | None:
         ctx, found = ls.symbol_request(params)
         if ctx is None:
@@ -457,14 +613,17 @@ def build_server(options=None) -> StvmLanguageServer:
         return [lsp.Location(ls.uri_of(sym.file), f.rng(sym.line, sym.col, sym.end_col))]
 
     @server.feature(lsp.TEXT_DOCUMENT_DEFINITION)
+    @positioned
     def definition(ls: StvmLanguageServer, params: lsp.DefinitionParams):
         return goto(ls, params)
 
     @server.feature(lsp.TEXT_DOCUMENT_DECLARATION)
+    @positioned
     def declaration(ls: StvmLanguageServer, params: lsp.DeclarationParams):
         return goto(ls, params)
 
     @server.feature(lsp.TEXT_DOCUMENT_TYPE_DEFINITION)
+    @positioned
     def type_definition(ls: StvmLanguageServer, params: lsp.TypeDefinitionParams):
         ctx, found = ls.symbol_request(params)
         if ctx is None:
@@ -475,6 +634,7 @@ def build_server(options=None) -> StvmLanguageServer:
         return [lsp.Location(ls.uri_of(tsym.file), f.rng(tsym.line, tsym.col, tsym.end_col))]
 
     @server.feature(lsp.TEXT_DOCUMENT_IMPLEMENTATION)
+    @positioned
     def implementation(ls: StvmLanguageServer, params: lsp.ImplementationParams):
         """From an interface (or its method/property): the FBs implementing it (their method/property)."""
         ctx, found = ls.symbol_request(params)
@@ -486,6 +646,7 @@ def build_server(options=None) -> StvmLanguageServer:
                 for sym in f.implementations(ctx[1], found[0]) if sym.line >= 0]
 
     @server.feature(lsp.TEXT_DOCUMENT_REFERENCES)
+    @positioned
     def references(ls: StvmLanguageServer, params: lsp.ReferenceParams) -> list[lsp.Location] | None:
         ctx, found = ls.symbol_request(params)
         if ctx is None:
@@ -497,6 +658,7 @@ def build_server(options=None) -> StvmLanguageServer:
                 for file, o in ctx[1].references(found[0].key) if include or not o.decl]
 
     @server.feature(lsp.TEXT_DOCUMENT_DOCUMENT_HIGHLIGHT)
+    @positioned
     def highlight(ls: StvmLanguageServer, params: lsp.DocumentHighlightParams):
         ctx, found = ls.symbol_request(params)
         if ctx is None:
@@ -508,16 +670,19 @@ def build_server(options=None) -> StvmLanguageServer:
                 for file, o in ctx[1].references(found[0].key) if file == ctx[0]]
 
     @server.feature(lsp.TEXT_DOCUMENT_DOCUMENT_SYMBOL)
+    @positioned
     def document_symbol(ls: StvmLanguageServer, params: lsp.DocumentSymbolParams):
         ctx = ls.context(params.text_document.uri)
         return f.document_symbols(ctx[1], ctx[0]) if ctx else None
 
     @server.feature(lsp.WORKSPACE_SYMBOL)
+    @positioned
     def workspace_symbol(ls: StvmLanguageServer, params: lsp.WorkspaceSymbolParams):
         return f.workspace_symbols([s.index for s in ls.projects.values() if s.index is not None],
                                    params.query, ls.uri_of)
 
     @server.feature(lsp.TEXT_DOCUMENT_COMPLETION, lsp.CompletionOptions(trigger_characters=[".", "#"]))
+    @positioned
     def completion(ls: StvmLanguageServer, params: lsp.CompletionParams):
         ctx = ls.context(params.text_document.uri)
         if ctx is None:
@@ -538,6 +703,7 @@ def build_server(options=None) -> StvmLanguageServer:
         return f.signature_help(ctx[1], ctx[0], params.position.line, doc.source, offset)
 
     @server.feature(lsp.TEXT_DOCUMENT_PREPARE_RENAME)
+    @positioned
     def prepare_rename(ls: StvmLanguageServer, params: lsp.PrepareRenameParams):
         ctx, found = ls.symbol_request(params)
         if ctx is None:
@@ -550,17 +716,14 @@ def build_server(options=None) -> StvmLanguageServer:
         return lsp.PrepareRenamePlaceholder(f.rng(occ.line, occ.col, occ.end), sym.name)
 
     @server.feature(lsp.TEXT_DOCUMENT_RENAME, lsp.RenameOptions(prepare_provider=True))
+    @positioned
     def rename(ls: StvmLanguageServer, params: lsp.RenameParams):
         ctx, found = ls.symbol_request(params)
         if ctx is None:
             return None
         if found is None:
             raise RequestFailed("nothing to rename here")
-        sym = found[0]
-        problem = f.rename_problem(ctx[1], sym, params.new_name)
-        if problem:
-            raise RequestFailed(problem)
-        edits = f.rename_edits(ctx[1], sym)
+        edits = f.rename_all(ctx[1], found[0], params.new_name)
         if isinstance(edits, str):
             raise RequestFailed(edits)
         return lsp.WorkspaceEdit(changes={
@@ -573,7 +736,9 @@ def build_server(options=None) -> StvmLanguageServer:
         ctx = ls.context(params.text_document.uri)
         if ctx is None:
             return lsp.SemanticTokens(data=[])
-        return lsp.SemanticTokens(data=f.semantic_tokens(ctx[1], ctx[0]))
+        return lsp.SemanticTokens(data=pos.semantic_tokens_out(f.semantic_tokens(ctx[1], ctx[0]),
+                                                               ls.text_for_positions(params.text_document.uri),
+                                                               ls.encoding))
 
     @server.feature(lsp.TEXT_DOCUMENT_FOLDING_RANGE)
     def folding(ls: StvmLanguageServer, params: lsp.FoldingRangeParams):
@@ -595,6 +760,7 @@ def build_server(options=None) -> StvmLanguageServer:
         ls.refresh_hints = bool(caps and caps.inlay_hint and caps.inlay_hint.refresh_support)
 
     @server.feature(lsp.TEXT_DOCUMENT_INLAY_HINT)
+    @positioned
     async def inlay_hint(ls: StvmLanguageServer, params: lsp.InlayHintParams):
         """Live values (stvm/lsp/live.py) beside the program and global variables in range."""
         ctx = ls.context(params.text_document.uri)

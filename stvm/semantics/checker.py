@@ -144,10 +144,10 @@ class Checker:
             self.error(f"a string of {length} {unit} does not fit {dst.name} ({dst.max_bytes} {unit}; "
                        "string_overflow=error)", span, "E054")
         elif initial:
-            self.warning(f"initial value truncated to {dst.max_bytes} {unit} of {dst.name}", span)
+            self.warning(f"initial value truncated to {dst.max_bytes} {unit} of {dst.name}", span, "W001")
         else:
             self.warning(f"a string of {length} {unit} is truncated to the {dst.max_bytes} {unit} of {dst.name}",
-                         span)
+                         span, "W001")
 
     # ---- indexing
     def build_index(self) -> None:
@@ -1678,7 +1678,7 @@ class Checker:
             span = self.method_nodes[cycle[0]].name_span
             if allowed:
                 self.warning(f"recursive method call {names}: allowed in {self.settings.dialect.value}, "
-                             f"but a recursion too deep ends the run in a stack-overflow fault", span)
+                             f"but a recursion too deep ends the run in a stack-overflow fault", span, "W002")
             else:
                 self.error(f"recursive method call {names}: IEC 61131-3 does not allow recursion", span, "E027")
 
@@ -1695,11 +1695,11 @@ class Checker:
                     params = {k: v for k, v in task.params}
                     interval = params.get("INTERVAL")
                     if interval is None:
-                        self.error(f"task '{task.name}' needs INTERVAL (event tasks are not supported)", task.span, "E031")
+                        self.error(f"task '{task.name}' needs INTERVAL (event tasks are not supported)", task.span, "E030")
                         continue
                     ns = self.const_value(interval, (), None)
                     if not isinstance(ns, int) or isinstance(interval, n.IntLiteral) or ns <= 0:
-                        self.error("INTERVAL must be a positive TIME literal", interval.span, "E031")
+                        self.error("INTERVAL must be a positive TIME literal", interval.span, "E030")
                         continue
                     prio = self.const_value(params.get("PRIORITY", n.IntLiteral(0)), (), None)
                     if task.name.lower() in tasks:
@@ -1712,7 +1712,7 @@ class Checker:
                         self.error(f"unknown program type '{chr(92).join(prog.type_name)}'", prog.span, "E032")
                         continue
                     if prog.task is None or prog.task.lower() not in tasks:
-                        self.error(f"program '{prog.instance}' needs WITH <task> naming a declared task", prog.span, "E031")
+                        self.error(f"program '{prog.instance}' needs WITH <task> naming a declared task", prog.span, "E030")
                         continue
                     if any(p[0].lower() == prog.instance.lower() for tk in tasks.values() for p in tk.programs):
                         self.error(f"duplicate program instance '{prog.instance}'", prog.span, "E010")

@@ -172,7 +172,7 @@ class _Rewriter:
                     if e.name.lower() in self.locals:
                         self.diagnostics.append(Diagnostic.error(
                             f"'{e.name}' of {gvl[0]} is hidden here by a local '{e.name}' (stvm reaches a "
-                            f"global list's variables by their own name; rename the local)", e.span, "E060"))
+                            f"global list's variables by their own name; rename the local)", e.span, "E057"))
                     return n.Name((e.name,), False, e.span)
                 enum = self.scope.enums.get(first)
                 if enum is not None and e.name.lower() in enum[1]:
@@ -190,10 +190,10 @@ class _Rewriter:
         if gvl is not None and key not in self.scope.loose_globals:
             self.diagnostics.append(Diagnostic.error(
                 f"'{e.parts[0]}' is in the global variable list {gvl}, which is "
-                f"{{attribute 'qualified_only'}}: write {gvl}.{e.parts[0]}", e.span, "E060"))
+                f"{{attribute 'qualified_only'}}: write {gvl}.{e.parts[0]}", e.span, "E057"))
             return
         enum = self.scope.strict_members.get(key)
         if enum is not None and key not in self.scope.loose_members and key not in self.scope.loose_globals:
             self.diagnostics.append(Diagnostic.error(
                 f"'{e.parts[0]}' is an enumerator of {enum}, which is {{attribute 'qualified_only'}}: "
-                f"write {enum}.{e.parts[0]} (or {enum}#{e.parts[0]})", e.span, "E060"))
+                f"write {enum}.{e.parts[0]} (or {enum}#{e.parts[0]})", e.span, "E057"))

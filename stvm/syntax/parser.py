@@ -236,9 +236,10 @@ class _ToNodes:
     def property_accessor(self, meta, items):
         word, end = str(items[0]).upper(), str(items[-1]).upper()
         if word not in ("GET", "SET"):
-            self._error(f"syntax error: unexpected '{items[0]}'; expected GET, SET or END_PROPERTY", self._ts(items[0]))
+            self._error(f"syntax error: unexpected '{items[0]}'; expected GET, SET or END_PROPERTY", self._ts(items[0]),
+                        "E001")
         elif end != "END_" + word:
-            self._error(f"{word} ends with END_{word}, not {end}", self._ts(items[-1]))
+            self._error(f"{word} ends with END_{word}, not {end}", self._ts(items[-1]), "E001")
         return n.Accessor(word if word in ("GET", "SET") else "GET", tuple(items[1:-2]), items[-2], self._s(meta))
 
     def interface(self, meta, items):
@@ -271,7 +272,7 @@ class _ToNodes:
         word = str(items[0]).upper()
         if word == "PERSISTENT" and not allows(self.settings.dialect, "persistent"):
             self._error(f"PERSISTENT is a CODESYS/TwinCAT qualifier, not one of {self.settings.dialect.value} "
-                        "(use RETAIN, or --dialect codesys|twincat)", self._s(meta))
+                        "(use RETAIN, or --dialect codesys|twincat)", self._s(meta), "E009")
         return word
 
     def var_decl(self, meta, items):
@@ -600,7 +601,7 @@ class _ToNodes:
         else:
             what, span = "a comma before ')'", self._ts(item)
         self._error(f"{what} is TwinCAT/CODESYS call syntax, not {self.settings.dialect.value} "
-                    "(use --dialect twincat|codesys)", span)
+                    "(use --dialect twincat|codesys)", span, "E009")
 
     def formal_output_empty(self, meta, items):
         return ("empty_output", str(items[0]), self._s(meta))
@@ -611,7 +612,7 @@ class _ToNodes:
         setting = str(items[1]).upper().startswith("S")
         if not allows(self.settings.dialect, "set_reset_assign"):
             self._error(f"'{str(items[1]).upper()}' is CODESYS/TwinCAT syntax, not "
-                        f"{self.settings.dialect.value} (use --dialect twincat|codesys)", span)
+                        f"{self.settings.dialect.value} (use --dialect twincat|codesys)", span, "E009")
         store = n.Assign(items[0], n.BoolLiteral(setting, span), span)
         return n.If(((items[2], (store,)),), None, span)
 
@@ -645,8 +646,8 @@ class _ToNodes:
         return n.Argument("positional", None, items[0], self._s(meta))
 
     # -- literals
-    def _error(self, message: str, span: n.Span):
-        self.diagnostics.append(Diagnostic.error(message, span))
+    def _error(self, message: str, span: n.Span, code: str):
+        self.diagnostics.append(Diagnostic.error(message, span, code))
 
     def int_literal(self, meta, items):
         text = str(items[0])
@@ -659,7 +660,7 @@ class _ToNodes:
         try:
             value = decode_int(str(items[0]))
         except LiteralError as exc:   # a `1__0`, or thousands of digits (an error, not exit 70)
-            self._error(str(exc), self._s(meta))
+            self._error(str(exc), self._s(meta), "E008")
             value = 0
         return n.IntLiteral(value, self._s(meta))
 
@@ -674,7 +675,7 @@ class _ToNodes:
                 raise LiteralError(f"REAL literal {text[:40]!r} is out of range: LREAL holds at most "
                                    f"±1.7976931348623157E308")
         except LiteralError as exc:
-            self._error(str(exc), self._s(meta))
+            self._error(str(exc), self._s(meta), "E008")
             value = 0.0
         return n.RealLiteral(value, text, self._s(meta))
 
@@ -689,7 +690,8 @@ class _ToNodes:
         try:
             return n.TimeLiteral(type_name, decoder(text), self._s(meta))
         except (LiteralError, ValueError) as exc:
-            self._error(str(exc) if isinstance(exc, LiteralError) else f"malformed literal {text!r}", self._s(meta))
+            self._error(str(exc) if isinstance(exc, LiteralError) else f"malformed literal {text!r}", self._s(meta),
+                        "E008")
             return n.TimeLiteral(type_name, 0, self._s(meta))
 
     # the long forms (LT#, LTIME#, LDATE#, LD#, LTOD#, LTIME_OF_DAY#, LDT#, LDATE_AND_TIME#) are
@@ -724,15 +726,15 @@ class _ToNodes:
         try:
             value, _ = decode_string(text, self.settings)
         except LiteralError as exc:
-            self._error(str(exc), span)
+            self._error(str(exc), span, "E008")
             value = b""
         double = text.startswith('"')
         if double:
             if self.settings.double_quote_strings is DoubleQuoteStrings.ERROR:
-                self._error('double-quoted text is a WSTRING; write STRING literals in single quotes', span)
+                self._error('double-quoted text is a WSTRING; write STRING literals in single quotes', span, "E009")
             else:
                 self.diagnostics.append(Diagnostic.warning(
-                    "double-quoted string literal accepted as STRING (Sysmac `double_quote_strings`)", span))
+                    "double-quoted string literal accepted as STRING (Sysmac `double_quote_strings`)", span, "W003"))
         return n.StringLiteral(value, double, span)
 
     def _wstring_literal(self, text: str, span) -> n.StringLiteral:
@@ -741,7 +743,7 @@ class _ToNodes:
         try:
             value = decode_wstring(text, self.settings)
         except LiteralError as exc:
-            self._error(str(exc), span)
+            self._error(str(exc), span, "E008")
             value = ""
         return n.StringLiteral(value, True, span)
 

@@ -294,7 +294,7 @@ class _Lines:
 
 
 def _xml_error(message: str, text: str, line: int, column: int) -> SourceError:
-    return SourceError(message, line, column, text)
+    return SourceError(message, line, column, text, "E007")
 
 
 def _parse_xml(text: str) -> _Builder:

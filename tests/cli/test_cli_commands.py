@@ -56,7 +56,7 @@ def test_check_errors_exit_1(tmp_path):
     bad.write_text("PROGRAM Main\nVAR x : INT; END_VAR\nx := y;\nEND_PROGRAM\n")
     rc, out, err = cli(["check", bad])
     assert rc == 1 and out == ""
-    assert err.startswith(f"{bad}:3:6: error: 'y' is not declared\n    x := y;\n         ^\n")
+    assert err.startswith(f"{bad}:3:6: error: 'y' is not declared [E031]\n    x := y;\n         ^\n")
     assert err.endswith("1 error(s)\n")
 
 

@@ -10,7 +10,7 @@ import pytest
 
 from core_helpers import check_text, cli, write_st
 
-HEAD = re.compile(r"^(?:.*/)?case\.st:(\d+):(\d+): error: (.+)$", re.M)
+HEAD = re.compile(r"^(?:.*/)?case\.st:(\d+):(\d+): error: (.+?)(?: \[E\d{3}\])?$", re.M)   # message, no code
 
 
 def errors(source: str) -> list[tuple[int, str]]:
@@ -309,7 +309,7 @@ END_FUNCTION_BLOCK
 
 def test_a_recursive_method_is_an_error_under_iec_as_a_recursive_function_is():
     rc, _, err = cli(["check", write_st(RECURSIVE_METHODS), "--dialect", "iec"])
-    found = [(int(m[1]), m[3]) for m in re.finditer(r":(\d+):(\d+): error: (.+)", err)]
+    found = [(int(m[1]), m[3]) for m in re.finditer(r":(\d+):(\d+): error: (.+) \[E\d{3}\]", err)]
     # the cycles are reported once each, at a method on them; callers of a cycle (Ok, G.Outer) are not
     assert rc == 1 and found == [
         (2, "recursive method call F.Down -> F.Down: IEC 61131-3 does not allow recursion"),

@@ -1,0 +1,36 @@
+"""Regenerate docs/error_codes.md from the error-code registry (stvm/diagnostics/codes.py).
+
+    python tools/gen_error_docs.py           # write docs/error_codes.md
+    python tools/gen_error_docs.py --check   # exit 1 if docs/error_codes.md is out of date
+
+tests/diagnostics/test_error_codes.py runs the check, so a code changed without its page fails CI.
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from stvm.diagnostics.codes import docs_page  # noqa: E402
+
+PAGE = ROOT / "docs" / "error_codes.md"
+
+
+def main(argv: list[str]) -> int:
+    text = docs_page()
+    if "--check" in argv:
+        current = PAGE.read_text(encoding="utf-8") if PAGE.exists() else ""
+        if current != text:
+            print(f"{PAGE.relative_to(ROOT)} is out of date: run python tools/gen_error_docs.py", file=sys.stderr)
+            return 1
+        return 0
+    PAGE.write_text(text, encoding="utf-8")
+    print(f"wrote {PAGE.relative_to(ROOT)} ({len(text.splitlines())} lines)")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main(sys.argv[1:]))
