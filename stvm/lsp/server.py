@@ -23,6 +23,7 @@ import json
 import os
 import logging
 import concurrent.futures
+import functools
 import threading
 import time
 from dataclasses import dataclass, field
