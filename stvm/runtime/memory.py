@@ -25,7 +25,7 @@ import struct
 from typing import Any, Callable
 
 from stvm.lower.layout import struct_layout
-from stvm.runtime.values import AttrRef, ItemRef, STFault
+from stvm.runtime.values import ItemRef, STFault
 from stvm.semantics import types as t
 
 Encode = Callable[[Any, bytearray, int], None]
@@ -406,5 +406,5 @@ class Box:
 MEMORY_HELPERS = {"_ptr_cast": cast, "_ptr_add": add, "_ptr_index": index, "_ptr_deref_agg": deref_aggregate,
                   "_as_ptr": as_ptr, "_Box": Box, "_Ptr": Ptr}
 
-__all__ = ["AttrRef", "Box", "MEMORY_HELPERS", "MemoryFault", "Ptr", "add", "as_ptr", "cast", "codec",
+__all__ = ["Box", "MEMORY_HELPERS", "MemoryFault", "Ptr", "add", "as_ptr", "cast", "codec",
            "image", "index", "memcmp", "memcpy", "memset"]
