@@ -9,6 +9,10 @@
     [sysmac]                            # Sysmac UNCERTAIN settings of the project (README)
     int_div_zero = "zero"
 
+    [test]                              # a TcUnit test project (stvm test, pytest): docs/unit_tests.md
+    library = "TcUnit"
+    timeout = "120s"
+
     [demo]                              # makes `stvm run FILE` the demo (stvm/demo.py)
     title = "thesis PnP demo"
     scenario = "scenarios/pnp_demo.toml"
@@ -66,6 +70,13 @@ _SCHEMA: dict[str, dict[str, tuple[Any, str]] | None] = {
     "opcua": None,      # front ends and tools that read their own table
     "lint": None,
     "libraries": None,  # NAME = "folder or .plcproj", checked by stvm/libraries.py
+    # a TcUnit test project (`stvm test`, the pytest plugin: docs/unit_tests.md)
+    "test": {
+        "library": (lambda v: isinstance(v, str) and v.isidentifier(),
+                    "the name of the test framework library, e.g. library = \"TcUnit\""),
+        "scan": (lambda v: isinstance(v, str), "the task period of the test run, e.g. scan = \"10ms\""),
+        "timeout": (lambda v: isinstance(v, str), "virtual time the tests may take, e.g. timeout = \"120s\""),
+    },
     "demo": {
         "scenario": (lambda v: isinstance(v, str), "a scenario file name, relative to the manifest"),
         "step_variable": (lambda v: isinstance(v, str), "a variable path, e.g. \"Main.step\""),
