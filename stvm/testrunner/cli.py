@@ -14,7 +14,6 @@ from __future__ import annotations
 
 import fnmatch
 import sys
-from dataclasses import replace
 from pathlib import Path
 
 from stvm.cli_support import (EXIT_COMPILE, EXIT_FAULT, EXIT_OK, EXIT_USAGE, UsageError, add_project_options,
@@ -53,29 +52,9 @@ def selected(test_id: str, pattern: str | None) -> bool:
     return pattern in text
 
 
-def default_dialect(spec):
-    """`spec` read in the twincat dialect when neither the command line nor the manifest names
-    one and the project or a library is TwinCAT XML (TcUnit is): its platform functions
-    (ADSLOGSTR, GETCPUCOUNTER, …) are TwinCAT's."""
-    from stvm.libraries import LibraryError, from_manifest, library_files   # lazy: start-up
-    from stvm.libraries import Library   # lazy: start-up
-    if spec.manifest.get("project", {}).get("dialect") or spec.dialect == "twincat":
-        return spec
-    tc = (".tcpou", ".tcgvl", ".tcdut", ".tcio", ".plcproj")
-    try:
-        libs = [Library(n, Path(f)) for n, f in spec.libraries] + from_manifest(spec.manifest, spec.root,
-                                                                                [n for n, _ in spec.libraries])
-        files = list(spec.files) + [f for lib in libs for f in library_files(lib)]
-    except (LibraryError, OSError):
-        return spec     # reported when the project loads
-    if any(Path(f).suffix.lower() in tc for f in files) or any(Path(f).suffix.lower() == ".plcproj" for _, f in spec.libraries):
-        return replace(spec, settings=spec.settings.with_overrides(["dialect=twincat"]))
-    return spec
-
-
 def cmd_test(args) -> int:
     from stvm.project import LoadError, parse_duration   # lazy: start-up
-    from stvm.testrunner.runner import TestRunError, run_tests   # lazy: start-up
+    from stvm.testrunner.runner import TestRunError, default_dialect, run_tests   # lazy: start-up
     spec = resolve_project(args)
     if args.dialect is None:
         spec = default_dialect(spec)

@@ -151,6 +151,25 @@ def with_junit(spec: ProjectSpec, library: str, file_name: str = JUNIT_FILE_NAME
     return replace(spec, library_parameters=tuple(spec.library_parameters) + params)
 
 
+def default_dialect(spec):
+    """`spec` read in the twincat dialect when neither the command line nor the manifest names
+    one and the project or a library is TwinCAT XML (TcUnit is): its platform functions
+    (ADSLOGSTR, GETCPUCOUNTER, …) are TwinCAT's."""
+    from stvm.libraries import Library, LibraryError, from_manifest, library_files   # lazy: start-up
+    if spec.manifest.get("project", {}).get("dialect") or spec.dialect == "twincat":
+        return spec
+    tc = (".tcpou", ".tcgvl", ".tcdut", ".tcio", ".plcproj")
+    try:
+        libs = [Library(n, Path(f)) for n, f in spec.libraries] + from_manifest(spec.manifest, spec.root,
+                                                                                [n for n, _ in spec.libraries])
+        files = list(spec.files) + [f for lib in libs for f in library_files(lib)]
+    except (LibraryError, OSError):
+        return spec     # reported when the project loads
+    if any(Path(f).suffix.lower() in tc for f in files) or any(Path(f).suffix.lower() == ".plcproj" for _, f in spec.libraries):
+        return replace(spec, settings=spec.settings.with_overrides(["dialect=twincat"]))
+    return spec
+
+
 class _Paths:
     """The framework's variables the runner reads, resolved once (a global variable list's
     variable is reached as `GVL.x` or, when its list is not qualified, as `x`)."""
