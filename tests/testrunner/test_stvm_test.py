@@ -221,3 +221,31 @@ def test_fixture_copied_elsewhere_keeps_its_project_name(tmp_path):
     rc, out, err = cli(["test", copy])
     assert rc == 1, err
     assert "hint: | Project: MiniProject" in out
+
+
+def test_codesys_dialect_project_reads_results_from_the_suites():
+    # a CfUnit-style project: plain .st in the codesys dialect, TcUnit's API, no ADS logger
+    rc, out, err = cli(["test", FIXTURES / "codesys_project"])
+    assert rc == 1, err
+    assert _summary(out).group(1, 2, 3) == ("2", "6", "4 passed, 1 failed, 1 skipped")
+    assert "error:" not in out            # no ADSLOGSTR under codesys: nothing logged
+    assert out.splitlines()[-1] == "FAILED PRG_TEST.CounterSuite::WrongOnPurpose: fails on purpose"
+
+
+def test_twincat_is_the_default_dialect_for_twincat_xml_libraries(tmp_path):
+    from stvm.project import Options, resolve
+    from stvm.testrunner.runner import default_dialect
+    lib = tmp_path / "lib"
+    lib.mkdir()
+    (lib / "X.TcGVL").write_text('<?xml version="1.0" encoding="utf-8"?><TcPlcObject Version="1.1.0.1">'
+                                 '<GVL Name="X"><Declaration><![CDATA[VAR_GLOBAL\n a : INT;\nEND_VAR]]>'
+                                 '</Declaration></GVL></TcPlcObject>')
+    app = tmp_path / "app"
+    app.mkdir()
+    (app / "main.st").write_text("PROGRAM Main\nEND_PROGRAM\n")
+    spec = resolve([app], Options(libraries=(("Lib", str(lib)),)))
+    assert spec.dialect == "iec"
+    assert default_dialect(spec).dialect == "twincat"
+    (app / "stvm.toml").write_text('[project]\ndialect = "codesys"\n')
+    spec = resolve([app], Options(libraries=(("Lib", str(lib)),)))
+    assert default_dialect(spec).dialect == "codesys"     # the manifest decides
