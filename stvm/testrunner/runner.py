@@ -186,15 +186,22 @@ class _Paths:
         self.printed_final = vm.accessor(f"{runner}.AdsTestResultLogger.PrintedFinalTestResults")
         self.queued = vm.accessor(f"{queue}.MemRingBuffer.nCount")
         self.current_test = self._find(f"{gvl}.CurrentTestNameBeingCalled", "CurrentTestNameBeingCalled")
+        # TcUnit's pointer to the suite being called (MiniUnit has none)
+        self.current_suite = self._find(f"{gvl}.CurrentTestSuiteBeingCalled^.InstancePath",
+                                        "CurrentTestSuiteBeingCalled^.InstancePath")
 
     def _find(self, *candidates: str) -> str | None:
+        """The first of `candidates` the program declares (a path through a pointer is only
+        checked to name declared members: the pointer may still be NULL)."""
         from stvm.runtime.access import PathError   # lazy: start-up
         for path in candidates:
             try:
-                self.vm.resolve(path)
+                self.vm.type_of(path)
                 return path
             except PathError:
                 continue
+            except Exception:   # noqa: BLE001 - e.g. a NULL pointer before the first scan: declared
+                return path
         return None
 
     def done(self) -> bool:
@@ -349,14 +356,13 @@ def _run(project, library, scan, timeout_ns, files_dir, on_message, watchdog_s, 
     paths = _Paths(vm, library)
     limit_scans = max(1, -(-timeout_ns // vm.base_ns))
     started = time.perf_counter()
-    fault = fault_test = None
+    fault = fault_test = fault_suite = None
     try:
         with Watchdog(vm, watchdog_s) if watchdog_s else _null():
             vm.run(cycles=limit_scans, until=paths.done)
     except RuntimeFault as exc:
         fault = exc
-        if paths.current_test is not None:
-            fault_test = _text(vm.get(paths.current_test)) or None
+        fault_test, fault_suite = _read_text(vm, paths.current_test), _read_text(vm, paths.current_suite)
     wall = time.perf_counter() - started
     finished = fault is None and paths.done()
     name = _project_name(project)
@@ -369,9 +375,11 @@ def _run(project, library, scan, timeout_ns, files_dir, on_message, watchdog_s, 
             if test is not None:
                 test.failures.append(text)
     if fault is not None and fault_test:
-        running = [s for s in suites if not s.finished]
-        if running:
-            fault_test = f"{running[0].name}::{fault_test}"
+        suite = _suite_name(fault_suite, name) if fault_suite else None
+        running = [s.name for s in suites if not s.finished]
+        suite = suite or (running[0] if running else None)
+        if suite:
+            fault_test = f"{suite}::{fault_test}"
     junit_xml = None
     if files_dir is not None and finished:
         written = files_dir / JUNIT_FILE_NAME
@@ -379,6 +387,16 @@ def _run(project, library, scan, timeout_ns, files_dir, on_message, watchdog_s, 
     return TestRun(suites, messages, finished, vm.scan_count, vm.now_ns, wall,
                    timed_out=fault is None and not finished, fault=fault, fault_test=fault_test,
                    junit_xml=junit_xml, sources=project.sources, project_warnings=list(project.warnings))
+
+
+def _read_text(vm, path: str | None) -> str | None:
+    """A STRING variable's text, or None (no such variable, or not readable after the fault)."""
+    if path is None:
+        return None
+    try:
+        return _text(vm.get(path)) or None
+    except Exception:   # noqa: BLE001 - a pointer left invalid by the fault: the name is a nicety
+        return None
 
 
 def _by_suffix(by_id: dict, suite: str, test: str):
