@@ -126,6 +126,8 @@ def _libraries(items) -> tuple[tuple[str, str], ...]:
 
 def _library_parameters(items) -> tuple[tuple[str, str, str], ...]:
     """`--library-param LIB.PARAM=VALUE` items as (library, parameter, ST text)."""
+    if not items:
+        return ()
     from stvm.libraries import LibraryError, parse_parameter_option   # lazy: start-up (rare option)
     out = []
     for item in items:
