@@ -76,7 +76,9 @@ class TcUnitProject(pytest.File):
             yield RunItem.from_parent(self, name=RUN_ITEM, text="the test project does not build:\n" + exc.render())
             return
         except (TestRunError, ValueError) as exc:
-            yield RunItem.from_parent(self, name=RUN_ITEM, text=str(exc))
+            hint = " (under pytest: --stvm-library NAME=DIR or the ini option stvm_libraries)" \
+                if "--library" in str(exc) else ""
+            yield RunItem.from_parent(self, name=RUN_ITEM, text=str(exc) + hint)
             return
         for case in run.tests:
             item = TcUnitItem.from_parent(self, name=case.id, case=case)
