@@ -230,12 +230,30 @@ def find_suites(vm, library: str) -> list[tuple[str, str]]:
 
     found: list[tuple[str, str]] = []
     lib_prefix = library.lower() + "\\"
+    holds: dict[str, bool] = {}
+
+    def may_hold(ty) -> bool:
+        """Whether a value of `ty` is or contains a suite (so arrays of other blocks are not walked)."""
+        while isinstance(ty, t.ArrayType):
+            ty = ty.element
+        if not isinstance(ty, t.FBType) or ty.is_program:
+            return False
+        key = ty.qualname.lower()
+        if key not in holds:
+            holds[key] = False    # a cycle ends here
+            if suite_type(key):
+                holds[key] = True
+            elif not key.startswith(lib_prefix):     # the framework's own blocks hold no user suites
+                pou = model.pous.get(key)
+                holds[key] = any(may_hold(v.type) for v in (pou.variables.values() if pou else ())
+                                 if v.section in ("VAR", "VAR_OUTPUT", "VAR_INPUT"))
+        return holds[key]
 
     def visit(path: str, ty, depth: int) -> None:
-        if depth > 8 or len(found) > 10_000:
+        if depth > 8 or len(found) > 10_000 or not may_hold(ty):
             return
         if isinstance(ty, t.ArrayType) and ty.dims:
-            if ty.length > 1000:
+            if ty.length > 10_000:
                 return
             for index in _indices(ty.dims):
                 visit(f"{path}[{', '.join(map(str, index))}]", ty.element, depth + 1)

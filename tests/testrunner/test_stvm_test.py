@@ -249,3 +249,45 @@ def test_twincat_is_the_default_dialect_for_twincat_xml_libraries(tmp_path):
     (app / "stvm.toml").write_text('[project]\ndialect = "codesys"\n')
     spec = resolve([app], Options(libraries=(("Lib", str(lib)),)))
     assert default_dialect(spec).dialect == "codesys"     # the manifest decides
+
+
+NESTED = """FUNCTION_BLOCK FB_Quick EXTENDS MiniUnit.FB_TestSuite
+TEST('Quick');
+AssertTrue(Condition := TRUE, Message := 'true');
+TEST_FINISHED();
+END_FUNCTION_BLOCK
+FUNCTION_BLOCK FB_Holder
+VAR
+    Inner : FB_Quick;
+    Counts : ARRAY[1..50] OF INT;
+END_VAR
+Inner();
+END_FUNCTION_BLOCK
+"""
+
+NESTED_PROGRAM = """PROGRAM PRG_TEST
+VAR
+    Many : ARRAY[1..2] OF FB_Quick;
+    Holder : FB_Holder;
+    Others : ARRAY[1..100] OF TON;
+END_VAR
+Many[1]();
+Many[2]();
+Holder();
+MiniUnit.RUN();
+END_PROGRAM
+"""
+
+
+def test_suites_in_arrays_and_inside_other_blocks_are_found(tmp_path):
+    folder = _project(tmp_path, NESTED, NESTED_PROGRAM)
+    rc, out, err = cli(["test", folder])
+    assert rc == 0, out + err
+    assert _summary(out).group(1, 2, 3) == ("3", "3", "3 passed")
+    from stvm.project import resolve
+    from stvm.testrunner.runner import run_tests
+    run = run_tests(resolve([folder]))
+    assert [s.path for s in run.suites] == ["PRG_TEST.Many[1]", "PRG_TEST.Many[2]", "PRG_TEST.Holder.Inner"]
+    assert [t.id for t in run.tests] == ["PRG_TEST.Many[1]::Quick", "PRG_TEST.Many[2]::Quick",
+                                        "PRG_TEST.Holder.Inner::Quick"]
+    assert all(t.asserts == 1 and t.status == "passed" for t in run.tests)
