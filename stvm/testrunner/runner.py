@@ -367,10 +367,10 @@ def _run(project, library, scan, timeout_ns, files_dir, on_message, watchdog_s, 
         if on_message is not None:
             on_message(word, text)
 
+    if files_dir is not None:   # the SysFile functions' file root (stdlib/sys_file.py): a private folder
+        project.files_root = str(files_dir)
     vm = project.start(scan=scan)
     vm.ctx.ads_log = sink
-    if files_dir is not None:
-        _confine_files(vm, files_dir)
     paths = _Paths(vm, library)
     limit_scans = max(1, -(-timeout_ns // vm.base_ns))
     started = time.perf_counter()
@@ -429,11 +429,6 @@ def _project_name(project) -> str:
     manifest = project.manifest or {}
     root = project.root
     return str(manifest.get("project", {}).get("name") or (root.name if root is not None else "stvm"))
-
-
-def _confine_files(vm, folder: Path) -> None:
-    """The file FBs of this run read and write inside `folder` only."""
-    vm.ctx.file_root = folder
 
 
 class _null:
