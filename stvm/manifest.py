@@ -70,13 +70,6 @@ _SCHEMA: dict[str, dict[str, tuple[Any, str]] | None] = {
     "opcua": None,      # front ends and tools that read their own table
     "lint": None,
     "libraries": None,  # NAME = "folder or .plcproj", checked by stvm/libraries.py
-    # a TcUnit test project (`stvm test`, the pytest plugin: docs/unit_tests.md)
-    "test": {
-        "library": (lambda v: isinstance(v, str) and v.isidentifier(),
-                    "the name of the test framework library, e.g. library = \"TcUnit\""),
-        "scan": (lambda v: isinstance(v, str), "the task period of the test run, e.g. scan = \"10ms\""),
-        "timeout": (lambda v: isinstance(v, str), "virtual time the tests may take, e.g. timeout = \"120s\""),
-    },
     "demo": {
         "scenario": (lambda v: isinstance(v, str), "a scenario file name, relative to the manifest"),
         "step_variable": (lambda v: isinstance(v, str), "a variable path, e.g. \"Main.step\""),
@@ -90,6 +83,13 @@ _SCHEMA: dict[str, dict[str, tuple[Any, str]] | None] = {
                    "a number of complete cycles after which the demo stops (0: no limit)"),
         "cycles_flag": (lambda v: isinstance(v, str) and _FLAG.fullmatch(v) is not None,
                         "a command-line flag, e.g. \"--pnp-cycles\", that sets `cycles` for a run"),
+    },
+    # a TcUnit test project (`stvm test`, the pytest plugin: docs/unit_tests.md)
+    "test": {
+        "library": (lambda v: isinstance(v, str) and v.isidentifier(),
+                    "the name of the test framework library, e.g. library = \"TcUnit\""),
+        "scan": (lambda v: isinstance(v, str), "the task period of the test run, e.g. scan = \"10ms\""),
+        "timeout": (lambda v: isinstance(v, str), "virtual time the tests may take, e.g. timeout = \"120s\""),
     },
 }
 
