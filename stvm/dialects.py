@@ -107,6 +107,20 @@ ROWS: tuple[Row, ...] = (
         False, False, True, True,
         f"{TC3} / {CDS} 'ADR': the address of any variable, constants included; SIZEOF of the "
         "dereferenced pointer is its target type's size (accepted in every dialect that has POINTER TO)"),
+    Row("any_input", "ANY as the type of a VAR_INPUT of user code (read as .TypeClass, .pValue, .diSize)",
+        False, False, True, True,
+        f"{TC3} 'ANY and ANY_<type>' / {CDS} 'ANY': the compiler passes a structure of the argument's "
+        "type class, address and size; IEC 61131-3 and Sysmac keep generic types to library functions"),
+    Row("short_times", "TIME and TIME_OF_DAY take 4 bytes (milliseconds), DATE and DATE_AND_TIME 4 bytes (seconds)",
+        False, False, True, True,
+        f"{TC3} 'TIME', 'TIME_OF_DAY', 'DATE', 'DATE_AND_TIME' and {CDS}: 32-bit values in ms / s (LTIME "
+        f"64-bit ns); {W501}: TIME, DATE, TOD and DT are 64-bit nanoseconds; IEC 61131-3 leaves the "
+        "size open (stvm keeps 64 bits there). Seen by SIZEOF, MEMCPY, cast pointers and UNION members"),
+    Row("enum_integer", "an enumeration value assigned to an integer variable and an integer to an enumeration",
+        False, False, False, True,
+        f"{TC3} 'Enumerations': without {{attribute 'strict'}} an enumeration converts implicitly to and "
+        "from its integer base type (stvm reads no 'strict' attribute yet: every enumeration does); "
+        "IEC 61131-3 and Sysmac: enumerations are distinct types; CODESYS left strict in stvm"),
     Row("shift_any_integer", "SHL/SHR/ROL/ROR on signed and unsigned integers, not only bit strings",
         False, False, True, True,
         f"{IEC3} table 29 and {W502}: ANY_BIT operands; {TC3} / {CDS} 'SHL': any integer type"),
@@ -120,6 +134,31 @@ ROWS: tuple[Row, ...] = (
         False, False, True, True, f"{CDS} / {TC3} 'Assignment as expression' (value: the value assigned)"),
     Row("method_recursion", "a method calling itself (directly or through others)",
         False, False, True, True, f"{CDS} / {TC3} allow recursion with a warning; Sysmac and IEC refuse it"),
+    Row("void_function", "a FUNCTION without a return type, called as a statement (`FUNCTION RUN`)",
+        False, False, True, True,
+        f"{CDS} 'Function' / {TC3} 'Function': the return type may be left out; such a function "
+        "returns nothing and is called as a statement (TcUnit's RUN, TEST, ...); IEC 61131-3 and "
+        "Sysmac require one"),
+    Row("mixed_arguments", "formal arguments followed by positional ones (`FIND(STR1 := s, '.')`)",
+        False, False, True, True,
+        f"{TC3} / {CDS}: the compiler accepts a call that names some inputs and gives the rest by "
+        "position (public TwinCAT code such as TcUnit uses it); the positional ones take, in order, "
+        "the inputs not named. IEC 61131-3 6.6.1.4 and Sysmac: all formal or all positional"),
+    Row("fb_assign", "assigning a function block instance to another of its type (a copy of its variables)",
+        False, False, True, True,
+        f"{TC3} / {CDS}: an FB instance is assigned like a structure (its memory is copied) unless "
+        "the FB has {{attribute 'no_assign'}}; a METHOD may return an FB (TcUnit's GetTestByPosition). "
+        "IEC 61131-3 and Sysmac: an instance cannot be assigned"),
+    Row("fb_input_assign", "writing an input of an FB instance outside its call (`fbTimer.IN := TRUE;`)",
+        False, False, True, True,
+        f"{TC3} / {CDS}: an instance's inputs are read and written from outside like variables (the "
+        "next call uses the value); IEC 61131-3 6.6.1.2 and Sysmac: inputs are set in the call only"),
+    Row("fb_internal_read", "reading a VAR (internal) variable of an FB instance from outside (`fb.counter`)",
+        False, False, False, True,
+        f"{TC3}: TwinCAT 3 compiles read access to an instance's internal variables (TcUnit reads "
+        "FB_TestSuite's Tests and FB_Test's TestName); writing them stays an error. IEC 61131-3, "
+        "Sysmac and CODESYS (stvm's choice: not confirmed for CODESYS): only inputs and outputs are "
+        "visible outside"),
     Row("int_div_zero", "integer division or MOD by zero",
         "fault", "fault", "fault", "fault",
         f"{W501}: an instruction error stops the task; {TC3} 'Division by zero': an exception (the "

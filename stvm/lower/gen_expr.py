@@ -7,7 +7,9 @@ expression. Only names from `lower.names` and `py_literal` constants are written
 from __future__ import annotations
 
 from stvm.numeric import f32, strfit
+from stvm.dialects import allows
 from stvm.semantics import types as t
+from stvm.semantics.body import RESULT_KEY, is_any_descriptor
 from stvm.semantics.facts import CallInfo
 from stvm.semantics.model import EXTERNAL, GLOBAL, IN_OUT, Variable
 from stvm.lower.names import method_attr, var_attr
@@ -70,6 +72,9 @@ class ExpressionGenerator:
     def coerce(self, code: str, src: t.Type, dst: t.Type, span: n.Span | None = None) -> str:
         if src == dst:
             return code
+        if self.pointer_cast(src, dst):
+            # TwinCAT/CODESYS: POINTER TO A into a POINTER TO B reads A's bytes as B's
+            return f"_ptr_cast({code}, {self.type_const(src.target)}, {self.type_const(dst.target)}{self.short_arg()})"  # type: ignore[attr-defined]
         if isinstance(dst, t.SubrangeType) and isinstance(src, t.IntType):
             code = code if int_contains(dst, src) else wrap_int(code, dst)
             if isinstance(src, t.SubrangeType) and dst.low <= src.low and src.high <= dst.high:
@@ -112,7 +117,10 @@ class ExpressionGenerator:
         if ref.kind == "enum":
             return py_literal(ref.value)
         if ref.kind == "result":
-            return "_r"
+            result = "_rb.value" if self.result_boxed() else "_r"
+            if e.nid in self.facts.auto_deref:   # a result REFERENCE TO: read through it
+                return self.deref_code(result, self.pou.return_type.target)
+            return result
         if ref.kind == "null":
             return "None"
         if ref.kind in ("this", "super"):
@@ -154,6 +162,8 @@ class ExpressionGenerator:
         """Read through a reference: the aggregate itself, or the scalar's current value; NULL
         (None) faults at the statement (`_null_ref`)."""
         if t.is_aggregate(target):
+            if self.byte_pointers():
+                return f"_ptr_deref_agg({code} or _null_ref())"
             return f"({code} or _null_ref())"
         return f"({code} or _null_ref()).get()"
 
@@ -168,7 +178,8 @@ class ExpressionGenerator:
     def raw_place(self, target: n.Expr) -> str:
         """The storage of a Name/Member itself (for a REFERENCE TO variable: the reference)."""
         if isinstance(target, n.Name):
-            return self.name_place(self.facts.names[target.nid])
+            ref = self.facts.names[target.nid]
+            return "_r" if ref.kind == "result" else self.name_place(ref)
         assert isinstance(target, n.Member)
         base_type = self.facts.types[target.base.nid]
         return f"{self.expr(target.base)}.{var_attr(self.member_name(base_type, target.name))}"
@@ -180,6 +191,8 @@ class ExpressionGenerator:
             return self.expr(value.base)
         if isinstance(value, (n.Name, n.Member)) and value.nid in self.facts.auto_deref:
             return self.raw_place(value)
+        if isinstance(value, n.Call) and value.nid in self.facts.auto_deref:
+            return self.call_code(value)   # a call's REFERENCE TO result: the reference itself
         if isinstance(ty, t.RefType) and ty.is_null:
             return "None"
         if t.is_aggregate(ty):
@@ -247,7 +260,15 @@ class ExpressionGenerator:
         return code, subscripts[-1]
 
     def ex_Index(self, e: n.Index) -> str:
+        if isinstance(self.facts.types.get(e.base.nid), t.RefType):
+            return f"{self.pointer_index(e)}.get()"
         return self.index_code(e)
+
+    def pointer_index(self, e: n.Index) -> str:
+        """`p[i]` (TwinCAT/CODESYS): a pointer to the i-th element from p."""
+        ty = self.facts.types[e.base.nid]
+        return (f"_ptr_index({self.expr(e.base)}, {self.expr(e.indices[0])}, "
+                f"{self.type_const(ty.target)}{self.short_arg()})")  # type: ignore[attr-defined]
 
     def ex_Unary(self, e: n.Unary) -> str:
         ty = self.facts.types[e.nid]
@@ -273,6 +294,20 @@ class ExpressionGenerator:
             # interfaces compare by the instance they hold; 0 and NULL are "none"
             left, right = ("None" if x.nid in self.facts.untyped else self.expr(x) for x in (e.left, e.right))
             return f"({left} {'is' if op == 'EQ' else 'is not'} {right})"
+        if op in ("EQ", "NE") and self.byte_pointers() and (
+                isinstance(lt, t.RefType) and e.right.nid in self.facts.untyped
+                or isinstance(self.facts.types.get(e.right.nid), t.RefType) and e.left.nid in self.facts.untyped):
+            # `p = 0`: the NULL address
+            side = e.right if e.left.nid in self.facts.untyped else e.left
+            return f"({self.expr(side)} {'is' if op == 'EQ' else 'is not'} None)"
+        if op in ("EQ", "NE") and isinstance(lt, t.RefType) and lt.flavour == "POINTER" and not lt.is_null \
+                and self.byte_pointers() and isinstance(self.facts.types.get(e.right.nid), t.RefType) \
+                and not self.facts.types[e.right.nid].is_null:
+            # byte-addressed pointers: the same byte of the same variable, whatever the pointers' types
+            target = self.type_const(lt.target)  # type: ignore[attr-defined]
+            left, right = self.expr(e.left), self.expr_as(e.right, lt)
+            same = f"_same_ref(_as_ptr({left}, {target}{self.short_arg()}), _as_ptr({right}, {target}{self.short_arg()}))"
+            return same if op == "EQ" else f"(not {same})"
         if op in ("EQ", "NE") and isinstance(lt, t.RefType):
             rt = self.facts.types[e.right.nid]
             target = lt.target if not lt.is_null else rt.target  # type: ignore[attr-defined]
@@ -293,6 +328,11 @@ class ExpressionGenerator:
         if op in ("AND", "AMP", "OR", "XOR"):
             pyop = {"AND": "&", "AMP": "&", "OR": "|", "XOR": "^"}[op]
             return f"({self.expr_as(e.left, ty)} {pyop} {self.expr_as(e.right, ty)})"
+        if isinstance(ty, t.RefType):
+            # TwinCAT/CODESYS pointer arithmetic: bytes further (or back)
+            ptr, delta = (e.left, e.right) if isinstance(lt, t.RefType) else (e.right, e.left)
+            amount = self.expr(delta) if op == "PLUS" else f"-({self.expr(delta)})"
+            return f"_ptr_add({self.expr(ptr)}, {amount}, {self.type_const(ty.target)}{self.short_arg()})"  # type: ignore[attr-defined]
         if isinstance(ty, t.TimeType):
             return self.time_binary(e, ty)
         if op == "POW":
@@ -426,8 +466,15 @@ class ExpressionGenerator:
         if self.facts.intrinsics and e.nid in self.facts.intrinsics:
             what, key = self.facts.intrinsics[e.nid]
             if what == "valid":
-                return f"({self.expr(e.args[0].value)} is not None)"
+                arg = e.args[0].value   # a REFERENCE TO variable: the reference, not its target
+                code = self.raw_place(arg) if arg.nid in self.facts.auto_deref else self.expr(arg)
+                return f"({code} is not None)"
             return f"_query_itf({self.expr(e.args[0].value)}, {key!r}, {self.ref_code(e.args[1].value)})"
+        if e.nid in self.facts.auto_deref:   # a result REFERENCE TO: read through it
+            return self.deref_code(self.call_code(e), self.facts.types[e.nid])
+        return self.call_code(e)
+
+    def call_code(self, e: n.Call) -> str:
         info = self.facts.calls[e.nid]
         if info.nested_en:
             return self.nested_en_call(e, info)
@@ -472,14 +519,59 @@ class ExpressionGenerator:
             return code if isinstance(vtype, t.ArrayType) and vtype.dims is None else self.open_array_code(code, vtype)
         if isinstance(ptype, t.GenericType):
             return self.expr(value)
+        if is_any_descriptor(ptype) and not is_any_descriptor(vtype):
+            return self.any_descriptor(value, ptype)  # type: ignore[arg-type]
         code = self.expr_as(value, ptype)
         if isinstance(ptype, (t.StructType, t.ArrayType)):
             return f"_copy_value({code})"
         return code
 
+    def any_descriptor(self, value: n.Expr, descriptor: t.StructType) -> str:
+        """An argument of an ANY input (TwinCAT/CODESYS): the `__SYSTEM.AnyType` structure of its
+        type class, a POINTER TO BYTE to it and its size in bytes. A value that is not a variable
+        gets a temporary (`_Box`), as the compiler's temporary in TwinCAT."""
+        vtype = self.facts.types[value.nid]
+        props = self.facts.props or {}
+        variable = value.nid not in props and (
+            isinstance(value, (n.Member, n.Index, n.Deref))
+            or isinstance(value, n.Name) and getattr(self.facts.names.get(value.nid), "kind", None)
+            not in ("enum", "null", "result", "this", "super"))
+        if variable and value.nid not in self.facts.consts:
+            ref = self.reference_code(value)
+        elif t.is_aggregate(vtype):
+            ref = f"_copy_value({self.expr(value)})"
+        else:
+            ref = f"_Box({self.expr(value)})"
+        pointer = f"_ptr_cast({ref}, {self.type_const(vtype)}, {self.type_const(t.BYTE)}{self.short_arg()})"  # type: ignore[attr-defined]
+        size = t.byte_size(vtype, allows(self.settings.dialect, "short_times")) or 0
+        fields = {"TypeClass": type_class(vtype), "pValue": pointer, "diSize": size}
+        names = {name.lower(): name for name, _ in descriptor.fields}
+        binds = ", ".join(f"{var_attr(names[key.lower()])}={code}" for key, code in fields.items())
+        return f"_with({self.default_expr(descriptor)}, {binds})"  # type: ignore[attr-defined]
+
+    def byte_pointers(self) -> bool:
+        """The profile's pointers are byte addresses (`pointer_arithmetic`, docs/memory_model.md)."""
+        return allows(self.settings.dialect, "pointer_arithmetic")
+
+    def short_arg(self) -> str:
+        """The time-layout argument of the memory helpers: `, True` under `short_times`."""
+        return ", True" if allows(self.settings.dialect, "short_times") else ""
+
+    def pointer_cast(self, src: t.Type | None, dst: t.Type | None) -> bool:
+        return (isinstance(src, t.RefType) and isinstance(dst, t.RefType) and src.flavour == dst.flavour == "POINTER"
+                and not src.is_null and not dst.is_null and not t.same_type(src.target, dst.target)
+                and self.byte_pointers())
+
+    def result_boxed(self) -> bool:
+        """Does ADR() take the address of this POU's result? Then the result lives in a `_Box`
+        (`_rb`) that the pointer references, not in the local `_r`."""
+        return self.pou is not None and (self.pou.key, RESULT_KEY) in self.facts.addressed
+
     def ref_code(self, value: n.Expr) -> str:
         if isinstance(value, n.Name):
             ref = self.facts.names[value.nid]
+            if ref.kind == "result":
+                return "_rb"
             var = ref.variable
             assert var is not None
             if var.section == IN_OUT and ref.kind != "global":
@@ -494,6 +586,8 @@ class ExpressionGenerator:
         if isinstance(value, n.Member):
             base_type = self.facts.types[value.base.nid]
             return f"_AttrRef({self.expr(value.base)}, {var_attr(self.member_name(base_type, value.name))!r})"
+        if isinstance(value, n.Index) and isinstance(self.facts.types.get(value.base.nid), t.RefType):
+            return self.pointer_index(value)
         if isinstance(value, n.Index):
             base, ix = self.index_parts(value)
             return f"_ItemRef({base}, {ix})"
@@ -540,3 +634,33 @@ class ExpressionGenerator:
                 lead.append(self.types_const(info.arg_types))
             return f"{name}({', '.join(lead + args)})"
         return f"{name}({', '.join(args)})"
+
+
+# __SYSTEM.TYPE_CLASS of a type (stvm/stdlib/type_classes.st: the values of the CODESYS Base
+# Interfaces library "TypeClass", which TwinCAT ships)
+_TYPE_CLASSES = {"BOOL": 0, "BYTE": 2, "WORD": 3, "DWORD": 4, "LWORD": 5, "SINT": 6, "INT": 7, "DINT": 8,
+                 "LINT": 9, "USINT": 10, "UINT": 11, "UDINT": 12, "ULINT": 13, "REAL": 14, "LREAL": 15,
+                 "TIME": 18, "DATE": 19, "DATE_AND_TIME": 20, "TIME_OF_DAY": 21, "LTIME": 37, "LDATE": 46,
+                 "LDATE_AND_TIME": 47, "LTIME_OF_DAY": 48}
+
+
+def type_class(ty: t.Type) -> int:
+    if isinstance(ty, t.SubrangeType):
+        return 24
+    if isinstance(ty, t.WStringType):
+        return 17
+    if isinstance(ty, t.StringType):
+        return 16
+    if isinstance(ty, t.EnumType):
+        return 25
+    if isinstance(ty, t.ArrayType):
+        return 26
+    if isinstance(ty, t.RefType):
+        return 23 if ty.flavour == "REFERENCE" else 22
+    if isinstance(ty, (t.StructType, t.FBType)):
+        return 28   # TYPE_USERDEF
+    if ty.name in _TYPE_CLASSES:
+        return _TYPE_CLASSES[ty.name]
+    if isinstance(ty, t.TimeType):
+        return _TYPE_CLASSES.get(ty.family, 18)
+    return 29   # TYPE_NONE

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from stvm.semantics import types as t
 from stvm.semantics.model import EXTERNAL, GLOBAL, IN_OUT, INPUT, OUTPUT, TEMP, POUInfo, Variable
+from stvm.dialects import allows
 from stvm.lower.names import method_attr, var_attr
 from stvm.lower.pycode import CodeWriter, py_literal
 from stvm.syntax import nodes as n
@@ -179,7 +180,7 @@ class PouGenerator:
         w.line(f"class {cls}(_Union):")
         w.indent += 1
         w.line("__slots__ = ()")
-        w.line(f"_size, _codecs, _aggregate = _union_codecs({self.type_const(st)})")
+        w.line(f"_size, _codecs, _aggregate = _union_codecs({self.type_const(st)}{self.short_arg()})")
         for index, (name, _) in enumerate(st.fields):
             w.line(f"{var_attr(name)} = _UnionMember({index})")
         w.line("def __init__(self):")
@@ -251,6 +252,13 @@ class PouGenerator:
         if not attrs:
             w.line("pass")
         w.indent -= 1
+        if allows(self.settings.dialect, "fb_assign"):
+            # `fb := other` and FB results (TwinCAT/CODESYS): the instance's variables copied; the
+            # nested instances, STRUCTs and ARRAYs it owns copied deeply (stvm/runtime/helpers.py)
+            owned = tuple(var_attr(v.name) for v in own if v.section != IN_OUT and t.is_aggregate(v.type))
+            w.line(f"_owned = {owned!r}")
+            w.line("def _copy(self): return _copy_fb(self)")
+            w.line("def _assign(self, src): _assign_fb(self, src)")
         w.line("def __call__(self):")
         w.indent += 1
         self.pou = pou
@@ -302,7 +310,7 @@ class PouGenerator:
         w.indent += 1
         self.pou = pou
         self.owner = "_f"
-        assert node is not None and (pou.return_type is not None or method)
+        assert node is not None   # a FUNCTION or METHOD without a result returns None
         plan = self.plan.pous[pou.key]
         if method and plan.frameless:
             # a METHOD none of whose variables is passed by reference keeps them all in Python
@@ -312,11 +320,12 @@ class PouGenerator:
             prologue = [f"{var_attr(v.name)} = {self.var_default(v)}" for v in pou.variables.values()
                         if v.section not in (INPUT, IN_OUT, "VAR_INST")]
             prologue.append(f"_r = {self.default_expr(pou.return_type)}" if pou.return_type is not None else "_r = None")
+            prologue += ["_rb = _Box(_r)"] if self.result_boxed() else []
             epilogue = [f"if o_{var_attr(o.name)} is not None: o_{var_attr(o.name)}.set({var_attr(o.name)})"
                         for o in outputs]
             self.cached_body(pou, node, every, prologue, epilogue, frameless=True)
             w.blank_span()
-            w.line("return _r")
+            w.line("return _rb.value" if self.result_boxed() else "return _r")
             w.indent -= 1
             return
         # every variable lives on the frame `_f` (so in-outs can reference it); the often used
@@ -328,12 +337,13 @@ class PouGenerator:
             if var.section not in (INPUT, IN_OUT, EXTERNAL, "VAR_INST"):
                 prologue.append(f"_f.{var_attr(var.name)} = {self.var_default(var)}")
         prologue.append(f"_r = {self.default_expr(pou.return_type)}" if pou.return_type is not None else "_r = None")
+        prologue += ["_rb = _Box(_r)"] if self.result_boxed() else []
         # VAR_OUTPUT of a function: written through the caller's references when it returns
         epilogue = [f"if o_{var_attr(o.name)} is not None: o_{var_attr(o.name)}.set(_f.{var_attr(o.name)})"
                     for o in outputs]
         self.cached_body(pou, node, dict(plan.cached), prologue, epilogue)
         w.blank_span()
-        w.line("return _r")
+        w.line("return _rb.value" if self.result_boxed() else "return _r")
         w.indent -= 1
 
     def cached_body(self, pou: POUInfo, node: n.POU, cached: dict[str, Variable], prologue_extra: list[str],

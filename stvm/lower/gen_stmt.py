@@ -270,6 +270,9 @@ class StatementGenerator:
             item_ok = " and ".join([f"type({ref}) is _ItemRef"] + ([f"type({ref}.lst) is list"] if lists else [])
                                    + [f"{ref}.lst is not {code}" for code in lists])
             self.w.line(f"if not ({attr_ok} or {item_ok}):")
+        elif self.byte_pointers():
+            # a byte-addressed pointer (docs/memory_model.md) may overlap anything: never held
+            self.w.line(f"if {ref} is None or type({ref}) is _Ptr:")
         else:
             self.w.line(f"if {ref} is None:")
         self.w.indent += 1
@@ -331,7 +334,8 @@ class StatementGenerator:
         self.w.line("continue")
 
     def st_Return(self, s: n.Return) -> None:
-        self.w.line("return _r" if self.pou and self.pou.kind in ("FUNCTION", "METHOD") else "return")
+        self.w.line(("return _rb.value" if self.result_boxed() else "return _r")
+                    if self.pou and self.pou.kind in ("FUNCTION", "METHOD") else "return")
 
     def st_Empty(self, s: n.Empty) -> None:
         self.w.line("pass")
@@ -348,13 +352,16 @@ class StatementGenerator:
 
     def store_code(self, target: n.Expr, value: str, ty: t.Type | None) -> list[str]:
         """Python statements that store `value` (already converted to `ty`) into `target`."""
-        aggregate = isinstance(ty, (t.StructType, t.ArrayType))
+        aggregate = isinstance(ty, (t.StructType, t.ArrayType, t.FBType))   # an FB: `fb_assign`
         if self.facts.props and target.nid in self.facts.props:
             return [f"{self.property_target(target, 'SET')}({value})"]
         if isinstance(target, n.Name):
             ref = self.facts.names[target.nid]
             if ref.kind == "result":
-                return [f"_r = {value}" if not aggregate else f"_r = _copy_value({value})"]
+                result = "_rb.value" if self.result_boxed() else "_r"
+                if target.nid in self.facts.auto_deref:   # a result REFERENCE TO: store through it
+                    return self.store_through(result, value, ty)
+                return [f"{result} = {value}" if not aggregate else f"{result} = _copy_value({value})"]
             var = ref.variable
             assert var is not None
             place = self.name_place(ref)
@@ -365,6 +372,8 @@ class StatementGenerator:
             if var.section == IN_OUT and not aggregate:
                 return [f"{place}.set({value})"]
             return [self.assign_into(place, value, ty)]
+        if isinstance(target, n.Index) and isinstance(self.facts.types.get(target.base.nid), t.RefType):
+            return [f"{self.pointer_index(target)}.set({value})"]   # TwinCAT/CODESYS `p[i] := v`
         if isinstance(target, n.Deref):
             held = self.held_local(target.base)
             if held is not None:
@@ -401,7 +410,7 @@ class StatementGenerator:
         return [f"({ref} or _null_ref()).set({value})"]
 
     def assign_into(self, place: str, value: str, ty: t.Type | None) -> str:
-        if isinstance(ty, t.StructType):
+        if isinstance(ty, (t.StructType, t.FBType)):   # an FB: `fb_assign` (TwinCAT/CODESYS)
             return f"{place}._assign({value})"
         if isinstance(ty, t.ArrayType):
             return f"_assign_array({place}, {value})"

@@ -5,10 +5,12 @@ Kept small and branch-light: they run inside scans.
 
 from __future__ import annotations
 
+import copy as _shallow
 import math
 
 from stvm.numeric import f32, strfit
 from stvm.runtime.values import ArrayIndexError, ArrayRef, AttrRef, FunctionError, ItemRef, MapRef, OpenArray, STFault
+from stvm.runtime.memory import MEMORY_HELPERS
 from stvm.runtime.unions import UNION_HELPERS
 
 
@@ -143,6 +145,47 @@ def copy_value(value):
     return copy() if copy is not None else value
 
 
+def _fb_slots(cls) -> tuple[tuple[str, bool], ...]:
+    """Every variable slot of an FB class, its bases' included, with whether the instance owns
+    the value (a nested instance, STRUCT or ARRAY: copied) or holds it (a number, a string, a
+    reference, an interface, a pointer: the value itself is copied)."""
+    out = []
+    for klass in cls.__mro__:
+        owned = getattr(klass, "_owned", ())
+        out += [(slot, slot in owned) for slot in getattr(klass, "__slots__", ()) if slot != "__dict__"]
+    return tuple(out)
+
+
+def _copy_fb(src):
+    """A copy of an FB instance (TwinCAT/CODESYS `fb_assign`: the instance's memory copied)."""
+    cls = type(src)
+    other = cls.__new__(cls)
+    for slot, owned in _fb_slots(cls):
+        if hasattr(src, slot):
+            value = getattr(src, slot)
+            setattr(other, slot, copy_value(value) if owned else _shallow.copy(value) if slot == "_impl" else value)
+    return other
+
+
+def _assign_fb(dst, src) -> None:
+    """`dst := src` for FB instances: every variable copied into `dst`, the nested instances,
+    structures and arrays in place (references to them see the new values)."""
+    if src is dst:
+        return
+    for slot, owned in _fb_slots(type(dst)):
+        if not hasattr(src, slot):
+            continue
+        value, mine = getattr(src, slot), getattr(dst, slot, None)
+        if not owned:
+            setattr(dst, slot, _shallow.copy(value) if slot == "_impl" else value)
+        elif type(value) is list and type(mine) is list:
+            _assign_array(mine, value)
+        elif type(mine) is type(value) and hasattr(mine, "_assign"):
+            mine._assign(value)
+        else:
+            setattr(dst, slot, copy_value(value))
+
+
 def _assign_array(dst: list, src) -> None:
     if isinstance(src, ArrayRef):
         src = src.data[src.start:]
@@ -189,10 +232,11 @@ HELPERS = {
     "_f32": f32, "_idiv": _idiv, "_idiv0": _idiv0, "_imod": _imod, "_imod0": _imod0, "_fdiv": _fdiv,
     "_tdiv": _tdiv, "_tdiv0": _tdiv0, "_expt": _expt, "_oob": _oob, "_subrange": _subrange, "_endless_for": _endless_for, "_strfit": strfit, "_copy_value": copy_value,
     "_assign_array": _assign_array, "_setbit": _setbit, "_with": _with, "_Frame": _Frame,
-    "_fb_init_later": _fb_init_later,
+    "_fb_init_later": _fb_init_later, "_copy_fb": _copy_fb, "_assign_fb": _assign_fb,
     "_AttrRef": AttrRef, "_MapRef": MapRef, "_ItemRef": ItemRef, "_ArrayRef": ArrayRef, "_FunctionError": FunctionError,
     "_STFault": STFault, "_null_ref": _null_ref, "_null_itf": _null_itf, "_query_itf": _query_itf, "_same_ref": _same_ref, "_ArrayIndexError": ArrayIndexError,
 }
 HELPERS.update(UNION_HELPERS)   # the base class and member descriptor of generated UNION classes
+HELPERS.update(MEMORY_HELPERS)  # byte-addressed pointers of the TwinCAT/CODESYS profiles
 HELPERS["_OpenArray"] = OpenArray   # ARRAY[*, *] arguments
 HELPERS["_en_call"] = _en_call      # EN/ENO inside an expression

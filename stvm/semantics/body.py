@@ -59,6 +59,16 @@ def real_for(int_type: t.IntType) -> t.RealType:
     return t.REAL if int_type.bits <= 16 else t.LREAL
 
 
+def is_any_descriptor(ty: t.Type | None) -> bool:
+    """The structure an ANY input of user code holds (`__SYSTEM.AnyType`, TwinCAT/CODESYS)."""
+    return isinstance(ty, t.StructType) and ty.qualname.lower().replace("\\", ".") == "__system.anytype"
+
+
+# the key under which `facts.addressed` records that ADR() takes the address of the POU's result
+# (no variable has this name)
+RESULT_KEY = "<result>"
+
+
 def implicit_ok(src: t.Type, dst: t.Type) -> bool:
     """May a value of `src` be assigned/passed to `dst` without a conversion function?"""
     if src == dst:
@@ -332,8 +342,8 @@ class BodyChecker:
                     g = self.c.globals.get(key)
                     return NameRef("global", g) if g is not None else None
                 return NameRef("var", var)
-            if key == self.pou.name.lower() and (self.pou.kind == "FUNCTION" or (
-                    self.pou.kind == "METHOD" and self.pou.return_type is not None)):
+            if key == self.pou.name.lower() and self.pou.kind in ("FUNCTION", "METHOD") \
+                    and self.pou.return_type is not None:
                 return NameRef("result", pou=self.pou)
             if self.fb is not None and self.fb is not self.pou:
                 var = self.fb.variables.get(key)   # a method sees its instance's variables
@@ -387,12 +397,13 @@ class BodyChecker:
             if kind == "prop":
                 return self.property_store(target, ref.value, "self")  # type: ignore[attr-defined]
             if kind == "result":
-                self.facts.types[target.nid] = self.pou.return_type  # type: ignore[assignment]
-                return self.pou.return_type
+                ty = self.implicit_deref(target, self.pou.return_type) if self.pou.return_type else None
+                self.facts.types[target.nid] = ty  # type: ignore[assignment]
+                return ty
             var: Variable = ref.variable  # type: ignore[attr-defined]
             if var.constant:
                 self.error(f"cannot assign to constant '{target.text}'", target.span, "E050")
-            if isinstance(var.type, t.FBType):
+            if isinstance(var.type, t.FBType) and not allows(self.settings.dialect, "fb_assign"):
                 self.error(f"cannot assign to function block instance '{target.text}'", target.span, "E050")
                 return None
             self.facts.types[target.nid] = self.implicit_deref(target, var.type)
@@ -411,10 +422,18 @@ class BodyChecker:
             if isinstance(base_type, t.FBType) and not self.inside_own(target.base, base_type):
                 fb = self.c.pous.get(base_type.qualname.lower())
                 pin = fb.pin(target.name) if fb else None
-                if pin is not None and pin.section in (INPUT, OUTPUT, IN_OUT):
+                if pin is not None and pin.section in (INPUT, OUTPUT, IN_OUT) and not (
+                        pin.section == INPUT and allows(self.settings.dialect, "fb_input_assign")):
                     what = {INPUT: "an input", OUTPUT: "an output", IN_OUT: "an in-out"}[pin.section]
                     self.error(f"cannot assign to '{target.name}', {what} of function block {base_type.name}; "
                                f"pass it in the call instead", target.span, "E051")
+                    return None
+                inner = fb.variables.get(target.name.lower()) if fb else None
+                if inner is not None and inner.section not in (INPUT, OUTPUT, IN_OUT) \
+                        and not base_type.is_program and allows(self.settings.dialect, "fb_internal_read"):
+                    # `fb_internal_read` lets TwinCAT code read an instance's internals, not write them
+                    self.error(f"cannot assign to '{target.name}', internal to {base_type.name}",
+                               target.span, "E034")
                     return None
             ty = self.expr(target)
             if ty is not None and self.is_constant_path(target.base):
@@ -450,11 +469,21 @@ class BodyChecker:
 
     # ---- assignability
     def require_assignable(self, expr: n.Expr, src: t.Type, dst: t.Type, span: n.Span) -> None:
+        if is_any_descriptor(dst) and not is_any_descriptor(src):
+            # an ANY input (TwinCAT/CODESYS) takes any value that has bytes: the call passes its
+            # type class, address and size
+            if isinstance(src, (t.FBType, t.InterfaceType, t.VoidType)) or t.byte_size(src) is None:
+                self.error(f"an ANY input takes a value with a size in bytes, not {src.name}", span, "E052")
+            else:
+                self.mark_addressed(expr)   # the call passes its address (pValue)
+            return
         if isinstance(dst, t.InterfaceType) or isinstance(src, t.InterfaceType):
             self.interface_assignable(expr, src, dst, span)
             return
         if isinstance(dst, t.FBType) or isinstance(src, t.FBType):
-            self.error("function block instances cannot be assigned", span, "E052")
+            if not (allows(self.settings.dialect, "fb_assign") and isinstance(dst, t.FBType)
+                    and isinstance(src, t.FBType) and src.qualname.lower() == dst.qualname.lower()):
+                self.error("function block instances cannot be assigned", span, "E052")
             return
         if isinstance(src, t.VoidType):
             self.error("this call has no result value", span, "E052")
@@ -487,10 +516,29 @@ class BodyChecker:
             return
         if implicit_ok(src, dst):
             return
+        if allows(self.settings.dialect, "enum_integer") and (
+                isinstance(src, t.EnumType) and isinstance(dst, t.IntType)
+                or isinstance(src, t.IntType) and isinstance(dst, t.EnumType)):
+            return   # TwinCAT: an enumeration converts to and from its integer value
         if isinstance(src, t.IntType) and isinstance(dst, t.IntType):
             self.error(f"cannot assign {src.name} to {dst.name} implicitly (value may not fit){conversion_hint(src, dst)}", span, "E052")
             return
         self.error(f"type mismatch: cannot assign {src.name} to {dst.name}{conversion_hint(src, dst)}", span, "E052")
+
+    def mark_addressed(self, expr: n.Expr) -> None:
+        """The variable under `expr` (a name, field, element) has its address taken: lowering keeps
+        it where a reference can reach it (never in a Python local)."""
+        root = expr
+        while isinstance(root, (n.Member, n.Index)):
+            if isinstance(root, n.Member):
+                base_type = self.facts.types.get(root.base.nid)
+                if isinstance(base_type, t.FBType):
+                    self.facts.addressed.add((base_type.qualname.lower(), root.name.lower()))
+            root = root.base
+        if isinstance(root, n.Name):
+            ref = self.facts.names.get(root.nid)
+            if getattr(ref, "kind", None) == "var":
+                self.facts.addressed.add((self.pou.key, ref.variable.key))  # type: ignore[union-attr]
 
     def interface_assignable(self, expr: n.Expr, src: t.Type, dst: t.Type, span: n.Span) -> None:
         """`itf := fbInstance` (its FB implements the interface), `itf := itf2` (the same or an
@@ -527,7 +575,7 @@ class BodyChecker:
         if ty is None:
             return None
         if word == "__ISVALIDREF":
-            if not isinstance(ty, (t.InterfaceType, t.RefType)):
+            if not isinstance(ty, (t.InterfaceType, t.RefType)) and args[0].value.nid not in self.facts.auto_deref:
                 self.error(f"__ISVALIDREF needs an interface or a reference, not {ty.name}", args[0].value.span, "E052")
                 return None
             self.facts.intrinsics[e.nid] = ("valid", None)
@@ -564,7 +612,12 @@ class BodyChecker:
         method = self._expr_methods.get(e.__class__)
         if method is None:
             method = self._method(self._expr_methods, "expr_", e.__class__)
-        ty = method(self, e, expected) if not isinstance(e, n.Call) else self.expr_Call(e, expected, statement)
+        if isinstance(e, n.Call):
+            ty = self.expr_Call(e, expected, statement)
+            if isinstance(ty, t.RefType) and ty.flavour == "REFERENCE" and e.nid in self.facts.calls:
+                ty = self.implicit_deref(e, ty)   # a METHOD/FUNCTION result REFERENCE TO: its target
+        else:
+            ty = method(self, e, expected)
         if ty is not None:
             self.facts.types[e.nid] = ty
         return ty
@@ -625,7 +678,7 @@ class BodyChecker:
             self.facts.consts[e.nid] = ref.value  # type: ignore[attr-defined]
             return ref.variable.type  # type: ignore[attr-defined]
         if ref.kind == "result":  # type: ignore[attr-defined]
-            return self.pou.return_type
+            return self.implicit_deref(e, self.pou.return_type) if self.pou.return_type is not None else None
         if ref.kind == "prop":  # type: ignore[attr-defined]
             return self.property_load(e, ref.value, "self")  # type: ignore[attr-defined]
         var: Variable = ref.variable  # type: ignore[attr-defined]
@@ -669,7 +722,8 @@ class BodyChecker:
 
     def member_visible(self, base: t.FBType, var: Variable, e: n.Member) -> bool:
         """IEC: outside an FB only its inputs and outputs are visible (the debugger sees all)."""
-        if var.section not in (INPUT, OUTPUT) and not base.is_program:
+        if var.section not in (INPUT, OUTPUT) and not base.is_program and not \
+                allows(self.settings.dialect, "fb_internal_read"):
             self.error(f"'{e.name}' is internal to {base.name}; only inputs and outputs are visible outside", e.span, "E034")
             return False
         return True
@@ -877,6 +931,8 @@ class BodyChecker:
                 self.error(f"array index must be an integer, not {ity.name}", ix.span, "E036")
         if base is None:
             return None
+        if self.byte_pointer(base) and len(e.indices) == 1 and t.byte_size(base.target) is not None:  # type: ignore[union-attr]
+            return self.canonical(base.target)   # TwinCAT/CODESYS `p[i]`: the i-th element from p
         if not isinstance(base, t.ArrayType):
             self.error(f"'{self.describe(e.base)}' is {base.name}, not an array", e.span, "E036")
             return None
@@ -949,6 +1005,11 @@ class BodyChecker:
         if isinstance(root, n.Name):
             ref = self.facts.names.get(root.nid)
             kind = getattr(ref, "kind", None)
+            if kind == "result" and word == "ADR" and allows(self.settings.dialect, "pointer_arithmetic"):
+                # TwinCAT/CODESYS: the function's (method's) result is a variable with an address
+                self.facts.addressed.add((self.pou.key, RESULT_KEY))
+                self.facts.ref_calls.add(e.nid)
+                return t.ref_type(ty, "POINTER")
             if kind in ("enum", "null", "result"):
                 self.error(f"{word}() needs a variable; '{root.text}' is a value", arg.span, "E055")
                 return None
@@ -978,7 +1039,7 @@ class BodyChecker:
         ty = self.sizeof_operand(arg)
         if ty is None:
             return None
-        size = t.byte_size(ty)
+        size = t.byte_size(ty, allows(self.settings.dialect, "short_times"))
         if size is None:
             self.error(f"{word}() of {ty.name}: its size in bytes is not defined here "
                        "(stvm does not model the memory of function blocks or references)", arg.span, "E070")
@@ -1037,7 +1098,9 @@ class BodyChecker:
         if isinstance(target, (n.Name, n.Member)):
             self.lvalue(target)
             if target.nid in self.facts.auto_deref:
-                if isinstance(target, n.Name):
+                if isinstance(target, n.Name) and self.facts.names[target.nid].kind == "result":  # type: ignore[attr-defined]
+                    raw = self.pou.return_type   # `Get REF= x;` in a METHOD ... : REFERENCE TO
+                elif isinstance(target, n.Name):
                     raw = self.facts.names[target.nid].variable.type  # type: ignore[attr-defined]
                 else:
                     raw = self.member_raw_type(target)
@@ -1051,7 +1114,8 @@ class BodyChecker:
             return
         if isinstance(value_type, t.RefType) and value_type.is_null:
             return
-        if not isinstance(s.value, (n.Name, n.Member, n.Index, n.Deref)):
+        if not isinstance(s.value, (n.Name, n.Member, n.Index, n.Deref)) and not (
+                isinstance(s.value, n.Call) and s.value.nid in self.facts.auto_deref):
             self.error("REF= needs a variable; this expression is a temporary value", s.value.span, "E055")
             return
         if not t.same_type(value_type, raw.target):
@@ -1077,7 +1141,18 @@ class BodyChecker:
     def refs_assignable(self, src: t.RefType, dst: t.Type) -> bool:
         if not isinstance(dst, t.RefType):
             return False
+        if self.byte_pointer(src) and self.byte_pointer(dst) and not isinstance(src.target, t.FBType) \
+                and not isinstance(dst.target, t.FBType):  # type: ignore[union-attr]
+            # TwinCAT/CODESYS: an address is an address (`pointer_arithmetic`); stvm has no byte
+            # image of an FB instance, so FB pointers keep their type (docs/memory_model.md)
+            return True
         return src.is_null or t.same_type(src.target, dst.target)
+
+    def byte_pointer(self, ty: t.Type | None) -> bool:
+        """A POINTER TO of a profile with byte-addressed pointers (`pointer_arithmetic`:
+        TwinCAT, CODESYS; docs/memory_model.md)."""
+        return isinstance(ty, t.RefType) and ty.flavour == "POINTER" and not ty.is_null \
+            and allows(self.settings.dialect, "pointer_arithmetic")
 
     def expr_Unary(self, e: n.Unary, expected) -> t.Type | None:
         ty = self.expr(e.operand, expected)
@@ -1169,6 +1244,12 @@ class BodyChecker:
                 return t.LREAL
         if isinstance(lt, t.TimeType) or isinstance(rt, t.TimeType):
             return self.time_arith(e, lt, rt)
+        if (op in ("PLUS", "MINUS") and self.byte_pointer(lt) and isinstance(rt, t.IntType)
+                or op == "PLUS" and isinstance(lt, t.IntType) and self.byte_pointer(rt)) \
+                and t.byte_size((lt if isinstance(lt, t.RefType) else rt).target) is not None:  # type: ignore[union-attr]
+            # TwinCAT/CODESYS: `p + n` is the address n bytes further, of p's type
+            self.facts.untyped.discard(e.nid)
+            return lt if isinstance(lt, t.RefType) else rt
         if isinstance(lt, (t.IntType, t.RealType)) and isinstance(rt, (t.IntType, t.RealType)):
             if op == "MOD" and not (isinstance(lt, t.IntType) and isinstance(rt, t.IntType)):
                 self.error(f"MOD needs integers, not {lt.name} and {rt.name}", e.span, "E039")
@@ -1232,7 +1313,11 @@ class BodyChecker:
             return all(isinstance(ty, t.FBType) or (isinstance(ty, t.RefType) and ty.is_null) or self.is_zero_literal(ex)
                        for ty, ex in others)
         if isinstance(lt, t.RefType) and isinstance(rt, t.RefType) and op in ("EQ", "NE"):
-            return lt.is_null or rt.is_null or t.same_type(lt.target, rt.target)
+            return lt.is_null or rt.is_null or t.same_type(lt.target, rt.target) \
+                or (self.byte_pointer(lt) and self.byte_pointer(rt))
+        if op in ("EQ", "NE") and (self.byte_pointer(lt) and self.is_zero_literal(re_)
+                                   or self.byte_pointer(rt) and self.is_zero_literal(le)):
+            return True   # TwinCAT/CODESYS: `p = 0` tests for the NULL address
         return False
 
     def time_arith(self, e: n.Binary, lt: t.Type, rt: t.Type) -> t.Type | None:
@@ -1343,6 +1428,8 @@ class BodyChecker:
             self.call_expected = outer
         self.facts.calls[e.nid] = info
         ret = pou.return_type
+        if ret is None:
+            return t.VOID   # a FUNCTION without a result (TwinCAT/CODESYS `void_function`)
         if isinstance(ret, t.GenericType):
             ret = info.generic_type
             if ret is None:
@@ -1360,10 +1447,24 @@ class BodyChecker:
         params = pou.params()
         positional = [a for a in e.args if a.kind == "positional"]
         formal = [a for a in e.args if a.kind != "positional"]
-        if positional and formal:
-            self.error("mix of formal (name := value) and positional arguments", e.span, "E047")
         generic_types: list[t.Type] = []
         bound: set[str] = set()
+        if positional and formal:
+            if fb or not allows(self.settings.dialect, "mixed_arguments"):
+                self.error("mix of formal (name := value) and positional arguments", e.span, "E047")
+            else:
+                # TwinCAT/CODESYS: the positional arguments take, in order, the inputs no formal
+                # argument names (`FIND(STR1 := s, '.')`, TcUnit)
+                named = {pou.pin(a.name).key for a in formal if a.kind == "input" and a.name
+                         and pou.pin(a.name) is not None}
+                free = [p for p in params if p.key not in named]
+                if len(positional) > len(free):
+                    self.error(f"{self.display(pou)} takes {len(params)} argument(s), got "
+                               f"{len(positional) + len(named)}", e.span, "E048")
+                for param, arg in zip(free, positional):
+                    self.bind_one(pou, param, arg, info, generic_types)
+                    bound.add(param.key)
+                positional = []
         if not positional and not formal and pou.variadic and not fb:
             self.error(f"{self.display(pou)} takes at least {max(len(params) - 1, 1)} arguments, got 0", e.span, "E048")
         if positional:

@@ -306,8 +306,11 @@ class Checker:
             return info
         if pou.kind == "FUNCTION":
             if pou.return_type is None:
-                self.error(f"function '{pou.name}' needs a return type", pou.span, "E014")
-                info.return_type = t.VOID
+                # TwinCAT/CODESYS: a function without a result, called as a statement (like a METHOD
+                # without one: return_type None, so its name is no result variable)
+                if not allows(self.settings.dialect, "void_function"):
+                    self.error(f"function '{pou.name}' needs a return type", pou.span, "E014")
+                    info.return_type = t.VOID
             else:
                 info.return_type = self.resolve_type_spec(pou.return_type, pou.namespace, allow_generic=native) or t.DINT
         elif pou.return_type is not None:
@@ -325,7 +328,7 @@ class Checker:
     def declare_variables(self, pou, info: POUInfo, namespace: tuple[str, ...], native: bool = False) -> None:
         """Declare the variable blocks of a POU or METHOD (`pou`: its node) into `info`."""
         early = self.declare_local_constants(pou, info, namespace)
-        function_like = info.kind == "FUNCTION" or (info.kind == "METHOD" and info.return_type is not None)
+        function_like = info.kind in ("FUNCTION", "METHOD") and info.return_type is not None
         for block in pou.var_blocks:
             kind = block.kind
             if kind == "VAR_STAT":
@@ -336,7 +339,12 @@ class Checker:
             for decl in block.decls:
                 if decl.nid in early:
                     continue
-                vtype = self.resolve_type_spec(decl.type_spec, namespace, allow_generic=native,
+                spec = decl.type_spec
+                if not native and kind == INPUT and isinstance(spec, n.NamedTypeSpec) \
+                        and [p.upper() for p in spec.parts] == ["ANY"] and allows(self.settings.dialect, "any_input"):
+                    # TwinCAT/CODESYS: an ANY input is the descriptor __SYSTEM.AnyType (docs/memory_model.md)
+                    spec = n.NamedTypeSpec(("__SYSTEM", "AnyType"), False, spec.span)
+                vtype = self.resolve_type_spec(spec, namespace, allow_generic=native,
                                                allow_open_array=kind in (IN_OUT, INPUT))
                 for name, span in decl.names:
                     self.check_identifier(name, span)
@@ -355,7 +363,9 @@ class Checker:
                     var = Variable(name, kind, vtype or t.DINT, block.constant and not input_constant, span)
                     if decl.init is None and kind not in (IN_OUT, EXTERNAL):
                         var.init = self.alias_init(decl.type_spec, namespace)
-                    if block.constant and decl.init is None and kind != EXTERNAL and not input_constant:
+                    # VAR_IN_OUT CONSTANT (CODESYS/TwinCAT): an in-out the POU may not write; its
+                    # value is the caller's
+                    if block.constant and decl.init is None and kind not in (EXTERNAL, IN_OUT) and not input_constant:
                         self.error(f"constant '{name}' needs an initial value", span, "E013")
                     info.variables[key] = var
                     if decl.fb_args is not None:
@@ -1096,7 +1106,9 @@ class Checker:
         if isinstance(expr, n.Call):
             # LOWER_BOUND/UPPER_BOUND of a declared array, SIZEOF: constants once checked
             word, value = self.facts.type_queries.get(expr.nid, ("", None))
-            return value if word == "CONST" else NOT_CONST
+            if word == "CONST":
+                return value
+            return self.declared_sizeof(expr, namespace, pou)
         if isinstance(expr, (n.IntLiteral, n.BoolLiteral, n.StringLiteral)):
             return expr.value
         if isinstance(expr, n.RealLiteral):
@@ -1152,6 +1164,28 @@ class Checker:
             if enum is not None:
                 return enum[1]
         return NOT_CONST
+
+    def declared_sizeof(self, expr: n.Call, namespace: tuple[str, ...], pou: POUInfo | None) -> object:
+        """SIZEOF(T) / SIZEOF(v) in a declaration (an array bound: `ARRAY[0..n * SIZEOF(ST_X) - 1]`),
+        before any body is checked: the size of the named type, or of a declared variable's type."""
+        callee = expr.callee
+        if not (isinstance(callee, n.Name) and len(callee.parts) == 1 and callee.parts[0].upper() in ("SIZEOF", "XSIZEOF")
+                and len(expr.args) == 1 and expr.args[0].kind == "positional" and isinstance(expr.args[0].value, n.Name)):
+            return NOT_CONST
+        arg = expr.args[0].value
+        var = None
+        if len(arg.parts) == 1:
+            key = arg.parts[0].lower()
+            var = (pou.variables.get(key) if pou else None) or self.globals.get(key)
+        if var is not None:
+            ty = var.type
+        elif (len(arg.parts) == 1 and arg.parts[0].upper() in t.ELEMENTARY) \
+                or self.lookup_type_key(arg.parts, False, namespace) is not None:
+            ty = self.resolve_type_spec(n.NamedTypeSpec(arg.parts, False, arg.span), namespace)
+        else:
+            return NOT_CONST
+        size = t.byte_size(ty, allows(self.settings.dialect, "short_times")) if ty is not None else None
+        return NOT_CONST if size is None else size
 
     def bare_enumerator(self, name: str, span: n.Span, report: bool = True) -> tuple[t.EnumType, int] | None:
         cands = self.enumerators.get(name.lower(), [])

@@ -82,9 +82,10 @@ def resolve(units: list[n.CompilationUnit]) -> tuple[list[n.CompilationUnit], li
     return out, diagnostics
 
 
-def _locals(pou: n.POU) -> set[str]:
+def _locals(pou: n.POU | n.Method | n.Property | n.Accessor) -> set[str]:
     names = {name.lower() for b in pou.var_blocks if b.kind != "VAR_EXTERNAL" for d in b.decls for name, _ in d.names}
-    names.add(pou.name.lower())
+    if not isinstance(pou, n.Accessor):
+        names.add(pou.name.lower())
     return names
 
 
@@ -136,6 +137,19 @@ class _Rewriter:
             return obj if out is None else tuple(out)
         if cls in _LEAVES or not isinstance(obj, n.Node):
             return obj
+        if cls is n.Method or cls is n.Property or cls is n.Accessor:
+            # a METHOD's or property's own variables shadow an enumerator or a GVL variable of the
+            # same name inside it, as the POU's do (TcUnit: a method output `Error` beside the
+            # qualified_only enumerator E_XmlError.Error)
+            outer = self.locals
+            self.locals = outer | _locals(obj)
+            try:
+                return self.fields(obj, cls)
+            finally:
+                self.locals = outer
+        return self.fields(obj, cls)
+
+    def fields(self, obj, cls):
         changes = None
         for name in _fields_of(cls):
             value = getattr(obj, name)

@@ -423,13 +423,16 @@ def is_numeric(t: Type) -> bool:
 # own alignment, the struct padded to its largest one: CODESYS's default pack mode 8). Function
 # block instances and references have no defined size here: None.
 
-def byte_size(ty: Type) -> int | None:
+def byte_size(ty: Type, short_times: bool = False) -> int | None:
+    """SIZEOF of `ty`. `short_times`: the TwinCAT/CODESYS layout of the time types (the
+    `short_times` profile row): TIME and TIME_OF_DAY 32-bit milliseconds, DATE and DATE_AND_TIME
+    32-bit seconds; the long forms (LTIME, …) stay 64-bit nanoseconds (docs/memory_model.md)."""
     if isinstance(ty, BoolType):
         return 1
     if isinstance(ty, (IntType, RealType)):
         return ty.bits // 8
     if isinstance(ty, TimeType):
-        return 8
+        return 4 if short_times and not ty.long else 8
     if isinstance(ty, WStringType):
         return 2 * ty.size   # two bytes a code unit, the NUL included (CODESYS)
     if isinstance(ty, StringType):
@@ -437,18 +440,18 @@ def byte_size(ty: Type) -> int | None:
     if isinstance(ty, EnumType):
         return byte_size(ty.base) if ty.base is not None else 2
     if isinstance(ty, ArrayType):
-        element = byte_size(ty.element)
+        element = byte_size(ty.element, short_times)
         return None if element is None or ty.dims is None else element * ty.length
     if isinstance(ty, UnionType):
-        sizes = [byte_size(f) for _, f in ty.fields]
-        align = _alignment(ty)
+        sizes = [byte_size(f, short_times) for _, f in ty.fields]
+        align = _alignment(ty, short_times)
         if None in sizes or align is None:
             return None
         return -(-max(sizes, default=0) // align) * align  # type: ignore[type-var]
     if isinstance(ty, StructType):
         offset, largest = 0, 1
         for _, field_type in ty.fields:
-            size, align = byte_size(field_type), _alignment(field_type)
+            size, align = byte_size(field_type, short_times), _alignment(field_type, short_times)
             if size is None or align is None:
                 return None
             offset = -(-offset // align) * align + size
@@ -457,19 +460,19 @@ def byte_size(ty: Type) -> int | None:
     return None
 
 
-def _alignment(ty: Type) -> int | None:
+def _alignment(ty: Type, short_times: bool = False) -> int | None:
     if isinstance(ty, ArrayType):
-        return _alignment(ty.element)
+        return _alignment(ty.element, short_times)
     if isinstance(ty, StructType):
-        aligns = [_alignment(f) for _, f in ty.fields]
+        aligns = [_alignment(f, short_times) for _, f in ty.fields]
         return None if None in aligns else max(aligns, default=1)  # type: ignore[type-var]
     if isinstance(ty, WStringType):
         return 2
     if isinstance(ty, StringType):
         return 1
-    return byte_size(ty)
+    return byte_size(ty, short_times)
 
 
-def alignment(ty: Type) -> int | None:
+def alignment(ty: Type, short_times: bool = False) -> int | None:
     """The alignment in bytes a member of `ty` gets in a STRUCT (see `byte_size`)."""
-    return _alignment(ty)
+    return _alignment(ty, short_times)

@@ -127,3 +127,40 @@ def install_system_info(vm, project) -> None:
     vm.on_scan_start.append(hook)
     # GETCURTASKINDEX reads the index of the task whose code runs (ctx.task holds its name)
     vm.ctx.task_indices = hook.index
+
+
+# Windows code page 1252 case pairs beyond ASCII (Tc2_Utilities F_ToLCase / F_ToUCase): Š Œ Ž Ÿ
+# and the Latin-1 letters À..Þ except × (16#D7); ß and ÿ have no upper-case form in the code page
+_UPPER = bytes(range(0x41, 0x5B)) + bytes([0x8A, 0x8C, 0x8E, 0x9F]) + bytes(
+    b for b in range(0xC0, 0xDF) if b != 0xD7)
+_LOWER = bytes(range(0x61, 0x7B)) + bytes([0x9A, 0x9C, 0x9E, 0xFF]) + bytes(
+    b + 0x20 for b in range(0xC0, 0xDF) if b != 0xD7)
+_TO_LOWER = bytes.maketrans(_UPPER, _LOWER)
+_TO_UPPER = bytes.maketrans(_LOWER, _UPPER)
+
+
+def _recase(text: bytes, table: bytes, upper: bool) -> bytes:
+    """Choice: a STRING whose bytes are UTF-8 text with letters beyond ASCII (stvm reads UTF-8
+    sources, so a literal 'Ä' is two bytes) is recased as that text, letter for letter where the
+    letter keeps its length in bytes; any other STRING is code page 1252 bytes, as on TwinCAT."""
+    if text.isascii():
+        return text.translate(table)
+    try:
+        decoded = text.decode("utf-8")
+    except UnicodeDecodeError:
+        return text.translate(table)
+    out = []
+    for ch in decoded:
+        other = ch.upper() if upper else ch.lower()
+        out.append(other if len(other) == 1 and len(other.encode()) == len(ch.encode()) else ch)
+    return "".join(out).encode("utf-8")
+
+
+@native_function("F_ToLCase")
+def f_to_lcase(ctx, text: bytes) -> bytes:
+    return _recase(text, _TO_LOWER, upper=False)
+
+
+@native_function("F_ToUCase")
+def f_to_ucase(ctx, text: bytes) -> bytes:
+    return _recase(text, _TO_UPPER, upper=True)

@@ -79,7 +79,22 @@ def attach(unit: n.CompilationUnit, tokens: list) -> n.CompilationUnit:
         return tuple(out)
 
     return dataclasses.replace(unit, pous=with_pragmas("pous", unit.pous), types=with_pragmas("types", unit.types),
-                               globals=with_pragmas("globals", unit.globals))
+                               globals=_one_list(with_pragmas("globals", unit.globals)))
+
+
+def _one_list(blocks: tuple) -> tuple:
+    """A global variable list with several VAR_GLOBAL blocks (TcUnit's GVL_TcUnit has a VAR_GLOBAL
+    and a VAR_GLOBAL CONSTANT): the pragmas before the first block name the list and its
+    `qualified_only`, which hold for every block of it, as in TwinCAT."""
+    out, gvl, strict = [], "", ()
+    for item in blocks:
+        if item.gvl:
+            gvl = item.gvl
+            strict = tuple(p for p in item.pragmas if attribute(p) == ("qualified_only", ""))
+        elif gvl:
+            item = dataclasses.replace(item, gvl=gvl, pragmas=tuple(item.pragmas) + strict)
+        out.append(item)
+    return tuple(out)
 
 
 def with_method_pragmas(pou, tokens: list):
