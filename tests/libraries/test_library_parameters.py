@@ -129,3 +129,17 @@ def test_a_value_of_the_wrong_type_is_reported_at_the_declaration(tmp_path):
     rc, out, err = _run(app, "--library", f"MyLib={tmp_path / 'lib'}", "--library-param", "MyLib.Count='x'")
     assert rc == 1
     assert "params.st:5:5: error: initial value does not fit type UINT" in err
+
+
+def test_a_var_stat_of_a_library_function(tmp_path):
+    # its hidden global is named after the function's qualified name (TcUnit's TEST_FINISHED_NAMED)
+    lib = tmp_path / "lib"
+    lib.mkdir()
+    (lib / "count.st").write_text("FUNCTION Count : UINT\nVAR_STAT\n    Calls : UINT;\nEND_VAR\n"
+                                  "Calls := Calls + 1;\nCount := Calls;\nEND_FUNCTION\n")
+    app = tmp_path / "app"
+    app.mkdir()
+    (app / "main.st").write_text("PROGRAM Main\nVAR\n    n : UINT;\nEND_VAR\nn := MyLib.Count();\nEND_PROGRAM\n")
+    rc, out, err = cli(["run", app, "--cycles", "3", "--no-cache", "--library", f"MyLib={lib}", "--print", "Main.n"])
+    assert rc == 0, err
+    assert out.splitlines() == ["Main.n = 3"]
