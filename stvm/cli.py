@@ -149,7 +149,8 @@ def build_parser() -> argparse.ArgumentParser:
 def _register_extensions(sub) -> None:
     """Commands living in their own modules (trace, debug, lint, lsp) register themselves here.
     (The demo is `stvm run` on a project with a `[demo]` table: it has no command of its own.)"""
-    for module_name in ("stvm.trace.cli", "stvm.debug.cli", "stvm.lint.cli", "stvm.lsp.cli"):
+    for module_name in ("stvm.trace.cli", "stvm.debug.cli", "stvm.lint.cli", "stvm.lsp.cli",
+                        "stvm.testrunner.cli"):
         try:
             module = importlib.import_module(module_name)
         except ModuleNotFoundError as exc:

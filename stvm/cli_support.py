@@ -47,6 +47,11 @@ LIBRARY_HELP = ("load the folder or .plcproj DIR as library NAME, its POUs and t
                 "(beside stvm.toml's [libraries])")
 
 
+LIBRARY_PARAM_HELP = ("set parameter PARAM of library LIB (a constant of its parameter list, e.g. "
+                      "TcUnit.xUnitEnablePublish=TRUE) to VALUE, an ST literal (beside stvm.toml's "
+                      "[libraries.LIB] parameters)")
+
+
 class UsageError(Exception):
     """A bad command line; printed as `stvm: error: message`, exit 2."""
 
@@ -90,6 +95,7 @@ def add_project_options(parser, defines: bool = True) -> None:
     if defines:
         parser.add_argument("--define", action="append", metavar="NAME[=VALUE]", help=DEFINE_HELP)
     parser.add_argument("--library", action="append", metavar="NAME=DIR", help=LIBRARY_HELP)
+    parser.add_argument("--library-param", action="append", metavar="LIB.PARAM=VALUE", help=LIBRARY_PARAM_HELP)
 
 
 def project_options(args) -> "Options":
@@ -100,7 +106,8 @@ def project_options(args) -> "Options":
     return Options(sysmac=tuple(given.get("sysmac") or ()), dialect=given.get("dialect"),
                    defines=tuple(given.get("define") or ()),
                    libraries=_libraries(given.get("library") or ()),
-                   use_cache=not given.get("no_cache", False))
+                   use_cache=not given.get("no_cache", False),
+                   library_parameters=_library_parameters(given.get("library_param") or ()))
 
 
 def _libraries(items) -> tuple[tuple[str, str], ...]:
@@ -115,6 +122,23 @@ def _libraries(items) -> tuple[tuple[str, str], ...]:
             raise UsageError(f"--library {item!r}: expected NAME=DIR (NAME an identifier, DIR a folder or a .plcproj)")
         pairs.append((name.strip(), folder.strip()))
     return tuple(pairs)
+
+
+def _library_parameters(items) -> tuple[tuple[str, str, str], ...]:
+    """`--library-param LIB.PARAM=VALUE` items as (library, parameter, ST text)."""
+    if not items:
+        return ()
+    from stvm.libraries import LibraryError, parse_parameter_option   # lazy: start-up (rare option)
+    out = []
+    for item in items:
+        if isinstance(item, tuple):
+            out.append(item)
+            continue
+        try:
+            out.append(parse_parameter_option(str(item)))
+        except LibraryError as exc:
+            raise UsageError(str(exc)) from None
+    return tuple(out)
 
 
 def resolve_project(args, files=None) -> "ProjectSpec":

@@ -4,8 +4,22 @@ TwinCAT XML) or a `.plcproj` loaded as library NAME, whose POUs and types are re
 `TcUnit.RUN();`.
 
 Where a library comes from:
-- `--library NAME=DIR` on the command line (DIR a folder or a .plcproj file);
-- a `[libraries]` table in the project's `stvm.toml`: `NAME = "dir"` (relative to the manifest).
+- `--library NAME=DIR` on the command line (DIR a folder or a .plcproj file); it replaces the
+  manifest's folder for a library of the same name;
+- a `[libraries]` table in the project's `stvm.toml`: `NAME = "dir"` (relative to the manifest),
+  or a table `[libraries.NAME]` with `path = "dir"` (optional when `--library` names it) and
+  `parameters = { NAME = VALUE }`.
+
+Library parameters: TwinCAT and CODESYS libraries declare parameter lists, global constants the
+project using the library may set to other values in its library manager (TcUnit's
+`GVL_Param_TcUnit.xUnitEnablePublish`, `.MaxNumberOfTestSuites`). stvm sets them from
+`[libraries.NAME] parameters` and `--library-param NAME.PARAM=VALUE` (the last one wins): the
+initial value of the constant PARAM (or GVL.PARAM) of a `VAR_GLOBAL CONSTANT` block of library
+NAME is replaced by VALUE, an ST expression as it would follow `:=` in the declaration (`TRUE`,
+`500`, `'out.xml'`, `T#20ms`; in the manifest a TOML boolean or number may stand for itself).
+The replacement is made on the syntax tree before the checker runs, so a parameter sizing an
+array (`ARRAY[1..MaxNumberOfTestSuites]`) sizes it, as in TwinCAT, where a parameter is a
+constant the library is compiled with.
 
 How it works: every declaration of a library file is put into the namespace NAME (the same
 namespaces Sysmac's `NAMESPACE … END_NAMESPACE` makes, semantics/checker.py resolves names in
@@ -47,20 +61,162 @@ def parse_option(text: str) -> Library:
     return Library(name, Path(path))
 
 
-def from_manifest(manifest: Mapping, root: Path | None) -> list[Library]:
-    """The `[libraries]` table of a project's stvm.toml: `NAME = "dir"`, relative to the manifest."""
+def from_manifest(manifest: Mapping, root: Path | None, given: Iterable[str] = ()) -> list[Library]:
+    """The `[libraries]` table of a project's stvm.toml: `NAME = "dir"` or `[libraries.NAME]`
+    with `path = "dir"`, relative to the manifest. `given`: the names `--library` gives a
+    folder (their manifest folder is not used; a table without `path` needs one)."""
+    given_keys = {g.lower() for g in given}
+    out = []
+    for name, (path, _) in _manifest_entries(manifest, root).items():
+        if name.lower() in given_keys:
+            continue
+        if path is None:
+            where = f"{Path(root or '.') / 'stvm.toml'}: [libraries.{name}]"
+            raise LibraryError(f"{where} has no path: add path = \"folder\" or give --library {name}=DIR")
+        out.append(Library(name, path))
+    return out
+
+
+def manifest_parameters(manifest: Mapping, root: Path | None) -> dict[str, dict[str, str]]:
+    """{library: {parameter: ST text}} of the manifest's `[libraries.NAME] parameters` tables."""
+    return {name: params for name, (_, params) in _manifest_entries(manifest, root).items() if params}
+
+
+_ENTRY_KEYS = ("path", "parameters")
+
+
+def _manifest_entries(manifest: Mapping, root: Path | None) -> dict[str, tuple[Path | None, dict[str, str]]]:
+    """NAME → (folder or None, {parameter: ST text}) of the `[libraries]` table."""
     table = manifest.get("libraries")
     if table is None:
-        return []
+        return {}
     where = f"{Path(root or '.') / 'stvm.toml'}: [libraries]"
     if not isinstance(table, dict):
         raise LibraryError(f"{where} must be a table of NAME = \"folder\"")
-    out = []
+    out: dict[str, tuple[Path | None, dict[str, str]]] = {}
     for name, value in table.items():
-        if not _NAME.match(str(name)) or not isinstance(value, str) or not value:
-            raise LibraryError(f"{where}: {name} must be an identifier set to a folder or a .plcproj (a string)")
-        path = Path(value)
-        out.append(Library(str(name), path if path.is_absolute() else Path(root or ".") / path))
+        if not _NAME.match(str(name)):
+            raise LibraryError(f"{where}: {name!r} is not an identifier (a library's name)")
+        params: dict[str, str] = {}
+        if isinstance(value, dict):
+            extra = sorted(set(value) - set(_ENTRY_KEYS))
+            if extra:
+                raise LibraryError(f"{where}.{name}: unknown key(s) {', '.join(extra)}; known: path, parameters")
+            text = value.get("path")
+            if text is not None and (not isinstance(text, str) or not text):
+                raise LibraryError(f"{where}.{name}: path must be a folder or a .plcproj (a string)")
+            raw = value.get("parameters", {})
+            if not isinstance(raw, dict):
+                raise LibraryError(f"{where}.{name}: parameters must be a table of PARAM = VALUE")
+            for param, given in raw.items():
+                params[str(param)] = _parameter_text(given, f"{where}.{name}.parameters: {param}")
+        elif isinstance(value, str) and value:
+            text = value
+        else:
+            raise LibraryError(f"{where}: {name} must be set to a folder or a .plcproj (a string), "
+                               f"or be a table with path and parameters")
+        path = None
+        if text is not None:
+            path = Path(text)
+            path = path if path.is_absolute() else Path(root or ".") / path
+        out[str(name)] = (path, params)
+    return out
+
+
+def _parameter_text(value, where: str) -> str:
+    """A manifest parameter value as ST text: booleans and numbers as themselves, a string as
+    the ST expression it holds."""
+    if isinstance(value, bool):
+        return "TRUE" if value else "FALSE"
+    if isinstance(value, (int, float)):
+        return repr(value)
+    if isinstance(value, str) and value.strip():
+        return value
+    raise LibraryError(f"{where} must be a boolean, a number or an ST literal in a string "
+                       f"(e.g. \"'results.xml'\", \"T#20ms\")")
+
+
+def parse_parameter_option(text: str) -> tuple[str, str, str]:
+    """`NAME.PARAM=VALUE` (or `NAME.GVL.PARAM=VALUE`) of `--library-param`: (library, param, ST text)."""
+    target, sep, value = text.partition("=")
+    lib, dot, param = target.strip().partition(".")
+    parts = param.split(".") if dot else []
+    if not sep or not _NAME.match(lib) or not parts or len(parts) > 2 \
+            or not all(_NAME.match(p) for p in parts) or not value.strip():
+        raise LibraryError(f"--library-param {text!r}: expected LIB.PARAM=VALUE (e.g. "
+                           f"TcUnit.xUnitEnablePublish=TRUE; VALUE an ST literal)")
+    return lib, param, value.strip()
+
+
+class LibrarySpaces(dict):
+    """The namespace of each library file by its name, and the library parameters to set
+    (`{library: {parameter: ST text}}`): what the driver hands the parser stage."""
+
+    def __init__(self, *args, parameters: Mapping[str, Mapping[str, str]] | None = None) -> None:
+        super().__init__(*args)
+        self.parameters = {lib: dict(p) for lib, p in (parameters or {}).items() if p}
+
+    def key(self) -> str:
+        """What the compile cache keys on (the namespaces and the parameters)."""
+        text = "".join(f"|{name}={ns}" for name, ns in sorted(self.items()))
+        for lib in sorted(self.parameters, key=str.lower):
+            text += "".join(f"|{lib}.{p}:={v}" for p, v in sorted(self.parameters[lib].items()))
+        return text
+
+
+def apply_parameters(units: Sequence[n.CompilationUnit], parameters: Mapping[str, Mapping[str, str]],
+                     settings) -> list[n.CompilationUnit]:
+    """`units` with each library parameter's initial value replaced (the module docstring).
+    Raises LibraryError for a parameter the library does not declare or a value that is not
+    an ST expression."""
+    from stvm.syntax.parser import parse_expression   # lazy: start-up (parameters are rare)
+    wanted: dict[str, dict[str, n.Expr]] = {}
+    for lib, params in parameters.items():
+        for param, text in params.items():
+            expr, diags = parse_expression(text, f"<parameter {lib}.{param}>", settings)
+            if expr is None or any(d.is_error for d in diags):
+                raise LibraryError(f"library parameter {lib}.{param}: {text!r} is not an ST expression "
+                                   f"(a STRING value is quoted: '...')")
+            wanted.setdefault(lib.lower(), {})[param.lower()] = expr
+    if not wanted:
+        return list(units)
+    found: set[tuple[str, str]] = set()
+    declared: dict[str, list[str]] = {}
+    out = []
+    for unit in units:
+        changed = False
+        new_globals = []
+        for g in unit.globals:
+            lib = g.namespace[0].lower() if g.namespace else ""
+            if lib not in wanted or not g.block.constant:
+                new_globals.append(g)
+                continue
+            decls = []
+            for decl in g.block.decls:
+                init = decl.init
+                for name, _ in decl.names:
+                    declared.setdefault(lib, []).append(f"{g.gvl}.{name}" if g.gvl else name)
+                    for key in (name.lower(), f"{g.gvl}.{name}".lower()):
+                        if key in wanted[lib]:
+                            if len(decl.names) > 1:
+                                raise LibraryError(f"library parameter {key}: declared together with other "
+                                                   f"names ({', '.join(x for x, _ in decl.names)}); stvm sets "
+                                                   f"only a parameter declared alone")
+                            init = n.ExprInit(wanted[lib][key], decl.span)
+                            found.add((lib, key))
+                if init is not decl.init:
+                    decl = dataclasses.replace(decl, init=init)
+                    changed = True
+                decls.append(decl)
+            new_globals.append(dataclasses.replace(g, block=dataclasses.replace(g.block, decls=tuple(decls))))
+        out.append(dataclasses.replace(unit, globals=tuple(new_globals)) if changed else unit)
+    for lib, params in parameters.items():
+        for param in params:
+            if (lib.lower(), param.lower()) not in found:
+                known = declared.get(lib.lower())
+                hint = f"its parameters: {', '.join(known)}" if known else \
+                    f"it declares no parameter list (VAR_GLOBAL CONSTANT), or no library {lib} is loaded"
+                raise LibraryError(f"library parameter {lib}.{param}: library {lib} has no such parameter ({hint})")
     return out
 
 

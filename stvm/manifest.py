@@ -9,6 +9,10 @@
     [sysmac]                            # Sysmac UNCERTAIN settings of the project (README)
     int_div_zero = "zero"
 
+    [test]                              # a TcUnit test project (stvm test, pytest): docs/unit_tests.md
+    library = "TcUnit"
+    timeout = "120s"
+
     [demo]                              # makes `stvm run FILE` the demo (stvm/demo.py)
     title = "thesis PnP demo"
     scenario = "scenarios/pnp_demo.toml"
@@ -79,6 +83,13 @@ _SCHEMA: dict[str, dict[str, tuple[Any, str]] | None] = {
                    "a number of complete cycles after which the demo stops (0: no limit)"),
         "cycles_flag": (lambda v: isinstance(v, str) and _FLAG.fullmatch(v) is not None,
                         "a command-line flag, e.g. \"--pnp-cycles\", that sets `cycles` for a run"),
+    },
+    # a TcUnit test project (`stvm test`, the pytest plugin: docs/unit_tests.md)
+    "test": {
+        "library": (lambda v: isinstance(v, str) and v.isidentifier(),
+                    "the name of the test framework library, e.g. library = \"TcUnit\""),
+        "scan": (lambda v: isinstance(v, str), "the task period of the test run, e.g. scan = \"10ms\""),
+        "timeout": (lambda v: isinstance(v, str), "virtual time the tests may take, e.g. timeout = \"120s\""),
     },
 }
 

@@ -214,6 +214,8 @@ class Options:
     defines: tuple[str, ...] = ()
     libraries: tuple[tuple[str, str], ...] = ()
     use_cache: bool = True
+    # `--library-param LIB.PARAM=VALUE`: (library, parameter, ST text), see stvm/libraries.py
+    library_parameters: tuple[tuple[str, str, str], ...] = ()
 
 
 @dataclass(frozen=True, eq=False)
@@ -232,6 +234,8 @@ class ProjectSpec:
     # `library_files` (the one place a library reaches the pipeline)
     libraries: tuple[tuple[str, Path], ...] = ()
     use_cache: bool = True
+    # (library, parameter, ST text) set over the manifest's `[libraries.NAME] parameters`
+    library_parameters: tuple[tuple[str, str, str], ...] = ()
 
     @property
     def dialect(self) -> str:
@@ -261,7 +265,7 @@ def resolve(paths: Sequence[str | Path], options: Options | None = None,
             settings = settings.with_defines(list(options.defines))
     libraries = tuple((name, Path(folder)) for name, folder in options.libraries)
     return ProjectSpec(tuple(Path(p) for p in paths), tuple(files), manifest, root, settings,
-                       source_encoding(manifest), libraries, options.use_cache)
+                       source_encoding(manifest), libraries, options.use_cache, tuple(options.library_parameters))
 
 
 def library_files(spec: ProjectSpec) -> list[Path]:
@@ -280,13 +284,18 @@ def _with_libraries(texts, diags, spec: ProjectSpec):
     """The texts of the project's libraries (`[libraries]` of stvm.toml, then `--library`) before
     its own, and the namespace of each library file by name. Raises LoadError for a library that
     cannot be used."""
-    if not spec.libraries and "libraries" not in spec.manifest:
+    if not spec.libraries and "libraries" not in spec.manifest and not spec.library_parameters:
         return texts, {}
     lib = _libraries()
     try:
-        wanted = lib.from_manifest(spec.manifest, spec.root) + [lib.Library(name, Path(folder))
-                                                                for name, folder in spec.libraries]
+        given = [name for name, _ in spec.libraries]
+        wanted = lib.from_manifest(spec.manifest, spec.root, given) + [lib.Library(name, Path(folder))
+                                                                       for name, folder in spec.libraries]
+        parameters = lib.manifest_parameters(spec.manifest, spec.root)
+        for name, param, text in spec.library_parameters:   # the command line over the manifest
+            parameters.setdefault(name, {})[param] = text
         lib_texts, spaces, lib_diags = lib.read_libraries(wanted, read_files, spec.encoding)
+        spaces = lib.LibrarySpaces(spaces, parameters=parameters)
     except lib.LibraryError as exc:
         raise LoadError([Diagnostic.error(str(exc), Span(str(spec.root or "."), 0, 0, 0, 0), "E081")], {}) from None
     diags += lib_diags
@@ -294,6 +303,8 @@ def _with_libraries(texts, diags, spec: ProjectSpec):
 
 
 def _spaces_key(spaces) -> str:
+    if hasattr(spaces, "key"):   # libraries.LibrarySpaces: the parameters too
+        return spaces.key()
     return "".join(f"|{name}={ns}" for name, ns in sorted(spaces.items()))
 
 
@@ -590,6 +601,12 @@ def _parse_units(texts, diags, settings, use_cache: bool = True, unit_entries: b
             unit = _libraries().namespaced(unit, spaces[name])
         units.append(unit)
         diags += d
+    if getattr(spaces, "parameters", None) and not has_errors(diags):
+        lib = _libraries()
+        try:
+            units = lib.apply_parameters(units, spaces.parameters, settings)
+        except lib.LibraryError as exc:
+            diags.append(Diagnostic.error(str(exc), Span(units[-1].path if units else "<input>", 0, 0, 0, 0)))
     if spaces or getattr(settings.dialect, "value", settings.dialect) == "twincat":
         units = _libraries().qualify(units, _libraries().namespaces(spaces or {}, settings))
     return units, diags, sources

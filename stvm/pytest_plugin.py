@@ -16,6 +16,11 @@ environment variable STVM_UPDATE_GOLDENS=1) rewrites the goldens instead of comp
 
 The golden directory is the ini option `stvm_golden_dir` (default `tests/golden`, relative to
 the rootdir); `golden_trace.directory` changes it for one test.
+
+The plugin also collects unit tests written in ST: a folder whose `stvm.toml` has a `[test]`
+table is a TcUnit test project, and each TcUnit test becomes an item `SUITE::TEST`
+(stvm/testrunner/pytest_items.py, docs/unit_tests.md). `--stvm-library NAME=DIR` (or the ini
+option `stvm_libraries`) gives the folder of a library such a project uses, e.g. TcUnit.
 """
 
 from __future__ import annotations
@@ -31,6 +36,18 @@ UPDATE_OPTION = "--update-goldens"
 def pytest_addoption(parser: pytest.Parser) -> None:
     _add_update_option(parser)
     parser.addini("stvm_golden_dir", "folder of golden traces (relative to the rootdir)", default="tests/golden")
+    parser.addoption("--stvm-library", action="append", default=[], metavar="NAME=DIR", dest="stvm_library",
+                     help="load the folder DIR as library NAME in the ST test projects pytest collects (e.g. TcUnit)")
+    parser.addini("stvm_libraries", "NAME=DIR lines: libraries of the ST test projects (relative to the rootdir)",
+                  type="linelist", default=[])
+
+
+def pytest_collect_file(file_path: Path, parent: pytest.Collector):
+    """A `stvm.toml` with a `[test]` table: its TcUnit tests (stvm/testrunner/pytest_items.py)."""
+    if file_path.name != "stvm.toml":
+        return None
+    from stvm.testrunner.pytest_items import collect_file   # lazy: start-up (most files are not manifests)
+    return collect_file(file_path, parent)
 
 
 def _add_update_option(parser: pytest.Parser) -> None:

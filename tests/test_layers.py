@@ -57,7 +57,7 @@ LAYERS: list[tuple[str, ...]] = [
     ("stvm.project", "stvm.cli_support"),   # the driver: load, check, lower, start; the commands' conventions
     ("stvm.lockstep", "stvm.scenario"),
     ("stvm.demo", "stvm.trace", "stvm.session"),   # a run: VM, robot, scenario, front ends
-    ("stvm.debug", "stvm.frontend", "stvm.hmi", "stvm.opcua", "stvm.lint"),
+    ("stvm.debug", "stvm.frontend", "stvm.hmi", "stvm.opcua", "stvm.lint", "stvm.testrunner"),
     ("stvm.lsp",),                       # the language server: the checker's index, lint, live values
     # the commands: `stvm run` drives the demo, scenarios and every front end; `stvm` is the API
     ("stvm", "stvm.cli", "stvm.run", "stvm.__main__", "stvm.pytest_plugin"),
