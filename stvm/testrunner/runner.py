@@ -32,7 +32,7 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Callable, Iterator
 
-from stvm.project import LoadError, ProjectSpec, load, parse_duration
+from stvm.project import ProjectSpec, load, parse_duration
 
 DEFAULT_TIMEOUT_NS = 120 * 1_000_000_000
 DEFAULT_SCAN = "10ms"
