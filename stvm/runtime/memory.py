@@ -260,15 +260,52 @@ class Ptr:
                               f"{self.base_type.name}: outside the variable the pointer points into")
         return self.offset, self.offset + count
 
+    def _window(self, lo: int, hi: int):
+        """For a one-dimensional array: (its list, the element's codec, the element's size, the
+        first and last element index that bytes lo..hi-1 touch), so that a read or write handles
+        only those elements and not the whole variable (a MEMCPY of 500 bytes into a 1 MB byte
+        buffer, as TcUnit's message queue does every scan, must not encode a million bytes).
+        None for any other variable (it is encoded whole: structs and scalars are small)."""
+        ty = self.base_type
+        if not isinstance(ty, t.ArrayType) or len(ty.dims or ()) != 1 or type(self.base) is not list:
+            return None
+        step = t.byte_size(ty.element, self.short) or 0
+        if step <= 0 or hi <= lo:
+            return None
+        return self.base, codec(ty.element, self.short), step, lo // step, (hi - 1) // step
+
     def read(self, count: int) -> bytes:
         lo, hi = self.span(count)
-        return bytes(self.load()[lo:hi])
+        window = self._window(lo, hi)
+        if window is None:
+            return bytes(self.load()[lo:hi])
+        items, (encode, _), step, first, last = window
+        buf = bytearray(step * (last - first + 1))
+        for k in range(last - first + 1):
+            encode(items[first + k], buf, k * step)
+        start = lo - first * step
+        return bytes(buf[start:start + count])
 
     def write(self, data: bytes) -> None:
         lo, hi = self.span(len(data))
-        buf = self.load()
-        buf[lo:hi] = data
-        self.store(buf)
+        window = self._window(lo, hi)
+        if window is None:
+            buf = self.load()
+            buf[lo:hi] = data
+            self.store(buf)
+            return
+        items, (encode, decode), step, first, last = window
+        buf = bytearray(step * (last - first + 1))
+        for k in range(last - first + 1):    # the touched elements' bytes, then the new ones over them
+            encode(items[first + k], buf, k * step)
+        start = lo - first * step
+        buf[start:start + len(data)] = data
+        aggregate = t.is_aggregate(self.base_type.element)
+        for k in range(last - first + 1):
+            if aggregate:
+                decode(buf, k * step, items[first + k])
+            else:
+                items[first + k] = decode(buf, k * step, items[first + k])
 
     # the pointer's target, as generated code reads and writes it (`p^`)
     def get(self):
@@ -278,18 +315,16 @@ class Ptr:
             raise MemoryFault(f"a {self.base_type.name} read as {self.view.name} through a pointer: "
                               "stvm reads only elementary values and strings through a cast pointer")
         size = t.byte_size(self.view, self.short) or 0
-        lo, _ = self.span(size)
-        return codec(self.view, self.short)[1](self.load(), lo, None)
+        return codec(self.view, self.short)[1](bytearray(self.read(size)), 0, None)
 
     def set(self, value) -> None:
         if self.offset == 0 and t.same_type(self.view, self.base_type) and not self._aggregate():
             self.base.set(value)
             return
         size = t.byte_size(self.view, self.short) or 0
-        lo, _ = self.span(size)
-        buf = self.load()
-        codec(self.view, self.short)[0](value, buf, lo)
-        self.store(buf)
+        buf = bytearray(self.read(size))    # the bytes as they are (a STRING leaves its tail)
+        codec(self.view, self.short)[0](value, buf, 0)
+        self.write(bytes(buf))
 
     def same(self, other) -> bool:
         other = as_ptr(other, self.view, self.short)
