@@ -4,9 +4,10 @@
 The file root (docs/platform_libraries.md, "Files"): `--files-root DIR` of `stvm run`, else
 `root` of the `[files]` table of stvm.toml (relative to the manifest), else the folder
 `stvm_files` beside the manifest, else (no manifest) a fresh temporary folder of the run. Every
-name an ST program gives is a path inside it: `/` or `\\` separate folders; TwinCAT's path
-placeholders (%TC_BOOTPRJPATH%, %TC_TARGETPATH%, %TC_INSTALLPATH%, %TC_CONFIGPATH%) and a leading
-`/`, `C:` or `C:/` stand for the root itself; a `..` part, a NUL, or a path that leaves the root
+name an ST program gives is a path inside it: `/` or `\\` separate folders; a relative name is
+relative to the root; TwinCAT's path placeholders at the start (%TC_BOOTPRJPATH%, %TC_TARGETPATH%,
+%TC_INSTALLPATH%, %TC_CONFIGPATH%) stand for the root; an absolute path is allowed only when it
+lies inside the root; a drive-letter path (`C:\\...`), a `..` part, or a path that leaves the root
 through a symbolic link is refused (the function fails with ERR_NO_ACCESS_RIGHTS, as the runtime
 answers an access it does not allow). The root is created when a file is first opened for writing
 or a folder first made.
@@ -60,15 +61,27 @@ class FileRoot:
     def path(self, name: bytes, create_root: bool = False) -> Path:
         """The file `name` (an ST STRING) stands for, inside the root; AccessRefused otherwise."""
         text = name.split(b"\0", 1)[0].decode("latin-1")
-        text = _PLACEHOLDER.sub("/", text).replace("\\", "/")
-        text = _DRIVE.sub("", text)
+        placeholder = _PLACEHOLDER.match(text)
+        if placeholder:
+            text = text[placeholder.end():]
+        text = text.replace("\\", "/")
+        absolute = not placeholder and (text.startswith("/") or _DRIVE.match(text) is not None)
         parts = [p for p in text.split("/") if p not in ("", ".")]
-        if not parts or any(p == ".." for p in parts):
+        if not parts or any(p == ".." for p in parts) or _PLACEHOLDER.search(text):
             raise AccessRefused(text)
         root = self.root
         if create_root:
             root.mkdir(parents=True, exist_ok=True)
         real_root = root.resolve()
+        if absolute:   # allowed only inside the root
+            if _DRIVE.match(text):
+                raise AccessRefused(text)
+            try:
+                parts = list(Path(text).resolve().relative_to(real_root).parts)
+            except ValueError:
+                raise AccessRefused(text) from None
+            if not parts:
+                raise AccessRefused(text)
         target = root.joinpath(*parts)
         # a symbolic link on the way (or the file itself) must not lead out of the root
         resolved = target.resolve()

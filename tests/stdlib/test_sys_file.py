@@ -72,12 +72,14 @@ def test_names_outside_the_root_are_refused(tmp_path):
     (tmp_path / "root").mkdir()
     (tmp_path / "secret.txt").write_text("x")
     os.symlink(tmp_path, tmp_path / "root" / "up")
-    for name in (b"../secret.txt", b"a/../../secret.txt", b"up/secret.txt", b"", b"%TC_BOOTPRJPATH%"):
+    outside = str(tmp_path / "secret.txt").encode()
+    for name in (b"../secret.txt", b"a/../../secret.txt", b"up/secret.txt", b"", b"%TC_BOOTPRJPATH%",
+                 outside, b"/etc/passwd", b"C:\\TwinCAT\\3.1\\Boot\\x.txt", b"x/%TC_BOOTPRJPATH%y"):
         with pytest.raises(AccessRefused):
             files.path(name)
     assert files.open(b"up/secret.txt", AM_READ) == (INVALID_HANDLE, ERR_NO_ACCESS_RIGHTS)
-    # an absolute or drive-letter path and the placeholders stand for the root
-    for name in (b"/etc/passwd", b"C:\\TwinCAT\\3.1\\Boot\\x.txt", b"%TC_TARGETPATH%x.txt"):
+    # the placeholders stand for the root; an absolute path inside the root is allowed
+    for name in (b"%TC_TARGETPATH%x.txt", b"%TC_BOOTPRJPATH%\\sub\\x.txt", str(tmp_path / "root" / "x.txt").encode()):
         inside = files.path(name)
         assert (tmp_path / "root") in inside.parents
 
