@@ -27,7 +27,8 @@ import re
 import tempfile
 from pathlib import Path
 
-from stvm.stdlib.registry import native_function
+from stvm.lower.bind import st_names
+from stvm.stdlib.registry import native_fb, native_function
 
 ERR_OK, ERR_FAILED, ERR_PARAMETER = 0x0, 0x1, 0x2
 ERR_INVALID_HANDLE, ERR_NO_ACCESS_RIGHTS, ERR_NO_OBJECT = 0x10, 0x1A, 0x1D
@@ -273,3 +274,63 @@ def sys_dir_delete(ctx, name: bytes) -> int:
     except OSError:
         return ERR_FAILED
     return ERR_OK
+
+
+# ---- Tc2_System file FBs (Tc2_System "FB_FileOpen", "FB_FileClose", "FB_FileDelete") --------------
+# ADS return codes (Beckhoff "ADS Return Codes"): 0x70C not found, 0x704 reading/writing not
+# permitted, 0x70B invalid parameter values, 0x700 general device error; Choice: an unknown
+# handle is 0x70B.
+ADS_NOT_FOUND, ADS_NOT_PERMITTED, ADS_INVALID_PARAM, ADS_DEVICE_ERROR = 0x70C, 0x704, 0x70B, 0x700
+FOPEN_READ, FOPEN_WRITE, FOPEN_APPEND, FOPEN_PLUS = 0x1, 0x2, 0x4, 0x8
+# nMode (fopen's r, w, a, r+, w+, a+; binary/text flags change nothing here) -> SysFile's mode
+_FOPEN = {FOPEN_READ: AM_READ, FOPEN_WRITE: AM_WRITE, FOPEN_APPEND: AM_APPEND_PLUS,
+          FOPEN_READ | FOPEN_PLUS: AM_READ_PLUS, FOPEN_WRITE | FOPEN_PLUS: AM_WRITE_PLUS,
+          FOPEN_APPEND | FOPEN_PLUS: AM_APPEND_PLUS}
+_ADS_OF = {ERR_NO_OBJECT: ADS_NOT_FOUND, ERR_NO_ACCESS_RIGHTS: ADS_NOT_PERMITTED,
+           ERR_PARAMETER: ADS_INVALID_PARAM, ERR_INVALID_HANDLE: ADS_INVALID_PARAM}
+
+
+@st_names("bBusy", "bError", "nErrId")
+def _done(inst, error: int) -> None:
+    inst.bBusy = False
+    inst.bError = error != ERR_OK
+    inst.nErrId = _ADS_OF.get(error, ADS_DEVICE_ERROR) if error != ERR_OK else 0
+
+
+@native_fb("FB_FileOpen")
+@st_names("sPathName", "nMode", "bExecute", "bBusy", "bError", "nErrId", "hFile", "bLast")
+class FileOpen:
+    """At a rising edge of bExecute: the file opened in the file root; hFile its handle (1 ...)."""
+
+    def call(self, inst, ctx) -> None:
+        edge = inst.bExecute and not inst.bLast
+        inst.bLast = inst.bExecute
+        if not edge:
+            return
+        mode = _FOPEN.get(inst.nMode & (FOPEN_READ | FOPEN_WRITE | FOPEN_APPEND | FOPEN_PLUS))
+        if mode is None:
+            _done(inst, ERR_PARAMETER)
+            return
+        handle, error = file_root(ctx).open(inst.sPathName, mode)
+        inst.hFile = handle if error == ERR_OK else 0
+        _done(inst, error)
+
+
+@native_fb("FB_FileClose")
+@st_names("hFile", "bExecute", "bBusy", "bError", "nErrId", "bLast")
+class FileClose:
+    def call(self, inst, ctx) -> None:
+        edge = inst.bExecute and not inst.bLast
+        inst.bLast = inst.bExecute
+        if edge:
+            _done(inst, sys_file_close(ctx, inst.hFile))
+
+
+@native_fb("FB_FileDelete")
+@st_names("sPathName", "bExecute", "bBusy", "bError", "nErrId", "bLast")
+class FileDelete:
+    def call(self, inst, ctx) -> None:
+        edge = inst.bExecute and not inst.bLast
+        inst.bLast = inst.bExecute
+        if edge:
+            _done(inst, sys_file_delete(ctx, inst.sPathName))

@@ -100,3 +100,29 @@ def test_the_manifest_names_the_root(tmp_path):
     assert check_manifest({"files": {"root": "plc"}}, "stvm.toml")
     with pytest.raises(ManifestError, match=r"\[files\]: unknown key"):
         check_manifest({"files": {"folder": "plc"}}, "stvm.toml")
+
+
+def test_tc2_system_file_function_blocks(tmp_path):
+    src = """
+PROGRAM Main
+VAR op : FB_FileOpen; cl : FB_FileClose; del : FB_FileDelete; step : INT; h : UINT;
+    openErr, closeErr, delErr, badErr : BOOL; delId : UDINT; END_VAR
+CASE step OF
+0: op(sPathName := 'log/a.txt', nMode := FOPEN_MODEWRITE OR FOPEN_MODETEXT, bExecute := TRUE);
+   IF NOT op.bBusy THEN h := op.hFile; openErr := op.bError; step := 1; END_IF
+1: cl(hFile := h, bExecute := TRUE); closeErr := cl.bError; step := 2;
+2: del(sPathName := 'log/missing.txt', bExecute := TRUE); delErr := del.bError; delId := del.nErrId; step := 3;
+3: op(bExecute := FALSE); step := 4;
+4: op(sPathName := '../a.txt', nMode := FOPEN_MODEREAD, bExecute := TRUE); badErr := op.bError; step := 5;
+END_CASE
+END_PROGRAM
+"""
+    (tmp_path / "log").mkdir()
+    project = load_st(src, settings=TWINCAT)
+    project.files_root = str(tmp_path)
+    vm = project.start()
+    vm.run(cycles=6)
+    assert (vm["Main.h"], vm["Main.openErr"], vm["Main.closeErr"]) == (1, False, False)
+    assert (tmp_path / "log" / "a.txt").is_file()
+    assert (vm["Main.delErr"], vm["Main.delId"]) == (True, 0x70C)     # ADS: not found
+    assert vm["Main.badErr"] and vm["Main.op.nErrId"] == 0x704        # ADS: not permitted
