@@ -125,6 +125,9 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--realtime", action="store_true", help="sleep to each deadline (default: virtual clock)")
     run.add_argument("--stats", action="store_true", help="print scan-time statistics")
     run.add_argument("--no-cache", action="store_true", help="do not use the compile cache")
+    run.add_argument("--files-root", metavar="DIR",
+                     help="twincat: the folder SysFile/SysDir and the file FBs work in (default: "
+                          "[files] root of stvm.toml, else stvm_files beside it, else a temporary folder)")
     run.add_argument("--scenario", help="scenario TOML applied to the run (see README)")
     run.add_argument("--watchdog", type=_watchdog_seconds, default=5.0, metavar="SECONDS",
                      help="fault when one scan runs longer than this wall-clock time (default 5; off: none)")

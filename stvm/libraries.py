@@ -259,20 +259,29 @@ def qualify(units: Sequence[n.CompilationUnit], names: Iterable[str]) -> list[n.
     # what `Lib.X.y` can be besides a POU or type: an enumerator, a GVL's variable
     enums: set[tuple[str, str]] = set()
     gvls: set[tuple[str, str]] = set()
+    # `Lib.x` besides a POU or type: a global variable of the library, an enumerator of one of
+    # its enumerations (`SysFile.AM_READ`, `SysTypes.RTS_INVALID_HANDLE`: CODESYS libraries)
+    members: dict[tuple[str, str], object] = {}
     for unit in units:
         for d in unit.types:
-            if d.namespace and d.namespace[0].lower() in libs and isinstance(d.body, n.EnumDecl):
-                enums.add((d.namespace[0].lower(), d.name.lower()))
+            if d.namespace and d.namespace[-1].lower() in libs and isinstance(d.body, n.EnumDecl):
+                enums.add((d.namespace[-1].lower(), d.name.lower()))
+                for m in d.body.members:
+                    members.setdefault((d.namespace[-1].lower(), m[0].lower()), (d.namespace + (d.name,)))
         for g in unit.globals:
-            if g.namespace and g.namespace[0].lower() in libs and g.gvl:
-                gvls.add((g.namespace[0].lower(), g.gvl.lower()))
+            if g.namespace and g.namespace[-1].lower() in libs and g.gvl:
+                gvls.add((g.namespace[-1].lower(), g.gvl.lower()))
+            if g.namespace and g.namespace[-1].lower() in libs:
+                for decl in g.block.decls:
+                    for name, _ in decl.names:
+                        members.setdefault((g.namespace[-1].lower(), name.lower()), "global")
     out = []
     for unit in units:
         if not libs & unit.member_bases:
             out.append(unit)
             continue
-        pous = tuple(_Qualifier(libs, _locals(p), enums, gvls).walk(p) for p in unit.pous)
-        rw = _Qualifier(libs, set(), enums, gvls)
+        pous = tuple(_Qualifier(libs, _locals(p), enums, gvls, members).walk(p) for p in unit.pous)
+        rw = _Qualifier(libs, set(), enums, gvls, members)
         out.append(dataclasses.replace(unit, pous=pous, types=tuple(rw.walk(d) for d in unit.types),
                                        globals=tuple(rw.walk(g) for g in unit.globals)))
     return out
@@ -289,13 +298,17 @@ _LEAVES = (str, int, float, bool, bytes, type(None), n.Span)
 
 
 class _Qualifier:
-    def __init__(self, libs: set[str], local_names: set[str], enums, gvls) -> None:
+    def __init__(self, libs: set[str], local_names: set[str], enums, gvls, members=None) -> None:
         self.libs = libs - local_names
         self.enums = enums
         self.gvls = gvls
+        self.members = members or {}
 
     def walk(self, obj):
         if isinstance(obj, n.Member):
+            obj = self.nested_library(obj)
+            if not isinstance(obj, n.Member):
+                return obj
             base = obj.base
             inner = base.base if isinstance(base, n.Member) else None
             if isinstance(inner, n.Name) and len(inner.parts) == 1 and not inner.rooted \
@@ -307,6 +320,11 @@ class _Qualifier:
                     return dataclasses.replace(obj, base=n.Name((base.name,), False, base.span))
             if isinstance(base, n.Name) and len(base.parts) == 1 and not base.rooted \
                     and base.parts[0].lower() in self.libs:
+                found = self.members.get((base.parts[0].lower(), obj.name.lower()))
+                if found == "global":      # `Lib.x`: the library's global variable x
+                    return n.Name((obj.name,), False, obj.span)
+                if isinstance(found, tuple):   # `Lib.member`: the enumerator of Lib's enumeration
+                    return n.HashLiteral(found, False, obj.name, obj.span)
                 return n.Name((base.parts[0], obj.name), False, obj.span)
             new = self.walk(base)
             return obj if new is base else dataclasses.replace(obj, base=new)
@@ -326,6 +344,27 @@ class _Qualifier:
             if new is not value:
                 changes[f.name] = new
         return dataclasses.replace(obj, **changes) if changes else obj
+
+
+    def nested_library(self, obj: n.Member):
+        """`SysFile.SysTypes.RTS_IEC_HANDLE`, `SysDir.CmpErrors.Errors.ERR_OK`: a library reached
+        through another one that references it (CODESYS/TwinCAT); the outer names are dropped."""
+        chain = []
+        cur = obj
+        while isinstance(cur, n.Member):
+            chain.append(cur)
+            cur = cur.base
+        if not (isinstance(cur, n.Name) and len(cur.parts) == 1 and not cur.rooted
+                and cur.parts[0].lower() in self.libs and chain and chain[-1].name.lower() in self.libs):
+            return obj
+        drop = len(chain) - 1    # chain[-1] is `Outer.Inner`
+        while drop > 0 and chain[drop - 1].name.lower() in self.libs:
+            drop -= 1            # `A.B.C.x` with A, B, C libraries: C.x
+        inner = chain[drop]
+        out: n.Expr = n.Name((inner.name,), False, inner.span)
+        for member in reversed(chain[:drop]):
+            out = dataclasses.replace(member, base=out)
+        return out
 
 
 def namespaces(spaces: Mapping[str, str], settings) -> set[str]:

@@ -70,6 +70,9 @@ _SCHEMA: dict[str, dict[str, tuple[Any, str]] | None] = {
     "opcua": None,      # front ends and tools that read their own table
     "lint": None,
     "libraries": None,  # NAME = "folder or .plcproj", checked by stvm/libraries.py
+    "files": {          # the folder SysFile/SysDir work in (stvm/stdlib/sys_file.py)
+        "root": (lambda v: isinstance(v, str) and v != "", "a folder, relative to the manifest"),
+    },
     "demo": {
         "scenario": (lambda v: isinstance(v, str), "a scenario file name, relative to the manifest"),
         "step_variable": (lambda v: isinstance(v, str), "a variable path, e.g. \"Main.step\""),

@@ -60,6 +60,7 @@ class Project:
     root: Path | None = None
     native_modules: tuple[str, ...] = ()   # the stdlib modules implementing the natives it calls
     natives_known: bool = False            # native_modules is complete (a cached load): import only those
+    files_root: str | None = None          # `--files-root`: the SysFile folder (stdlib/sys_file.py)
 
     def start(self, scan: str | int = "10ms", realtime: bool = False, start_dt_ns: int = 0,
               transport=None) -> "VM":
@@ -72,7 +73,9 @@ class Project:
                 natives=functions, native_fbs=fbs)
         if self.settings.dialect.value == "twincat":   # TwinCAT_SystemInfoVarList (stdlib/tc2_system.py)
             from stvm.stdlib.tc2_system import install_system_info   # lazy: twincat projects only
+            from stvm.stdlib.sys_file import install_files   # lazy: twincat projects only
             install_system_info(vm, self)
+            install_files(vm, self, self.files_root)
         return vm
 
 

@@ -272,6 +272,7 @@ def cmd_run(args) -> int:
         print(f"stvm: error: {nothing_to_run(project, args.files)}", file=sys.stderr)
         return EXIT_COMPILE
     _check_demo_flags(args, "demo" in project.manifest)
+    project.files_root = getattr(args, "files_root", None)
     session = _start_session(args, project, scan_ns)
     if session is None:
         return EXIT_COMPILE

@@ -9,7 +9,7 @@ the sibling generators."""
 from __future__ import annotations
 
 from stvm.semantics import types as t
-from stvm.semantics.model import EXTERNAL, IN_OUT, INPUT, OUTPUT, TEMP, POUInfo, Variable
+from stvm.semantics.model import EXTERNAL, IN_OUT, INPUT, OUTPUT, TEMP, POUInfo, SiblingInstance, Variable
 from stvm.dialects import allows
 from stvm.lower.names import method_attr, var_attr
 from stvm.lower.pycode import CodeWriter, py_literal
@@ -29,6 +29,8 @@ class PouGenerator:
         return ty.members[0][1]
 
     def default_expr(self, ty: t.Type, init: object = None, fb_args: dict | None = None) -> str:
+        if isinstance(init, SiblingInstance):   # `itf := fbOther` in an FB's declaration
+            return f"self.{var_attr(init.name)}"
         if isinstance(ty, t.BoolType):
             return py_literal(bool(init) if init is not None else False)
         if isinstance(ty, t.IntType):

@@ -21,7 +21,7 @@ from stvm.semantics.body import BodyChecker
 from stvm.syntax.pragmas import has_attribute
 from stvm.semantics.facts import NOT_CONST, CallInfo, Facts, NameRef  # noqa: F401 (API: checker.Facts)
 from stvm.semantics.qualified import resolve as resolve_qualified
-from stvm.semantics.model import (EXTERNAL, GLOBAL, IN_OUT, INPUT, LOCAL, OUTPUT, POUInfo,
+from stvm.semantics.model import (SiblingInstance, EXTERNAL, GLOBAL, IN_OUT, INPUT, LOCAL, OUTPUT, POUInfo,
                                   ProjectModel, PropertyInfo, TaskInfo, Variable)
 from stvm.dialects import allows, known_library_prefix
 from stvm.settings import BareEnumerators, DEFAULT_SETTINGS, Dialect, StringOverflow, StringSize, SysmacSettings
@@ -1268,6 +1268,9 @@ class Checker:
                     v = ty.value_of(init.expr.parts[0])
                     if v is not None:
                         return v
+                sibling = self.sibling_instance(init.expr, ty, pou)
+                if sibling is not None:
+                    return sibling
                 self.error("initial value must be a constant expression", init.span, "E023")
                 return None
             if isinstance(ty, t.EnumType) and isinstance(init.expr, n.Name):
@@ -1396,6 +1399,10 @@ class Checker:
                     continue
                 value = self.const_value(arg.value, namespace, pou)
                 if value is NOT_CONST:
+                    sibling = self.sibling_instance(arg.value, target.type, pou, before=var.key)
+                    if sibling is not None:
+                        values[target.key] = sibling
+                        continue
                     self.error("an FB_init argument in a declaration must be a constant expression",
                                arg.value.span, "E063")
                     continue
@@ -1407,6 +1414,24 @@ class Checker:
                            f"{len(params)} inputs of {vtype.name}'s FB_init: give all of them, or name them",
                            span, "E063")
             var.fb_args = values
+
+    def sibling_instance(self, expr: n.Expr, ty: t.Type, pou: POUInfo | None, before: str | None = None):
+        """`itf : I_X := fbOther;` or `fb : F(fbOther)` (TwinCAT/CODESYS, the `ref_initial_value`
+        row): an interface given an FB instance declared earlier in the same FUNCTION_BLOCK or
+        PROGRAM (TcUnit's FB_TcUnitRunner). None when `expr` is not such an instance. Choice: the
+        instance must be declared before, as it is made first."""
+        if not (isinstance(expr, n.Name) and len(expr.parts) == 1 and pou is not None
+                and pou.kind in ("FUNCTION_BLOCK", "PROGRAM") and isinstance(ty, t.InterfaceType)
+                and allows(self.settings.dialect, "ref_initial_value")):
+            return None
+        keys = list(pou.variables)
+        key = expr.parts[0].lower()
+        var = pou.variables.get(key)
+        if var is None or not isinstance(var.type, t.FBType) or var.section in (IN_OUT, EXTERNAL):
+            return None
+        if before is not None and before in keys and keys.index(key) > keys.index(before):
+            return None
+        return SiblingInstance(var.name)
 
     def convert_constant(self, value: object, ty: t.Type, span: n.Span, expr: n.Expr | None = None) -> object:
         if isinstance(ty, t.BoolType):

@@ -16,6 +16,16 @@ INPUT, OUTPUT, IN_OUT, LOCAL, TEMP, GLOBAL, EXTERNAL = (
     "VAR_INPUT", "VAR_OUTPUT", "VAR_IN_OUT", "VAR", "VAR_TEMP", "VAR_GLOBAL", "VAR_EXTERNAL")
 
 
+@dataclass(frozen=True)
+class SiblingInstance:
+    """The initial value (or FB_init argument) `itf : I_X := fbOther;` / `fb : F(fbOther)` in a
+    FUNCTION_BLOCK or PROGRAM: the instance `name` declared before it in the same POU (CODESYS /
+    TwinCAT: the instance's address is a constant of the load). The lowering writes the sibling's
+    storage."""
+
+    name: str
+
+
 @dataclass
 class Variable:
     name: str                 # the user's spelling

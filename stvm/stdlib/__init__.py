@@ -28,7 +28,7 @@ from stvm.stdlib.registry import NATIVE_FBS, NATIVE_FUNCTIONS, native_fb, native
 # (the checker needs every declaration; `stdlib_sources` calls it), a VM from the cache imports
 # only the modules its program calls into (`Project.native_modules`). lazy: start-up
 IMPLEMENTATIONS = ("conversions", "numeric", "omron", "sockets", "strings", "timefns", "timers", "bcd", "tc2_system",
-                   "tc2_memory")
+                   "tc2_memory", "sys_file")
 _SOCKET_NAMES = ("RealTcpTransport", "SocketTable", "Transport", "make_default_transport")
 
 
@@ -99,10 +99,10 @@ def _rewrite(text: str, marker_line: str, replacement: str) -> str:
     return text.replace(marker_line, replacement)
 
 
-TWINCAT_LIBRARIES = ("tc2_standard.st", "tc2_system.st", "tc2_utilities.st", "type_classes.st",
-                     "tc2_memory.st")
+TWINCAT_LIBRARIES = ("tc2_standard.st", "tc2_system.st", "tc2_utilities.st", "type_classes.st", "tc2_memory.st",
+                     "sys_file.st")
 # namespaces of the platform libraries, reached as `IBaseLibrary.TypeClass.TYPE_INT` (stvm/libraries.py)
-TWINCAT_NAMESPACES = ("IBaseLibrary", "__SYSTEM")
+TWINCAT_NAMESPACES = ("IBaseLibrary", "__SYSTEM", "SysFile", "SysDir", "SysTypes", "CmpErrors")
 
 # Beckhoff Tc2_Standard names the inputs of the string functions STR/STR1/STR2/SIZE/LEN/POS
 # (infosys.beckhoff.com, Tc2_Standard "CONCAT": `STR1 : STRING(255); STR2 : STRING(255);`, and

@@ -125,3 +125,43 @@ END_PROGRAM
 """
     assert run_st(src, prints=["Main.n", "Main.a", "Main.s.tests[2].name", "Main.cur.name"], settings=TWINCAT) == \
         {"Main.n": b"second", "Main.a": 6, "Main.s.tests[2].name": b"second", "Main.cur.name": b"changed"}
+
+
+def test_an_interface_initialised_with_an_instance_declared_before_it():
+    # TcUnit's FB_TcUnitRunner: `AdsTestResultLogger : FB_AdsTestResultLogger(TestResults);` and
+    # `TestResultLogger : I_TestResultLogger := AdsTestResultLogger;`
+    src = """
+INTERFACE I_Res
+METHOD Count : INT END_METHOD
+END_INTERFACE
+FUNCTION_BLOCK FB_Res IMPLEMENTS I_Res
+VAR_INPUT n : INT := 7; END_VAR
+METHOD Count : INT
+Count := n;
+END_METHOD
+END_FUNCTION_BLOCK
+FUNCTION_BLOCK FB_Log
+VAR res : I_Res; END_VAR
+METHOD FB_init : BOOL
+VAR_INPUT bInitRetains : BOOL; bInCopyCode : BOOL; iRes : I_Res; END_VAR
+res := iRes;
+END_METHOD
+METHOD Show : INT
+Show := res.Count();
+END_METHOD
+END_FUNCTION_BLOCK
+FUNCTION_BLOCK FB_Runner
+VAR
+  results : FB_Res;
+  logger : FB_Log(results);
+  itf : I_Res := results;
+END_VAR
+END_FUNCTION_BLOCK
+PROGRAM Main
+VAR r : FB_Runner; a, b : INT; END_VAR
+r.results.n := 9;
+a := r.logger.Show();
+b := r.itf.Count();
+END_PROGRAM
+"""
+    assert run_st(src, prints=["Main.a", "Main.b"], settings=TWINCAT) == {"Main.a": 9, "Main.b": 9}
