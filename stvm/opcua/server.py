@@ -50,6 +50,7 @@ from stvm.frontend import RunControl, Snapshot, VariableBridge, WriteRejected, c
 from stvm.frontend.limits import LimitTable
 from stvm.opcua import bounds
 from stvm.opcua.aspace_cache import init_server
+from stvm.opcua.browse import ContinuationPoints
 from stvm.opcua.config import OpcUaConfig, revise_interval as bounds_interval
 from stvm.opcua.datatypes import BadWrite, datetime_of
 from stvm.opcua.engineering import eu_information, eu_range
@@ -506,6 +507,16 @@ class OpcUaServer:
                     return super().activate_session(params, peer_certificate)
                 finally:
                     _TOKEN_KIND.reset(reset)
+
+            async def browse(self, params: ua.BrowseParameters) -> list[ua.BrowseResult]:
+                # at most RequestedMaxReferencesPerNode per node, the rest by BrowseNext (stvm.opcua.browse)
+                points = self.__dict__.setdefault("_continuation_points", ContinuationPoints())
+                return [points.page(result, params.RequestedMaxReferencesPerNode)
+                        for result in iserver.view_service.browse(params)]
+
+            def browse_next_pages(self, params: ua.BrowseNextParameters) -> list[ua.BrowseResult]:
+                points = self.__dict__.setdefault("_continuation_points", ContinuationPoints())
+                return points.next(params)
 
             async def history_read(self, params: ua.HistoryReadParameters) -> list[ua.HistoryReadResult]:
                 # no history is kept: say so per node (asyncua would answer Good with no data)
