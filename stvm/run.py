@@ -348,7 +348,7 @@ def _start_session(args, project, scan_ns: int):
         vm.ctx.socket_service_vm = vm
         _check_prints(args, vm)   # a typo is a usage error, not a lost run
         session.until = Until(args.until, vm) if getattr(args, "until", None) is not None else None
-        _apply_sets(args, vm)
+        _apply_sets(args, vm, project)
         try:
             if demo_mode:
                 from stvm.demo import Demo   # lazy: start-up
@@ -384,19 +384,33 @@ def _check_prints(args, vm) -> None:
             raise UsageError(str(exc)) from exc
 
 
-def _apply_sets(args, vm) -> None:
-    """`--set NAME=VALUE`, before the scenario's initial values."""
+def _apply_sets(args, vm, project=None) -> None:
+    """`--set NAME=VALUE`, before the scenario's initial values. The value must be within the
+    project's operator limits (stvm/frontend/limits.py: the range the HMI and OPC UA enforce;
+    NaN and infinities refused). Choice: `--set` may still preset an output or status (the
+    developer's preset before the first scan, like the debugger's `set`, not an operator's write)."""
     if not args.set:
         return
+    from stvm.frontend.limits import LimitTable, LimitsError   # lazy: start-up
     from stvm.runtime.vm import PathError   # lazy: start-up
     # lazy: start-up (the literal parser brings the syntax nodes, ~50 ms, which a run from the
     # cache never needs otherwise)
     from stvm.semantics.literals import literal_value
+    try:
+        table = LimitTable.for_project(project, vm) if project is not None else LimitTable(
+            None, lambda path: vm.type_of(path))
+    except LimitsError as exc:
+        raise UsageError(str(exc)) from exc
     for item in args.set:
         name, text = parse_assignment(item)
         try:
             ty = vm.type_of(name)
-            vm.set(name, literal_value(text, ty))
+            value = literal_value(text, ty)
+            limits = table.limits_for(name)
+            problem = limits.check(value)
+            if problem is not None:
+                raise UsageError(f"--set {limits.label or name}: {problem} (limits from {limits.by or 'the type'})")
+            vm.set(name, value)
         except PathError as exc:
             raise UsageError(str(exc)) from exc
         except ValueError as exc:

@@ -18,8 +18,9 @@ A variable's operator limits are declared once and read here:
 
 Outputs and status are **read-only by default** (`Limits.writable`): a variable is writable only
 if it is not CONSTANT, not an output or internal of an FB or PROGRAM instance (`VAR_OUTPUT`,
-`VAR`), and no `writable = false` entry matches it. An entry `writable = true` on an exact path
-opens a variable the section rule closes (say, a global the program only reads).
+`VAR`), not named like a status (`DEFAULT_STATUS`: `*_Busy`, `*_Done`, `*.Connected`, …) and no
+`writable = false` entry matches it. An entry `writable = true` (exact path or pattern) opens a
+variable these rules close; the switch `"@outputs" = { writable = true }` opens them all.
 
 Choice: ST attributes on declarations (`{attribute 'hmi.min' := '0'}`) are not read: stvm's
 parser attaches pragmas to POUs and type declarations only, not to single variables.
@@ -46,6 +47,16 @@ MAX_LIMITS_FILE_BYTES = 1 << 20
 """A limits file larger than this is refused (a page file has the same bound)."""
 
 _KEYS = {"min", "max", "unit", "decimals", "enum", "writable", "label"}
+
+OUTPUTS_SWITCH = "@outputs"
+"""The key of the switch that opens outputs and status to writes: `"@outputs" = { writable = true }`
+(an `@` name cannot clash with an ST path)."""
+
+DEFAULT_STATUS = ("*_Busy", "*_Done", "*_Error", "*_ErrorID", "*_ErrorDescrip", "*_CmdID_Ack",
+                  "*.Connected", "*.Socket.*")
+"""Status by name, read-only in every project (least specific: any declared entry overrides them).
+These are the names the command FBs' outputs are bound to (`Busy => MoveRel_Busy`) and the
+connection state a connect FB keeps in its in-out (`Cobot.Connected`, `Cobot.Socket.Handle`)."""
 
 
 class LimitsError(ValueError):
@@ -85,7 +96,9 @@ class Limits:
 
 
 def _num(value: float) -> str:
-    return str(int(value)) if float(value).is_integer() else f"{value:g}"
+    if float(value).is_integer() and abs(value) < 1e15:
+        return str(int(value))
+    return f"{value:g}"
 
 
 def type_limits(ty: t.Type | None) -> Limits:
@@ -118,6 +131,8 @@ class LimitTable:
         self._exact: dict[str, Limits] = {}
         self._patterns: list[tuple[str, re.Pattern, Limits]] = []
         self._cache: dict[str, Limits] = {}
+        self.outputs_writable = False   # the `@outputs` switch
+        self._defaults = [(_pattern(_norm(p)), p) for p in DEFAULT_STATUS]
         for key, raw in (entries or {}).items():
             self.declare(key, raw, where)
 
@@ -128,6 +143,12 @@ class LimitTable:
             raise LimitsError(at, "a key is a variable path or a pattern such as \"*.Speed\"")
         if not isinstance(raw, Mapping):
             raise LimitsError(at, "the value is a table { min = …, max = …, unit = \"…\" }")
+        if key.strip().lower() == OUTPUTS_SWITCH:
+            if set(raw) != {"writable"} or not isinstance(raw["writable"], bool):
+                raise LimitsError(at, "the switch takes only writable = true or false")
+            self.outputs_writable = raw["writable"]
+            self._cache.clear()
+            return
         unknown = set(raw) - _KEYS
         if unknown:
             raise LimitsError(at, f"unknown key(s) {', '.join(sorted(unknown))} (known: {', '.join(sorted(_KEYS))})")
@@ -162,9 +183,7 @@ class LimitTable:
         self._cache.clear()
         norm = _norm(key)
         if any(c in norm for c in "*?"):
-            # `[` is an array index here, not a character class: only * and ? are wildcards
-            regex = "".join(".*" if c == "*" else "." if c == "?" else re.escape(c) for c in norm)
-            self._patterns.append((norm, re.compile(regex + r"\Z"), _Partial(fields)))
+            self._patterns.append((norm, _pattern(norm), _Partial(fields)))
             self._patterns.sort(key=lambda p: -len(p[0].replace("*", "")))
         else:
             self._exact[norm] = _Partial(fields)
@@ -230,9 +249,12 @@ class LimitTable:
                 ty = None
         fields = dict(type_limits(ty).__dict__)
         writable = True
-        if self.section_of is not None:
-            section = self.section_of(norm)
-            if section is not None and read_only_by_section(*section):
+        if not self.outputs_writable:
+            if self.section_of is not None:
+                section = self.section_of(norm)
+                if section is not None and read_only_by_section(*section):
+                    writable = False
+            if any(regex.match(norm) for regex, _ in self._defaults):
                 writable = False
         fields["writable"] = writable
         # patterns first (least specific first), the exact entry last: it wins
@@ -262,6 +284,12 @@ class LimitTable:
 @dataclass(frozen=True)
 class _Partial:
     fields: dict
+
+
+def _pattern(norm: str) -> re.Pattern:
+    # `[` is an array index here, not a character class: only * and ? are wildcards
+    regex = "".join(".*" if c == "*" else "." if c == "?" else re.escape(c) for c in norm)
+    return re.compile(regex + r"\Z")
 
 
 def _norm(path: str) -> str:

@@ -192,7 +192,7 @@ def build_app(server: Any) -> Starlette:
             "start": hmi.start,
             "pages": {p.name: {"title": p.title, "paths": list(p.paths)} for p in hmi.pages.values()},
             "presets": {n: {"label": p.label, "page": p.page} for n, p in hmi.presets.items()},
-            "writable": sorted(hmi.writable),
+            "writable": sorted(p for p in hmi.writable if server.limit_table.limits_for(p).writable),
         })
 
     async def alarms_page(request: Request) -> Response:

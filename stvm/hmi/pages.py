@@ -28,6 +28,8 @@ reports each mistake as `FILE:LINE:COL: error: message` (a `Diagnostic`), never 
 
 from __future__ import annotations
 
+import math
+
 import re
 import tomllib
 from dataclasses import dataclass, field
@@ -42,6 +44,12 @@ from stvm.syntax.nodes import Span
 from stvm.syntax.literals import decode_int
 from stvm.diagnostics import render
 from stvm.runtime.vm import coerce_python_value
+
+MAX_PAGE_FILE_BYTES = 1 << 20
+"""A page file larger than this is refused (the limits file has the same bound)."""
+MAX_LIMIT = 1e18
+"""A page's min/max beyond this is refused: no ST number an operator types is larger (LREAL's
+range aside, a position or speed of 1e18 is a typing mistake)."""
 
 WIDGET_KINDS = ("lamp", "numeric", "dropdown", "text", "status", "toggle", "momentary", "set",
                 "preset", "nav", "popup", "robot_view", "note")
@@ -227,7 +235,13 @@ def load_pages(files: Sequence[str | Path], type_of: Callable[[str], t.Type],
     for raw in files:
         path = str(raw)
         try:
-            text = Path(path).read_text(encoding="utf-8")
+            with open(path, "rb") as fh:   # bounded: /dev/zero or a huge file is refused, not read whole
+                data = fh.read(MAX_PAGE_FILE_BYTES + 1)
+            if len(data) > MAX_PAGE_FILE_BYTES:
+                diags.append(Diagnostic.error(f"HMI page file larger than {MAX_PAGE_FILE_BYTES} bytes",
+                                              Span(path, 1, 1, 1, 2)))
+                continue
+            text = data.decode("utf-8")
         except OSError as exc:
             diags.append(Diagnostic.error(f"cannot read HMI page file: {exc.strerror or exc}",
                                           Span(path, 1, 1, 1, 2)))
@@ -484,6 +498,12 @@ class _Reader:
             value = table[key]
             if isinstance(value, bool) or not isinstance(value, (int, float)):
                 f.error(where + (key,), f"{key} must be a number, got {value!r}")
+                out["invalid"] = True
+                continue
+            # nan/inf (TOML spells them) and numbers beyond any ST type are no limit (float(nan)
+            # != int(nan) raised ValueError: exit 70)
+            if not math.isfinite(value) or abs(value) > MAX_LIMIT:
+                f.error(where + (key,), f"{key} must be a finite number within ±{MAX_LIMIT:g}, got {value!r}")
                 out["invalid"] = True
                 continue
             if isinstance(ty, t.IntType):

@@ -133,8 +133,7 @@ class HmiServer:
         self.hmi = hmi
         self.limits = limits or ServerLimits()
         # one source of limits (stvm/frontend/limits.py): the project's table, the pages merged in
-        self.limit_table = limit_table if limit_table is not None else LimitTable(
-            None, bridge.type_of)
+        self.limit_table = limit_table if limit_table is not None else LimitTable.for_project(None, bridge.vm)
         self.limit_table.merge_pages(hmi.writable)
         self.alarms = alarms
         self.labels = _labels(hmi)
@@ -436,6 +435,10 @@ class HmiServer:
                 raise Refused(403, f"{path}: not written by any HMI page" if known else
                                f"{path}: not a variable any HMI page maps", path)
             label = self.labels.get(path, path)
+            if not self.limit_table.limits_for(path).writable:
+                # outputs and status are read-only for every front end unless the limits table
+                # opens them (`"@outputs" = { writable = true }`, docs/hmi.md)
+                raise Refused(403, f"{label}: read-only (an output or status of the controller)", path)
             if isinstance(raw, bool):
                 text = "TRUE" if raw else "FALSE"
             elif isinstance(raw, (int, float)):
@@ -539,6 +542,9 @@ class HmiServer:
         for batch in preset.steps:
             values = {}
             for path, item in batch:
+                if not self.limit_table.limits_for(path).writable:
+                    raise Refused(403, f"preset {name}: {self.labels.get(path, path)} is read-only "
+                                       f"(an output or status of the controller)", path)
                 if isinstance(item, RunParameter):
                     if item.name not in self.run_parameters:
                         raise Refused(409, f"preset {name}: {path} takes the run's {item.name}, "

@@ -54,6 +54,13 @@ def apply(server, limits: ServerLimits) -> None:
 class BoundedProtocol(OPCUAProtocol):
     """asyncua's connection, with the chunk header checked before a byte of its body is kept."""
 
+    def connection_made(self, transport) -> None:
+        super().connection_made(transport)
+        if self.processor is not None:
+            # asyncua builds its processor inside connection_made: give it BrowseNext (stvm.opcua.browse)
+            from stvm.opcua.browse import BrowsingProcessor
+            self.processor.__class__ = BrowsingProcessor
+
     def data_received(self, data: bytes) -> None:
         if self.transport is None or self.transport.is_closing():
             return

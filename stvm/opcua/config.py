@@ -143,6 +143,9 @@ class OpcUaConfig:
     private_key: Path | None = None
     trusted_clients: tuple[Path, ...] = ()
     limits: ServerLimits = field(default_factory=lambda: ServerLimits())
+    # the project's manifest and folder: the operator limits table (stvm/frontend/limits.py) is read from them
+    manifest: dict = field(default_factory=dict, compare=False, repr=False)
+    root: Path | None = None
 
     @property
     def namespace_uri(self) -> str:
@@ -230,6 +233,8 @@ def load_config(manifest: dict, root: Path | None, files, endpoint_arg: str | No
         trusted_clients=tuple(_file(base, p, f"{where} trusted_clients") for p in
                               _string_list(table, "trusted_clients", (), where)),
         limits=limits_from(table.get("limits"), f"{where} limits"),
+        manifest=manifest,
+        root=root,
     )
     _check_security(config, where)
     return config

@@ -161,6 +161,9 @@ def select(roots: list[VariableInfo], config: OpcUaConfig) -> Selection:
 _REF_COMPONENT = ua.NodeId(ua.ObjectIds.HasComponent)
 _REF_ORGANIZES = ua.NodeId(ua.ObjectIds.Organizes)
 _REF_TYPEDEF = ua.NodeId(ua.ObjectIds.HasTypeDefinition)
+_REF_PROPERTY = ua.NodeId(ua.ObjectIds.HasProperty)
+_PROPERTY_TYPE = ua.NodeId(ua.ObjectIds.PropertyType)
+_ANALOG_TYPE = ua.NodeId(ua.ObjectIds.AnalogItemType)
 _VARIABLE_TYPE = ua.NodeId(ua.ObjectIds.BaseDataVariableType)
 _OBJECT_TYPE = ua.NodeId(ua.ObjectIds.BaseObjectType)
 
@@ -211,6 +214,17 @@ class NodeBuilder:
                 ReferenceTypeId=_REF_TYPEDEF, IsForward=True, NodeId=_OBJECT_TYPE,
                 BrowseName=ua.QualifiedName("BaseObjectType", 0), DisplayName=ua.LocalizedText("BaseObjectType"),
                 NodeClass=ua.NodeClass.ObjectType, TypeDefinition=ua.NodeId())}
+        self._analog = ua.ReferenceDescription(
+            ReferenceTypeId=_REF_TYPEDEF, IsForward=True, NodeId=_ANALOG_TYPE,
+            BrowseName=ua.QualifiedName("AnalogItemType", 0), DisplayName=ua.LocalizedText("AnalogItemType"),
+            NodeClass=ua.NodeClass.VariableType, TypeDefinition=ua.NodeId())
+        self._property_typedef = ua.ReferenceDescription(
+            ReferenceTypeId=_REF_TYPEDEF, IsForward=True, NodeId=_PROPERTY_TYPE,
+            BrowseName=ua.QualifiedName("PropertyType", 0), DisplayName=ua.LocalizedText("PropertyType"),
+            NodeClass=ua.NodeClass.VariableType, TypeDefinition=ua.NodeId())
+        self._property = {key: AttributeValue(value) for key, value in
+                          {**variable, ua.AttributeIds.AccessLevel: _dv(read, ua.VariantType.Byte),
+                           ua.AttributeIds.UserAccessLevel: _dv(read, ua.VariantType.Byte)}.items()}
 
     def nodeid(self, text: str) -> ua.NodeId:
         return ua.NodeId(text, self.ns)
@@ -231,7 +245,7 @@ class NodeBuilder:
         return data
 
     def _link(self, parent: NodeData, child: NodeData, nodeclass: ua.NodeClass, typedef: ua.NodeId,
-              browse: ua.QualifiedName, display: ua.LocalizedText) -> None:
+              browse: ua.QualifiedName, display: ua.LocalizedText, analog: bool = False) -> None:
         parent.references.append(ua.ReferenceDescription(
             ReferenceTypeId=_REF_COMPONENT, IsForward=True, NodeId=child.nodeid, BrowseName=browse,
             DisplayName=display, NodeClass=nodeclass, TypeDefinition=typedef))
@@ -244,7 +258,7 @@ class NodeBuilder:
                 NodeClass=ua.NodeClass(parent.attributes[ua.AttributeIds.NodeClass].value.Value.Value),
                 TypeDefinition=ua.NodeId())
         child.references.append(up)
-        child.references.append(self._typedef[nodeclass])
+        child.references.append(self._analog if analog else self._typedef[nodeclass])
 
     def add_object(self, parent_id: ua.NodeId, path: str, name: str, description: str) -> NodeData:
         browse, display = ua.QualifiedName(name, self.ns), ua.LocalizedText(name)
@@ -254,7 +268,8 @@ class NodeBuilder:
         return data
 
     def add_variable(self, parent_id: ua.NodeId, var: PublishedVariable, name: str, datatype: ua.NodeId,
-                     value: ua.DataValue) -> NodeData:
+                     value: ua.DataValue, analog: bool = False) -> NodeData:
+        """`analog`: an AnalogItemType variable (Part 8 §5.3.2: it has an EURange property)."""
         browse, display = ua.QualifiedName(name, self.ns), ua.LocalizedText(name)
         data = self._record(self.nodeid(var.path), name, f"{var.uatype.text} ({var.info.section})",
                             self._variable[var.writable], browse, display)
@@ -264,8 +279,30 @@ class NodeBuilder:
         data.attributes[ua.AttributeIds.DataType] = shared
         var.nodeid = data.nodeid
         var.value_attr = data.attributes[ua.AttributeIds.Value] = AttributeValue(value)
-        self._link(self.aspace[parent_id], data, ua.NodeClass.Variable, _VARIABLE_TYPE, browse, display)
+        self._link(self.aspace[parent_id], data, ua.NodeClass.Variable, _ANALOG_TYPE if analog else _VARIABLE_TYPE,
+                   browse, display, analog)
         self.aspace[data.nodeid] = data
+        return data
+
+
+    def add_property(self, parent: NodeData, name: str, variant: ua.Variant, datatype: int) -> NodeData:
+        """A read-only property (HasProperty, PropertyType) of `parent`, NodeId `<parent>.@<name>`
+        (Part 8: EURange, EngineeringUnits of an AnalogItemType variable)."""
+        browse, display = ua.QualifiedName(name, 0), ua.LocalizedText(name)
+        nodeid = self.nodeid(f"{parent.nodeid.Identifier}.@{name}")
+        data = self._record(nodeid, name, name, self._property, browse, display)
+        data.attributes[ua.AttributeIds.DataType] = AttributeValue(_dv(ua.NodeId(datatype, 0), ua.VariantType.NodeId))
+        data.attributes[ua.AttributeIds.Value] = AttributeValue(ua.DataValue(variant))
+        parent.references.append(ua.ReferenceDescription(
+            ReferenceTypeId=_REF_PROPERTY, IsForward=True, NodeId=nodeid, BrowseName=browse,
+            DisplayName=display, NodeClass=ua.NodeClass.Variable, TypeDefinition=_PROPERTY_TYPE))
+        data.references.append(ua.ReferenceDescription(
+            ReferenceTypeId=_REF_PROPERTY, IsForward=False, NodeId=parent.nodeid,
+            BrowseName=parent.attributes[ua.AttributeIds.BrowseName].value.Value.Value,
+            DisplayName=parent.attributes[ua.AttributeIds.DisplayName].value.Value.Value,
+            NodeClass=ua.NodeClass.Variable, TypeDefinition=ua.NodeId()))
+        data.references.append(self._property_typedef)
+        self.aspace[nodeid] = data
         return data
 
 

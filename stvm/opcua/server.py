@@ -47,10 +47,13 @@ from asyncua.common.utils import ServiceError
 from asyncua.server.internal_session import InternalSession
 
 from stvm.frontend import RunControl, Snapshot, VariableBridge, WriteRejected, catalog
+from stvm.frontend.limits import LimitTable
 from stvm.opcua import bounds
 from stvm.opcua.aspace_cache import init_server
+from stvm.opcua.browse import ContinuationPoints
 from stvm.opcua.config import OpcUaConfig, revise_interval as bounds_interval
 from stvm.opcua.datatypes import BadWrite, datetime_of
+from stvm.opcua.engineering import eu_information, eu_range
 from stvm.opcua.nodes import GLOBALS_ID, RUNTIME_ID, NodeBuilder, PublishedVariable, describe, select, \
     walk_published
 from stvm.semantics import types as t
@@ -74,12 +77,19 @@ class OpcUaServer:
     `start()` returns once the endpoint listens, `stop()` when the run has ended."""
 
     def __init__(self, vm, config: OpcUaConfig, bridge: VariableBridge | None = None,
-                 run_control: bool = True) -> None:
+                 run_control: bool = True, limit_table: LimitTable | None = None) -> None:
         self.vm = vm
         self.config = config
         self.roots = catalog(vm)
         self.selection = select(self.roots, config)   # first: a bad rule leaves the VM untouched
         self.variables: dict[str, PublishedVariable] = self.selection.variables
+        # the operator limits every front end shares (BadOutOfRange, EURange, outputs read-only);
+        # a mistake in the table is a LimitsError (a ValueError: `stvm run` exits 2)
+        self.limit_table = limit_table if limit_table is not None else LimitTable.for_project(
+            _ProjectFiles(config.manifest, config.root), vm)
+        for var in self.variables.values():
+            if var.writable and not self.limit_table.limits_for(var.path).writable:
+                var.writable = False   # an output or status: read-only unless the table opens it
         self.bridge = bridge or VariableBridge(vm)
         self.control = RunControl(vm) if run_control and not vm.realtime else None
         self.base_ns = vm.base_ns
@@ -261,7 +271,16 @@ class OpcUaServer:
             dv = ua.DataValue(ua.Variant(var.uatype.to_ua(value), var.uatype.variant),
                               SourceTimestamp=stamp, ServerTimestamp=stamp) if value is not None else \
                 ua.DataValue(StatusCode=ua.StatusCode(ua.StatusCodes.BadWaitingForInitialData))
-            builder.add_variable(parent_id, var, node.name, datatype, dv)
+            limits = self.limit_table.limits_for(node.path)
+            eu = eu_range(limits, node.type)
+            data = builder.add_variable(parent_id, var, node.name, datatype, dv, analog=eu is not None)
+            if eu is not None:
+                builder.add_property(data, "EURange", ua.Variant(eu, ua.VariantType.ExtensionObject),
+                                     ua.ObjectIds.Range)
+            if limits.unit:
+                builder.add_property(data, "EngineeringUnits",
+                                     ua.Variant(eu_information(limits.unit), ua.VariantType.ExtensionObject),
+                                     ua.ObjectIds.EUInformation)
             self._by_nodeid[var.nodeid] = var
         await self._add_runtime(server, objects)
 
@@ -489,6 +508,16 @@ class OpcUaServer:
                 finally:
                     _TOKEN_KIND.reset(reset)
 
+            async def browse(self, params: ua.BrowseParameters) -> list[ua.BrowseResult]:
+                # at most RequestedMaxReferencesPerNode per node, the rest by BrowseNext (stvm.opcua.browse)
+                points = self.__dict__.setdefault("_continuation_points", ContinuationPoints())
+                return [points.page(result, params.RequestedMaxReferencesPerNode)
+                        for result in iserver.view_service.browse(params)]
+
+            def browse_next_pages(self, params: ua.BrowseNextParameters) -> list[ua.BrowseResult]:
+                points = self.__dict__.setdefault("_continuation_points", ContinuationPoints())
+                return points.next(params)
+
             async def history_read(self, params: ua.HistoryReadParameters) -> list[ua.HistoryReadResult]:
                 # no history is kept: say so per node (asyncua would answer Good with no data)
                 return [ua.HistoryReadResult(StatusCode=ua.StatusCode(ua.StatusCodes.BadHistoryOperationUnsupported))
@@ -531,15 +560,22 @@ class OpcUaServer:
         for i, item in enumerate(items):
             var = self._by_nodeid.get(item.NodeId)
             if var is None:
-                if item.NodeId in self._runtime_ids and item.AttributeId == ua.AttributeIds.Value:
-                    results[i] = ua.StatusCode(ua.StatusCodes.BadNotWritable)   # the VM's own state
+                if item.NodeId in self._runtime_ids and item.AttributeId == ua.AttributeIds.Value or \
+                        item.NodeId.NamespaceIndex == self.ns and item.NodeId in self._server.iserver.aspace:
+                    # the VM's own state, properties (EURange …), objects: nothing of ours is
+                    # writable but the published variables' values
+                    results[i] = ua.StatusCode(ua.StatusCodes.BadNotWritable)
                 else:
                     others.append(i)
                 continue
             status = self._check_write(session, var, item)
             if status is None:
                 try:
-                    batch[var.path] = var.uatype.from_ua(item.Value.Value if item.Value else None)
+                    value = var.uatype.from_ua(item.Value.Value if item.Value else None)
+                    problem = self.limit_table.limits_for(var.path).check(value)
+                    if problem is not None:   # the operator's range, NaN and ±inf (the HMI's table)
+                        raise BadWrite(ua.StatusCodes.BadOutOfRange, problem)
+                    batch[var.path] = value
                     index_of.setdefault(var.path, []).append(i)
                     continue
                 except BadWrite as bad:
@@ -786,6 +822,13 @@ async def _notify(callback, handle: int, dv: ua.DataValue) -> None:
         await callback(handle, dv)
     except Exception:   # noqa: BLE001 - one broken subscription must not stop the others
         _log.exception("data change notification failed")
+
+
+@dataclasses.dataclass
+class _ProjectFiles:
+    """What `LimitTable.for_project` reads of a project: its manifest and folder."""
+    manifest: dict
+    root: Any
 
 
 class _UserManager:

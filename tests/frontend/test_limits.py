@@ -103,3 +103,36 @@ def test_a_limits_table_in_the_manifest_is_read(tmp_path):
     assert (lim.min, lim.max, lim.unit, lim.writable) == (1, 90, "mm/s", True)   # an exact entry opens a VAR
     assert not table.limits_for("Main.Out").writable                              # a program's VAR: status
     vm.close()
+
+
+def test_status_names_are_read_only_in_any_project_and_the_switch_opens_them():
+    from stvm.semantics import types as t
+    table = LimitTable({}, type_of=lambda p: t.BOOL)
+    for path in ("Connect_Busy", "Move_Done", "Move_Error", "Move_ErrorID", "Move_ErrorDescrip",
+                 "Robot.Connected", "Robot.Socket.Handle", "Move_CmdID_Ack"):
+        assert not table.limits_for(path).writable, path
+    assert table.limits_for("Move_Execute").writable
+    # a declared entry wins over the built-in names
+    table.declare("Connect_Busy", {"writable": True})
+    assert table.limits_for("Connect_Busy").writable
+    opened = LimitTable({"@outputs": {"writable": True}}, type_of=lambda p: t.BOOL)
+    assert opened.limits_for("Robot.Connected").writable
+    with pytest.raises(LimitsError, match="only writable"):
+        LimitTable({"@outputs": {"min": 1}})
+
+
+def test_set_reads_the_limits_table(tmp_path):
+    import subprocess
+    import sys
+    def run(assignment):
+        return subprocess.run([sys.executable, "-m", "stvm", "run", str(THESIS), "--no-demo", "--cycles", "1",
+                               "--set", assignment, "--print", assignment.split("=")[0]],
+                              capture_output=True, text=True, timeout=120)
+    refused = run("MoveAbs_Param.Speed=9000")
+    assert refused.returncode == 2
+    assert "--set MoveAbs_Param.Speed: 9000 is above the maximum 4500 % | mm/s" in refused.stderr
+    assert "Traceback" not in refused.stderr
+    far = run("MoveAbs_Param.TargetPosition.X=1e30")
+    assert far.returncode == 2 and "1e+30 is above the maximum 1000 mm" in far.stderr
+    ok = run("MoveAbs_Param.Speed=90")
+    assert ok.returncode == 0 and "MoveAbs_Param.Speed = 90" in ok.stdout

@@ -144,3 +144,21 @@ def test_cli_run_serves_and_exits_cleanly(tmp_path):
     assert result.returncode == 0, result.stderr
     assert "HMI: http://127.0.0.1:" in result.stderr and "token" not in result.stderr
     assert "Count = 200" in result.stdout
+
+
+@pytest.mark.parametrize("bound", ["nan", "inf", "-inf", "1e300"])
+def test_non_finite_or_absurd_limits_are_errors_not_exit_70(tmp_path, bound):
+    page = TEST_PAGE.replace("min = 10\nmax = 100", f"min = {bound}\nmax = 100", 1)
+    assert f"min = {bound}" in page
+    report = errors(tmp_path, page)
+    assert "Test.toml:" in report and "min must be a finite number" in report
+    result = run_cli("run", str(tmp_path / "main.st"), "--cycles", "5", "--hmi", "127.0.0.1:0")
+    assert result.returncode == 1, result.stderr
+    assert "Traceback" not in result.stderr and "a bug in stvm" not in result.stderr
+
+
+def test_a_page_file_larger_than_the_limit_is_refused(tmp_path):
+    from stvm.hmi.pages import MAX_PAGE_FILE_BYTES
+    page = TEST_PAGE + "\n# " + "x" * MAX_PAGE_FILE_BYTES + "\n"
+    report = errors(tmp_path, page)
+    assert f"HMI page file larger than {MAX_PAGE_FILE_BYTES} bytes" in report

@@ -34,12 +34,15 @@ def wire_demo(vm) -> None:
 class Running:
     """The VM's scan loop in a thread beside a started OPC UA server; `close()` ends both."""
 
-    def __init__(self, project, opcua: dict | None = None, demo: bool = True, files=None) -> None:
+    def __init__(self, project, opcua: dict | None = None, demo: bool = True, files=None,
+                 limits: dict | None = None) -> None:
         self.vm, self.transport = start_lockstep(project, "1ms")
         if demo:
             wire_demo(self.vm)
         manifest = copy.deepcopy(project.manifest)
         manifest["opcua"] = {"start": "paused", **(opcua or {})}
+        if limits is not None:   # entries over the project's own [limits] table
+            manifest["limits"] = {**manifest.get("limits", {}), **limits}
         self.config = load_config(manifest, project.root, files or THESIS, LOOPBACK)
         self.server = OpcUaServer(self.vm, self.config)
         self.url = self.server.start()
