@@ -24,6 +24,7 @@ from pathlib import Path
 from typing import Iterable, Mapping, Sequence
 
 from stvm.syntax import nodes as n
+from stvm.syntax.pragmas import has_attribute
 
 _NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*\Z")
 
@@ -103,20 +104,40 @@ def qualify(units: Sequence[n.CompilationUnit], names: Iterable[str]) -> list[n.
     # what `Lib.X.y` can be besides a POU or type: an enumerator, a GVL's variable
     enums: set[tuple[str, str]] = set()
     gvls: set[tuple[str, str]] = set()
+    # `Lib.member` without the enumeration's name (TcUnit-Verifier: `IBaseLibrary.TYPE_BIT`): the
+    # enumerator of the one enumeration of Lib that has it, unless that one is qualified_only or
+    # Lib declares something else of that name (a POU, type or variable wins, as before)
+    members: dict[tuple[str, str], tuple[str, str] | None] = {}
+    declared: set[tuple[str, str]] = set()
     for unit in units:
         for d in unit.types:
-            if d.namespace and d.namespace[0].lower() in libs and isinstance(d.body, n.EnumDecl):
-                enums.add((d.namespace[0].lower(), d.name.lower()))
+            if d.namespace and d.namespace[0].lower() in libs:
+                lib = d.namespace[0].lower()
+                declared.add((lib, d.name.lower()))
+                if isinstance(d.body, n.EnumDecl):
+                    enums.add((lib, d.name.lower()))
+                    strict = has_attribute(d.pragmas, "qualified_only")
+                    for member in d.body.members:
+                        key = (lib, member[0].lower())
+                        # None: ambiguous (two enumerations) or reachable only with its type's name
+                        members[key] = None if strict or key in members else (d.namespace[0], d.name)
+        for p in unit.pous:
+            if p.namespace and p.namespace[0].lower() in libs:
+                declared.add((p.namespace[0].lower(), p.name.lower()))
         for g in unit.globals:
-            if g.namespace and g.namespace[0].lower() in libs and g.gvl:
-                gvls.add((g.namespace[0].lower(), g.gvl.lower()))
+            if g.namespace and g.namespace[0].lower() in libs:
+                if g.gvl:
+                    gvls.add((g.namespace[0].lower(), g.gvl.lower()))
+                    declared.add((g.namespace[0].lower(), g.gvl.lower()))
+                declared.update((g.namespace[0].lower(), name.lower()) for decl in g.block.decls for name, _ in decl.names)
+    enumerators = {key: enum for key, enum in members.items() if enum is not None and key not in declared}
     out = []
     for unit in units:
         if not libs & unit.member_bases:
             out.append(unit)
             continue
-        pous = tuple(_Qualifier(libs, _locals(p), enums, gvls).walk(p) for p in unit.pous)
-        rw = _Qualifier(libs, set(), enums, gvls)
+        pous = tuple(_Qualifier(libs, _locals(p), enums, gvls, enumerators).walk(p) for p in unit.pous)
+        rw = _Qualifier(libs, set(), enums, gvls, enumerators)
         out.append(dataclasses.replace(unit, pous=pous, types=tuple(rw.walk(d) for d in unit.types),
                                        globals=tuple(rw.walk(g) for g in unit.globals)))
     return out
@@ -133,10 +154,11 @@ _LEAVES = (str, int, float, bool, bytes, type(None), n.Span)
 
 
 class _Qualifier:
-    def __init__(self, libs: set[str], local_names: set[str], enums, gvls) -> None:
+    def __init__(self, libs: set[str], local_names: set[str], enums, gvls, enumerators) -> None:
         self.libs = libs - local_names
         self.enums = enums
         self.gvls = gvls
+        self.enumerators = enumerators   # (lib, enumerator) lower -> (lib, enumeration) as declared
 
     def walk(self, obj):
         if isinstance(obj, n.Member):
@@ -151,6 +173,9 @@ class _Qualifier:
                     return dataclasses.replace(obj, base=n.Name((base.name,), False, base.span))
             if isinstance(base, n.Name) and len(base.parts) == 1 and not base.rooted \
                     and base.parts[0].lower() in self.libs:
+                enum = self.enumerators.get((base.parts[0].lower(), obj.name.lower()))
+                if enum is not None:       # `Lib.member`: the enumerator of Lib's one enumeration with it
+                    return n.HashLiteral(enum, False, obj.name, obj.span)
                 return n.Name((base.parts[0], obj.name), False, obj.span)
             new = self.walk(base)
             return obj if new is base else dataclasses.replace(obj, base=new)
