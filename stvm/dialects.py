@@ -209,7 +209,9 @@ def known_library_prefix(parts: tuple[str, ...], known) -> tuple[str, ...]:
     `FsCommon.I_Runnable`): the name itself when `known(parts)`, else the name without its leading
     library part(s) when that is known, else the name as given (the caller reports it unknown).
     The one place where a vendor library's namespace is taken off a name; a library loaded as a
-    real namespace makes the full name known and wins."""
+    real namespace makes the full name known and wins (`Lib.ENUMERATOR`, an enumerator of the one
+    enumeration of Lib that has it, is resolved with the namespaces in stvm/libraries.py `qualify`;
+    docs/dialects.md "Library enumerators")."""
     if known(parts):
         return parts
     for start in range(1, len(parts)):
