@@ -446,7 +446,9 @@ class Checker:
             var = info.variables.get(key)
             if var is None or var.section != LOCAL:
                 continue    # a duplicate, already reported
-            hidden = Variable(f"{info.qualname.replace('.', '__')}__{var.name}", GLOBAL, var.type, False, var.span)
+            # a library's POU is named `Lib\POU` (TcUnit's TEST_FINISHED_NAMED): no backslash in the global
+            owner = info.qualname.replace(".", "__").replace("\\", "__")
+            hidden = Variable(f"{owner}__{var.name}", GLOBAL, var.type, False, var.span)
             hidden.init = var.init
             self.globals[hidden.key] = hidden
             del info.variables[key]

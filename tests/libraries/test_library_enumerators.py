@@ -1,6 +1,7 @@
 """`Lib.ENUMERATOR`: an enumerator written with its library's namespace but without its
 enumeration's name (TcUnit-Verifier's `IBaseLibrary.TYPE_BIT`), resolved in stvm/libraries.py when
-exactly one enumeration of the library has it and that one is not qualified_only."""
+exactly one enumeration of the library has it and that one is not qualified_only; and a VAR_STAT
+of a library's function (its hidden global is named without the namespace's backslash)."""
 
 from __future__ import annotations
 
@@ -50,3 +51,13 @@ def test_an_ambiguous_or_qualified_only_enumerator_needs_its_type():
                                         f"{body} END_PROGRAM\n"})[0]
         rc, _, err = cli(["check", "--dialect", "twincat", "--library", f"MyLib={lib}", main])
         assert rc == 1 and f"MyLib\\{name}" in err, err
+
+
+def test_a_var_stat_of_a_library_function_keeps_its_value():
+    # TcUnit's TEST_FINISHED_NAMED: a VAR_STAT in a function of a library (a namespaced POU)
+    lib = write_files({"Count.st": "FUNCTION Count : UINT\nVAR_STAT calls : UINT; END_VAR\n"
+                                   "calls := calls + 1;\nCount := calls;\nEND_FUNCTION\n"})[0].parent
+    main = write_files({"main.st": "PROGRAM Main\nVAR n : UINT; END_VAR\nn := MyLib.Count();\nEND_PROGRAM\n"})
+    vm = load(main, TWINCAT, use_cache=False, libraries=[Library("MyLib", lib)]).start()
+    vm.run(cycles=3)
+    assert vm["Main.n"] == 3
