@@ -116,6 +116,15 @@ ROWS: tuple[Row, ...] = (
         f"{TC3} 'TIME', 'TIME_OF_DAY', 'DATE', 'DATE_AND_TIME' and {CDS}: 32-bit values in ms / s (LTIME "
         f"64-bit ns); {W501}: TIME, DATE, TOD and DT are 64-bit nanoseconds; IEC 61131-3 leaves the "
         "size open (stvm keeps 64 bits there). Seen by SIZEOF, MEMCPY, cast pointers and UNION members"),
+    Row("unsigned_time", "TIME and LTIME are unsigned: TIME 0..T#49d17h2m47s295ms (32-bit ms), LTIME "
+        "0..LTIME#213503d23h34m33s709ms551us615ns (64-bit ns); arithmetic wraps there, LTIME_TO_STRING "
+        "writes LTIME#",
+        False, False, True, True,
+        f"{TC3} 'TIME/LTIME': TIME is handled like a UDINT, LTIME like a ULINT, lower limit 0; {CDS} "
+        "'Data type: TIME, LTIME': DWORD / LWORD, T#0MS..T#49D17H2M47S295MS and "
+        f"LTIME#0NS..LTIME#213503D23H34M33S709MS551US615NS; IEC 61131-3 and {W501}: signed 64-bit "
+        "nanoseconds (±106751d23h47m16s854ms775us807ns), arithmetic wraps as a LINT, LTIME_TO_STRING "
+        "writes LT#"),
     Row("enum_integer", "an enumeration value assigned to an integer variable and an integer to an enumeration",
         False, False, False, True,
         f"{TC3} 'Enumerations': without {{attribute 'strict'}} an enumeration converts implicitly to and "
@@ -200,7 +209,9 @@ def known_library_prefix(parts: tuple[str, ...], known) -> tuple[str, ...]:
     `FsCommon.I_Runnable`): the name itself when `known(parts)`, else the name without its leading
     library part(s) when that is known, else the name as given (the caller reports it unknown).
     The one place where a vendor library's namespace is taken off a name; a library loaded as a
-    real namespace makes the full name known and wins."""
+    real namespace makes the full name known and wins (`Lib.ENUMERATOR`, an enumerator of the one
+    enumeration of Lib that has it, is resolved with the namespaces in stvm/libraries.py `qualify`;
+    docs/dialects.md "Library enumerators")."""
     if known(parts):
         return parts
     for start in range(1, len(parts)):

@@ -283,7 +283,7 @@ class ExpressionGenerator:
         if isinstance(ty, t.IntType):
             return wrap_int(f"-{operand}", ty)
         if getattr(ty, "family", "") == "TIME":
-            return wrap_int(f"-{operand}", t.LINT)  # type: ignore[arg-type]
+            return self.time_wrap(f"-{operand}", ty)
         return f"(-{operand})"
 
     def ex_Binary(self, e: n.Binary) -> str:
@@ -405,15 +405,22 @@ class ExpressionGenerator:
         rt = self.facts.types[e.right.nid]
         left, right = self.expr(e.left), self.expr(e.right)
         if e.op in ("PLUS", "MINUS"):
-            return wrap_int(f"{left} {'+' if e.op == 'PLUS' else '-'} {right}", t.LINT)  # type: ignore[arg-type]
+            return self.time_wrap(f"{left} {'+' if e.op == 'PLUS' else '-'} {right}", ty)
         if e.op == "STAR":
             if isinstance(lt, t.RealType) or isinstance(rt, t.RealType):
                 return f"int({left} * {right})"
-            return wrap_int(f"{left} * {right}", t.LINT)  # type: ignore[arg-type]
+            return self.time_wrap(f"{left} * {right}", ty)
         zero = self.settings.int_div_zero is IntDivZero.ZERO   # TIME / 0 is an integer division by 0
         if isinstance(rt, t.RealType):
             return f"{'_tdiv0' if zero else '_tdiv'}({left}, {right})"
-        return wrap_int(f"{'_idiv0' if zero else '_idiv'}({left}, {right})", t.LINT)  # type: ignore[arg-type]
+        return self.time_wrap(f"{'_idiv0' if zero else '_idiv'}({left}, {right})", ty)
+
+    def time_wrap(self, code: str, ty: t.Type) -> str:
+        """A time result wrapped as the dialect's runtime does: TIME/LTIME are unsigned under
+        `unsigned_time` (TwinCAT/CODESYS: modulo 2^32 ms, 2^64 ns), else a LINT of nanoseconds."""
+        if isinstance(ty, t.TimeType) and ty.family == "TIME" and allows(self.settings.dialect, "unsigned_time"):
+            return f"(({code}) % {1 << 64 if ty.long else (1 << 32) * 1_000_000})"
+        return wrap_int(code, t.LINT)  # type: ignore[arg-type]
 
     def open_array_code(self, code: str, vtype: t.Type | None) -> str:
         """A whole fixed array passed to an ARRAY[*] parameter (see `open_array_bounds`)."""

@@ -71,7 +71,8 @@ def _build_codec(ty: t.Type, short: bool) -> tuple[Encode, Decode]:
     if isinstance(ty, t.TimeType):
         if short and not ty.long:
             return _scaled_codec(_MS if ty.family in ("TIME", "TIME_OF_DAY") else _S)
-        return _int_codec(8, True)
+        # the TwinCAT/CODESYS layout is that of the unsigned time types (`unsigned_time`): LTIME a ULINT
+        return _int_codec(8, not (short and ty.family == "TIME"))
     if isinstance(ty, t.RealType):
         packer = struct.Struct("<f" if ty.bits == 32 else "<d")
 

@@ -446,8 +446,8 @@ class Checker:
             var = info.variables.get(key)
             if var is None or var.section != LOCAL:
                 continue    # a duplicate, already reported
-            # a library POU's qualname holds `\\` (TcUnit\\TEST_FINISHED_NAMED): the hidden name must be an identifier
-            owner = info.qualname.replace('.', '__').replace(chr(92), '__')
+            # a library's POU is named `Lib\POU` (TcUnit's TEST_FINISHED_NAMED): no backslash in the global
+            owner = info.qualname.replace(".", "__").replace("\\", "__")
             hidden = Variable(f"{owner}__{var.name}", GLOBAL, var.type, False, var.span)
             hidden.init = var.init
             self.globals[hidden.key] = hidden

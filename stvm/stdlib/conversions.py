@@ -26,6 +26,7 @@ import math
 import re
 from functools import lru_cache
 
+from stvm.dialects import allows
 from stvm.runtime.values import FunctionError
 from stvm.semantics.types import ELEMENTARY, BoolType, EnumType, IntType, RealType, StringType, TimeType, Type, is_wide
 from stvm.stdlib.registry import native_function
@@ -155,7 +156,17 @@ def to_text(ctx, value, source: Type) -> bytes:
     if isinstance(source, RealType):
         return real_to_text(value, source.bits, ctx.settings.real_to_string_format)
     text = TIME_TEXT_WRITERS[source.family](value)  # type: ignore[attr-defined]
+    if source.long and source.family == "TIME" and allows(ctx.settings.dialect, "unsigned_time"):  # type: ignore[attr-defined]
+        return b"LTIME#" + text[2:]                 # TwinCAT/CODESYS LTIME_TO_STRING: LTIME#1ms
     return b"L" + text if source.long else text     # type: ignore[attr-defined]  # LT#…, LDT#…
+
+
+def wrap_time(ctx, value: int, target: Type) -> int:
+    """A value converted to TIME/LTIME, wrapped as an unsigned time where the dialect's time types
+    are unsigned (`unsigned_time`: TIME modulo 2^32 ms, LTIME modulo 2^64 ns); else unchanged."""
+    if target.family == "TIME" and allows(ctx.settings.dialect, "unsigned_time"):  # type: ignore[attr-defined]
+        return value % (1 << 64 if target.long else (1 << 32) * 1_000_000)  # type: ignore[attr-defined]
+    return value
 
 
 TIME_TEXT_WRITERS = {"TIME": time_to_text, "DATE": date_to_text, "TIME_OF_DAY": tod_to_text,
@@ -270,6 +281,10 @@ def text_to_time(ctx, text: bytes, what: str) -> int:
     if position == 0:
         raise FunctionError(f"{what}: {text!r} is not a duration")
     total = -total if negative else total
+    if allows(ctx.settings.dialect, "unsigned_time"):   # TwinCAT/CODESYS: 0 .. 2^64-1 ns (LTIME)
+        if not 0 <= total < (1 << 64):
+            raise FunctionError(f"{what}: {text!r} is outside the LTIME range")
+        return total
     if not -(1 << 63) <= total < (1 << 63):
         raise FunctionError(f"{what}: {text!r} is outside the TIME range")
     return total
@@ -390,14 +405,14 @@ def _make_converter(what: str, source_name: str, target_name: str):
             if isinstance(source, RealType):
                 if not math.isfinite(value):
                     raise FunctionError(f"{what}: {value} is not a time")
-                return real_to_integer(value * unit)
-            return int(value) * unit
+                return wrap_time(ctx, real_to_integer(value * unit), target)
+            return wrap_time(ctx, int(value) * unit, target)
     elif isinstance(source, TimeType):
         # DT_TO_DATE / DT_TO_TOD: the date part, or the time of day (IEC 2.5.1.5.1); between a
         # type and its long form (TIME_TO_LTIME, LDT_TO_DT, …) the value itself (both 64-bit ns)
         def convert(ctx, value):
             if source.family == target.family:  # type: ignore[attr-defined]
-                return value
+                return wrap_time(ctx, value, target)
             return value - value % NS_PER_DAY if target.family == "DATE" else value % NS_PER_DAY  # type: ignore[attr-defined]
     else:
         def convert(ctx, value):

@@ -108,6 +108,11 @@ def decode_wstring(token_text: str, settings: SysmacSettings) -> str:
 MAX_INT_LITERAL_CHARS = 160
 # TIME/LTIME are 64-bit counts of nanoseconds (about ±106,751 days)
 TIME_NS_MIN, TIME_NS_MAX = -2**63, 2**63 - 1
+# ... unless unsigned (the `unsigned_time` profile row, TwinCAT/CODESYS): TIME a 32-bit count of
+# milliseconds, LTIME a 64-bit count of nanoseconds, both from 0
+UNSIGNED_TIME_NS_MAX = {"TIME": (2**32 - 1) * 1_000_000, "LTIME": 2**64 - 1}
+UNSIGNED_TIME_TEXT = {"TIME": "T#0ms..T#49d17h2m47s295ms (32-bit milliseconds)",
+                      "LTIME": "LTIME#0ns..LTIME#213503d23h34m33s709ms551us615ns (64-bit nanoseconds)"}
 
 
 def check_digit_separators(text: str) -> None:
@@ -133,8 +138,9 @@ def decode_int(text: str) -> int:
 
 
 @lru_cache(maxsize=4096)   # the same few durations recur in a program (PT := T#100ms); Fractions are slow
-def decode_time(text: str) -> int:
-    """`T#1h2m3s4ms5us6ns` → nanoseconds. Raises LiteralError."""
+def decode_time(text: str, unsigned: str | None = None) -> int:
+    """`T#1h2m3s4ms5us6ns` → nanoseconds. Raises LiteralError. `unsigned`: "TIME" or "LTIME" when
+    the dialect's time types are unsigned (`unsigned_time`), which sets the range."""
     body = text.split("#", 1)[1].replace("_", "")
     sign = 1
     if body and body[0] in "+-":
@@ -153,6 +159,11 @@ def decode_time(text: str) -> int:
     if pos != len(body):
         raise LiteralError(f"malformed duration literal {text!r}")
     value = sign * int(total)
+    if unsigned is not None:
+        if not 0 <= value <= UNSIGNED_TIME_NS_MAX[unsigned]:
+            raise LiteralError(f"duration {text if len(text) <= 40 else text[:40] + '…'} is out of range: "
+                               f"{unsigned} holds {UNSIGNED_TIME_TEXT[unsigned]} in this dialect")
+        return value
     if not TIME_NS_MIN <= value <= TIME_NS_MAX:
         raise LiteralError(f"duration {text if len(text) <= 40 else text[:40] + '…'} is out of range: "
                            f"TIME and LTIME hold at most ±106751d23h47m16s854ms775us807ns (64-bit nanoseconds)")

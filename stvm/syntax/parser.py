@@ -697,7 +697,10 @@ class _ToNodes:
     # the long forms (LT#, LTIME#, LDATE#, LD#, LTOD#, LTIME_OF_DAY#, LDT#, LDATE_AND_TIME#) are
     # the IEC ed. 3 64-bit types; DATE_AND_TIME# starts with D too, so the prefix decides
     def time_literal(self, meta, items):
-        return self._literal(meta, items, _long_form(items, "TIME", "LTIME"), decode_time)
+        type_name = _long_form(items, "TIME", "LTIME")
+        if allows(self.settings.dialect, "unsigned_time"):   # TwinCAT/CODESYS: 0..2^32-1 ms, 0..2^64-1 ns
+            return self._literal(meta, items, type_name, lambda text: decode_time(text, type_name))
+        return self._literal(meta, items, type_name, decode_time)
 
     def date_literal(self, meta, items):
         return self._literal(meta, items, _long_form(items, "DATE", "LDATE"), decode_date)

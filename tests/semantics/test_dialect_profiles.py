@@ -161,6 +161,19 @@ def probe_short_times(dialect, value):
         assert result == (8, 8, 8, 8, 1_500_000_000)
 
 
+def probe_unsigned_time(dialect, value):
+    result = outcome("PROGRAM Main VAR d : LTIME; t : TIME; s : STRING; END_VAR\n"
+                     "d := LTIME#0ns - LTIME#1ns; t := T#0ms - T#1ms; s := LTIME_TO_STRING(LTIME#1ms); END_PROGRAM",
+                     dialect, ["Main.d", "Main.t", "Main.s"])
+    # TwinCAT/CODESYS: ULINT ns and UDINT ms wrap-around; elsewhere signed 64-bit ns
+    assert (result == (2**64 - 1, (2**32 - 1) * 1_000_000, b"LTIME#1ms")) is value
+    if not value:
+        assert result == (-1, -1_000_000, b"LT#1ms")
+    largest = outcome("PROGRAM Main VAR d : LTIME := LTIME#213503D23H34M33S709MS551US615NS; END_VAR END_PROGRAM",
+                      dialect, ["Main.d"])
+    assert (largest == (2**64 - 1,)) is value
+
+
 def probe_enum_integer(dialect, value):
     result = outcome("TYPE E : (A := 3, B := 5); END_TYPE\n"
                      "PROGRAM Main VAR x : E := E.B; i : INT; f : E; END_VAR i := x; f := 3; END_PROGRAM",
