@@ -38,6 +38,7 @@ from pathlib import Path
 from typing import Iterable, Mapping, Sequence
 
 from stvm.syntax import nodes as n
+from stvm.syntax.pragmas import has_attribute
 
 _NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*\Z")
 
@@ -261,20 +262,33 @@ def qualify(units: Sequence[n.CompilationUnit], names: Iterable[str]) -> list[n.
     gvls: set[tuple[str, str]] = set()
     # `Lib.x` besides a POU or type: a global variable of the library, an enumerator of one of
     # its enumerations (`SysFile.AM_READ`, `SysTypes.RTS_INVALID_HANDLE`: CODESYS libraries)
+    # An enumerator is reached this way only when exactly one enumeration of Lib has it and that
+    # one is not qualified_only (None marks the others), and a POU or type of Lib of the same
+    # name wins (TcUnit-Verifier writes `IBaseLibrary.TYPE_BIT`).
     members: dict[tuple[str, str], object] = {}
+    declared: set[tuple[str, str]] = set()
     for unit in units:
+        for p in unit.pous:
+            if p.namespace and p.namespace[-1].lower() in libs:
+                declared.add((p.namespace[-1].lower(), p.name.lower()))
         for d in unit.types:
+            if d.namespace and d.namespace[-1].lower() in libs:
+                declared.add((d.namespace[-1].lower(), d.name.lower()))
             if d.namespace and d.namespace[-1].lower() in libs and isinstance(d.body, n.EnumDecl):
                 enums.add((d.namespace[-1].lower(), d.name.lower()))
+                strict = has_attribute(d.pragmas, "qualified_only")
                 for m in d.body.members:
-                    members.setdefault((d.namespace[-1].lower(), m[0].lower()), (d.namespace + (d.name,)))
+                    key = (d.namespace[-1].lower(), m[0].lower())
+                    members[key] = None if strict or key in members else (d.namespace + (d.name,))
         for g in unit.globals:
             if g.namespace and g.namespace[-1].lower() in libs and g.gvl:
                 gvls.add((g.namespace[-1].lower(), g.gvl.lower()))
             if g.namespace and g.namespace[-1].lower() in libs:
                 for decl in g.block.decls:
                     for name, _ in decl.names:
-                        members.setdefault((g.namespace[-1].lower(), name.lower()), "global")
+                        members[(g.namespace[-1].lower(), name.lower())] = "global"   # a variable wins
+    members = {key: found for key, found in members.items()
+               if found is not None and (found == "global" or key not in declared)}
     out = []
     for unit in units:
         if not libs & unit.member_bases:

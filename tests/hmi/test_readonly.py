@@ -6,7 +6,6 @@ from __future__ import annotations
 import threading
 
 import httpx
-import pytest
 
 import stvm
 from small_project import SOURCE, TEST_PAGE, write_project
