@@ -183,9 +183,10 @@ ROWS: tuple[Row, ...] = (
     Row("bool_to_string", "BOOL_TO_STRING", "'TRUE'/'FALSE'", "'TRUE'/'FALSE'", "'TRUE'/'FALSE'",
         "'TRUE'/'FALSE'", f"{TC3} 'TO_STRING conversions': BOOL_TO_STRING(TRUE) = 'TRUE'"),
     Row("unsized_string", "STRING without a size",
-        "1985 bytes", "1985 bytes", "1985 bytes", "1985 bytes",
+        "1985 bytes", "1985 bytes", "80 characters", "80 characters",
         f"{W501}: 1986 bytes with the NUL. TwinCAT and CODESYS reserve 80 characters ({TC3} "
-        "'STRING'); stvm keeps 1985 in every profile (not yet a profile difference: see docs)"),
+        "'STRING': 'if no size is specified, 80 characters'); IEC leaves it to the implementer and "
+        "stvm keeps Sysmac's 1985 there; the stdlib's own STRING parameters keep 1985 everywhere"),
 )
 
 BY_KEY = {row.key: row for row in ROWS}

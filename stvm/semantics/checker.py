@@ -15,6 +15,7 @@ from typing import Any, Mapping
 from stvm.diagnostics import Diagnostic
 from stvm.semantics.limits import array_bounds_problem, array_size_problem
 from stvm.source import is_stdlib_file
+from stvm.dialects import profile_value
 from stvm.numeric import f32, utf16_units
 from stvm.semantics import types as t
 from stvm.semantics.body import BodyChecker
@@ -259,6 +260,16 @@ class Checker:
         T that have no initialiser of their own; None if there is none."""
         if isinstance(spec, n.SubrangeTypeSpec):
             return spec.low   # IEC 6.4.4.3: a subrange variable starts at its lower bound
+        if isinstance(spec, n.ArrayTypeSpec):
+            # each element starts at its type's initial value (TcUnit: `ARRAY[1..n] OF UINT(1..m)`
+            # starts as n ones); the flat list is what an array initialiser gives
+            element = self.alias_init(spec.element, namespace, seen)
+            if element is None or any(r is None for r in spec.ranges):
+                return None
+            ty = self.resolve_type_spec(spec, namespace)
+            if not isinstance(ty, t.ArrayType) or not ty.dims:
+                return None
+            return [element] * ty.length
         if not isinstance(spec, n.NamedTypeSpec):
             return None
         key = self.lookup_type_key(spec.parts, spec.rooted, namespace)
@@ -984,6 +995,9 @@ class Checker:
 
     def wstring_spec(self, spec: n.StringTypeSpec, namespace: tuple[str, ...]) -> t.Type:
         """WSTRING[n]: n UTF-16 code units (IEC; no NUL counted, unlike Sysmac's STRING[n])."""
+        if spec.size is None and not _is_stdlib(spec.span.file) \
+                and profile_value(self.settings.dialect, "unsized_string") == "80 characters":
+            return t.wstring_type(80)     # TwinCAT/CODESYS: a WSTRING without a size holds 80
         units = self.const_int(spec.size, namespace)
         if units is None:
             return t.WSTRING
@@ -992,11 +1006,24 @@ class Checker:
             return t.WSTRING
         return t.wstring_type(units)
 
+    def unsized_string(self, span: n.Span) -> t.Type:
+        """`STRING` without a size: 1985 characters (Sysmac), or 80 under the profiles whose
+        `unsized_string` row says so (TwinCAT, CODESYS); the stdlib's own declarations keep the
+        long form (its functions take any STRING)."""
+        if _is_stdlib(span.file) or profile_value(self.settings.dialect, "unsized_string") != "80 characters":
+            return t.STRING
+        return t.string_type(81, "STRING[80]")
+
     def resolve_type_spec(self, spec: n.TypeSpec, namespace: tuple[str, ...], allow_generic: bool = False,
                           allow_open_array: bool = False) -> t.Type | None:
         if isinstance(spec, n.NamedTypeSpec):
             if len(spec.parts) == 1:
                 upper = spec.parts[0].upper()
+                if upper == "STRING":
+                    return self.unsized_string(spec.span)
+                if upper == "WSTRING" and not _is_stdlib(spec.span.file) \
+                        and profile_value(self.settings.dialect, "unsized_string") == "80 characters":
+                    return t.wstring_type(80)
                 if upper in t.ELEMENTARY:
                     return t.ELEMENTARY[upper]
                 if upper in t.GENERICS:
@@ -1021,6 +1048,8 @@ class Checker:
         if isinstance(spec, n.StringTypeSpec) and spec.wide:
             return self.wstring_spec(spec, namespace)
         if isinstance(spec, n.StringTypeSpec):
+            if spec.size is None:
+                return self.unsized_string(spec.span)
             size = self.const_int(spec.size, namespace)
             if size is None:
                 return t.STRING

@@ -66,10 +66,14 @@ def adsloglreal(ctx, mask: int, fmt: bytes, arg: float) -> int:
 @st_names("cpuCntLoDW", "cpuCntHiDW")
 class CpuCounter:
     """The 64-bit counter in 100 ns ticks: the virtual clock at the start of the scan (so a run
-    is deterministic; a test's durations are virtual time)."""
+    is deterministic; a test's durations are virtual time) plus BOOT_TICKS. A real CPU counter
+    counts from the machine's start and is never 0 at the PLC's first scan; TcUnit takes a
+    timestamp of 0 as "not started yet" (an empty suite started in scan 0 would never finish)."""
+
+    BOOT_TICKS = 10_000_000    # choice: as if the machine started 1 s before the first scan
 
     def call(self, inst, ctx) -> None:
-        ticks = ctx.now_ns // 100
+        ticks = ctx.now_ns // 100 + self.BOOT_TICKS
         inst.cpuCntLoDW = ticks & 0xFFFFFFFF
         inst.cpuCntHiDW = (ticks >> 32) & 0xFFFFFFFF
 
