@@ -86,9 +86,9 @@ def _timer_floor() -> float:
 def opcua_like(vm, items: int = 200):
     """The bridge watch OPC UA makes for `items` monitored items sampled every scan."""
     from stvm.frontend import VariableBridge
-    from stvm.trace.signals import all_nodes
-    paths = [name for name, ty, _root, _steps in all_nodes(vm)
-             if ty.kind in ("bool", "int", "real", "time", "string", "enum")][:items]
+    from stvm.runtime.catalog import Catalog
+    paths = [node.path for node in Catalog(vm).walk()
+             if node.leaf and node.type.kind in ("bool", "int", "real", "time", "string", "enum")][:items]
     inbox = {}
     bridge = VariableBridge(vm)
     bridge.watch(paths, 0, lambda snapshot: inbox.__setitem__("group", snapshot), changes_only=True)

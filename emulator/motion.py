@@ -160,7 +160,7 @@ class Kinematics:
             ct, st = dm.cos(th), dm.sin(th)
             rows = ((ct, -st * ca, st * sa, a * ct), (st, ct * ca, -ct * sa, a * st), (0.0, sa, ca, d))
             if q != 0.0:
-                if len(self._link_rows) >= 4096:   # bounded: a long run visits many angles
+                if len(self._link_rows) >= 256:   # bounded small: the reuse is within one step (the Jacobian), a run visits ever new angles
                     self._link_rows.clear()
                 self._link_rows[key] = rows
         return rows
@@ -204,7 +204,7 @@ class Kinematics:
             found = self._ik_results[key]
             return None if found is None else found.copy()
         found = self._ik(target, seed_deg, tool, max_iterations)
-        if len(self._ik_results) >= 1024:   # bounded: a long run with ever new targets
+        if len(self._ik_results) >= 128:   # bounded: a cycle repeats a few targets; a long run with ever new ones stays small
             self._ik_results.clear()
         self._ik_results[key] = None if found is None else found.copy()
         return found

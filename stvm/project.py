@@ -609,7 +609,7 @@ def _parse_units(texts, diags, settings, use_cache: bool = True, unit_entries: b
         try:
             units = lib.apply_parameters(units, spaces.parameters, settings)
         except lib.LibraryError as exc:
-            diags.append(Diagnostic.error(str(exc), Span(units[-1].path if units else "<input>", 0, 0, 0, 0)))
+            diags.append(Diagnostic.error(str(exc), Span(units[-1].path if units else "<input>", 0, 0, 0, 0), "E081"))
     if spaces or getattr(settings.dialect, "value", settings.dialect) == "twincat":
         units = _libraries().qualify(units, _libraries().namespaces(spaces or {}, settings))
     return units, diags, sources

@@ -58,7 +58,7 @@ class BoundedProtocol(OPCUAProtocol):
         super().connection_made(transport)
         if self.processor is not None:
             # asyncua builds its processor inside connection_made: give it BrowseNext (stvm.opcua.browse)
-            from stvm.opcua.browse import BrowsingProcessor
+            from stvm.opcua.browse import BrowsingProcessor   # lazy: a cycle (browse imports the server's pieces)
             self.processor.__class__ = BrowsingProcessor
 
     def data_received(self, data: bytes) -> None:

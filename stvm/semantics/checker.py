@@ -372,6 +372,8 @@ class Checker:
                     input_constant = (block.constant and kind == INPUT and decl.init is None
                                       and allows(self.settings.dialect, "input_constant"))
                     var = Variable(name, kind, vtype or t.DINT, block.constant and not input_constant, span)
+                    var.instance_path = bool(decl.pragmas) and isinstance(vtype, t.StringType) \
+                        and has_attribute(decl.pragmas, "instance-path")
                     if decl.init is None and kind not in (IN_OUT, EXTERNAL):
                         var.init = self.alias_init(decl.type_spec, namespace)
                     # VAR_IN_OUT CONSTANT (CODESYS/TwinCAT): an in-out the POU may not write; its

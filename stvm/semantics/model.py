@@ -36,6 +36,9 @@ class Variable:
     init: object = None       # the constant initial value (runtime representation) or None for the type default
     # CODESYS `fb : F(1, nMax := 5)`: F's FB_init inputs given in the declaration, {input key: value}
     fb_args: dict | None = None
+    # TwinCAT `{attribute 'instance-path'}` on a STRING member of an FB: the VM writes the path of
+    # each instance into it at start (stdlib/tc2_system.py `fill_instance_paths`)
+    instance_path: bool = False
 
     @property
     def key(self) -> str:

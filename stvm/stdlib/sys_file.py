@@ -28,6 +28,7 @@ import tempfile
 from pathlib import Path
 
 from stvm.lower.bind import st_names
+from stvm.runtime.memory import MemoryFault, Ptr
 from stvm.stdlib.registry import native_fb, native_function
 
 ERR_OK, ERR_FAILED, ERR_PARAMETER = 0x0, 0x1, 0x2
@@ -147,7 +148,13 @@ def _set_result(ptr, code: int) -> None:
 
 def read_bytes(ptr, size: int) -> bytes | None:
     """`size` bytes at a POINTER TO BYTE: an ARRAY OF BYTE (the pointer to its first element, or
-    to one element of it) or a STRING (its characters, then NULs); None for anything else."""
+    to one element of it) or a STRING (its characters, then NULs), or any byte address the memory
+    model makes (stvm/runtime/memory.py: a cast or moved pointer); None for anything else."""
+    if type(ptr) is Ptr:
+        try:
+            return ptr.read(size)
+        except MemoryFault:
+            return None
     if type(ptr) is list:
         lst, start = ptr, 0
     elif hasattr(ptr, "lst") and hasattr(ptr, "index"):
@@ -166,7 +173,14 @@ def read_bytes(ptr, size: int) -> bytes | None:
 
 
 def write_bytes(ptr, data: bytes) -> bool:
-    """Store `data` at a POINTER TO BYTE (an ARRAY OF BYTE or one of its elements)."""
+    """Store `data` at a POINTER TO BYTE (an ARRAY OF BYTE or one of its elements, or a byte
+    address of the memory model)."""
+    if type(ptr) is Ptr:
+        try:
+            ptr.write(data)
+        except MemoryFault:
+            return False
+        return True
     if type(ptr) is list:
         lst, start = ptr, 0
     elif hasattr(ptr, "lst") and hasattr(ptr, "index"):

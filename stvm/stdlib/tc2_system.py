@@ -130,6 +130,7 @@ def install_system_info(vm, project) -> None:
     name = manifest.get("project", {}).get("name") or (root.name if root is not None else "stvm")
     hook = SystemInfo(vm, str(name))
     vm.on_scan_start.append(hook)
+    fill_instance_paths(vm, str(name))
     # GETCURTASKINDEX reads the index of the task whose code runs (ctx.task holds its name)
     vm.ctx.task_indices = hook.index
 
@@ -273,3 +274,34 @@ class FormatString:
             inst.bError, inst.nErrId = False, 0
         except FormatError:
             inst.sOut, inst.bError, inst.nErrId = b"", True, FORMAT_ERROR
+
+
+def fill_instance_paths(vm, project_name: str) -> None:
+    """`{attribute 'instance-path'}` (Beckhoff Infosys, TwinCAT 3 PLC "Attribute 'instance-path'"):
+    a STRING member of a function block so marked holds the path of each instance, which TwinCAT
+    writes before the first cycle: the PLC project's name, then the instance's path
+    (`TcUnitVerifier.PRG_TEST.PrimitiveTypes`; TcUnit strips the project name). Written once at
+    start, for every FB instance the variable catalog lists (stvm/runtime/catalog.py)."""
+    from stvm.runtime.catalog import Catalog   # lazy: twincat projects only
+    pous = vm.model.pous
+    marked: dict[str, list[str]] = {}
+
+    def marked_members(qualname: str) -> list[str]:
+        key = qualname.lower()
+        if key not in marked:
+            names, seen, info = [], set(), pous.get(key)
+            while info is not None and info.qualname.lower() not in seen:    # the FB and its bases
+                seen.add(info.qualname.lower())
+                names += [v.name for v in info.variables.values() if getattr(v, "instance_path", False)]
+                info = pous.get(info.base) if info.base else None
+            marked[key] = names
+        return marked[key]
+
+    if not any(getattr(v, "instance_path", False) for info in pous.values() for v in info.variables.values()):
+        return
+    from stvm.semantics import types as t   # lazy: as above
+    for node in Catalog(vm).walk():
+        if isinstance(node.type, t.FBType) and not node.type.is_program:
+            for name in marked_members(node.type.qualname):
+                text = f"{project_name}.{node.path}".encode("latin-1", "replace")
+                vm.set(f"{node.path}.{name}", text)

@@ -338,6 +338,8 @@ class VarDecl(Node):
     span: Span = _span()
     # CODESYS/TwinCAT `fb : F(1, nMax := 5)`: the arguments of F's FB_init (None: no parentheses)
     fb_args: tuple[Argument, ...] | None = None
+    # the `{…}` pragmas right before the declaration, inside its var block (syntax/pragmas.py)
+    pragmas: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True, slots=True)

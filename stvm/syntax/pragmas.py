@@ -60,7 +60,7 @@ def attach(unit: n.CompilationUnit, tokens: list) -> n.CompilationUnit:
         if i > 0 and elements[i - 1][1] > where:
             continue      # inside the element before it (a variable's or a statement's pragma)
         found.setdefault((elements[i][2], elements[i][3]), []).append(str(tok)[1:-1].strip())
-    if not found and not any(p.methods for p in unit.pous):
+    if not found and not any(p.methods or p.var_blocks for p in unit.pous):
         return unit
 
     def with_pragmas(kind: str, items: tuple) -> tuple:
@@ -69,6 +69,8 @@ def attach(unit: n.CompilationUnit, tokens: list) -> n.CompilationUnit:
             extra = found.get((kind, i))
             if kind == "pous" and item.methods:
                 item = with_method_pragmas(item, tokens)
+            if kind == "pous" and item.var_blocks:
+                item = with_variable_pragmas(item, tokens)
             if extra:
                 item = dataclasses.replace(item, pragmas=tuple(item.pragmas) + tuple(extra))
                 if kind == "globals":
@@ -115,3 +117,27 @@ def with_method_pragmas(pou, tokens: list):
         mine = tuple(str(tok)[1:-1].strip() for tok in inside if before <= (tok.line, tok.column) < start)
         methods.append(dataclasses.replace(m, pragmas=tuple(m.pragmas) + mine) if mine else m)
     return dataclasses.replace(pou, methods=tuple(methods))
+
+
+def with_variable_pragmas(pou, tokens: list):
+    """`pou` with each variable declaration's leading pragmas (`{attribute 'instance-path'}` on
+    the line before `InstancePath : T_MaxString;`): the ones inside its var block after the
+    declaration before it (or the block's keyword)."""
+    blocks = []
+    changed = False
+    for block in pou.var_blocks:
+        b = block.span
+        inside = [tok for tok in tokens
+                  if (b.line, b.column) < (tok.line, tok.column) < (b.end_line, b.end_column)]
+        if not inside:
+            blocks.append(block)
+            continue
+        decls, before = [], (b.line, b.column)
+        for decl in block.decls:
+            start = (decl.span.line, decl.span.column)
+            mine = tuple(str(tok)[1:-1].strip() for tok in inside if before <= (tok.line, tok.column) < start)
+            decls.append(dataclasses.replace(decl, pragmas=tuple(decl.pragmas) + mine) if mine else decl)
+            before = (decl.span.end_line, decl.span.end_column)
+        blocks.append(dataclasses.replace(block, decls=tuple(decls)))
+        changed = True
+    return dataclasses.replace(pou, var_blocks=tuple(blocks)) if changed else pou

@@ -57,8 +57,8 @@ def test_each_tcunit_test_is_an_item(tmp_path, workers):
     assert {k: v for k, v in outcomes.items() if v != "SKIPPED"} == EXPECTED, result.stdout
     assert len(skipped) == 1 and "disabled in the source" in skipped[0], result.stdout
     # the failure text: the framework's own assertion lines, no Python traceback
-    assert "FAILED TEST '@WrongOnPurpose', EXP: 5, ACT: 1, MSG: fails on purpose\n" \
-           "FAILED TEST '@WrongOnPurpose', EXP: TRUE, ACT: FALSE, MSG: not full either" in result.stdout
+    assert "FAILED TEST 'MiniProject.PRG_TEST.CounterSuite@WrongOnPurpose', EXP: 5, ACT: 1, MSG: fails on purpose\n" \
+           "FAILED TEST 'MiniProject.PRG_TEST.CounterSuite@WrongOnPurpose', EXP: TRUE, ACT: FALSE, MSG: not full either" in result.stdout
     assert "Traceback" not in result.stdout
     assert re.search(r"1 failed, 4 passed, 1 skipped", result.stdout), result.stdout
 

@@ -36,8 +36,8 @@ def test_fixture_project_messages_summary_and_exit_code():
     lines = _lines(out)
     # every ADSLOGSTR message, one line each, the message type of its mask first, in order
     assert lines[:8] == [
-        "error: FAILED TEST '@WrongOnPurpose', EXP: 5, ACT: 1, MSG: fails on purpose",
-        "error: FAILED TEST '@WrongOnPurpose', EXP: TRUE, ACT: FALSE, MSG: not full either",
+        "error: FAILED TEST 'MiniProject.PRG_TEST.CounterSuite@WrongOnPurpose', EXP: 5, ACT: 1, MSG: fails on purpose",
+        "error: FAILED TEST 'MiniProject.PRG_TEST.CounterSuite@WrongOnPurpose', EXP: TRUE, ACT: FALSE, MSG: not full either",
         "error: | ==========TESTS FINISHED RUNNING==========",
         "error: | Test suites: 2",
         "error: | Tests: 6",
