@@ -74,15 +74,15 @@ def real_to_text(value: float, bits: int, style: RealToStringFormat = RealToStri
 def _shortest_real_text(value: float, bits: int) -> bytes:
     """The fewest significant digits that read back as the same REAL/LREAL (Beckhoff: 3.5 ->
     '3.5', LREAL_TO_STRING -> '1.4'; at most 16 digits for LREAL, which the shortest form never
-    exceeds but for 17-digit doubles, cut to 16 as Beckhoff says). Choice where the vendors show no
-    example: plain notation for exponents -5..15, else mantissa and 'E+nn'/'E-nn'; '#INF', '-#INF'
+    exceeds but for 17-digit doubles, cut to 16 as Beckhoff says); a whole number with '.0' ('24.0',
+    '0.0'). Choice where the vendors show no example: plain notation for exponents -5..15, else mantissa and 'E+nn'/'E-nn'; '#INF', '-#INF'
     and '#QNAN' as Beckhoff's LREAL_TO_FMTSTR writes them."""
     if math.isnan(value):
         return b"#QNAN"
     if math.isinf(value):
         return b"#INF" if value > 0 else b"-#INF"
     if value == 0:
-        return b"0" if math.copysign(1.0, value) > 0 else b"-0"
+        return b"0.0" if math.copysign(1.0, value) > 0 else b"-0.0"
     limit = 9 if bits == 32 else 16
     for digits in range(1, limit + 1):
         text = f"{value:.{digits - 1}e}"
@@ -97,7 +97,9 @@ def _shortest_real_text(value: float, bits: int) -> bytes:
         if exp < 0:
             return f"{sign}0.{'0' * (-exp - 1)}{figures}".encode()
         whole, fraction = figures[: exp + 1].ljust(exp + 1, "0"), figures[exp + 1:]
-        return f"{sign}{whole}{'.' + fraction if fraction else ''}".encode()
+        # a whole number keeps one decimal, as TwinCAT prints it (LREAL_TO_STRING(-23.0) is
+        # '-23.0': TcUnit-Verifier's messages as recorded on a TwinCAT runtime)
+        return f"{sign}{whole}.{fraction or '0'}".encode()
     point = f"{figures[0]}.{figures[1:]}" if len(figures) > 1 else figures
     return f"{sign}{point}E{'-' if exp < 0 else '+'}{abs(exp):02d}".encode()
 
