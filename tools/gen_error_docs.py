@@ -15,21 +15,13 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from stvm.diagnostics.codes import docs_page  # noqa: E402
+from tools.generated_page import write_or_check  # noqa: E402
 
 PAGE = ROOT / "docs" / "error_codes.md"
 
 
 def main(argv: list[str]) -> int:
-    text = docs_page()
-    if "--check" in argv:
-        current = PAGE.read_text(encoding="utf-8") if PAGE.exists() else ""
-        if current != text:
-            print(f"{PAGE.relative_to(ROOT)} is out of date: run python tools/gen_error_docs.py", file=sys.stderr)
-            return 1
-        return 0
-    PAGE.write_text(text, encoding="utf-8")
-    print(f"wrote {PAGE.relative_to(ROOT)} ({len(text.splitlines())} lines)")
-    return 0
+    return write_or_check(PAGE, docs_page(), argv, "python tools/gen_error_docs.py")
 
 
 if __name__ == "__main__":
