@@ -168,8 +168,11 @@ def is_loopback(host: str) -> bool:
 
 
 def parse_endpoint(text: str, where: str = "--opcua") -> Endpoint:
-    """`opc.tcp://HOST:PORT[/PATH]`; raises OpcUaConfigError with an example."""
+    """`opc.tcp://HOST:PORT[/PATH]`, or `HOST:PORT` for short (as `--hmi` takes its address);
+    raises OpcUaConfigError with an example."""
     example = f"{where}: expected opc.tcp://HOST:PORT (for example {DEFAULT_ENDPOINT}), got {text!r}"
+    if "://" not in text and re.fullmatch(r"\s*(\[[0-9A-Fa-f:.]+\]|[^\s:/\[\]]+):\d+\s*", text):
+        text = "opc.tcp://" + text.strip()
     try:
         parts = urlsplit(text.strip())
         port = parts.port

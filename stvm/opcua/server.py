@@ -56,6 +56,7 @@ from stvm.opcua.aspace_cache import init_server
 from stvm.opcua.browse import ContinuationPoints
 from stvm.opcua.config import OpcUaConfig, revise_interval as bounds_interval
 from stvm.opcua.datatypes import BadWrite, datetime_of
+from stvm.opcua.structs import PublishedStruct, StructTypes, find_structs, published_struct
 from stvm.opcua.engineering import eu_information, eu_range
 from stvm.opcua.nodes import GLOBALS_ID, RUNTIME_ID, NodeBuilder, PublishedVariable, describe, select, \
     walk_published
@@ -312,11 +313,33 @@ class OpcUaServer:
             dv = ua.DataValue(array.variant(values), SourceTimestamp=stamp, ServerTimestamp=stamp) \
                 if None not in values else ua.DataValue(StatusCode=ua.StatusCode(ua.StatusCodes.BadWaitingForInitialData))
             array.last = tuple(values)
-            builder.add_array_variable(parents[node.path], array, datatype, dv, describe(node))
-            self._arrays[array.nodeid] = array
-            for path in array.paths:
-                self._arrays_of_path.setdefault(path, []).append(array)
+            builder.add_value_variable(parents[node.path], array, datatype, dv, describe(node))
+            self._add_composite(array)
+        await self._add_structs(server, builder, parents, enum_types, stamp)
         await self._add_runtime(server, objects)
+
+    def _add_composite(self, composite) -> None:
+        """An array or struct variable: read, written and monitored through its element variables."""
+        self._arrays[composite.nodeid] = composite
+        for path in composite.paths:
+            self._arrays_of_path.setdefault(path, []).append(composite)
+
+    async def _add_structs(self, server: Server, builder: NodeBuilder, parents: dict, enum_types: dict, stamp) -> None:
+        """The STRUCT DataTypes and a `<path>.@Value` ExtensionObject variable per struct instance."""
+        types = StructTypes(self.ns, enum_types)
+        found = [(node, ty) for node, ty in find_structs(self.roots, self.variables, types) if node.path in parents]
+        if not found:
+            return
+        await types.build(server)
+        for node, ty in found:
+            struct = published_struct(node, ty, self.variables, types)
+            values = [e.last for e in struct.elements]
+            dv = ua.DataValue(struct.variant(values), SourceTimestamp=stamp, ServerTimestamp=stamp) \
+                if None not in values else ua.DataValue(StatusCode=ua.StatusCode(ua.StatusCodes.BadWaitingForInitialData))
+            struct.last = tuple(values)
+            builder.add_value_variable(parents[node.path], struct, types.datatypes[struct.type_key], dv,
+                                       describe(node))
+            self._add_composite(struct)
 
     async def _enum_datatypes(self, server: Server) -> dict[str, ua.NodeId]:
         """One Enumeration DataType per ST enum type that a published variable has."""
@@ -581,9 +604,13 @@ class OpcUaServer:
                 return points.next(params)
 
             async def history_read(self, params: ua.HistoryReadParameters) -> list[ua.HistoryReadResult]:
-                # no history is kept: say so per node (asyncua would answer Good with no data)
-                return [ua.HistoryReadResult(StatusCode=ua.StatusCode(ua.StatusCodes.BadHistoryOperationUnsupported))
-                        for _ in params.NodesToRead]
+                # no history is kept (of values or events): say so per node, as Part 4 §5.11.3.4's
+                # operation-level Bad_HistoryOperationUnsupported ("not supported for the requested
+                # node"); a node that does not exist is Bad_NodeIdUnknown (asyncua would answer
+                # Good with no data)
+                return [ua.HistoryReadResult(StatusCode=ua.StatusCode(
+                    ua.StatusCodes.BadHistoryOperationUnsupported if item.NodeId in iserver.aspace
+                    else ua.StatusCodes.BadNodeIdUnknown)) for item in params.NodesToRead]
 
             async def read(self, params: ua.ReadParameters) -> list[ua.DataValue]:
                 return await owner._read(self, params)
@@ -606,7 +633,9 @@ class OpcUaServer:
         results = await InternalSession.read(session, params)
         for i, array in arrays:
             index_range = params.NodesToRead[i].IndexRange
-            if index_range and array.last is not None and results[i].StatusCode.is_good():
+            if index_range and isinstance(array, PublishedStruct):   # a struct is a scalar
+                results[i] = ua.DataValue(StatusCode=ua.StatusCode(_index_range_status(index_range)))
+            elif index_range and array.last is not None and results[i].StatusCode.is_good():
                 try:
                     results[i] = dataclasses.replace(results[i], Value=read_range(array, list(array.last), index_range))
                 except RangeError as bad:
@@ -691,18 +720,30 @@ class OpcUaServer:
         variant = item.Value.Value if item.Value is not None else None
         if variant is None or variant.Value is None:
             return ua.StatusCodes.BadTypeMismatch
-        values = flat(variant.Value) if isinstance(variant.Value, list) else None
-        if values is None:
-            return ua.StatusCodes.BadTypeMismatch
-        try:
-            positions = write_positions(array, item.IndexRange, len(values))
-        except RangeError as bad:
-            return bad.status
+        if isinstance(array, PublishedStruct):
+            if item.IndexRange:      # a struct is a scalar (Part 4 §5.11.4.2)
+                status = _index_range_status(item.IndexRange)
+                return ua.StatusCodes.BadWriteNotSupported if status == ua.StatusCodes.BadIndexRangeNoData else status
+            try:
+                values = array.split(variant.Value)
+            except (TypeError, ValueError):
+                return ua.StatusCodes.BadTypeMismatch
+            positions = list(range(len(values)))
+            variants = [e.uatype.variant for e in array.elements]
+        else:
+            values = flat(variant.Value) if isinstance(variant.Value, list) else None
+            if values is None:
+                return ua.StatusCodes.BadTypeMismatch
+            try:
+                positions = write_positions(array, item.IndexRange, len(values))
+            except RangeError as bad:
+                return bad.status
+            variants = [variant.VariantType] * len(array.elements)
         staged = {}
         for position, value in zip(positions, values):
             element = array.elements[position]
             try:
-                converted = element.uatype.from_ua(ua.Variant(value, variant.VariantType))
+                converted = element.uatype.from_ua(ua.Variant(value, variants[position]))
                 problem = self.limit_table.limits_for(element.path).check(converted)
                 if problem is not None:
                     raise BadWrite(ua.StatusCodes.BadOutOfRange, f"{element.path}: {problem}")
