@@ -64,6 +64,7 @@ class _Condition:
         self.event: AlarmCondition | None = None     # the newest event (ConditionRefresh sends it)
         self.active_since = None
         self.acked_since = None
+        self.comment = ""                           # the last Acknowledge's comment (Part 9 §5.5.2 Comment)
 
 
 class AlarmConditions:
@@ -168,6 +169,8 @@ class AlarmConditions:
         if previous is not None and previous.id > alarm.id:
             return                        # a late notice of an alarm already superseded
         stamp = self.owner._timestamp(now_ns)
+        if previous is not None and previous.id != alarm.id:
+            condition.comment = ""        # a new alarm of this source starts without a comment
         if previous is None or previous.id != alarm.id or previous.active != alarm.active:
             condition.active_since = self.owner._timestamp(alarm.raised_vm_ns) if alarm.active and \
                 (previous is None or previous.id != alarm.id) else stamp
@@ -210,6 +213,7 @@ class AlarmConditions:
             "AckedState/Id": (alarm.acknowledged, ua.VariantType.Boolean),
             "AckedState/TransitionTime": (condition.acked_since, _UTC),
             "SuppressedOrShelved": (False, ua.VariantType.Boolean),
+            "Comment": (ua.LocalizedText(condition.comment), ua.VariantType.LocalizedText),
             "InputNode": (condition.input_node or ua.NodeId(), ua.VariantType.NodeId),
             "NodeId": (condition.condition_node, ua.VariantType.NodeId),   # the ConditionId
         }
@@ -251,6 +255,8 @@ class AlarmConditions:
         if alarm is None or alarm.acknowledged:
             # acknowledged already (here, in the HMI) or returned and acknowledged: nothing to do
             return ua.StatusCode(ua.StatusCodes.BadConditionBranchAlreadyAcked)
+        text = comment.Value if isinstance(comment, ua.Variant) else comment
+        condition.comment = (text.Text if isinstance(text, ua.LocalizedText) else str(text or "")) or ""
         self.alarms.acknowledge(alarm.id)     # the listener sends the AckedState event
         return []
 

@@ -85,6 +85,7 @@ def test_fb_error_is_an_alarm_event_on_the_server_and_the_fb_object_and_ack_work
                                         ua.LocalizedText("seen"))
             acked = await at_server.wait_for(lambda e: of_source(e) and getattr(e, "AckedState/Id"))
             assert getattr(acked, "ActiveState/Id") is True and acked.Retain is True   # still active
+            assert acked.Comment.Text == "seen"
             assert [a.acknowledged for a in idle.server.alarm_list.current() if a.source == SOURCE] == [True]
             # twice: already acknowledged; an EventId never sent: unknown
             with pytest.raises(ua.UaStatusCodeError) as twice:
