@@ -84,8 +84,8 @@ def _timer_floor() -> float:
 
 
 def opcua_like(vm, items: int = 200):
-    """The bridge watch the OPC UA server makes for `items` monitored items sampled every scan
-    (read at most every FORWARD_S of wall time: stvm/opcua/server.py `_rebuild_watches`)."""
+    """The bridge watch the OPC UA server makes for `items` monitored items asking for every scan
+    (read every FORWARD_S of VM time: stvm/opcua/server.py `_rebuild_watches`)."""
     from stvm.frontend import VariableBridge
     from stvm.opcua.server import FORWARD_NS   # lazy: asyncua
     from stvm.runtime.catalog import Catalog
@@ -93,8 +93,7 @@ def opcua_like(vm, items: int = 200):
              if node.leaf and node.type.kind in ("bool", "int", "real", "time", "string", "enum")][:items]
     inbox = {}
     bridge = VariableBridge(vm)
-    bridge.watch(paths, 0, lambda snapshot: inbox.__setitem__("group", snapshot), changes_only=True,
-                 every_wall_ns=FORWARD_NS)
+    bridge.watch(paths, FORWARD_NS, lambda snapshot: inbox.__setitem__("group", snapshot), changes_only=True)
     return len(paths)
 
 

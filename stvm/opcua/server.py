@@ -833,7 +833,7 @@ class OpcUaServer:
                 item = params.ItemsToCreate[i]
                 if result.StatusCode.is_good() and item.ItemToMonitor.NodeId in self._by_nodeid:
                     result.RevisedSamplingInterval = self._every_ns(requested[item.ItemToMonitor.NodeId]) / 1e6 \
-                        or self.base_ns / 1e6
+                        or max(self.base_ns, FORWARD_NS) / 1e6
                 results[i] = result
         return results   # type: ignore[return-value]
 
@@ -917,13 +917,14 @@ class OpcUaServer:
             arrays[key] = array_groups.get(every, {})
             watch = self._watches.pop(key, None)
             if watch is None:
-                # items sampled "every scan" are read at most once per forwarding period of wall
-                # time: the server puts only the newest sample into the nodes every FORWARD_S anyway,
-                # so reading them at every scan end cost the scan loop ~0.03 µs a value for samples
-                # that were overwritten unseen (issue 33 item 3). Slower intervals stay on VM time
-                # (deterministic); Runtime.Scan/Pause sample every group once more at their end.
-                watch = self.bridge.watch(list(key[1]), every, self._handover_for(key), changes_only=True,
-                                          every_wall_ns=FORWARD_NS if every == 0 else 0)
+                # items asking for every scan are read once per forwarding period (FORWARD_S) of VM
+                # time: the server puts only the newest sample into the nodes every FORWARD_S of wall
+                # time anyway, so reading them at every scan end cost the scan loop ~0.03 µs a value
+                # for samples overwritten unseen (issue 33 item 3). VM time, not wall time: the
+                # samples stay deterministic on the virtual clock, and the scans between two reads
+                # pay one comparison. Runtime.Scan/Pause read every such group once more at their end.
+                watch = self.bridge.watch(list(key[1]), every or FORWARD_NS, self._handover_for(key),
+                                          changes_only=True)
             watches[key] = watch
             handles[key] = by_path
         for old in self._watches.values():
