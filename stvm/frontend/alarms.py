@@ -15,6 +15,10 @@ Model (after ISA-18.2 / OPC UA Part 9's AlarmConditionType, simplified):
                             active list (`current()`) but stays in the history (`history()`)
     VM fault              → source "VM", code None, text the fault message (`poll_vm`)
 
+One list per VM: `attach` hands every front end of a VM (the HMI, the OPC UA server) the same
+list, so an alarm acknowledged in one is acknowledged in all; each `attach` is matched by a
+`close()`, and the last one stops the watch.
+
 Listeners (`subscribe(fn)`) are called with the `Alarm` after every change, in the thread that made
 it (the VM thread for FB alarms, the caller's for acknowledge/poll_vm): they must only hand it
 over (`loop.call_soon_threadsafe`), never block. Everything else is safe from any thread.
@@ -24,12 +28,17 @@ from __future__ import annotations
 
 import threading
 import time
+import weakref
 from collections import deque
 from dataclasses import dataclass, replace
 from datetime import datetime, timezone
 from typing import Any, Callable
 
 from stvm.semantics import types as t
+
+# id(vm) → its list while attached; weak: a VM dropped without close() takes its list with it
+_SHARED: "weakref.WeakValueDictionary[int, AlarmList]" = weakref.WeakValueDictionary()
+_SHARED_LOCK = threading.Lock()
 
 HISTORY = 500
 """Alarms kept after they returned and were acknowledged (newest first in `history()`)."""
@@ -106,12 +115,26 @@ class AlarmList:
         self._watch = None
         self._paths: list[str] = []
         self._fault_seen = False
+        self._users = 0
         self.version = 0                              # increases with every change
 
     # ---- wiring
     @classmethod
     def attach(cls, bridge: Any, clock: Callable[[], float] = time.time) -> "AlarmList":
-        """An alarm list for `bridge.vm`, watching every FB instance with an Error output."""
+        """The alarm list of `bridge.vm`, watching every FB instance with an Error output: the one
+        already attached to that VM if a front end has it (then `clock` is that list's)."""
+        with _SHARED_LOCK:
+            alarms = _SHARED.get(id(bridge.vm))
+            if alarms is not None and alarms.vm is bridge.vm:
+                alarms._users += 1
+                return alarms
+            alarms = cls._watching(bridge, clock)
+            alarms._users = 1
+            _SHARED[id(bridge.vm)] = alarms
+            return alarms
+
+    @classmethod
+    def _watching(cls, bridge: Any, clock: Callable[[], float]) -> "AlarmList":
         alarms = cls(find_sources(bridge.vm), clock)
         alarms.vm = bridge.vm
         paths: list[str] = []
@@ -123,6 +146,14 @@ class AlarmList:
         return alarms
 
     def close(self) -> None:
+        """Release this front end's use; the last user's close stops the watch."""
+        with _SHARED_LOCK:
+            self._users = max(0, self._users - 1)
+            if self._users:
+                return
+            vm = getattr(self, "vm", None)
+            if vm is not None and _SHARED.get(id(vm)) is self:
+                del _SHARED[id(vm)]
         if self._watch is not None:
             self._watch.close()
             self._watch = None

@@ -17,6 +17,7 @@ subscriptions and monitored items per session, the publishing and sampling inter
 
 from __future__ import annotations
 
+import asyncio
 import logging
 import struct
 import time
@@ -51,11 +52,30 @@ def apply(server, limits: ServerLimits) -> None:
     iserver.max_monitored_item_queue_size = limits.max_queue_size
 
 
+class _Inbox(asyncio.Queue):
+    """A connection's queue of received chunks that says when one was taken (room again)."""
+
+    def __init__(self, maxsize: int, on_room) -> None:
+        super().__init__(maxsize)
+        self._on_room = on_room
+
+    async def get(self):
+        item = await super().get()
+        self._on_room()
+        return item
+
+
 class BoundedProtocol(OPCUAProtocol):
-    """asyncua's connection, with the chunk header checked before a byte of its body is kept."""
+    """asyncua's connection, with the chunk header checked before a byte of its body is kept, and
+    backpressure instead of a disconnect when the client sends more requests than
+    `max_pending_requests` without waiting for the answers (asyncua's own client does, loading
+    the DataType definitions): the rest stays unread in the socket until one is answered."""
+
+    _held = b""
 
     def connection_made(self, transport) -> None:
         super().connection_made(transport)
+        self.messages = _Inbox(self.messages.maxsize, self._room)
         if self.processor is not None:
             # asyncua builds its processor inside connection_made: give it BrowseNext (stvm.opcua.browse)
             from stvm.opcua.browse import BrowsingProcessor   # lazy: a cycle (browse imports the server's pieces)
@@ -76,7 +96,33 @@ class BoundedProtocol(OPCUAProtocol):
                 return
             pos += size
         self._buffer = b""
+        room = self.messages.maxsize - self.messages.qsize() if self.messages.maxsize > 0 else None
+        if room is not None and self._activated():
+            pos = chunks = 0
+            while chunks < room and len(buffered) - pos >= 8:
+                size = struct.unpack_from("<I", buffered, pos + 4)[0]
+                if len(buffered) - pos < size:
+                    break
+                pos += size
+                chunks += 1
+            if chunks >= room and pos < len(buffered):
+                # a full queue: keep the rest and stop reading until a request is taken from it
+                self._held = buffered[pos:]
+                buffered = buffered[:pos]
+                self.transport.pause_reading()
         super().data_received(buffered)
+
+    def _room(self) -> None:
+        if self._held and self.transport is not None and not self.transport.is_closing():
+            held, self._held = self._held, b""
+            asyncio.get_running_loop().call_soon(self._resume, held)
+
+    def _resume(self, held: bytes) -> None:
+        if self.transport is None or self.transport.is_closing():
+            return
+        self.data_received(held)
+        if not self._held:
+            self.transport.resume_reading()
 
     def _problem(self, kind: bytes, chunk: bytes, size: int) -> tuple[int, str] | None:
         limit = self.limits.max_recv_buffer

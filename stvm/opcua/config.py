@@ -46,7 +46,7 @@ SETS = ("@globals", "@programs", "@program_inputs", "@fb_internals")
 DEFAULT_PUBLISH = ("@globals", "@programs")
 DEFAULT_WRITABLE = ("@globals", "@program_inputs")
 KEYS = ("endpoint", "publish", "exclude", "writable", "read_only", "start", "users", "certificate",
-        "private_key", "trusted_clients", "limits")
+        "private_key", "trusted_clients", "limits", "alarms")
 
 
 @dataclass(frozen=True)
@@ -138,6 +138,7 @@ class OpcUaConfig:
     writable: tuple[str, ...] = DEFAULT_WRITABLE
     read_only: tuple[str, ...] = ()
     start_paused: bool = False
+    alarms: bool = True          # Alarms & Conditions events of the FB errors (stvm/opcua/alarms.py)
     users: dict[str, str] = field(default_factory=dict)   # user name → sha256 hex of the password
     certificate: Path | None = None
     private_key: Path | None = None
@@ -167,8 +168,11 @@ def is_loopback(host: str) -> bool:
 
 
 def parse_endpoint(text: str, where: str = "--opcua") -> Endpoint:
-    """`opc.tcp://HOST:PORT[/PATH]`; raises OpcUaConfigError with an example."""
+    """`opc.tcp://HOST:PORT[/PATH]`, or `HOST:PORT` for short (as `--hmi` takes its address);
+    raises OpcUaConfigError with an example."""
     example = f"{where}: expected opc.tcp://HOST:PORT (for example {DEFAULT_ENDPOINT}), got {text!r}"
+    if "://" not in text and re.fullmatch(r"\s*(\[[0-9A-Fa-f:.]+\]|[^\s:/\[\]]+):\d+\s*", text):
+        text = "opc.tcp://" + text.strip()
     try:
         parts = urlsplit(text.strip())
         port = parts.port
@@ -227,6 +231,7 @@ def load_config(manifest: dict, root: Path | None, files, endpoint_arg: str | No
         writable=_rules(table, "writable", DEFAULT_WRITABLE, where),
         read_only=_rules(table, "read_only", (), where),
         start_paused=start == "paused",
+        alarms=_bool(table, "alarms", True, where),
         users=_users(table.get("users", {}), where),
         certificate=_path(table, "certificate", base, where),
         private_key=_path(table, "private_key", base, where),
@@ -260,6 +265,13 @@ def _string(table: dict, key: str, default: str, where: str) -> str:
     value = table.get(key, default)
     if not isinstance(value, str) or not value.strip():
         raise OpcUaConfigError(f"{where} {key}: expected a string, got {value!r}")
+    return value
+
+
+def _bool(table: dict, key: str, default: bool, where: str) -> bool:
+    value = table.get(key, default)
+    if not isinstance(value, bool):
+        raise OpcUaConfigError(f"{where} {key}: expected true or false, got {value!r}")
     return value
 
 

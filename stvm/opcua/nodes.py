@@ -285,6 +285,25 @@ class NodeBuilder:
         return data
 
 
+    def add_value_variable(self, parent_id: ua.NodeId, array, datatype: ua.NodeId, value: ua.DataValue,
+                           description: str) -> NodeData:
+        """The variable `<path>.@Value` of an ARRAY object (stvm.opcua.arrays: ValueRank the array's
+        rank, ArrayDimensions its lengths, Part 3 §5.6.2) or of a STRUCT object (stvm.opcua.structs:
+        a scalar of the struct's DataType)."""
+        browse, display = ua.QualifiedName("Value", self.ns), ua.LocalizedText("Value")
+        data = self._record(self.nodeid(f"{array.path}.@Value"), "Value", description,
+                            self._variable[array.writable], browse, display)
+        data.attributes = dict(data.attributes)
+        data.attributes[ua.AttributeIds.ValueRank] = AttributeValue(_dv(len(array.dims) or -1, ua.VariantType.Int32))
+        data.attributes[ua.AttributeIds.ArrayDimensions] = AttributeValue(
+            _dv(list(array.dims), ua.VariantType.UInt32, is_array=True))
+        data.attributes[ua.AttributeIds.DataType] = AttributeValue(_dv(datatype, ua.VariantType.NodeId))
+        array.nodeid = data.nodeid
+        array.value_attr = data.attributes[ua.AttributeIds.Value] = AttributeValue(value)
+        self._link(self.aspace[parent_id], data, ua.NodeClass.Variable, _VARIABLE_TYPE, browse, display)
+        self.aspace[data.nodeid] = data
+        return data
+
     def add_property(self, parent: NodeData, name: str, variant: ua.Variant, datatype: int) -> NodeData:
         """A read-only property (HasProperty, PropertyType) of `parent`, NodeId `<parent>.@<name>`
         (Part 8: EURange, EngineeringUnits of an AnalogItemType variable)."""

@@ -3,6 +3,7 @@ protocol's error and the server keeps serving; every limit is settable in `[opcu
 
 from __future__ import annotations
 
+import asyncio
 import math
 import socket
 import struct
@@ -211,3 +212,20 @@ def test_a_busy_port_is_one_line(tmp_path):
     lines = [line for line in result.stderr.splitlines() if "OPC UA" in line]
     assert lines == [f"stvm: error: cannot serve OPC UA on opc.tcp://127.0.0.1:{port}: the port is in use "
                      f"(another server listens there; choose another port: --opcua opc.tcp://HOST:PORT)"]
+
+
+def test_requests_past_max_pending_requests_wait_instead_of_closing_the_connection(thesis_project):
+    # asyncua's client sends many requests without waiting (load_data_type_definitions sends
+    # hundreds): past the queue's bound the server stops reading the socket until one is answered
+    run = Running(thesis_project, opcua={"limits": {"max_pending_requests": 4}})
+    try:
+        async def body():
+            async with Client(run.url) as client:
+                ns = await client.get_namespace_index(run.ns_uri)
+                node = client.get_node(ua.NodeId("Connect_Dest_PortIP", ns))
+                values = await asyncio.gather(*[node.read_browse_name() for _ in range(120)])
+                assert [v.Name for v in values] == ["Connect_Dest_PortIP"] * 120
+                assert await node.read_value() == await node.read_value()   # the same session goes on
+        run_async(body())
+    finally:
+        run.close()

@@ -17,13 +17,15 @@ def config(table=None, url=None, root=None, **manifest):
     ("opc.tcp://localhost:0/stvm", "localhost", 0),
     ("opc.tcp://[::1]:4841", "::1", 4841),
     ("opc.tcp://plc.example.com:4840", "plc.example.com", 4840),
+    ("127.0.0.1:4850", "127.0.0.1", 4850),            # HOST:PORT for short, as --hmi takes it
+    ("[::1]:4851", "::1", 4851),
 ])
 def test_endpoints(url, host, port):
     endpoint = parse_endpoint(url)
     assert (endpoint.host, endpoint.port) == (host, port)
 
 
-@pytest.mark.parametrize("url", ["127.0.0.1:4840", "http://127.0.0.1:4840", "opc.tcp://127.0.0.1",
+@pytest.mark.parametrize("url", ["127.0.0.1", "127.0.0.1:", "http://127.0.0.1:4840", "opc.tcp://127.0.0.1",
                                  "opc.tcp://127.0.0.1:99999", "opc.tcp://user:pw@127.0.0.1:4840",
                                  "opc.tcp://bad_host!:4840", "opc.tcp://:4840"])
 def test_bad_endpoints_are_usage_errors(url):

@@ -55,9 +55,14 @@ def test_index_range_history_read_and_runtime_write_statuses(running):
                 HistoryReadDetails=ua.ReadRawModifiedDetails(IsReadModified=False, NumValuesPerNode=10,
                                                             StartTime=ua.get_win_epoch(), EndTime=ua.get_win_epoch()),
                 TimestampsToReturn=ua.TimestampsToReturn.Both,
-                NodesToRead=[ua.HistoryReadValueId(NodeId=speed)])
+                NodesToRead=[ua.HistoryReadValueId(NodeId=speed), ua.HistoryReadValueId(NodeId=ua.NodeId("nope", ns))])
             results = await client.uaclient.history_read(history)
-            assert [r.StatusCode.value for r in results] == [ua.StatusCodes.BadHistoryOperationUnsupported]
+            assert [r.StatusCode.value for r in results] == [ua.StatusCodes.BadHistoryOperationUnsupported,
+                                                              ua.StatusCodes.BadNodeIdUnknown]
+            # and the nodes say so: not historizing, no HistoryRead access
+            assert (await client.get_node(speed).read_attribute(ua.AttributeIds.Historizing)).Value.Value is False
+            access = (await client.get_node(speed).read_attribute(ua.AttributeIds.AccessLevel)).Value.Value
+            assert not access & ua.AccessLevel.HistoryRead.mask
     run_async(body())
 
 
