@@ -50,6 +50,8 @@ class LoadError(Exception):
 
 @dataclass
 class Project:
+    """A loaded project: its model, its lowered code and what a run or a check needs beside."""
+
     model: "ProjectModel"
     lowered: "LoweredProject"
     code: tuple          # the generated module's code objects, run in order (lower.product.compile_module)
@@ -653,6 +655,8 @@ def _analyze(units, diags, settings):
 
 @dataclass
 class Parsed:
+    """The parse stage's product: the texts, the syntax trees and their diagnostics."""
+
     spec: ProjectSpec
     texts: list[tuple[str, str]]     # (name, text) of each user file, libraries first
     units: list                      # the stdlib's syntax trees, then the files'
@@ -666,6 +670,8 @@ class Parsed:
 
 @dataclass
 class Checked:
+    """The check stage's product: the analysis (None after an error) and every diagnostic."""
+
     parsed: Parsed
     analysis: object | None          # semantics.Analysis; None when anything has an error
     checker: object | None           # the Checker whose index types expressions (the debugger's)
@@ -682,6 +688,8 @@ class Checked:
 
 @dataclass
 class Compiled:
+    """The lowering stage's product: the generated Python and its compiled code."""
+
     checked: Checked
     lowered: "LoweredProject"
     code: tuple

@@ -70,6 +70,9 @@ class RuntimeFault(Exception):
 
 @dataclass
 class Task:
+    """One task of the configuration: its programs, run every `every` base periods. (A
+    docstring also spares `dataclass` an `inspect.signature` to write one, a start-up cost.)"""
+
     name: str
     interval_ns: int
     priority: int
