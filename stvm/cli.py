@@ -101,8 +101,9 @@ _CORE_COMMANDS = ("check", "run")
 
 def build_parser(command: str | None = None) -> argparse.ArgumentParser:
     """The whole command line; given `command` (the first argument) and it is one of this
-    module's own commands, the extension commands are left out: importing their modules is a
-    tenth of a warm `stvm run`'s start-up, and the parse of a core command never looks at them."""
+    module's own commands, the extension commands are left out (and for `check`, `run` too):
+    importing their modules is a tenth of a warm `stvm run`'s start-up, and the parse of a core
+    command never looks at the other commands."""
     parser = _Parser(prog="stvm", description="Structured Text virtual machine")
     parser.add_argument("--version", action="version", version="stvm " + __version__)
     sub = parser.add_subparsers(dest="command", parser_class=_Parser)
@@ -116,6 +117,8 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
                             "VAR_GLOBAL for the globals)")
     add_project_options(check)
     check.set_defaults(func=cmd_check)
+    if command == "check":   # `run`'s options import the OPC UA configuration: a check needs neither
+        return parser
 
     run = sub.add_parser("run", help="run ST programs on the VM")
     run.add_argument("files", nargs="+")
