@@ -20,8 +20,8 @@ lockstep, and a FOR-loop-heavy program (bench/st/for_debug.st: 100 turns a scan)
 printed beside them is the plainest Python FOR-100 loop (`for i in range(1, 101): s = s + i`),
 timed in the same run. Target: the debugger with breakpoints set but not hit ≤ 2x `stvm run`.
 
-`run(smoke)` returns the rows as dicts with the fields of `bench.registry.Row` (figure, value,
-unit, yard_name, yard, yard_unit, target, ratio, note) for `python -m bench`.
+`run(smoke)` returns `bench.registry.Row`s for `python -m bench` (the yardstick is the registry's
+`for_loop_us`).
 """
 
 from __future__ import annotations
@@ -35,28 +35,12 @@ ROOT = Path(__file__).resolve().parent.parent
 if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
+from bench.registry import Row, for_loop_us  # noqa: E402
+
 THESIS = ROOT / "st_src" / "PnP_Example.st"
 MOVE_ABS = ROOT / "st_src" / "CBT_MoveAbsolute.st"
 SCENARIO = ROOT / "st_src" / "scenarios" / "pnp_demo.toml"
 FOR_DEBUG = ROOT / "bench" / "st" / "for_debug.st"
-
-
-def _for_100() -> int:
-    s = 0
-    for i in range(1, 101):
-        s = s + i
-    return s
-
-
-def for_loop_us(rounds: int = 5, number: int = 2000) -> float:
-    """CPU µs of the plainest Python FOR-100 loop (best of `rounds`)."""
-    best = float("inf")
-    for _ in range(rounds):
-        started = time.process_time()
-        for _ in range(number):
-            _for_100()
-        best = min(best, (time.process_time() - started) / number)
-    return best * 1e6
 
 
 def _source_line(path: Path, text: str) -> int:
@@ -134,12 +118,12 @@ def cases(smoke: bool) -> list[Case]:
     return [loop] if smoke else [thesis, loop]
 
 
-def measure(smoke: bool = False, rounds: int = 3) -> list[dict]:
+def measure(smoke: bool = False, rounds: int = 3) -> list[Row]:
     import stvm
     from stvm.debug.build import load_debug
     if smoke:
         rounds = 1
-    rows: list[dict] = []
+    rows: list[Row] = []
     yard = for_loop_us()
     for case in cases(smoke):
         project = stvm.load([str(case.path)], use_cache=False)
@@ -153,23 +137,19 @@ def measure(smoke: bool = False, rounds: int = 3) -> list[dict]:
         base = best["run"]
         cold_where = f"{case.cold[0].name}:{case.cold[1]}"
         hot_where = f"{case.hot[0].name}:{case.hot[1]}"
-        rows.append(_row(f"debug speed: {case.label}, `stvm run`", base, yard, "", "the yardstick for the rows below"))
-        rows.append(_row(f"debug speed: {case.label}, debugger, no breakpoint", best["none"], base, "<= 2x",
-                         "", yard_name="`stvm run`, same scans"))
-        rows.append(_row(f"debug speed: {case.label}, debugger, breakpoint set not hit", best["cold"], base, "<= 2x",
-                         f"breakpoint at {cold_where}", yard_name="`stvm run`, same scans"))
-        rows.append(_row(f"debug speed: {case.label}, debugger, conditional breakpoint FALSE on a hot line",
-                         best["hot"], base, "", f"condition evaluated at every pass of {hot_where}",
-                         yard_name="`stvm run`, same scans"))
+        label = f"debug speed: {case.label}"
+        run_name = "`stvm run`, same scans"
+        rows += [Row(f"{label}, `stvm run`", base, "µs/scan", "FOR-100", yard, "µs",
+                     note="the yardstick for the rows below"),
+                 Row(f"{label}, debugger, no breakpoint", best["none"], "µs/scan", run_name, base, "µs/scan", "<= 2x"),
+                 Row(f"{label}, debugger, breakpoint set not hit", best["cold"], "µs/scan", run_name, base, "µs/scan",
+                     "<= 2x", note=f"breakpoint at {cold_where}"),
+                 Row(f"{label}, debugger, conditional breakpoint FALSE on a hot line", best["hot"], "µs/scan",
+                     run_name, base, "µs/scan", note=f"condition evaluated at every pass of {hot_where}")]
     return rows
 
 
-def _row(figure: str, value: float, yard: float, target: str, note: str, yard_name: str = "Python FOR-100 loop") -> dict:
-    return {"figure": figure, "value": value, "unit": "µs/scan", "yard_name": yard_name, "yard": yard,
-            "yard_unit": "µs", "target": target, "ratio": value / yard if yard else None, "note": note}
-
-
-def run(smoke: bool) -> list[dict]:
+def run(smoke: bool) -> list[Row]:
     """The registry's entry point (`python -m bench`)."""
     return measure(smoke)
 
@@ -183,9 +163,9 @@ def main() -> None:
     print(f"Python {sys.version.split()[0]}; CPU µs per scan, best of {1 if args.smoke else args.rounds} rounds")
     print(f"{'figure':92} {'value':>10} {'yardstick':>34} {'ratio':>7} {'target':>7}")
     for r in rows:
-        yard = f"{r['yard_name']} {r['yard']:.1f} {r['yard_unit']}"
-        print(f"{r['figure']:92} {r['value']:10.1f} {yard:>34} {r['ratio']:6.2f}x {r['target']:>7}"
-              + (f"  ({r['note']})" if r["note"] else ""))
+        yard = f"{r.yard_name} {r.yard:.1f} {r.yard_unit}"
+        print(f"{r.figure:92} {r.value:10.1f} {yard:>34} {r.ratio:6.2f}x {r.target:>7}"
+              + (f"  ({r.note})" if r.note else ""))
 
 
 if __name__ == "__main__":

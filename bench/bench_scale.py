@@ -19,8 +19,8 @@ Both series are fitted by least squares (slope, intercept, R²): the growth must
 Target: ≤ 100 µs per scan at 16 robots. The yardstick printed beside each figure is the plainest
 Python FOR-100 loop, timed in the same run.
 
-`run(smoke)` returns the rows as dicts with the fields of `bench.registry.Row` (figure, value,
-unit, yard_name, yard, yard_unit, target, ratio, note) for `python -m bench`.
+`run(smoke)` returns `bench.registry.Row`s for `python -m bench` (the yardstick is the registry's
+`for_loop_us`).
 """
 
 from __future__ import annotations
@@ -36,6 +36,8 @@ ROOT = Path(__file__).resolve().parent.parent
 if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
+from bench.registry import Row, for_loop_us  # noqa: E402
+
 V2 = ROOT / "st_src" / "cbt_v2"
 DEMO_FILES = ("Globals.st", "PnP_Example.st", "Configuration.st")   # the demo program: not the cell's
 SCENARIO = ROOT / "st_src" / "scenarios" / "pnp_demo.toml"
@@ -43,24 +45,6 @@ ROBOTS = (1, 2, 4, 8, 16)
 IDLE = (0, 4, 8, 16)
 BASE_PORT = 5890
 _HARNESS_DIR = Path(tempfile.mkdtemp(prefix="stvm-bench-scale-"))
-
-
-def _for_100() -> int:
-    s = 0
-    for i in range(1, 101):
-        s = s + i
-    return s
-
-
-def for_loop_us(rounds: int = 5, number: int = 2000) -> float:
-    """CPU µs of the plainest Python FOR-100 loop (best of `rounds`)."""
-    best = float("inf")
-    for _ in range(rounds):
-        started = time.process_time()
-        for _ in range(number):
-            _for_100()
-        best = min(best, (time.process_time() - started) / number)
-    return best * 1e6
 
 
 def harness(robots: int, idle: int = 0) -> str:
@@ -240,31 +224,26 @@ def measure(smoke: bool = False, scans: int = 4000, rounds: int = 2) -> tuple[li
     return by_robots, by_size, yard
 
 
-def rows_of(by_robots: list[dict], by_size: list[dict], yard: float) -> list[dict]:
+def rows_of(by_robots: list[dict], by_size: list[dict], yard: float) -> list[Row]:
     rows = []
     for r in by_robots:
-        rows.append(_row(f"scale: {r['robots']} robot(s) in lockstep, µs per scan", r["scan_us"], yard,
-                         "<= 100 µs at 16" if r["robots"] == 16 else "",
-                         f"{r['fbs']} FB instances; ST {r['st_us']:.1f} µs, lockstep+emulators {r['lockstep_us']:.1f} µs"))
+        rows.append(Row(f"scale: {r['robots']} robot(s) in lockstep, µs per scan", r["scan_us"], "µs", "FOR-100",
+                        yard, "µs", "<= 100 µs at 16" if r["robots"] == 16 else "",
+                        note=f"{r['fbs']} FB instances; ST {r['st_us']:.1f} µs, "
+                             f"lockstep+emulators {r['lockstep_us']:.1f} µs"))
     slope, intercept, r2 = fit([r["robots"] for r in by_robots], [r["scan_us"] for r in by_robots])
-    rows.append(_row("scale: growth per robot (least-squares slope)", slope, yard, "linear",
-                     f"intercept {intercept:.1f} µs, R² {r2:.4f}"))
-    rows.append({"figure": "scale: R² of the linear fit against robots", "value": r2, "unit": "",
-                 "yard_name": "a perfect straight line", "yard": 1.0, "yard_unit": "", "target": "linear (≈ 1)",
-                 "ratio": r2, "note": ""})
+    rows.append(Row("scale: growth per robot (least-squares slope)", slope, "µs", "FOR-100", yard, "µs", "linear",
+                    note=f"intercept {intercept:.1f} µs, R² {r2:.4f}"))
+    rows.append(Row("scale: R² of the linear fit against robots", r2, "", "a perfect straight line", 1.0, "",
+                    "linear (≈ 1)"))
     slope_k, intercept_k, r2_k = fit([r["fbs"] for r in by_size], [r["scan_us"] for r in by_size])
-    rows.append(_row("scale: growth per FB instance (1 robot, idle FBs added)", slope_k, yard, "linear",
-                     f"intercept {intercept_k:.1f} µs, R² {r2_k:.4f}, "
-                     f"{by_size[0]['fbs']}..{by_size[-1]['fbs']} FB instances"))
+    rows.append(Row("scale: growth per FB instance (1 robot, idle FBs added)", slope_k, "µs", "FOR-100", yard, "µs",
+                    "linear", note=f"intercept {intercept_k:.1f} µs, R² {r2_k:.4f}, "
+                                   f"{by_size[0]['fbs']}..{by_size[-1]['fbs']} FB instances"))
     return rows
 
 
-def _row(figure: str, value: float, yard: float, target: str, note: str) -> dict:
-    return {"figure": figure, "value": value, "unit": "µs", "yard_name": "Python FOR-100 loop", "yard": yard,
-            "yard_unit": "µs", "target": target, "ratio": value / yard if yard else None, "note": note}
-
-
-def run(smoke: bool) -> list[dict]:
+def run(smoke: bool) -> list[Row]:
     """The registry's entry point (`python -m bench`)."""
     return rows_of(*measure(smoke))
 

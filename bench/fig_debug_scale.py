@@ -5,7 +5,8 @@
 * the scale of a cell (`bench/bench_scale.py`): µs per scan for 1..16 robots in lockstep, the
   linear fit per robot and per FB instance (target <= 100 µs at 16 robots).
 
-The scripts return their rows as dicts with `Row`'s fields, so this module only registers them.
+The scripts build their rows with the registry's `Row` and `for_loop_us`; this module only
+registers them.
 """
 
 from __future__ import annotations
@@ -16,9 +17,9 @@ from bench.registry import Row, figure
 
 @figure("debugging at speed", item="issue 33 item 1", tags=("debug",))
 def debug_speed_figure(smoke: bool) -> list[Row]:
-    return [Row(**row) for row in bench_debug_speed.run(smoke)]
+    return bench_debug_speed.run(smoke)
 
 
 @figure("scale of a cell", item="issue 33 item 4", tags=("scale",))
 def scale_figure(smoke: bool) -> list[Row]:
-    return [Row(**row) for row in bench_scale.run(smoke)]
+    return bench_scale.run(smoke)

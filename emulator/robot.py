@@ -228,7 +228,19 @@ class Robot:
         if now_ns != self._settled_ns:
             deadline = self._deadline_ns
             if self._deadline_known and now_ns > self.now_ns and (deadline is None or now_ns < deadline):
-                self._pass_quiet_time(now_ns)
+                # nothing due up to now_ns (later than self.now_ns, earlier than the known
+                # deadline): what `_run_until(now_ns)` would do, written here without its call
+                # (the lockstep loop passes here on nearly every scan): the clocks move on, the
+                # executor's too (its `advance` with nothing due only moves its clock, and not
+                # while the motion is stalled)
+                running = not self.paused and self.state != _STOPPED
+                if running:
+                    self.motion_ns += now_ns - self.now_ns
+                self.now_ns = now_ns
+                executor = self.executor
+                if running and (executor.queue or executor.active) and not executor.stalled \
+                        and executor.time_ns < self.motion_ns:
+                    executor.time_ns = self.motion_ns
             else:
                 self._run_until(now_ns)
                 deadline = self._next_internal_ns()
@@ -366,20 +378,6 @@ class Robot:
         if not self.paused and self.state != _STOPPED:
             self.motion_ns += t_ns - self.now_ns
         self.now_ns = t_ns
-
-    def _pass_quiet_time(self, now_ns: int) -> None:
-        """What `_run_until(now_ns)` does when nothing is due up to ``now_ns`` (``now_ns`` is
-        later than ``self.now_ns`` and earlier than the known deadline): the clocks move on, the
-        executor's too (its `advance` with nothing due only moves its clock, and not while the
-        motion is stalled)."""
-        running = not self.paused and self.state != _STOPPED
-        if running:
-            self.motion_ns += now_ns - self.now_ns
-        self.now_ns = now_ns
-        executor = self.executor
-        if running and (executor.queue or executor.active) and not executor.stalled \
-                and executor.time_ns < self.motion_ns:
-            executor.time_ns = self.motion_ns
 
     def _run_until(self, now_ns: int) -> None:
         for _ in range(1_000_000):

@@ -563,10 +563,17 @@ class InProcessLink:
                 if self.core.next_deadline_ns() == before and before is not None and before <= t:
                     break  # nothing consumed the deadline; do not spin
         self.now_ns = target
-        self.core.advance(target)
-        ready = self.core.pop_ready(target)
-        if ready:   # (`_collect` without its call on the scans when nothing is sent)
-            self._deliver(ready)
+        core = self.core
+        core.advance(target)
+        # `core.pop_ready(target)` only when it could return something or tick: after `advance`
+        # it has ticked at target, and with nothing due by then it returns [] and changes
+        # nothing (its own early outs, without its call on the quiet scans of the lockstep loop)
+        pending = core._pending
+        if (pending and pending[0][0] <= target) or core._ticked_ns != target \
+                or core.robot._settled_ns != target:
+            ready = core.pop_ready(target)
+            if ready:   # (`_collect` without its call on the scans when nothing is sent)
+                self._deliver(ready)
 
     def close(self) -> None:
         self.frame_log.close()

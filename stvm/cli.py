@@ -96,7 +96,14 @@ def _watchdog_seconds(text: str) -> float | None:
     return value
 
 
-def build_parser() -> argparse.ArgumentParser:
+_CORE_COMMANDS = ("check", "run")
+
+
+def build_parser(command: str | None = None) -> argparse.ArgumentParser:
+    """The whole command line; given `command` (the first argument) and it is one of this
+    module's own commands, the extension commands are left out (and for `check`, `run` too):
+    importing their modules is a tenth of a warm `stvm run`'s start-up, and the parse of a core
+    command never looks at the other commands."""
     parser = _Parser(prog="stvm", description="Structured Text virtual machine")
     parser.add_argument("--version", action="version", version="stvm " + __version__)
     sub = parser.add_subparsers(dest="command", parser_class=_Parser)
@@ -110,6 +117,8 @@ def build_parser() -> argparse.ArgumentParser:
                             "VAR_GLOBAL for the globals)")
     add_project_options(check)
     check.set_defaults(func=cmd_check)
+    if command == "check":   # `run`'s options import the OPC UA configuration: a check needs neither
+        return parser
 
     run = sub.add_parser("run", help="run ST programs on the VM")
     run.add_argument("files", nargs="+")
@@ -145,13 +154,15 @@ def build_parser() -> argparse.ArgumentParser:
                           "host 127.0.0.1 unless given, any other host needs the token printed at start-up")
     add_project_options(run)
     run.set_defaults(func=cmd_run)
-    _register_extensions(sub)
+    _register_extensions(sub, command in _CORE_COMMANDS)
     return parser
 
 
-def _register_extensions(sub) -> None:
+def _register_extensions(sub, core_only: bool = False) -> None:
     """Commands living in their own modules (trace, debug, lint, lsp) register themselves here.
     (The demo is `stvm run` on a project with a `[demo]` table: it has no command of its own.)"""
+    if core_only:
+        return
     for module_name in ("stvm.trace.cli", "stvm.debug.cli", "stvm.lint.cli", "stvm.lsp.cli",
                         "stvm.testrunner.cli"):
         try:
@@ -221,9 +232,10 @@ def _show_cache_warnings() -> None:
 def _main(argv: list[str] | None) -> int:
     from stvm.diagnostics import printable   # lazy: start-up
     _show_cache_warnings()
-    parser = build_parser()
+    argv = sys.argv[1:] if argv is None else list(argv)
+    parser = build_parser(argv[0] if argv else None)
     try:
-        args = _parse(parser, sys.argv[1:] if argv is None else list(argv))
+        args = _parse(parser, argv)
     except UsageError as exc:
         print(f"stvm: error: {printable(str(exc))}", file=sys.stderr)
         return EXIT_USAGE

@@ -20,7 +20,6 @@ from typing import Any, Callable, Mapping
 from stvm.numeric import f32, strfit, utf16_units
 from stvm.runtime.access import PathError, UnboundInOut, VariableAccess  # noqa: F401 (API: PathError, UnboundInOut)
 from stvm.runtime.context import RunContext
-from stvm.runtime.format import format_time, format_value
 from stvm.runtime.helpers import HELPERS
 from stvm.runtime.stats import TimingStats
 from stvm.runtime.values import ArrayIndexError, FunctionError, STFault
@@ -61,6 +60,7 @@ class RuntimeFault(Exception):
         self.now_ns = now_ns
 
     def render(self, sources: dict[str, str] | None = None) -> str:
+        from stvm.runtime.format import format_time   # lazy: start-up (a run without a fault or --print)
         where = f"{self.span.file}:{self.span.line}:{self.span.column}" if self.span else "<unknown>"
         text = f"{where}: fault: {self.message} (task {self.task}, scan {self.scan}, t={format_time(self.now_ns)})\n"
         if self.span and sources:
@@ -70,6 +70,9 @@ class RuntimeFault(Exception):
 
 @dataclass
 class Task:
+    """One task of the configuration: its programs, run every `every` base periods. (A
+    docstring also spares `dataclass` an `inspect.signature` to write one, a start-up cost.)"""
+
     name: str
     interval_ns: int
     priority: int
@@ -408,6 +411,7 @@ class VM:
         self.set(path, value)
 
     def format(self, path: str) -> str:
+        from stvm.runtime.format import format_value   # lazy: start-up (a run without --print)
         container, key, ty = self.access.resolve(path)
         value = container[key] if isinstance(key, int) else getattr(container, key)
         return format_value(value, ty, self.layouts)
