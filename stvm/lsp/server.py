@@ -36,6 +36,7 @@ from pygls.exceptions import JsonRpcException, JsonRpcInternalError, JsonRpcInva
 from pygls.lsp.server import LanguageServer
 from pygls.protocol import LanguageServerProtocol
 
+from stvm.heap import collector_paused
 from stvm.lsp import features as f
 from stvm.lsp import positions as pos
 from stvm.lsp.driver import CheckResult, Driver, Stopwatch, is_source, project_identity, stdlib_path
@@ -342,7 +343,10 @@ class StvmLanguageServer(LanguageServer):
         result = state.result
         if result is not None and result.analysis is not None and state.indexed is not result \
                 and not result.focused:    # a focused analysis lacks the other files' bodies
-            state.index = build_index(result.analysis, result.texts, result.files, result.originals)
+            # the collector paused, as for a check: the index's objects live until the next one,
+            # and collections over the project's heap while building it cost a fifth of its time
+            with collector_paused(age_survivors=True):
+                state.index = build_index(result.analysis, result.texts, result.files, result.originals)
             state.indexed = result
 
     def lint_of(self, result: CheckResult, files: set[str] | None) -> dict[str, list]:
