@@ -20,77 +20,18 @@ numbers scale with the CPU it gets.
 from __future__ import annotations
 
 import argparse
-import json
 import os
-import queue
 import re
 import statistics
-import subprocess
 import sys
-import threading
 import time
 from pathlib import Path
+
+from stvm.lsp.stdio_client import StdioClient
 
 ROOT = Path(__file__).resolve().parents[1]
 ST = ROOT / "st_src"
 FILES = ["PnP_Example.st", "CBT_MoveAbsolute.st", "Program_Example.st"]
-TIMEOUT = 120      # seconds to wait for one message (--timeout: a loaded machine needs more)
-
-
-class Client:
-    def __init__(self) -> None:
-        self.proc = subprocess.Popen([sys.executable, "-m", "stvm", "lsp"], stdin=subprocess.PIPE,
-                                     stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, cwd=ROOT)
-        self.messages: queue.Queue = queue.Queue()
-        self.next_id = 0
-        threading.Thread(target=self._read, daemon=True).start()
-
-    def _read(self) -> None:
-        stream = self.proc.stdout
-        while True:
-            header = b""
-            while not header.endswith(b"\r\n\r\n"):
-                byte = stream.read(1)
-                if not byte:
-                    return
-                header += byte
-            length = int(next(line.split(b":")[1] for line in header.split(b"\r\n")
-                              if line.lower().startswith(b"content-length")))
-            self.messages.put((time.perf_counter(), json.loads(stream.read(length))))
-
-    def send(self, message: dict) -> float:
-        body = json.dumps(message).encode()
-        sent = time.perf_counter()
-        self.proc.stdin.write(b"Content-Length: %d\r\n\r\n" % len(body) + body)
-        self.proc.stdin.flush()
-        return sent
-
-    def request(self, method: str, params) -> tuple[float, dict]:
-        self.next_id += 1
-        sent = self.send({"jsonrpc": "2.0", "id": self.next_id, "method": method, "params": params})
-        while True:
-            at, msg = self.messages.get(timeout=TIMEOUT)
-            if msg.get("id") == self.next_id and "method" not in msg:
-                return at - sent, msg
-
-    def notify(self, method: str, params) -> float:
-        return self.send({"jsonrpc": "2.0", "method": method, "params": params})
-
-    def wait_diagnostics(self, uri: str, ready) -> tuple[float, list]:
-        while True:
-            at, msg = self.messages.get(timeout=TIMEOUT)
-            if msg.get("method") == "textDocument/publishDiagnostics" and msg["params"]["uri"] == uri \
-                    and ready(msg["params"]["diagnostics"]):
-                return at, msg["params"]["diagnostics"]
-
-    def close(self) -> None:
-        try:
-            self.request("shutdown", None)
-            self.notify("exit", None)
-            self.proc.wait(timeout=10)
-        finally:
-            if self.proc.poll() is None:
-                self.proc.kill()
 
 
 def identifiers(text: str) -> list[tuple[int, int]]:
@@ -146,10 +87,8 @@ def main() -> int:
     parser.add_argument("--edits", type=int, default=20, help="edit/restore pairs")
     parser.add_argument("--timeout", type=float, default=120, help="seconds to wait for one message")
     args = parser.parse_args()
-    global TIMEOUT
-    TIMEOUT = args.timeout
     print(f"load average {os.getloadavg()[0]:.2f} on {os.cpu_count()} CPUs")
-    client = Client()
+    client = StdioClient(cwd=ROOT, timeout=args.timeout)
     client.request("initialize", {"processId": os.getpid(), "rootUri": ST.as_uri(), "capabilities": {}})
     client.notify("initialized", {})
     texts = {}
@@ -162,7 +101,7 @@ def main() -> int:
     first = (ST / FILES[0]).as_uri()
     client.wait_diagnostics(first, lambda d: True)
     print(f"first open (check + lint of the project, to its diagnostics): {time.perf_counter() - started:.2f} s")
-    seconds, _ = client.request("textDocument/hover", {"textDocument": {"uri": first}, "position": {"line": 0, "character": 0}})
+    seconds, _ = client.timed_request("textDocument/hover", {"textDocument": {"uri": first}, "position": {"line": 0, "character": 0}})
     print(f"first request (waits for the index of the first check): {seconds:.2f} s")
 
     positions = []
@@ -176,7 +115,7 @@ def main() -> int:
         times = []
         answered = 0
         for uri, line, col in sample:
-            seconds, reply = client.request(method, {"textDocument": {"uri": uri}, "position": {"line": line, "character": col}})
+            seconds, reply = client.timed_request(method, {"textDocument": {"uri": uri}, "position": {"line": line, "character": col}})
             times.append(seconds)
             answered += bool(reply.get("result"))
         ok &= report(label, times, 50)
@@ -198,7 +137,7 @@ def main() -> int:
             times.append(at - sent)
             time.sleep(1.0)    # let the index and the re-lint that follow settle (typing pauses)
     ok &= report("diagnostics after edit", times, 300, judged=50)
-    _, reply = client.request("workspace/executeCommand", {"command": "stvm.timings", "arguments": []})
+    reply = client.request("workspace/executeCommand", {"command": "stvm.timings", "arguments": []})
     timings = reply.get("result") or []
     cpu = [t["check_cpu"] for t in timings]
     focused = sum(bool(t.get("focused")) for t in timings)
