@@ -1,9 +1,11 @@
 """`stvm lsp`: the language server (LSP over stdio, pygls 2).
 
-On open, change (debounced) and save, the project of the document (its stvm.toml, else its
-folder: stvm/lsp/driver.py) is checked with the editor's unsaved buffers; the checker's errors
-and the lint findings are published for every file of the project (so an edit in one file
-updates its dependents), and the position index (stvm/lsp/index.py) is rebuilt. The requests
+On open, change and save, the project of the document (its stvm.toml, else its folder:
+stvm/lsp/driver.py) is checked with the editor's unsaved buffers; the checker's errors and the
+lint findings are published for every file of the project (so an edit in one file updates its
+dependents), and the position index (stvm/lsp/index.py) is rebuilt. After a change the
+focused check's diagnostics come first, the full check, index and lint once typing pauses
+(`edit_cycle`; docs/editor.md "Typing"). The requests
 (hover, definition, references, completion, …) read the last index that was built from a
 project without syntax errors, so they keep answering while a line is half typed.
 
@@ -705,6 +707,8 @@ def build_server(options=None) -> StvmLanguageServer:
         if path is not None:
             ls.open_files.discard(_norm(path))
         ls.text_document_publish_diagnostics(lsp.PublishDiagnosticsParams(params.text_document.uri, []))
+        for state in ls.projects.values():     # cleared: the next publish sends them again
+            state.sent.pop(params.text_document.uri, None)
 
     @server.feature(lsp.TEXT_DOCUMENT_HOVER)
     @positioned
