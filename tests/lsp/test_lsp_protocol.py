@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import json
 import os
+import time
 from pathlib import Path
 
 import pytest
@@ -93,3 +94,30 @@ def test_diagnostics_are_published_under_the_uri_the_client_used(client, tmp_pat
     # and requests on that URI are answered
     reply = client.request("textDocument/hover", {"textDocument": {"uri": dotted}, "position": {"line": 1, "character": 4}})
     assert "(VAR) P.x : INT" in reply["result"]["contents"]["value"]
+
+
+def test_a_burst_of_edits_ends_with_the_verdict_of_the_last_text(client):
+    # edits sent back to back: checks of text already replaced are not published after a
+    # newer verdict (the edit cycle, stvm/lsp/server.py), and the last text's verdict stands
+    main = (FIXTURE / "main.st").resolve()
+    uri, text = main.as_uri(), main.read_text(encoding="utf-8")
+    broken = text.replace("reading := drive.Position", "reading := drive.Positio")
+    client.notify("textDocument/didOpen", {"textDocument": {"uri": uri, "languageId": "structured-text",
+                                                            "version": 1, "text": text}})
+    client.wait_diagnostics(uri)
+    version = 1
+    for body in [broken, text] * 3 + [broken]:
+        version += 1
+        client.notify("textDocument/didChange", {"textDocument": {"uri": uri, "version": version},
+                                                 "contentChanges": [{"text": body}]})
+    client.wait_diagnostics(uri, lambda d: any(x["severity"] == 1 for x in d))
+    client.notify("textDocument/didChange", {"textDocument": {"uri": uri, "version": version + 1},
+                                             "contentChanges": [{"text": text}]})
+    client.wait_diagnostics(uri, lambda d: not any(x["severity"] == 1 for x in d))
+    # the full check, index and lint that follow publish nothing older
+    reply = client.request("workspace/executeCommand", {"command": "stvm.timings", "arguments": []})
+    assert 2 <= len(reply["result"]) <= 8      # at most one publish per edit
+    time.sleep(1.5)
+    late = [m for _, m in list(client.messages.queue)
+            if m.get("method") == "textDocument/publishDiagnostics" and m["params"]["uri"] == uri]
+    assert not any(d["severity"] == 1 for m in late for d in m["params"]["diagnostics"])
