@@ -1,18 +1,15 @@
-"""`stvm lsp` over stdio, as VS Code talks to it: LSP JSON-RPC with Content-Length framing."""
+"""`stvm lsp` over stdio, as VS Code talks to it: LSP JSON-RPC with Content-Length framing
+(stvm/lsp/stdio_client.py)."""
 
 from __future__ import annotations
 
-import json
 import os
-import queue
-import subprocess
-import sys
-import threading
 from pathlib import Path
 
 import pytest
 
 from lint_helpers import write_st
+from stvm.lsp.stdio_client import StdioClient
 
 BAD = """FUNCTION_BLOCK Probe
 VAR_INPUT a, b : INT; END_VAR
@@ -24,64 +21,9 @@ GOOD = BAD.replace("y := a / b;", "IF b <> 0 THEN y := a / b; END_IF;")
 BROKEN = BAD.replace("y := a / b;", "y := a / ;")
 
 
-class Client:
-    def __init__(self) -> None:
-        env = dict(os.environ)
-        self.proc = subprocess.Popen([sys.executable, "-m", "stvm", "lsp"], stdin=subprocess.PIPE,
-                                     stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env)
-        self.messages: queue.Queue = queue.Queue()
-        self.next_id = 0
-        threading.Thread(target=self._read, daemon=True).start()
-
-    def _read(self) -> None:
-        stream = self.proc.stdout
-        while True:
-            header = b""
-            while not header.endswith(b"\r\n\r\n"):
-                byte = stream.read(1)
-                if not byte:
-                    return
-                header += byte
-            length = int(next(line.split(b":")[1] for line in header.split(b"\r\n")
-                              if line.lower().startswith(b"content-length")))
-            self.messages.put(json.loads(stream.read(length)))
-
-    def send(self, message: dict) -> None:
-        body = json.dumps(message).encode()
-        self.proc.stdin.write(b"Content-Length: %d\r\n\r\n" % len(body) + body)
-        self.proc.stdin.flush()
-
-    def request(self, method: str, params: dict) -> dict:
-        self.next_id += 1
-        self.send({"jsonrpc": "2.0", "id": self.next_id, "method": method, "params": params})
-        while True:
-            msg = self.messages.get(timeout=60)
-            if msg.get("id") == self.next_id and "method" not in msg:
-                return msg
-
-    def notify(self, method: str, params: dict) -> None:
-        self.send({"jsonrpc": "2.0", "method": method, "params": params})
-
-    def diagnostics(self, uri: str) -> list[dict]:
-        while True:
-            msg = self.messages.get(timeout=60)
-            if msg.get("method") == "textDocument/publishDiagnostics" and msg["params"]["uri"] == uri:
-                return msg["params"]["diagnostics"]
-
-    def close(self) -> None:
-        try:
-            self.request("shutdown", {})
-            self.notify("exit", {})
-            self.proc.wait(timeout=10)
-        finally:
-            if self.proc.poll() is None:
-                self.proc.kill()
-                self.proc.wait()
-
-
 @pytest.fixture
 def client():
-    c = Client()
+    c = StdioClient()
     reply = c.request("initialize", {"processId": os.getpid(), "rootUri": None, "capabilities": {}})
     sync = reply["result"]["capabilities"]["textDocumentSync"]
     assert sync["openClose"] and sync["save"]["includeText"]

@@ -1,23 +1,19 @@
 """`stvm lsp` under malformed and random JSON-RPC (issue 34): messages drawn by hypothesis
 (fixed seed, bounded) are sent over stdio to one server; each gets the JSON-RPC answer the
 specification asks for, the server answers a real request after every one, and nothing it
-writes to stderr is a traceback."""
+writes to stderr is a traceback. The client is stvm/lsp/stdio_client.py: raw frames, no client
+library."""
 
 from __future__ import annotations
 
 import json
-import queue
-import subprocess
-import sys
-import tempfile
-import threading
-import time
 
 import pytest
 from hypothesis import HealthCheck, given, seed, settings
 from hypothesis import strategies as st
 
 from lsp_helpers import FIXTURES, ROOT, position
+from stvm.lsp.stdio_client import StdioClient
 
 MAIN = (FIXTURES / "oo" / "main.st").resolve()
 PARSE_ERROR, INVALID_REQUEST, METHOD_NOT_FOUND, INVALID_PARAMS, INTERNAL_ERROR = -32700, -32600, -32601, -32602, -32603
@@ -42,54 +38,11 @@ json_values = st.recursive(
 positions = st.fixed_dictionaries({"line": st.integers(-5, 2**33), "character": st.integers(-5, 2**33)})
 
 
-class Server:
-    """`stvm lsp` over stdio: raw frames in, every message out on a queue."""
+class Server(StdioClient):
+    """`stvm lsp` over stdio: raw frames in, every message out on a queue, stderr kept."""
 
     def __init__(self) -> None:
-        self.stderr = tempfile.TemporaryFile()
-        self.proc = subprocess.Popen([sys.executable, "-m", "stvm", "lsp"], stdin=subprocess.PIPE,
-                                     stdout=subprocess.PIPE, stderr=self.stderr, cwd=ROOT)
-        self.messages: queue.Queue = queue.Queue()
-        self.next_id = 1000
-        threading.Thread(target=self._read, daemon=True).start()
-
-    def _read(self) -> None:
-        stream = self.proc.stdout
-        while True:
-            header = b""
-            while not header.endswith(b"\r\n\r\n"):
-                byte = stream.read(1)
-                if not byte:
-                    return
-                header += byte
-            length = int(next(line.split(b":")[1] for line in header.split(b"\r\n")
-                              if line.lower().startswith(b"content-length")))
-            self.messages.put(json.loads(stream.read(length)))
-
-    def frame(self, body: bytes) -> None:
-        self.proc.stdin.write(b"Content-Length: %d\r\n\r\n" % len(body) + body)
-        self.proc.stdin.flush()
-
-    def send(self, message) -> None:
-        self.frame(json.dumps(message).encode())
-
-    def fresh_id(self) -> int:
-        self.next_id += 1
-        return self.next_id
-
-    def until(self, done) -> list[dict]:
-        """Every message up to and including the one `done` accepts."""
-        out = []
-        deadline = time.monotonic() + TIMEOUT
-        while True:
-            out.append(self.messages.get(timeout=max(0.1, deadline - time.monotonic())))
-            if done(out[-1]):
-                return out
-
-    def request(self, method: str, params) -> dict:
-        msg_id = self.fresh_id()
-        self.send({"jsonrpc": "2.0", "id": msg_id, "method": method, "params": params})
-        return self.until(lambda m: m.get("id") == msg_id and "method" not in m)[-1]
+        super().__init__(cwd=ROOT, timeout=TIMEOUT, capture_stderr=True, first_id=1000)
 
     def answers_hover(self) -> list[dict]:
         """A real hover (the server still serves); the messages that came before its answer."""
@@ -100,18 +53,6 @@ class Server:
         got = self.until(lambda m: m.get("id") == msg_id and "method" not in m)
         assert "FB_Axis" in got[-1]["result"]["contents"]["value"], got[-1]
         return got[:-1]
-
-    def close(self) -> str:
-        try:
-            self.request("shutdown", None)
-            self.send({"jsonrpc": "2.0", "method": "exit"})
-            self.proc.wait(timeout=30)
-        finally:
-            if self.proc.poll() is None:
-                self.proc.kill()
-                self.proc.wait()
-        self.stderr.seek(0)
-        return self.stderr.read().decode("utf-8", "replace")
 
 
 @pytest.fixture(scope="module")

@@ -1,89 +1,26 @@
 """The protocol's edges (issue 34 item 11, LSP half): requests with params that do not fit get a
 JSON-RPC error and the server keeps serving; a `file://host/…` URI keeps its host; a URI with
-`..` is answered under the URI the client used. Raw JSON-RPC over stdio, no client library, so
-the malformed messages reach the server as sent."""
+`..` is answered under the URI the client used. Raw JSON-RPC over stdio, no client library
+(stvm/lsp/stdio_client.py), so the malformed messages reach the server as sent."""
 
 from __future__ import annotations
 
 import json
 import os
-import queue
-import subprocess
-import sys
-import threading
+import time
 from pathlib import Path
 
 import pytest
 
 from stvm.lsp.server import path_of
+from stvm.lsp.stdio_client import StdioClient
 
 FIXTURE = Path(__file__).resolve().parent / "fixtures" / "oo"
 
 
-class RawClient:
-    def __init__(self) -> None:
-        self.proc = subprocess.Popen([sys.executable, "-m", "stvm", "lsp"], stdin=subprocess.PIPE,
-                                     stdout=subprocess.PIPE, stderr=subprocess.PIPE)
-        self.messages: queue.Queue = queue.Queue()
-        self.next_id = 0
-        threading.Thread(target=self._read, daemon=True).start()
-
-    def _read(self) -> None:
-        stream = self.proc.stdout
-        while True:
-            header = b""
-            while not header.endswith(b"\r\n\r\n"):
-                byte = stream.read(1)
-                if not byte:
-                    return
-                header += byte
-            length = int(next(line.split(b":")[1] for line in header.split(b"\r\n")
-                              if line.lower().startswith(b"content-length")))
-            self.messages.put(json.loads(stream.read(length)))
-
-    def send(self, message) -> None:
-        body = (json.dumps(message) if not isinstance(message, bytes) else message)
-        body = body.encode() if isinstance(body, str) else body
-        self.proc.stdin.write(b"Content-Length: %d\r\n\r\n" % len(body) + body)
-        self.proc.stdin.flush()
-
-    def request(self, method: str, params) -> dict:
-        self.next_id += 1
-        self.send({"jsonrpc": "2.0", "id": self.next_id, "method": method, "params": params})
-        while True:
-            msg = self.messages.get(timeout=60)
-            if msg.get("id") == self.next_id and "method" not in msg:
-                return msg
-
-    def notify(self, method: str, params) -> None:
-        self.send({"jsonrpc": "2.0", "method": method, "params": params})
-
-    def diagnostics_uris(self, until: str) -> list[str]:
-        seen = []
-        while True:
-            msg = self.messages.get(timeout=60)
-            if msg.get("method") == "textDocument/publishDiagnostics":
-                seen.append(msg["params"]["uri"])
-                if msg["params"]["uri"] == until:
-                    return seen
-
-    def close(self) -> str:
-        if self.proc.poll() is not None:
-            return ""
-        try:
-            self.request("shutdown", None)
-            self.notify("exit", None)
-            self.proc.wait(timeout=10)
-        finally:
-            if self.proc.poll() is None:
-                self.proc.kill()
-                self.proc.wait()
-        return self.proc.stderr.read().decode(errors="replace")
-
-
 @pytest.fixture
 def client():
-    c = RawClient()
+    c = StdioClient(capture_stderr=True)
     reply = c.request("initialize", {"processId": os.getpid(), "rootUri": None, "capabilities": {}})
     assert "hover" in json.dumps(reply["result"]["capabilities"]).lower()
     c.notify("initialized", {})
@@ -157,3 +94,30 @@ def test_diagnostics_are_published_under_the_uri_the_client_used(client, tmp_pat
     # and requests on that URI are answered
     reply = client.request("textDocument/hover", {"textDocument": {"uri": dotted}, "position": {"line": 1, "character": 4}})
     assert "(VAR) P.x : INT" in reply["result"]["contents"]["value"]
+
+
+def test_a_burst_of_edits_ends_with_the_verdict_of_the_last_text(client):
+    # edits sent back to back: checks of text already replaced are not published after a
+    # newer verdict (the edit cycle, stvm/lsp/server.py), and the last text's verdict stands
+    main = (FIXTURE / "main.st").resolve()
+    uri, text = main.as_uri(), main.read_text(encoding="utf-8")
+    broken = text.replace("reading := drive.Position", "reading := drive.Positio")
+    client.notify("textDocument/didOpen", {"textDocument": {"uri": uri, "languageId": "structured-text",
+                                                            "version": 1, "text": text}})
+    client.wait_diagnostics(uri)
+    version = 1
+    for body in [broken, text] * 3 + [broken]:
+        version += 1
+        client.notify("textDocument/didChange", {"textDocument": {"uri": uri, "version": version},
+                                                 "contentChanges": [{"text": body}]})
+    client.wait_diagnostics(uri, lambda d: any(x["severity"] == 1 for x in d))
+    client.notify("textDocument/didChange", {"textDocument": {"uri": uri, "version": version + 1},
+                                             "contentChanges": [{"text": text}]})
+    client.wait_diagnostics(uri, lambda d: not any(x["severity"] == 1 for x in d))
+    # the full check, index and lint that follow publish nothing older
+    reply = client.request("workspace/executeCommand", {"command": "stvm.timings", "arguments": []})
+    assert 2 <= len(reply["result"]) <= 8      # at most one publish per edit
+    time.sleep(1.5)
+    late = [m for _, m in list(client.messages.queue)
+            if m.get("method") == "textDocument/publishDiagnostics" and m["params"]["uri"] == uri]
+    assert not any(d["severity"] == 1 for m in late for d in m["params"]["diagnostics"])

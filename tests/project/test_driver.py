@@ -17,6 +17,7 @@ from pathlib import Path
 import pytest
 
 from core_helpers import cli
+from stvm.lsp.stdio_client import StdioClient
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "debug"))
 
@@ -183,9 +184,7 @@ def test_the_language_server_honours_the_manifest_and_its_initialization_options
     """`stvm lsp` as an editor starts it: the manifest's dialect and defines, and the client's
     initializationOptions over them."""
     pytest.importorskip("pygls")
-    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "lint"))
-    from test_lint_lsp import Client
-    client = Client()
+    client = StdioClient()
     try:
         client.request("initialize", {"processId": None, "rootUri": None, "capabilities": {},
                                       "initializationOptions": init})
