@@ -22,6 +22,7 @@ from stvm.runtime.access import PathError, UnboundInOut, VariableAccess  # noqa:
 from stvm.runtime.context import RunContext
 from stvm.runtime.format import format_time, format_value
 from stvm.runtime.helpers import HELPERS
+from stvm.runtime.memory import guard_bytes, memory_helpers
 from stvm.runtime.stats import TimingStats
 from stvm.runtime.values import ArrayIndexError, FunctionError, STFault
 from stvm.semantics import types as t
@@ -93,6 +94,7 @@ class VM:
                               transport=transport)
         self.realtime = realtime
         ns: dict[str, Any] = dict(HELPERS)
+        ns.update(memory_helpers(guard_bytes(self.settings)))   # `pointer_overrun`
         NATIVE_FUNCTIONS = natives if natives is not None else {}
         NATIVE_FBS = native_fbs if native_fbs is not None else {}
         ns["_NATIVE_FB"] = NATIVE_FBS
