@@ -53,11 +53,13 @@ def probe_real_to_string_format(dialect, value):
                 RealToStringFormat.SHORTEST: (b"3.5", b"1.4", b"-0.25"),
                 RealToStringFormat.DIGITS15: (b"3.5", b"1.4", b"-0.25")}[value]
     assert text == expected
-    small = outcome("PROGRAM Main VAR s, t : STRING; x : LREAL := 0.01; END_VAR s := LREAL_TO_STRING(x * 7); "
-                    "t := LREAL_TO_STRING(LREAL#0.0099385); END_PROGRAM", dialect, ["Main.s", "Main.t"])
-    assert small == {RealToStringFormat.C_EXP: (b"7.00000000000000e-02", b"9.93850000000000e-03"),
-                     RealToStringFormat.SHORTEST: (b"0.07", b"0.0099385"),   # x * 7 is 0.07 exactly
-                     RealToStringFormat.DIGITS15: (b"0.07", b"9.9385e-3")}[value]
+    # ten additions of 0.01 make 0.09999999999999999 in binary floating point
+    small = outcome("PROGRAM Main VAR s, t : STRING; x : LREAL; i : INT; END_VAR FOR i := 1 TO 10 DO "
+                    "x := x + 0.01; END_FOR s := LREAL_TO_STRING(x); t := LREAL_TO_STRING(LREAL#0.0099385); "
+                    "END_PROGRAM", dialect, ["Main.s", "Main.t"])
+    assert small == {RealToStringFormat.C_EXP: (b"1.00000000000000e-01", b"9.93850000000000e-03"),
+                     RealToStringFormat.SHORTEST: (b"0.09999999999999999", b"0.0099385"),
+                     RealToStringFormat.DIGITS15: (b"0.1", b"9.9385e-3")}[value]
 
 
 def probe_string_size(dialect, value):
