@@ -36,7 +36,8 @@ Decode = Callable[[bytearray, int, Any], Any]
 
 class MemoryFault(STFault):
     """A read or write through a pointer outside the variable it points into (TwinCAT: a page
-    fault or a silent overwrite of a neighbour; stvm stops the task)."""
+    fault or a silent overwrite of a neighbour; stvm stops the task, unless the access stays
+    within the guard of `pointer_overrun=guard`)."""
 
 
 GUARD_BYTES = 8
@@ -234,6 +235,8 @@ def image(value, ty: t.Type, short: bool = False) -> bytearray:
 
 
 # ---- byte-addressed pointers ---------------------------------------------------------------------
+_SIZES: dict[t.Type, int] = {}   # the size of an integer or BOOL element type (no time layout involved)
+
 class Ptr:
     """A pointer `offset` bytes into a variable, read as `view`. `base` is a reference (get/set) to
     a scalar variable, or an aggregate object (a list for an array, a struct or union object) that
@@ -341,8 +344,27 @@ class Ptr:
             else:
                 items[first + k] = decode(buf, k * step, items[first + k])
 
+    def _slot(self) -> int:
+        """The index of the list element this pointer reads whole, as the element's own type, in
+        a one-dimensional array of integers or BOOLs (`p^` of a POINTER TO BYTE walking an ARRAY
+        OF BYTE, TcUnit's stream and XML buffers: one element, not the bytes of a window), else -1."""
+        base, ty = self.base, self.base_type
+        if type(base) is not list or type(ty) is not t.ArrayType or len(ty.dims or ()) != 1:
+            return -1
+        element = ty.element
+        if type(element) not in (t.IntType, t.BoolType) or not (self.view is element or t.same_type(self.view, element)):
+            return -1
+        step = _SIZES.get(element)
+        if step is None:
+            step = _SIZES[element] = t.byte_size(element) or 1
+        at, rest = divmod(self.offset, step)
+        return at if rest == 0 and 0 <= at < len(base) else -1
+
     # the pointer's target, as generated code reads and writes it (`p^`)
     def get(self):
+        at = self._slot()
+        if at >= 0:
+            return self.base[at]
         if self.offset == 0 and t.same_type(self.view, self.base_type):
             return self.base if self._aggregate() else self.base.get()
         if t.is_aggregate(self.view):
@@ -352,6 +374,15 @@ class Ptr:
         return codec(self.view, self.short)[1](bytearray(self.read(size)), 0, None)
 
     def set(self, value) -> None:
+        at = self._slot()
+        if at >= 0:   # the value as the element's bytes would hold it (the codec's wrap)
+            view = self.view
+            if type(view) is t.BoolType:
+                self.base[at] = bool(value)
+            else:
+                word = int(value) & ((1 << view.bits) - 1)
+                self.base[at] = word - (1 << view.bits) if view.signed and word >> (view.bits - 1) else word
+            return
         if self.offset == 0 and t.same_type(self.view, self.base_type) and not self._aggregate():
             self.base.set(value)
             return
