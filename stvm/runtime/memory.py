@@ -313,6 +313,8 @@ class Ptr:
         if window is None:
             return bytes(self.load()[lo:hi])
         items, (encode, _), step, first, last = window
+        if _is_octet(self.base_type.element):     # an ARRAY OF BYTE/USINT: its elements are its bytes
+            return bytes(items[lo:hi])
         buf = bytearray(step * (last - first + 1))
         for k in range(last - first + 1):
             encode(items[first + k], buf, k * step)
@@ -332,6 +334,9 @@ class Ptr:
             self.store(buf)
             return
         items, (encode, decode), step, first, last = window
+        if _is_octet(self.base_type.element):     # MEMSET/MEMCPY into an ARRAY OF BYTE: the bytes are the elements
+            items[lo:hi] = data
+            return
         buf = bytearray(step * (last - first + 1))
         for k in range(last - first + 1):    # the touched elements' bytes, then the new ones over them
             encode(items[first + k], buf, k * step)
@@ -397,6 +402,11 @@ class Ptr:
 
     def moved(self, delta: int, view: t.Type) -> "Ptr":
         return Ptr(self.base, self.base_type, self.offset + delta, view, self.short, self.guard)
+
+
+def _is_octet(ty: t.Type) -> bool:
+    """An unsigned 8-bit integer type (BYTE, USINT): held as ints 0..255, the same as its bytes."""
+    return type(ty) is t.IntType and ty.bits == 8 and not ty.signed
 
 
 def _same_base(a, b) -> bool:
