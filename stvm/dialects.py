@@ -60,11 +60,15 @@ ROWS: tuple[Row, ...] = (
         "the standard gives no text form)", setting=True),
     Row("real_to_string_format", "REAL/LREAL_TO_STRING (and TO_STRING of a real)",
         "c_exp", "shortest", "shortest",
-        "shortest",
+        "digits15",
         "Sysmac: C %e with the type's digits, 3.5 -> '3.500000e+00' (stvm's choice, which the thesis "
-        f"checksum relies on); {TC3} 'TO_STRING conversions' (LREAL_TO_STRING -> '1.4') and "
-        "'REAL/LREAL_TO_<type>' (at most 16 significant digits): the shortest decimal text, "
-        "3.5 -> '3.5'; IEC and CODESYS alike", setting=True),
+        f"checksum relies on); {TC3} 'TO_STRING conversions' (LREAL_TO_STRING -> '1.4'), "
+        "'REAL/LREAL_TO_<type>' (the digits are limited, the last one rounded) and Tc2_Utilities "
+        "'LREAL_TO_FMTSTR' (an LREAL has at most 15 significant digits): the shortest text of the "
+        "value rounded to 15 digits, 0.06999999999999999 -> '0.07'; below 0.01 mantissa and exponent, "
+        "0.0099385 -> '9.9385e-3', as TcUnit's messages from a TwinCAT runtime show them "
+        "(github.com/tcunit/TcUnit pull request 231); IEC and CODESYS: the shortest text, 3.5 -> '3.5'",
+        setting=True),
     Row("string_size", "what n counts in STRING[n] / STRING(n)",
         "with_nul", "characters", "characters", "characters",
         f"{W501}: STRING[n] is n bytes including the NUL (holds n-1); {IEC3} 6.3.3, {TC3} 'STRING' "
@@ -78,6 +82,13 @@ ROWS: tuple[Row, ...] = (
         "fault", "fault", "store", "store",
         f"{IEC3} 6.4.4.3: an error; {CDS} / {TC3} 'Subrange types': checked only by the implicit "
         "CheckRangeSigned/CheckRangeUnsigned functions, without them the value is stored", setting=True),
+    Row("pointer_overrun", "an access through a byte pointer a few bytes outside the variable it points into",
+        "fault", "fault", "guard", "guard",
+        f"{TC3} 'POINTER TO' and 'CheckPointer' / {CDS} 'POINTER TO' and 'POU CheckPointer': pointers "
+        "are not checked at run time unless the project adds the implicit CheckPointer function, so "
+        "a write past a variable's end lands in the neighbouring memory (stvm: an 8-byte guard "
+        "absorbs it, docs/memory_model.md); Sysmac and IEC have no pointer arithmetic: a fault",
+        setting=True),
     # ---- rule rows ------------------------------------------------------------------------------
     Row("p_prefix_rule", "names may not start with '_' or 'P_', end with '_', contain '__'",
         True, False, False, False,

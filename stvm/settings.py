@@ -78,6 +78,14 @@ class SubrangeCheck(Enum):
     STORE = "store"
 
 
+class PointerOverrun(Enum):
+    """A read or write through a byte pointer (MEMCPY, `p^` of a cast or moved pointer) a few bytes outside the variable it points into (docs/memory_model.md)."""
+    FAULT = "fault"             # the task stops with the ST location (stvm's memory model has no neighbours)
+    # TwinCAT/CODESYS: the access lands in neighbouring memory without an error; stvm gives every
+    # variable an 8-byte guard on each side that absorbs it (writes dropped, reads 0)
+    GUARD = "guard"
+
+
 class IntLiteralType(Enum):
     """Type of an untyped integer literal."""
     DINT = "dint"               # DINT if it fits, else LINT
@@ -107,7 +115,10 @@ class Dialect(Enum):
 class RealToStringFormat(Enum):
     """REAL/LREAL_TO_STRING (and TO_STRING of a real)."""
     C_EXP = "c_exp"             # Omron (Choice): C `%e` with the type's digits, 3.5 -> '3.500000e+00'
-    SHORTEST = "shortest"       # Beckhoff/CODESYS: the shortest text that reads back the same, 3.5 -> '3.5'
+    SHORTEST = "shortest"       # CODESYS: the shortest text that reads back the same, 3.5 -> '3.5'
+    # TwinCAT: an LREAL rounded to 15 significant digits first (0.06999999999999999 -> '0.07'), and
+    # below 0.01 a mantissa and exponent as a TwinCAT runtime logs them (0.0099385 -> '9.9385e-3')
+    DIGITS15 = "digits15"
 
 
 class StringSize(Enum):
@@ -405,6 +416,7 @@ class SysmacSettings:
     double_quote_strings: DoubleQuoteStrings = setting(DoubleQuoteStrings.ACCEPT_WARN, "3 #8")
     for_end_eval: ForEndEval = setting(ForEndEval.ONCE, "9")
     open_array_bounds: OpenArrayBounds = setting(None, "3 #4")
+    pointer_overrun: PointerOverrun = setting(None, "3")
     # section 4/5: sockets
     skt_send_copy: SktSendCopy = setting(SktSendCopy.AT_START, "4 #2")
     skt_errorid_reset: SktErrorIdReset = setting(SktErrorIdReset.START_AND_CLEAR, "4 #2")

@@ -252,6 +252,11 @@ def probe_real_to_string_format(settings):
                         settings, ["Main.s"])
 
 
+def probe_real_to_string_small(settings):
+    return _run_program("PROGRAM Main VAR s : STRING; END_VAR s := LREAL_TO_STRING(LREAL#0.0099385); END_PROGRAM\n",
+                        settings, ["Main.s"])
+
+
 def probe_for_end_eval(settings):
     return _run_program("PROGRAM Main VAR i, n, count : INT; END_VAR n := 5; count := 0;\n"
                         "FOR i := 1 TO n DO n := n - 1; count := count + 1; END_FOR; END_PROGRAM\n",
@@ -296,6 +301,9 @@ OBSERVED: dict[tuple[str, str], Probe | StdlibTest] = {
     ("dialect", "codesys"): probe_dialect,
     ("string_size", "with_nul"): probe_string_size,
     ("real_to_string_format", "c_exp"): probe_real_to_string_format,
+    ("real_to_string_format", "digits15"): probe_real_to_string_small,
+    ("pointer_overrun", "guard"):
+        "tests/runtime/test_memory_overrun.py::test_the_setting_comes_from_the_command_line_and_the_manifest",
     ("dialect", "twincat"): probe_dialect_twincat,
     ("bare_enumerators", "require_type"): probe_bare_enumerators,
     ("dollar_n", "crlf"): "tests/syntax/test_syntax_literals.py::test_dollar_n_setting",

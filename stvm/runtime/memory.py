@@ -22,11 +22,13 @@ alignment (at most 8) and the whole padded to its largest member's alignment —
 from __future__ import annotations
 
 import struct
+from functools import partial
 from typing import Any, Callable
 
 from stvm.lower.layout import struct_layout
 from stvm.runtime.values import ItemRef, STFault
 from stvm.semantics import types as t
+from stvm.settings import PointerOverrun
 
 Encode = Callable[[Any, bytearray, int], None]
 Decode = Callable[[bytearray, int, Any], Any]
@@ -34,7 +36,15 @@ Decode = Callable[[bytearray, int, Any], Any]
 
 class MemoryFault(STFault):
     """A read or write through a pointer outside the variable it points into (TwinCAT: a page
-    fault or a silent overwrite of a neighbour; stvm stops the task)."""
+    fault or a silent overwrite of a neighbour; stvm stops the task, unless the access stays
+    within the guard of `pointer_overrun=guard`)."""
+
+
+GUARD_BYTES = 8
+"""The guard of `pointer_overrun=guard`: how many bytes before and after a variable absorb an
+access through a byte pointer (writes there are dropped, reads give 0). 8 is TwinCAT 3's
+alignment (Beckhoff "Alignment"): what lies within 8 bytes of a variable's end is its padding or
+its neighbour, which a real PLC overwrites without an error."""
 
 
 # ---- the serialiser ------------------------------------------------------------------------------
@@ -225,19 +235,23 @@ def image(value, ty: t.Type, short: bool = False) -> bytearray:
 
 
 # ---- byte-addressed pointers ---------------------------------------------------------------------
+_SIZES: dict[t.Type, int] = {}   # the size of an integer or BOOL element type (no time layout involved)
+
 class Ptr:
     """A pointer `offset` bytes into a variable, read as `view`. `base` is a reference (get/set) to
     a scalar variable, or an aggregate object (a list for an array, a struct or union object) that
     is changed in place; `base_type` is the variable's type; `short`: the time layout (`codec`)."""
 
-    __slots__ = ("base", "base_type", "offset", "view", "short")
+    __slots__ = ("base", "base_type", "offset", "view", "short", "guard")
 
-    def __init__(self, base, base_type: t.Type, offset: int, view: t.Type, short: bool = False) -> None:
+    def __init__(self, base, base_type: t.Type, offset: int, view: t.Type, short: bool = False,
+                 guard: int = 0) -> None:
         self.base = base
         self.base_type = base_type
         self.offset = offset
         self.view = view
         self.short = short
+        self.guard = guard      # bytes on each side that absorb an overrun (`pointer_overrun`)
 
     # the variable's bytes
     def _aggregate(self) -> bool:
@@ -255,11 +269,18 @@ class Ptr:
             self.base.set(decode(buf, 0, None))
 
     def span(self, count: int) -> tuple[int, int]:
+        """The bytes lo..hi-1 of the variable an access of `count` bytes touches: the part inside
+        the variable (empty when all of it falls in the guard). An access outside the variable
+        faults, unless it stays within the guard (`pointer_overrun=guard`)."""
         size = t.byte_size(self.base_type, self.short) or 0
-        if self.offset < 0 or self.offset + count > size:
-            raise MemoryFault(f"access to {count} byte(s) at offset {self.offset} of a {size}-byte "
-                              f"{self.base_type.name}: outside the variable the pointer points into")
-        return self.offset, self.offset + count
+        lo, hi = self.offset, self.offset + count
+        if lo < 0 or hi > size:
+            if lo < -self.guard or hi > size + self.guard:
+                beyond = f" and its {self.guard}-byte guard" if self.guard else ""
+                raise MemoryFault(f"access to {count} byte(s) at offset {lo} of a {size}-byte "
+                                  f"{self.base_type.name}: outside the variable the pointer points into{beyond}")
+            lo, hi = max(lo, 0), max(min(hi, size), max(lo, 0))
+        return lo, hi
 
     def _window(self, lo: int, hi: int):
         """For a one-dimensional array: (its list, the element's codec, the element's size, the
@@ -277,18 +298,35 @@ class Ptr:
 
     def read(self, count: int) -> bytes:
         lo, hi = self.span(count)
+        inside = self._read_inside(lo, hi)
+        if hi - lo == count:
+            return inside
+        if not inside:
+            return bytes(count)
+        before = lo - self.offset    # bytes in the guard before the variable: they read 0
+        return bytes(before) + inside + bytes(count - before - len(inside))
+
+    def _read_inside(self, lo: int, hi: int) -> bytes:
+        if hi <= lo:
+            return b""
         window = self._window(lo, hi)
         if window is None:
             return bytes(self.load()[lo:hi])
         items, (encode, _), step, first, last = window
+        if _is_octet(self.base_type.element):     # an ARRAY OF BYTE/USINT: its elements are its bytes
+            return bytes(items[lo:hi])
         buf = bytearray(step * (last - first + 1))
         for k in range(last - first + 1):
             encode(items[first + k], buf, k * step)
         start = lo - first * step
-        return bytes(buf[start:start + count])
+        return bytes(buf[start:start + hi - lo])
 
     def write(self, data: bytes) -> None:
         lo, hi = self.span(len(data))
+        if hi - lo != len(data):     # partly or wholly in the guard: that part is dropped
+            data = data[lo - self.offset:hi - self.offset]
+            if not data:
+                return
         window = self._window(lo, hi)
         if window is None:
             buf = self.load()
@@ -296,6 +334,9 @@ class Ptr:
             self.store(buf)
             return
         items, (encode, decode), step, first, last = window
+        if _is_octet(self.base_type.element):     # MEMSET/MEMCPY into an ARRAY OF BYTE: the bytes are the elements
+            items[lo:hi] = data
+            return
         buf = bytearray(step * (last - first + 1))
         for k in range(last - first + 1):    # the touched elements' bytes, then the new ones over them
             encode(items[first + k], buf, k * step)
@@ -308,8 +349,27 @@ class Ptr:
             else:
                 items[first + k] = decode(buf, k * step, items[first + k])
 
+    def _slot(self) -> int:
+        """The index of the list element this pointer reads whole, as the element's own type, in
+        a one-dimensional array of integers or BOOLs (`p^` of a POINTER TO BYTE walking an ARRAY
+        OF BYTE, TcUnit's stream and XML buffers: one element, not the bytes of a window), else -1."""
+        base, ty = self.base, self.base_type
+        if type(base) is not list or type(ty) is not t.ArrayType or len(ty.dims or ()) != 1:
+            return -1
+        element = ty.element
+        if type(element) not in (t.IntType, t.BoolType) or not (self.view is element or t.same_type(self.view, element)):
+            return -1
+        step = _SIZES.get(element)
+        if step is None:
+            step = _SIZES[element] = t.byte_size(element) or 1
+        at, rest = divmod(self.offset, step)
+        return at if rest == 0 and 0 <= at < len(base) else -1
+
     # the pointer's target, as generated code reads and writes it (`p^`)
     def get(self):
+        at = self._slot()
+        if at >= 0:
+            return self.base[at]
         if self.offset == 0 and t.same_type(self.view, self.base_type):
             return self.base if self._aggregate() else self.base.get()
         if t.is_aggregate(self.view):
@@ -319,6 +379,15 @@ class Ptr:
         return codec(self.view, self.short)[1](bytearray(self.read(size)), 0, None)
 
     def set(self, value) -> None:
+        at = self._slot()
+        if at >= 0:   # the value as the element's bytes would hold it (the codec's wrap)
+            view = self.view
+            if type(view) is t.BoolType:
+                self.base[at] = bool(value)
+            else:
+                word = int(value) & ((1 << view.bits) - 1)
+                self.base[at] = word - (1 << view.bits) if view.signed and word >> (view.bits - 1) else word
+            return
         if self.offset == 0 and t.same_type(self.view, self.base_type) and not self._aggregate():
             self.base.set(value)
             return
@@ -332,7 +401,12 @@ class Ptr:
         return type(other) is Ptr and other.offset == self.offset and _same_base(self.base, other.base)
 
     def moved(self, delta: int, view: t.Type) -> "Ptr":
-        return Ptr(self.base, self.base_type, self.offset + delta, view, self.short)
+        return Ptr(self.base, self.base_type, self.offset + delta, view, self.short, self.guard)
+
+
+def _is_octet(ty: t.Type) -> bool:
+    """An unsigned 8-bit integer type (BYTE, USINT): held as ints 0..255, the same as its bytes."""
+    return type(ty) is t.IntType and ty.bits == 8 and not ty.signed
 
 
 def _same_base(a, b) -> bool:
@@ -342,7 +416,7 @@ def _same_base(a, b) -> bool:
     return same is not None and same(b)
 
 
-def as_ptr(p, target: t.Type, short: bool = False):
+def as_ptr(p, target: t.Type, short: bool = False, *, guard: int = 0):
     """The pointer value `p` of static type POINTER TO `target` as a `Ptr` (None stays None).
     A value that is not a `Ptr` points to a variable of exactly `target` (the invariant the
     generated code keeps: every cast makes a `Ptr`); an array element's pointer is widened to
@@ -352,32 +426,32 @@ def as_ptr(p, target: t.Type, short: bool = False):
     if type(p) is ItemRef and type(p.lst) is list:
         size = t.byte_size(target, short) or 0
         array = t.ArrayType(f"ARRAY[0..{len(p.lst) - 1}] OF {target.name}", target, ((0, len(p.lst) - 1),))
-        return Ptr(p.lst, array, p.index * size, target, short)
-    return Ptr(p, target, 0, target, short)
+        return Ptr(p.lst, array, p.index * size, target, short, guard)
+    return Ptr(p, target, 0, target, short, guard)
 
 
-def cast(p, source: t.Type, target: t.Type, short: bool = False):
+def cast(p, source: t.Type, target: t.Type, short: bool = False, *, guard: int = 0):
     """`POINTER TO target := POINTER TO source` (TwinCAT/CODESYS accept it: an address is an
     address); the result reads the same bytes as `target`."""
     if p is None:
         return None
-    ptr = as_ptr(p, source, short)
-    return Ptr(ptr.base, ptr.base_type, ptr.offset, target, ptr.short)
+    ptr = as_ptr(p, source, short, guard=guard)
+    return Ptr(ptr.base, ptr.base_type, ptr.offset, target, ptr.short, ptr.guard)
 
 
-def add(p, delta: int, target: t.Type, short: bool = False):
+def add(p, delta: int, target: t.Type, short: bool = False, *, guard: int = 0):
     """`p + delta` / `p - delta` on a POINTER TO `target`: `delta` bytes further (TwinCAT and
     CODESYS add bytes, not elements: 'ADR(x) + 1' is the next byte)."""
     if p is None:
         raise MemoryFault("pointer arithmetic on a NULL pointer (address 0)")
-    ptr = as_ptr(p, target, short)
+    ptr = as_ptr(p, target, short, guard=guard)
     return ptr.moved(delta, target)
 
 
-def index(p, i: int, target: t.Type, short: bool = False):
+def index(p, i: int, target: t.Type, short: bool = False, *, guard: int = 0):
     """`p[i]` on a POINTER TO `target`: the i-th element from the pointer (CODESYS/TwinCAT scale
     the index by the target's size, unlike `+`)."""
-    return add(p, i * (t.byte_size(target, short) or 0), target, short)
+    return add(p, i * (t.byte_size(target, short) or 0), target, short, guard=guard)
 
 
 def deref_aggregate(p):
@@ -442,5 +516,20 @@ class Box:
 MEMORY_HELPERS = {"_ptr_cast": cast, "_ptr_add": add, "_ptr_index": index, "_ptr_deref_agg": deref_aggregate,
                   "_as_ptr": as_ptr, "_Box": Box, "_Ptr": Ptr}
 
-__all__ = ["Box", "MEMORY_HELPERS", "MemoryFault", "Ptr", "add", "as_ptr", "cast", "codec",
-           "image", "index", "memcmp", "memcpy", "memset"]
+
+def guard_bytes(settings) -> int:
+    """The guard a run with `settings` gives every byte pointer (`pointer_overrun`)."""
+    return GUARD_BYTES if settings.pointer_overrun is PointerOverrun.GUARD else 0
+
+
+def memory_helpers(guard: int) -> dict:
+    """The helpers of the generated code for a program run with a guard of `guard` bytes
+    (`pointer_overrun=guard`: GUARD_BYTES; `fault`: 0, the module's own functions): every byte
+    pointer the program makes carries the guard, and a pointer derived from it keeps it."""
+    if not guard:
+        return dict(MEMORY_HELPERS)
+    return {**MEMORY_HELPERS, "_ptr_cast": partial(cast, guard=guard), "_ptr_add": partial(add, guard=guard),
+            "_ptr_index": partial(index, guard=guard), "_as_ptr": partial(as_ptr, guard=guard)}
+
+__all__ = ["Box", "GUARD_BYTES", "MEMORY_HELPERS", "MemoryFault", "Ptr", "add", "as_ptr", "cast", "codec",
+           "image", "index", "guard_bytes", "memcmp", "memcpy", "memory_helpers", "memset"]

@@ -21,6 +21,7 @@ from stvm.numeric import f32, strfit, utf16_units
 from stvm.runtime.access import PathError, UnboundInOut, VariableAccess  # noqa: F401 (API: PathError, UnboundInOut)
 from stvm.runtime.context import RunContext
 from stvm.runtime.helpers import HELPERS
+from stvm.runtime.memory import guard_bytes, memory_helpers
 from stvm.runtime.stats import TimingStats
 from stvm.runtime.values import ArrayIndexError, FunctionError, STFault
 from stvm.semantics import types as t
@@ -96,6 +97,7 @@ class VM:
                               transport=transport)
         self.realtime = realtime
         ns: dict[str, Any] = dict(HELPERS)
+        ns.update(memory_helpers(guard_bytes(self.settings)))   # `pointer_overrun`
         NATIVE_FUNCTIONS = natives if natives is not None else {}
         NATIVE_FBS = native_fbs if native_fbs is not None else {}
         ns["_NATIVE_FB"] = NATIVE_FBS

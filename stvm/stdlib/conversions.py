@@ -62,6 +62,8 @@ def real_to_text(value: float, bits: int, style: RealToStringFormat = RealToStri
     """REAL/LREAL_TO_STRING in the dialect's form (`real_to_string_format`, stvm/dialects.py)."""
     if style is RealToStringFormat.SHORTEST:
         return _shortest_real_text(value, bits)
+    if style is RealToStringFormat.DIGITS15:
+        return _twincat_real_text(value, bits)
     # Choice (no primary source): C `%e` with the digits the type carries (7 significant for REAL,
     # 15 for LREAL), e.g. REAL#-123.45 -> '-1.234500e+02'.
     if math.isnan(value):
@@ -102,6 +104,34 @@ def _shortest_real_text(value: float, bits: int) -> bytes:
         return f"{sign}{whole}.{fraction or '0'}".encode()
     point = f"{figures[0]}.{figures[1:]}" if len(figures) > 1 else figures
     return f"{sign}{point}E{'-' if exp < 0 else '+'}{abs(exp):02d}".encode()
+
+
+def _twincat_real_text(value: float, bits: int) -> bytes:
+    """TwinCAT's LREAL/REAL_TO_STRING (`digits15`): an LREAL rounded to 15 significant digits
+    (Beckhoff LREAL_TO_FMTSTR: an LREAL carries at most 15; REAL/LREAL_TO_<type>: the last digit
+    shown is rounded), so a sum such as 0.01 * 7 prints '0.07', not '0.06999999999999999'; a REAL
+    keeps its shortest text. Below 0.01 (in magnitude, not 0) the figures and a power of ten
+    without sign or padding for the exponent's digits, '9.9385e-3', '1.1e-5', as TcUnit's duration
+    messages from a TwinCAT runtime read (tcunit/TcUnit pull request 231); Choice where no example
+    shows it: one figure keeps '.0' ('1.0e-3'), as a whole number keeps it ('-23.0'), and values
+    from 0.01 up are written as the shortest form writes them."""
+    if bits != 32 and math.isfinite(value) and value != 0:
+        value = float(f"{value:.14e}")
+    if not math.isfinite(value) or value == 0 or abs(value) >= 0.01:
+        return _shortest_real_text(value, bits)
+    text = _shortest_real_text(value, bits).decode()
+    sign, figures = ("-", text[1:]) if text.startswith("-") else ("", text)
+    if "E" in figures:          # already mantissa and exponent (below 1e-5)
+        mantissa, exponent = figures.split("E")
+        exp = int(exponent)
+    else:                       # '0.00123' -> '1.23', -3
+        digits = figures.replace("0.", "", 1)
+        stripped = digits.lstrip("0")
+        exp = -(len(digits) - len(stripped) + 1)
+        mantissa = f"{stripped[0]}.{stripped[1:]}" if len(stripped) > 1 else stripped
+    if "." not in mantissa:
+        mantissa += ".0"
+    return f"{sign}{mantissa}e{exp}".encode()
 
 
 def _fraction_text(ns: int) -> str:

@@ -207,42 +207,49 @@ def sys_file_close(ctx, handle: int) -> int:
     return ERR_OK
 
 
-@native_function("SysFileWrite")
-def sys_file_write(ctx, handle: int, buffer, size: int, p_result) -> int:
+class _BadBuffer(Exception):
+    """The buffer of SysFileRead/SysFileWrite is not bytes the memory model can read or write."""
+
+
+def _file_io(ctx, handle: int, p_result, transfer) -> int:
+    """What SysFileRead and SysFileWrite share: the handle's file, `transfer(file)` (the number of
+    bytes moved), and the error in pResult^ (ERR_INVALID_HANDLE for an unknown handle,
+    ERR_PARAMETER for a buffer that is not bytes, ERR_FAILED when the file operation fails); the
+    count is 0 on any error."""
     f = file_root(ctx).handles.get(handle)
     if f is None:
-        _set_result(p_result, ERR_INVALID_HANDLE)
-        return 0
-    data = read_bytes(buffer, size)
-    if data is None:
-        _set_result(p_result, ERR_PARAMETER)
-        return 0
-    try:
+        code, count = ERR_INVALID_HANDLE, 0
+    else:
+        try:
+            code, count = ERR_OK, transfer(f)
+        except _BadBuffer:
+            code, count = ERR_PARAMETER, 0
+        except OSError:
+            code, count = ERR_FAILED, 0
+    _set_result(p_result, code)
+    return count
+
+
+@native_function("SysFileWrite")
+def sys_file_write(ctx, handle: int, buffer, size: int, p_result) -> int:
+    def write(f) -> int:
+        data = read_bytes(buffer, size)
+        if data is None:
+            raise _BadBuffer
         f.write(data)
         f.flush()
-    except OSError:
-        _set_result(p_result, ERR_FAILED)
-        return 0
-    _set_result(p_result, ERR_OK)
-    return len(data)
+        return len(data)
+    return _file_io(ctx, handle, p_result, write)
 
 
 @native_function("SysFileRead")
 def sys_file_read(ctx, handle: int, buffer, size: int, p_result) -> int:
-    f = file_root(ctx).handles.get(handle)
-    if f is None:
-        _set_result(p_result, ERR_INVALID_HANDLE)
-        return 0
-    try:
+    def read(f) -> int:
         data = f.read(size)
-    except OSError:
-        _set_result(p_result, ERR_FAILED)
-        return 0
-    if not write_bytes(buffer, data):
-        _set_result(p_result, ERR_PARAMETER)
-        return 0
-    _set_result(p_result, ERR_OK)
-    return len(data)
+        if not write_bytes(buffer, data):
+            raise _BadBuffer
+        return len(data)
+    return _file_io(ctx, handle, p_result, read)
 
 
 @native_function("SysFileDelete")

@@ -193,14 +193,16 @@ class _Paths:
     def _find(self, *candidates: str) -> str | None:
         """The first of `candidates` the program declares (a path through a pointer is only
         checked to name declared members: the pointer may still be NULL)."""
-        from stvm.runtime.access import PathError   # lazy: start-up
+        from stvm.runtime.access import PathError, UnboundInOut   # lazy: start-up
         for path in candidates:
             try:
                 self.vm.type_of(path)
                 return path
+            except UnboundInOut:   # a NULL pointer before the first scan (a PathError too): declared
+                return path
             except PathError:
                 continue
-            except Exception:   # noqa: BLE001 - e.g. a NULL pointer before the first scan: declared
+            except Exception:   # noqa: BLE001 - any other failure to follow a declared pointer
                 return path
         return None
 

@@ -64,8 +64,10 @@ def test_memset_and_memcmp():
 
 
 def test_a_copy_beyond_the_variable_faults():
+    # with `pointer_overrun=fault`; the profile's guard absorbs a few bytes (test_memory_overrun.py)
     with pytest.raises(Exception, match="outside the variable"):
-        run(program("a : INT; b : DINT;", "MEMCPY(ADR(a), ADR(b), 4);"), ["a"])
+        run(program("a : INT; b : DINT;", "MEMCPY(ADR(a), ADR(b), 4);"), ["a"],
+            settings=TWINCAT.with_overrides(["pointer_overrun=fault"]))
 
 
 # ---- pointer arithmetic, casts, indexing --------------------------------------------------------
@@ -319,3 +321,20 @@ def test_time_types_have_twincats_32_bit_layout():
                  ["a", "b", "c", "l", "n1", "n2", "back"])
     # Beckhoff: TIME and TOD in milliseconds, DATE in seconds (32 bits), LTIME in nanoseconds (64)
     assert values == {"a": 1501, "b": 2500, "c": 86400, "l": 1000, "n1": 4, "n2": 8, "back": 1_501_000_000}
+
+
+def test_a_byte_pointer_on_an_array_element_reads_and_writes_that_element_as_its_bytes_would():
+    # the direct path for a whole element (Ptr._slot) keeps the codec's wrap-around and sign
+    sint = t.ELEMENTARY["SINT"]
+    array = t.ArrayType("ARRAY[0..2] OF SINT", sint, ((0, 2),))
+    base = [1, 2, 3]
+    p = memory.Ptr(base, array, 0, sint)
+    memory.index(p, 1, sint).set(200)
+    memory.index(p, 2, sint).set(-129)
+    assert base == [1, -56, 127] and memory.index(p, 1, sint).get() == -56
+    word = memory.cast(memory.add(p, 1, sint), sint, t.WORD)     # two elements as one WORD: the byte path
+    assert word.get() == 0x7FC8
+    bools = [False, True]
+    q = memory.Ptr(bools, t.ArrayType("ARRAY[0..1] OF BOOL", t.BOOL, ((0, 1),)), 1, t.BOOL)
+    q.set(0)
+    assert bools == [False, False] and q.get() is False

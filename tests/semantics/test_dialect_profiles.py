@@ -14,8 +14,8 @@ import pytest
 import stvm
 from core_helpers import load_st
 from stvm.dialects import BY_KEY, PROFILE_FIELDS, ROWS, known_library_prefix, profile_value
-from stvm.settings import (ByteToStringFormat, DEFAULT_SETTINGS, Dialect, OpenArrayBounds, RealToStringFormat,
-                           StringSize, SubrangeCheck, SysmacSettings)
+from stvm.settings import (ByteToStringFormat, DEFAULT_SETTINGS, Dialect, OpenArrayBounds, PointerOverrun,
+                           RealToStringFormat, StringSize, SubrangeCheck, SysmacSettings)
 
 DIALECTS = list(Dialect)
 
@@ -50,8 +50,16 @@ def probe_real_to_string_format(dialect, value):
                    "l := LREAL_TO_STRING(LREAL#1.4); t := TO_STRING(REAL#-0.25); END_PROGRAM",
                    dialect, ["Main.s", "Main.l", "Main.t"])
     expected = {RealToStringFormat.C_EXP: (b"3.500000e+00", b"1.40000000000000e+00", b"-2.500000e-01"),
-                RealToStringFormat.SHORTEST: (b"3.5", b"1.4", b"-0.25")}[value]
+                RealToStringFormat.SHORTEST: (b"3.5", b"1.4", b"-0.25"),
+                RealToStringFormat.DIGITS15: (b"3.5", b"1.4", b"-0.25")}[value]
     assert text == expected
+    # ten additions of 0.01 make 0.09999999999999999 in binary floating point
+    small = outcome("PROGRAM Main VAR s, t : STRING; x : LREAL; i : INT; END_VAR FOR i := 1 TO 10 DO "
+                    "x := x + 0.01; END_FOR s := LREAL_TO_STRING(x); t := LREAL_TO_STRING(LREAL#0.0099385); "
+                    "END_PROGRAM", dialect, ["Main.s", "Main.t"])
+    assert small == {RealToStringFormat.C_EXP: (b"1.00000000000000e-01", b"9.93850000000000e-03"),
+                     RealToStringFormat.SHORTEST: (b"0.09999999999999999", b"0.0099385"),
+                     RealToStringFormat.DIGITS15: (b"0.1", b"9.9385e-3")}[value]
 
 
 def probe_string_size(dialect, value):
@@ -78,6 +86,17 @@ def probe_subrange_check(dialect, value):
         assert result[0] == "fault"
     else:
         assert result == (110,)
+
+
+def probe_pointer_overrun(dialect, value):
+    result = outcome("PROGRAM Main VAR a : ARRAY[0..3] OF BYTE; p : POINTER TO BYTE; n : BYTE := 7; END_VAR\n"
+                     "p := ADR(a) + 4; p^ := 16#FF; n := p^; END_PROGRAM", dialect, ["Main.a", "Main.n"])
+    if dialect in (Dialect.SYSMAC, Dialect.IEC):   # no pointer arithmetic there
+        assert value is PointerOverrun.FAULT and not accepted(result)
+    elif value is PointerOverrun.GUARD:
+        assert result == ([0, 0, 0, 0], 0)
+    else:
+        assert result[0] == "fault"
 
 
 def probe_p_prefix_rule(dialect, value):
@@ -353,7 +372,7 @@ def test_a_setting_the_user_chose_survives_a_change_of_dialect():
     assert moved.byte_to_string_format is ByteToStringFormat.HEX_PAD2
     assert moved.real_to_string_format is RealToStringFormat.C_EXP        # not chosen: the profile's
     back = moved.with_overrides(["dialect=twincat"])
-    assert back.real_to_string_format is RealToStringFormat.SHORTEST
+    assert back.real_to_string_format is RealToStringFormat.DIGITS15
     assert back.byte_to_string_format is ByteToStringFormat.HEX_PAD2
 
 

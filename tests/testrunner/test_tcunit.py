@@ -134,6 +134,10 @@ def test_junit_file_is_tcunits_and_valid(tmp_path):
     assert failed.get("status") == "FAIL" and failed.get("classname") == "PRG_TEST.DebounceTest"
     assert failed.find("failure").get("message") == "deliberately wrong"
     assert all(cases[name].get("status") == "PASS" for name in TEST_NAMES)
+    # TcUnit writes the times with LREAL_TO_STRING: TwinCAT's 15 significant digits
+    # (`real_to_string_format=digits15`), so a sum of 10 ms steps reads '0.07', never '0.06999999999999999'
+    times = [suites.get("time"), suite.get("time")] + [case.get("time") for case in cases.values()]
+    assert all(t == repr(round(float(t), 6)) for t in times), times
 
 
 def test_pytest_collects_the_tcunit_tests(tmp_path):
@@ -145,3 +149,37 @@ def test_pytest_collects_the_tcunit_tests(tmp_path):
     for name in TEST_NAMES:
         assert re.search(rf"PASSED \S*stvm.toml::PRG_TEST.DebounceTest::{name}\b", done.stdout), done.stdout
     assert "4 passed" in done.stdout
+
+
+CRASHING_SUITE = """FUNCTION_BLOCK FB_Crash EXTENDS TcUnit.FB_TestSuite
+VAR
+    zero, q : INT;
+END_VAR
+Crashes();
+
+METHOD Crashes
+TEST('Crashes');
+q := 10 / zero;
+TEST_FINISHED();
+END_METHOD
+END_FUNCTION_BLOCK
+"""
+
+
+def test_a_fault_names_the_suite_and_test_it_happened_in(tmp_path):
+    import shutil
+    project = tmp_path / "crash"
+    shutil.copytree(EXAMPLES / "st", project)
+    (project / "FB_Crash.st").write_text(CRASHING_SUITE, encoding="utf-8")
+    manifest = project / "stvm.toml"
+    manifest.write_text(manifest.read_text(encoding="utf-8").replace('files = [', 'files = ["FB_Crash.st", '),
+                        encoding="utf-8")
+    prg = project / "PRG_TEST.st"
+    prg.write_text(prg.read_text(encoding="utf-8").replace("DebounceTest : FB_Debounce_Test;",
+                                                           "DebounceTest : FB_Debounce_Test;\n    CrashTest : FB_Crash;"),
+                   encoding="utf-8")
+    rc, out, err = _run(project)
+    assert rc == 3, out + err
+    assert "FB_Crash.st:9:1: fault: integer division by zero" in err
+    # the second suite: TcUnit's pointer to the suite being called is read after the fault
+    assert err.splitlines()[-1] == "stvm: error: the tests stopped at a runtime fault in test PRG_TEST.CrashTest::Crashes"
