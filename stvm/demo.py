@@ -182,7 +182,7 @@ class Demo:
             rows.append(("socket service", f"between scans, mean {service[0]:.0f} µs, p99 {service[2]:.0f} µs"))
         if self.vm.realtime:
             rows.append(("deadlines", f"overruns {self.vm.overruns}, catch-up scans {self.vm.catch_up_scans}, "
-                                      f"max lateness {self.vm.max_lateness_ns / 1000:.0f} µs"))
+                                      f"over the period {self.vm.long_scans}, max lateness {self.vm.max_lateness_ns / 1000:.0f} µs"))
         return rows
 
 

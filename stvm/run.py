@@ -469,7 +469,7 @@ def _check_demo_flags(args, is_demo: bool) -> None:
 
 def _realtime_counts(vm) -> str:
     return (f"overruns {vm.overruns} (started > 1 period late), catch-up scans {vm.catch_up_scans}, "
-            f"max lateness {vm.max_lateness_ns / 1000:.0f} us")
+            f"scans over the period {vm.long_scans}, max lateness {vm.max_lateness_ns / 1000:.0f} us")
 
 
 def _start_hmi(address: str, project, vm, demo=None):
@@ -512,4 +512,4 @@ def _print_stats(vm) -> None:
     if vm.realtime:
         jitter = timing_us(vm.jitter_ns) or (0.0, 0.0, 0.0, 0.0)
         print(f"overruns: {vm.overruns}  catch-up scans: {vm.catch_up_scans}  "
-              f"jitter us: p50 {jitter[1]:.1f}  p99 {jitter[2]:.1f}  max {jitter[3]:.1f}")
+              f"scans over the period: {vm.long_scans}  jitter us: p50 {jitter[1]:.1f}  p99 {jitter[2]:.1f}  max {jitter[3]:.1f}")

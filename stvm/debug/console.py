@@ -3,11 +3,23 @@
 Reads one command per line from an input stream (a terminal, a file, or a test's StringIO) and
 writes to an output stream; every stop prints where it is, the ST line and the watches. An empty
 line repeats the last step/next/finish/scan/continue. Ctrl-C while the program runs pauses it.
+
+On a terminal, lines are read while the program runs too (a reader thread): a person types
+`break`, `print` or `pause` during a `continue`. Without it those lines sat unread in the
+terminal's input queue, and the Ctrl-C that followed made the terminal driver flush that queue
+(POSIX: the INTR character discards pending input unless NOFLSH), so they were lost. While the
+program runs, `pause`, `quit`, `break`, `delete`, `watch`, `unwatch`, `info breakpoints|watch|force`
+and `help` are done at once; every other command is queued and runs, in order, at the next stop.
+From a file or a pipe (a script) lines are still read one at a time, each after the previous
+command has finished, so a script's `break` never lands in the middle of its `continue`.
 """
 
 from __future__ import annotations
 
+import queue
 import sys
+import threading
+from collections import deque
 from typing import Callable, TextIO
 
 from stvm.debug.engine import (CONTINUE, FAULTED, FINISH, NEXT, SCAN, STEP, TERMINATED, Engine,
@@ -23,6 +35,7 @@ Commands (ST expressions in ST syntax, evaluated in the selected frame's scope):
   break LINE [if EXPR]        ... in the current file;  break  lists breakpoints
   delete [N...]               delete breakpoints (all without N) (d)
   continue                    run to a breakpoint, a fault or Ctrl-C (c)
+  pause                       while the program runs: stop it where it is (as Ctrl-C)
   step                        next ST statement, into FB and function calls (s)
   next                        next statement, over calls (n)
   finish                      run until the current FB/function returns; in a program: scan end
@@ -44,15 +57,27 @@ _ALIASES = {"b": "break", "d": "delete", "c": "continue", "cont": "continue", "s
             "fin": "finish", "p": "print", "bt": "where", "backtrace": "where", "l": "list", "q": "quit",
             "exit": "quit", "h": "help", "?": "help", "f": "frame", "w": "where"}
 _REPEATABLE = {"step", "next", "finish", "scan", "continue"}
+# done at once while the program runs (the engine takes them from another thread, as the DAP's
+# setBreakpoints); every other command waits for the next stop
+_WHILE_RUNNING = {"pause", "quit", "break", "delete", "watch", "unwatch", "info", "help"}
+_INFO_WHILE_RUNNING = ("b", "w", "f")
 
 
 class Console:
     def __init__(self, engine: Engine, stdin: TextIO | None = None, stdout: TextIO | None = None,
-                 echo: bool | None = None) -> None:
+                 echo: bool | None = None, live: bool | None = None) -> None:
         self.engine = engine
         self.stdin = stdin or sys.stdin
         self.stdout = stdout or sys.stdout
-        self.echo = (not self.stdin.isatty()) if echo is None else echo
+        interactive = self.stdin.isatty()
+        self.echo = (not interactive) if echo is None else echo
+        # live: read lines while the program runs (a person at a terminal); see the module doc
+        self.live = interactive if live is None else live
+        self._lines: queue.Queue[str | None] = queue.Queue()   # live: lines read, None at the end
+        self._reader: threading.Thread | None = None
+        self._pending: deque[str] = deque()   # typed while running, to run at the next stop
+        self._quit = False                    # quit typed while running
+        self._write_lock = threading.Lock()
         self.watches: list[str] = []
         self.frame_index = 0
         self.list_line: tuple[str, int] | None = None
@@ -61,8 +86,32 @@ class Console:
 
     # ---- output
     def write(self, text: str = "") -> None:
-        self.stdout.write(text + "\n")
-        self.stdout.flush()
+        with self._write_lock:
+            self.stdout.write(text + "\n")
+            self.stdout.flush()
+
+    # ---- input
+    def _read_lines(self) -> None:
+        """The reader thread (live mode): every line as soon as it is typed."""
+        try:
+            while True:
+                line = self.stdin.readline()
+                if not line:
+                    break
+                self._lines.put(line.rstrip("\r\n"))
+        except (OSError, ValueError):   # the terminal went away, or stdin was closed at exit
+            pass
+        self._lines.put(None)
+
+    def _read_line(self) -> str | None:
+        """The next command line; None at the end of the input."""
+        if not self.live:
+            line = self.stdin.readline()
+            return line.rstrip("\n") if line else None
+        if self._reader is None:
+            self._reader = threading.Thread(target=self._read_lines, name="stvm-debug-input", daemon=True)
+            self._reader.start()
+        return self._lines.get()
 
     # ---- the loop
     def run(self, commands: list[str] | None = None) -> int:
@@ -81,13 +130,21 @@ class Console:
                 if not self.execute(line):
                     return 0
             while True:
-                self.stdout.write("(stvm) ")
-                self.stdout.flush()
-                line = self.stdin.readline()
-                if not line:
+                if self._quit:
+                    return 0
+                if self._pending:   # typed while the program ran: run them now, in order
+                    line = self._pending.popleft()
+                    self.write(f"(stvm) {line}")
+                    if not self.execute(line):
+                        return 0
+                    continue
+                with self._write_lock:
+                    self.stdout.write("(stvm) ")
+                    self.stdout.flush()
+                line = self._read_line()
+                if line is None:
                     self.write()
                     return 0
-                line = line.rstrip("\n")
                 if self.echo:
                     self.write(line)
                 if not self.execute(line):
@@ -130,17 +187,52 @@ class Console:
         event = None
         while True:
             try:
-                event = engine.wait(serial, 0.2)
-            except KeyboardInterrupt:
+                event = engine.wait(serial, 0.05 if self.live else 0.2)
+                if event is not None or engine.state in (TERMINATED,) or engine.serial > serial:
+                    break
+                if self.live and self._serve_while_running():
+                    engine.terminate()
+                    return
+            except KeyboardInterrupt:   # Ctrl-C, wherever it lands while the program runs
                 engine.pause()
-                continue
-            if event is not None or engine.state in (TERMINATED,) or engine.serial > serial:
-                break
         if event is None:
             self.write("The program has ended.")
             return
         self.frame_index = 0
         self.show_stop(event)
+
+    def _serve_while_running(self) -> bool:
+        """Live mode, while the program runs: handle the lines typed so far. True after quit
+        (or the end of the input) typed while running."""
+        while True:
+            try:
+                line = self._lines.get_nowait()
+            except queue.Empty:
+                return False
+            if line is None:   # the end of the input (Ctrl-D): as quit
+                self._quit = True
+                return True
+            text = line.strip()
+            if not text or text.startswith("#"):
+                continue   # an empty line does not repeat the continue that is running
+            word, _, rest = text.partition(" ")
+            command = _ALIASES.get(word.lower(), word.lower())
+            at_once = command in _WHILE_RUNNING and (
+                command != "info" or rest.strip().lower().startswith(_INFO_WHILE_RUNNING))
+            if command == "quit":
+                self._quit = True
+                return True
+            if at_once:
+                self.execute(text)
+            else:
+                self._pending.append(text)
+                self.write(f"(running: {text!r} will run at the next stop; type pause to stop now)")
+
+    def do_pause(self, rest: str) -> None:
+        if self.engine.state != "running":
+            self.write("The program is not running.")
+            return
+        self.engine.pause()
 
     def show_stop(self, event: StopEvent) -> None:
         self.write(event.describe())

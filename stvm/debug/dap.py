@@ -55,6 +55,7 @@ class BadMessage(Exception):
 
 MAX_MESSAGE_BYTES = 16 * 2**20   # a DAP message (setBreakpoints of a huge file is far below)
 MAX_HEADER_LINE = 8192
+MAX_HANDLES = 100_000            # variablesReferences alive at one stop (see DapServer._handle)
 
 
 def _int_arg(args: dict, name: str, default: int = 0) -> int:
@@ -113,6 +114,7 @@ class DapServer:
         self.seq = 0
         self.write_lock = threading.Lock()
         self.handles: dict[int, _Node] = {}
+        self.handle_keys: dict[tuple, int] = {}   # scope or path → its reference (see _handle)
         self.handle_lock = threading.Lock()
         self.session = None
         self.engine: Engine | None = None
@@ -452,9 +454,23 @@ class DapServer:
                 "presentationHint": {"Locals": "locals", "Globals": "globals"}.get(name, "arguments")}
 
     def _handle(self, node: _Node) -> int:
+        """The variablesReference of `node`, valid until the program runs again. A scope or an
+        addressable value asked for again gets its first reference back: a client repeating
+        `scopes` or `variables` on a stopped program would otherwise add handles without end
+        (the soak measured 0.4 KB per `scopes`). At most MAX_HANDLES; past that a value is
+        shown but cannot be expanded (0) until the next stop."""
+        key = (node.kind, node.frame, node.path, node.indices) if node.kind != "value" or node.path else None
         with self.handle_lock:
+            if key is not None:
+                ref = self.handle_keys.get(key)
+                if ref is not None and ref in self.handles:
+                    return ref
+            if len(self.handles) >= MAX_HANDLES:
+                return 0
             ref = len(self.handles) + 1
             self.handles[ref] = node
+            if key is not None:
+                self.handle_keys[key] = ref
             return ref
 
     def on_variables(self, args: dict) -> dict:
@@ -583,6 +599,7 @@ class DapServer:
             return {"allThreadsContinued": True}
         with self.handle_lock:
             self.handles.clear()
+            self.handle_keys.clear()
         engine.resume(mode, count)
         return {"allThreadsContinued": True}
 
@@ -634,6 +651,7 @@ class DapServer:
             return
         with self.handle_lock:
             self.handles.clear()
+            self.handle_keys.clear()
         body: dict[str, Any] = {"reason": _REASONS.get(event.reason, "step"), "threadId": self._thread_of(event),
                                 "allThreadsStopped": True, "description": event.describe().splitlines()[0]}
         if event.breakpoints:

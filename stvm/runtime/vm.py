@@ -139,6 +139,7 @@ class VM:
         self.scan_durations_ns = TimingStats()
         self.overruns = 0          # real time: scans started more than a period late (episodes)
         self.catch_up_scans = 0    # real time: scans started at once, behind schedule
+        self.long_scans = 0        # scans whose own execution took longer than the base period
         self.max_lateness_ns = 0
         self._late = False
         self.fault: RuntimeFault | None = None
@@ -247,6 +248,10 @@ class VM:
         if self.fault is not None:
             raise self.fault
         tick = self.scan_count
+        if self.realtime and self._rt_start is None:
+            # the schedule starts when the first scan does, so the first scan is held to its
+            # deadline like every other (it was measured from its own end: never late)
+            self._rt_start = time.perf_counter_ns() - tick * self.base_ns
         ctx = self.ctx
         ctx.now_ns = self.now_ns
         ctx.scan = tick
@@ -263,7 +268,10 @@ class VM:
         except Exception as exc:
             self._raise_fault(fault_message(exc), exc.__traceback__, ctx.task)
         if started:
-            self.scan_durations_ns.add(time.perf_counter_ns() - started)
+            took = time.perf_counter_ns() - started
+            self.scan_durations_ns.add(took)
+            if took > self.base_ns:
+                self.long_scans += 1
         if self.on_scan_end:
             for hook in self.on_scan_end:
                 hook(self)
@@ -278,7 +286,9 @@ class VM:
         Behind schedule, the next scan starts at once (a catch-up scan), so VM time stays tied
         to the wall clock. An overrun is the first scan of such an episode that starts more than
         one period late; the catch-up scans that follow it are counted apart (one stall of
-        57 ms is one overrun and ~57 catch-up scans, not 57 overruns)."""
+        57 ms is one overrun and ~57 catch-up scans, not 57 overruns). `long_scans` counts the
+        scans whose own execution exceeded the period (TwinCAT's exceed counter counts such
+        cycles), so a program always 10x too slow shows as 1 overrun and N scans over the period."""
         now = time.perf_counter_ns()
         if self._rt_start is None:
             self._rt_start = now - self.base_ns
