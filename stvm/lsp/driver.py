@@ -59,9 +59,9 @@ def project_root_of(path: Path) -> list[Path]:
             if any(up.glob("*.plcproj")):
                 return [up]
         return [folder]
-    if path.suffix.lower() == ".st":
+    if path.suffix.lower() == ".st" and any(p.is_file() for p in folder.glob("*.st")):
         return [folder]
-    return [path]
+    return [path]   # e.g. a new buffer, never saved, alone in its folder: that file only
 
 
 def project_identity(path: Path) -> tuple[str, ...]:

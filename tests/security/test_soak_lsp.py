@@ -283,10 +283,6 @@ def test_lsp_soak_stays_flat_and_keeps_answering(tmp_path):
     assert pct(figures["after_latencies"], 0.5) <= max(5 * quiet_p50, 0.2)
 
 
-@pytest.mark.xfail(strict=True, reason="stvm/lsp bug found by the soak: a request on an unsaved buffer whose "
-                   "folder has no .st file on disk answers Internal error -32603 ('stvm.project.LoadError: "
-                   "1 error(s)', from stvm/project.py expand_paths via Driver.settings_for) with a Python "
-                   "traceback in error.data; owners of stvm/lsp: remove this mark once fixed")
 def test_unsaved_buffer_alone_in_its_folder(tmp_path):
     folder = tmp_path / "root"
     (folder / "sub").mkdir(parents=True)
