@@ -28,7 +28,7 @@ from stvm.stdlib.registry import NATIVE_FBS, NATIVE_FUNCTIONS, native_fb, native
 # (the checker needs every declaration; `stdlib_sources` calls it), a VM from the cache imports
 # only the modules its program calls into (`Project.native_modules`). lazy: start-up
 IMPLEMENTATIONS = ("conversions", "numeric", "omron", "sockets", "strings", "timefns", "timers", "bcd", "tc2_system",
-                   "tc2_memory", "sys_file")
+                   "tc2_memory", "sys_file", "cds_operators")
 _SOCKET_NAMES = ("RealTcpTransport", "SocketTable", "Transport", "make_default_transport")
 
 
@@ -100,7 +100,9 @@ def _rewrite(text: str, marker_line: str, replacement: str) -> str:
 
 
 TWINCAT_LIBRARIES = ("tc2_standard.st", "tc2_system.st", "tc2_utilities.st", "type_classes.st", "tc2_memory.st",
-                     "sys_file.st")
+                     "sys_file.st", "tc3_module.st")
+# CODESYS V3 operators beyond IEC's (TIME(), TRUNC_INT, …), in CODESYS and in TwinCAT (built on it)
+CODESYS_OPERATORS = "cds_operators.st"
 # namespaces of the platform libraries, reached as `IBaseLibrary.TypeClass.TYPE_INT` (stvm/libraries.py)
 TWINCAT_NAMESPACES = ("IBaseLibrary", "__SYSTEM", "SysFile", "SysDir", "SysTypes", "CmpErrors")
 
@@ -173,6 +175,8 @@ def stdlib_sources(settings: SysmacSettings = DEFAULT_SETTINGS) -> list[tuple[st
     iec_standard = _apply_settings("iec_standard.st", _packaged_text("iec_standard.st"), settings)
     sources.append((f"{DISPLAY_PREFIX}typed_counters.st", typed_counters_source(iec_standard)))
     sources.append((f"{DISPLAY_PREFIX}bcd.st", bcd.bcd_declarations()))
+    if settings.dialect in (Dialect.TWINCAT, Dialect.CODESYS):
+        sources.append((DISPLAY_PREFIX + CODESYS_OPERATORS, _packaged_text(CODESYS_OPERATORS)))
     if settings.dialect is Dialect.TWINCAT:   # vendor extras exist only in their dialect
         sources.append((f"{DISPLAY_PREFIX}twincat_types.st", _packaged_text("twincat_types.st")))
         # the Beckhoff platform libraries (docs/platform_libraries.md)
