@@ -103,6 +103,7 @@ TWINCAT_LIBRARIES = ("tc2_standard.st", "tc2_system.st", "tc2_utilities.st", "ty
                      "sys_file.st", "tc3_module.st")
 # CODESYS V3 operators beyond IEC's (TIME(), TRUNC_INT, …), in CODESYS and in TwinCAT (built on it)
 CODESYS_OPERATORS = "cds_operators.st"
+CODESYS_UTIL = "cds_util.st"     # the CODESYS Util library (BLINK, HYSTERESIS, LIMITALARM), CODESYS only
 # namespaces of the platform libraries, reached as `IBaseLibrary.TypeClass.TYPE_INT` (stvm/libraries.py)
 TWINCAT_NAMESPACES = ("IBaseLibrary", "__SYSTEM", "SysFile", "SysDir", "SysTypes", "CmpErrors")
 
@@ -130,6 +131,9 @@ def _apply_settings(name: str, text: str, settings: SysmacSettings) -> str:
         text = _rewrite(text, "IN : ANY_BIT; (* dialect: shift_any_integer *)",
                         "IN : ANY_BIT_OR_INT; (* dialect: shift_any_integer *)")
         text = re.sub(r"FUNCTION (SHL|SHR|ROL|ROR) : ANY_BIT\n", r"FUNCTION \1 : ANY_BIT_OR_INT\n", text)
+        # and the count may be a bit string: CODESYS's and Beckhoff's own examples shift by a BYTE
+        # (CODESYS help "Operator: SHL": `n : BYTE := 2; erg_byte := SHL(in_byte, n);`)
+        text = text.replace("    N : ANY_INT;\n", "    N : ANY_BIT_OR_INT;\n")
     if name == "iec_functions.st" and settings.dialect is Dialect.TWINCAT:
         text = _tc2_standard_pins(text)
     if name == "iec_standard.st":
@@ -177,6 +181,8 @@ def stdlib_sources(settings: SysmacSettings = DEFAULT_SETTINGS) -> list[tuple[st
     sources.append((f"{DISPLAY_PREFIX}bcd.st", bcd.bcd_declarations()))
     if settings.dialect in (Dialect.TWINCAT, Dialect.CODESYS):
         sources.append((DISPLAY_PREFIX + CODESYS_OPERATORS, _packaged_text(CODESYS_OPERATORS)))
+    if settings.dialect is Dialect.CODESYS:
+        sources.append((DISPLAY_PREFIX + CODESYS_UTIL, _packaged_text(CODESYS_UTIL)))
     if settings.dialect is Dialect.TWINCAT:   # vendor extras exist only in their dialect
         sources.append((f"{DISPLAY_PREFIX}twincat_types.st", _packaged_text("twincat_types.st")))
         # the Beckhoff platform libraries (docs/platform_libraries.md)
