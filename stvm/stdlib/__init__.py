@@ -134,6 +134,11 @@ def _apply_settings(name: str, text: str, settings: SysmacSettings) -> str:
         # and the count may be a bit string: CODESYS's and Beckhoff's own examples shift by a BYTE
         # (CODESYS help "Operator: SHL": `n : BYTE := 2; erg_byte := SHL(in_byte, n);`)
         text = text.replace("    N : ANY_INT;\n", "    N : ANY_BIT_OR_INT;\n")
+    if name == "iec_functions.st" and settings.dialect in (Dialect.TWINCAT, Dialect.CODESYS):
+        # EXPT's base may be any number (CODESYS help and Beckhoff Infosys "EXPT": "numeric base
+        # data types"; `EXPT(7, 2)` is 49.0); its result is then an LREAL (numeric._power_type)
+        text = _rewrite(text, "FUNCTION EXPT : ANY_REAL\nVAR_INPUT\n    IN1 : ANY_REAL;\n",
+                        "FUNCTION EXPT : ANY_REAL\nVAR_INPUT\n    IN1 : ANY_NUM;\n")
     if name == "iec_functions.st" and settings.dialect is Dialect.TWINCAT:
         text = _tc2_standard_pins(text)
     if name == "iec_standard.st":

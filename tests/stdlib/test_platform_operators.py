@@ -95,3 +95,33 @@ def test_hresult_and_event_severity() -> None:
     assert (vm["Main.okInfo"], vm["Main.failInfo"]) == (True, False)   # a positive HRESULT is a message, no error
     assert vm["Main.n"] == 2 + 40           # Beckhoff: Warning 2, Critical 4
     assert vm["Main.b0"] == 127
+
+
+POWERS = """
+PROGRAM Main
+VAR
+    fPow : LREAL;
+    nBase : INT := 2;
+    nExponent : INT := 7;
+    literal : LREAL;
+    r : REAL;
+END_VAR
+fPow := EXPT(nBase, nExponent);
+literal := EXPT(7, 2);
+r := EXPT(REAL#1.5, 2);
+END_PROGRAM
+"""
+
+
+@pytest.mark.parametrize("settings", [TWINCAT, CODESYS], ids=["twincat", "codesys"])
+def test_expt_of_an_integer_base(settings) -> None:
+    # CODESYS help and Beckhoff Infosys "EXPT": any numeric base, EXPT(7, 2) = 49, 2 ** 7 = 128
+    vm = load(write_files({"main.st": POWERS}), settings, use_cache=False).start()
+    vm.run(cycles=1)
+    assert (vm["Main.fPow"], vm["Main.literal"], vm["Main.r"]) == (128.0, 49.0, 2.25)
+
+
+def test_iec_keeps_expt_to_a_real_base() -> None:
+    with pytest.raises(LoadError) as info:
+        load(write_files({"main.st": POWERS}), DEFAULT_SETTINGS, use_cache=False)
+    assert "EXPT" in info.value.render()
