@@ -28,7 +28,7 @@ from stvm.stdlib.registry import NATIVE_FBS, NATIVE_FUNCTIONS, native_fb, native
 # (the checker needs every declaration; `stdlib_sources` calls it), a VM from the cache imports
 # only the modules its program calls into (`Project.native_modules`). lazy: start-up
 IMPLEMENTATIONS = ("conversions", "numeric", "omron", "sockets", "strings", "timefns", "timers", "bcd", "tc2_system",
-                   "tc2_memory", "sys_file", "cds_operators")
+                   "tc2_memory", "sys_file", "cds_operators", "sys_mem")
 _SOCKET_NAMES = ("RealTcpTransport", "SocketTable", "Transport", "make_default_transport")
 
 
@@ -104,6 +104,7 @@ TWINCAT_LIBRARIES = ("tc2_standard.st", "tc2_system.st", "tc2_utilities.st", "ty
 # CODESYS V3 operators beyond IEC's (TIME(), TRUNC_INT, …), in CODESYS and in TwinCAT (built on it)
 CODESYS_OPERATORS = "cds_operators.st"
 CODESYS_UTIL = "cds_util.st"     # the CODESYS Util library (BLINK, HYSTERESIS, LIMITALARM), CODESYS only
+CODESYS_LIBRARIES = (CODESYS_UTIL, "sys_mem.st")
 # namespaces of the platform libraries, reached as `IBaseLibrary.TypeClass.TYPE_INT` (stvm/libraries.py)
 TWINCAT_NAMESPACES = ("IBaseLibrary", "__SYSTEM", "SysFile", "SysDir", "SysTypes", "CmpErrors")
 
@@ -187,7 +188,8 @@ def stdlib_sources(settings: SysmacSettings = DEFAULT_SETTINGS) -> list[tuple[st
     if settings.dialect in (Dialect.TWINCAT, Dialect.CODESYS):
         sources.append((DISPLAY_PREFIX + CODESYS_OPERATORS, _packaged_text(CODESYS_OPERATORS)))
     if settings.dialect is Dialect.CODESYS:
-        sources.append((DISPLAY_PREFIX + CODESYS_UTIL, _packaged_text(CODESYS_UTIL)))
+        for name in CODESYS_LIBRARIES:
+            sources.append((DISPLAY_PREFIX + name, _packaged_text(name)))
     if settings.dialect is Dialect.TWINCAT:   # vendor extras exist only in their dialect
         sources.append((f"{DISPLAY_PREFIX}twincat_types.st", _packaged_text("twincat_types.st")))
         # the Beckhoff platform libraries (docs/platform_libraries.md)
