@@ -305,3 +305,17 @@ def fill_instance_paths(vm, project_name: str) -> None:
             for name in marked_members(node.type.qualname):
                 text = f"{project_name}.{node.path}".encode("latin-1", "replace")
                 vm.set(f"{node.path}.{name}", text)
+
+
+FILETIME_1970 = 116_444_736_000_000_000   # 100 ns intervals from 1601-01-01 to 1970-01-01
+
+
+@native_function("F_GetSystemTime")
+def f_get_system_time(ctx) -> int:
+    """Tc2_System F_GetSystemTime: 100 ns intervals since 1601-01-01, from the virtual date and
+    time (the run's start DT plus the virtual clock at the start of the scan), so it is the same
+    on every run; in a real-time run, the host's clock (UTC)."""
+    if ctx.realtime:
+        import time   # lazy: only a real-time run reads the host clock
+        return time.time_ns() // 100 + FILETIME_1970
+    return (ctx.start_dt_ns + ctx.now_ns) // 100 + FILETIME_1970
