@@ -77,6 +77,8 @@ VAR
     n : INT;
     net : T_AmsNetIdArr := [127, 16, 17, 3, 1, 1];
     b0 : BYTE;
+    text, longest : T_AmsNetID;
+    top : T_AmsNetIdArr := [255, 255, 255, 255, 255, 255];
 END_VAR
 okBad := SUCCEEDED(hrBad);
 failBad := FAILED(hrBad);
@@ -84,6 +86,8 @@ okInfo := SUCCEEDED(hrInfo);
 failInfo := FAILED(hr := hrInfo);
 n := TO_INT(sev) + TO_INT(TcEventSeverity.Critical) * 10;
 b0 := net[0];
+text := F_CreateAmsNetId(net);
+longest := F_CreateAmsNetId(nIds := top);
 END_PROGRAM
 """
 
@@ -95,6 +99,9 @@ def test_hresult_and_event_severity() -> None:
     assert (vm["Main.okInfo"], vm["Main.failInfo"]) == (True, False)   # a positive HRESULT is a message, no error
     assert vm["Main.n"] == 2 + 40           # Beckhoff: Warning 2, Critical 4
     assert vm["Main.b0"] == 127
+    # Beckhoff Infosys "F_CreateAmsNetId": [127, 16, 17, 3, 1, 1] -> '127.16.17.3.1.1'
+    assert vm["Main.text"] == b"127.16.17.3.1.1"
+    assert vm["Main.longest"] == b"255.255.255.255.255.255"     # 23 characters: T_AmsNetID holds it
 
 
 POWERS = """
