@@ -101,3 +101,70 @@ def test_shift_by_a_byte_as_in_the_vendor_examples() -> None:
     # CODESYS/Beckhoff help "SHL": 16#45 by 2 is 16#14 in a BYTE, 16#0114 in a WORD; ROL 16#15
     assert (vm["Main.b"], vm["Main.w"], vm["Main.r"]) == (0x14, 0x114, 0x15)
     assert vm["Main.when.wYear"] == 2024
+
+
+RAMPS = """
+PROGRAM Main
+VAR
+    target : REAL := 100.0;
+    reset : BOOL;
+    timed : RAMP_REAL;
+    perCall : RAMP_INT;
+END_VAR
+timed(IN := target, ASCEND := 10.0, DESCEND := 40.0, TIMEBASE := T#100ms, RESET := reset);
+perCall(IN := REAL_TO_INT(target), ASCEND := 10, DESCEND := 5, TIMEBASE := T#0s, RESET := reset);
+END_PROGRAM
+"""
+
+
+def test_ramps_limit_the_slope() -> None:
+    vm = load(write_files({"main.st": RAMPS}), CODESYS, use_cache=False).start(scan="10ms")
+    vm.run(cycles=11)     # timed: the first call takes the time, then 10 calls of 10 ms = one TIMEBASE
+    assert vm["Main.timed.OUT"] == pytest.approx(10.0)
+    assert vm["Main.perCall.OUT"] == 100        # 10 per call: reached after 10 calls, then held
+    vm["Main.target"] = 0.0
+    vm.run(cycles=2)
+    assert vm["Main.timed.OUT"] == pytest.approx(10.0 - 2 * 4.0)    # DESCEND 40 per 100 ms: 4 per 10 ms
+    assert vm["Main.perCall.OUT"] == 90
+    vm["Main.reset"] = True
+    vm.run(cycles=3)
+    assert vm["Main.perCall.OUT"] == 90          # RESET stops the ramp and keeps OUT
+    vm["Main.reset"] = False
+    vm.run(cycles=1)
+    assert vm["Main.perCall.OUT"] == 85          # and it goes on from there
+
+
+CURVE = """
+PROGRAM Main
+VAR
+    curve : CHARCURVE;
+    KL : ARRAY[0..10] OF POINT := [(X:=0,Y:=0),(X:=250,Y:=50),(X:=500,Y:=150),(X:=750,Y:=400), 7((X:=1000,Y:=1000))];
+    bad : ARRAY[0..10] OF POINT := [(X:=0,Y:=0),(X:=500,Y:=50),(X:=400,Y:=150), 8((X:=1000,Y:=1000))];
+    input : INT;
+    n : BYTE := 5;
+    useBad : BOOL;
+END_VAR
+IF useBad THEN
+    curve(IN := input, N := n, P := bad);
+ELSE
+    curve(IN := input, N := n, P := KL);
+END_IF
+END_PROGRAM
+"""
+
+
+@pytest.mark.parametrize("value, n, bad, out, err", [
+    (600, 5, False, 250, 0),       # between (500, 150) and (750, 400)
+    (125, 5, False, 25, 0),
+    (1000, 5, False, 1000, 0),
+    (-10, 5, False, 0, 2),         # below the first X: the first Y, ERR 2
+    (1200, 5, False, 1000, 2),     # beyond the last X: the last Y
+    (300, 1, False, 0, 4),         # N outside 2..11
+    (450, 3, True, 45, 0),         # in the first segment: the bad order later is not seen yet
+    (600, 3, True, 0, 1),          # past the second point, to the third whose X goes back: ERR 1
+])
+def test_characteristic_curve(value, n, bad, out, err) -> None:
+    vm = load(write_files({"main.st": CURVE}), CODESYS, use_cache=False).start()
+    vm["Main.input"], vm["Main.n"], vm["Main.useBad"] = value, n, bad
+    vm.run(cycles=1)
+    assert (vm["Main.curve.OUT"], vm["Main.curve.ERR"]) == (out, err)
