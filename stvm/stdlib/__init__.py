@@ -103,7 +103,7 @@ TWINCAT_LIBRARIES = ("tc2_standard.st", "tc2_system.st", "tc2_utilities.st", "ty
                      "sys_file.st", "tc3_module.st")
 # CODESYS V3 operators beyond IEC's (TIME(), TRUNC_INT, …), in CODESYS and in TwinCAT (built on it)
 CODESYS_OPERATORS = "cds_operators.st"
-CODESYS_UTIL = "cds_util.st"     # the CODESYS Util library (BLINK, HYSTERESIS, LIMITALARM), CODESYS only
+CODESYS_UTIL = "cds_util.st"     # the CODESYS Util library (BLINK, HYSTERESIS, RAMP_*, CHARCURVE, …), CODESYS only
 CODESYS_LIBRARIES = (CODESYS_UTIL, "sys_mem.st")
 # namespaces of the platform libraries, reached as `IBaseLibrary.TypeClass.TYPE_INT` (stvm/libraries.py)
 TWINCAT_NAMESPACES = ("IBaseLibrary", "__SYSTEM", "SysFile", "SysDir", "SysTypes", "CmpErrors")
