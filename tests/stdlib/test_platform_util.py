@@ -168,3 +168,43 @@ def test_characteristic_curve(value, n, bad, out, err) -> None:
     vm["Main.input"], vm["Main.n"], vm["Main.useBad"] = value, n, bad
     vm.run(cycles=1)
     assert (vm["Main.curve.OUT"], vm["Main.curve.ERR"]) == (out, err)
+
+
+CONTROL = """
+PROGRAM Main
+VAR
+    fixed : PID_FIXCYCLE;
+    timed : PID;
+    setPoint : REAL := 1.0;
+    actual : REAL;
+    manual, reset : BOOL;
+    yMax : REAL := 10.0;
+END_VAR
+fixed(ACTUAL := actual, SET_POINT := setPoint, KP := 2.0, TN := 1.0, TV := 0.5, Y_MANUAL := 7.0, Y_OFFSET := 0.5,
+      Y_MIN := 0.0, Y_MAX := yMax, MANUAL := manual, RESET := reset, CYCLE := 0.1);
+timed(ACTUAL := actual, SET_POINT := setPoint, KP := 2.0, TN := 1.0, TV := 0.0, Y_MIN := 0.0, Y_MAX := yMax);
+END_PROGRAM
+"""
+
+
+def test_pid_fixcycle_and_pid() -> None:
+    vm = load(write_files({"main.st": CONTROL}), CODESYS, use_cache=False).start(scan="100ms")
+    vm.run(cycles=3)
+    # e = 1 constant: integral 3 * 0.1 s; no derivative of a constant error; Y_OFFSET added
+    assert vm["Main.fixed.Y"] == pytest.approx(2.0 * (1.0 + 0.3) + 0.5)
+    assert vm["Main.timed.Y"] == pytest.approx(2.0 * (1.0 + 0.2))   # the first call measures 0 s
+    vm["Main.actual"] = 0.5                                          # e drops by 0.5 in 0.1 s
+    vm.run(cycles=1)
+    # the derivative kick: 2 * (0.5 + 0.35 + 0.5 * (-0.5 / 0.1)) + 0.5 = -2.8, below Y_MIN
+    assert vm["Main.fixed.Y"] == pytest.approx(0.0) and vm["Main.fixed.LIMITS_ACTIVE"] is True
+    vm.run(cycles=1)       # the limited cycle did not integrate: 0.3 + 0.05 now
+    assert vm["Main.fixed.Y"] == pytest.approx(2.0 * (0.5 + 0.35) + 0.5) and vm["Main.fixed.LIMITS_ACTIVE"] is False
+    vm["Main.yMax"] = 1.0
+    vm.run(cycles=1)
+    assert vm["Main.fixed.Y"] == pytest.approx(1.0) and vm["Main.fixed.LIMITS_ACTIVE"] is True
+    vm["Main.manual"] = True
+    vm.run(cycles=1)
+    assert vm["Main.fixed.Y"] == pytest.approx(7.0)
+    vm["Main.manual"], vm["Main.reset"] = False, True
+    vm.run(cycles=1)
+    assert vm["Main.fixed.Y"] == pytest.approx(0.5) and vm["Main.fixed.LIMITS_ACTIVE"] is False
