@@ -21,12 +21,14 @@ VAR
     valid : BOOL;
     tz : E_TimeZoneID;
     enable : BOOL := TRUE;
+    text : STRING(24);
 END_VAR
 fbTime(bEnable := enable);
 now := fbTime.systemTime;
 valid := fbTime.bValid;
 tz := fbTime.tzID;
 stamp := F_GetSystemTime();
+text := SYSTEMTIME_TO_STRING(now);
 END_PROGRAM
 """
 
@@ -50,6 +52,8 @@ def test_local_system_time_follows_the_virtual_clock() -> None:
     got = {name: vm[f"Main.now.{name}"] for name in fields}
     assert got == {"wYear": 2024, "wMonth": 3, "wDay": 4, "wDayOfWeek": 1, "wHour": 0, "wMinute": 0,
                    "wSecond": 0, "wMilliseconds": 250}
+    # Beckhoff Infosys "SYSTEMTIME_TO_STRING": YYYY-MM-DD-hh:mm:ss.xxx
+    assert vm["Main.text"] == b"2024-03-04-00:00:00.250"
 
 
 def test_disabled_it_is_not_valid() -> None:
