@@ -119,6 +119,11 @@ TC2_STANDARD_PINS = {
 }
 
 
+_OMRON_ROUNDING = tuple(
+    f"{{native generic}}\nFUNCTION {name} : ANY_INT\nVAR_INPUT\n    In : ANY_REAL;\nEND_VAR\nEND_FUNCTION\n"
+    for name in ("Round", "RoundUp"))
+
+
 def _tc2_standard_pins(text: str) -> str:
     for function, pins in TC2_STANDARD_PINS.items():
         marker = f"\nFUNCTION {function} : "
@@ -140,6 +145,11 @@ def _apply_settings(name: str, text: str, settings: SysmacSettings) -> str:
         # data types"; `EXPT(7, 2)` is 49.0); its result is then an LREAL (numeric._power_type)
         text = _rewrite(text, "FUNCTION EXPT : ANY_REAL\nVAR_INPUT\n    IN1 : ANY_REAL;\n",
                         "FUNCTION EXPT : ANY_REAL\nVAR_INPUT\n    IN1 : ANY_NUM;\n")
+    if name == "iec_functions.st" and settings.dialect in (Dialect.TWINCAT, Dialect.CODESYS):
+        # Round and RoundUp are Omron instructions: TwinCAT and CODESYS have none, and projects
+        # for them declare their own ROUND (OSCAT BASIC does); names are not case-sensitive
+        for block in _OMRON_ROUNDING:
+            text = _rewrite(text, block, "")
     if name == "iec_functions.st" and settings.dialect is Dialect.TWINCAT:
         text = _tc2_standard_pins(text)
     if name == "iec_standard.st":

@@ -132,3 +132,29 @@ def test_iec_keeps_expt_to_a_real_base() -> None:
     with pytest.raises(LoadError) as info:
         load(write_files({"main.st": POWERS}), DEFAULT_SETTINGS, use_cache=False)
     assert "EXPT" in info.value.render()
+
+
+OWN_ROUND = """
+FUNCTION ROUND : REAL
+VAR_INPUT
+    in : REAL;
+    N : INT;
+END_VAR
+ROUND := TRUNC_INT(in * 10.0) / 10.0;
+END_FUNCTION
+
+PROGRAM Main
+VAR
+    r : REAL;
+END_VAR
+r := ROUND(1.26, 1);
+END_PROGRAM
+"""
+
+
+@pytest.mark.parametrize("settings", [TWINCAT, CODESYS], ids=["twincat", "codesys"])
+def test_a_project_declares_its_own_round(settings) -> None:
+    # Omron's Round/RoundUp are not TwinCAT or CODESYS functions; OSCAT BASIC declares ROUND
+    vm = load(write_files({"main.st": OWN_ROUND}), settings, use_cache=False).start()
+    vm.run(cycles=1)
+    assert vm["Main.r"] == pytest.approx(1.2)
