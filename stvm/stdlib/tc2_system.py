@@ -78,6 +78,13 @@ class CpuCounter:
         inst.cpuCntHiDW = (ticks >> 32) & 0xFFFFFFFF
 
 
+@native_function("GETCURTASKINDEXEX")
+def get_cur_task_index_ex(ctx) -> int:
+    """Tc2_System GETCURTASKINDEXEX: GETCURTASKINDEX as a function (the running task's index)."""
+    indices = getattr(ctx, "task_indices", None) or {}
+    return indices.get(ctx.task, 1)
+
+
 @native_fb("GETCURTASKINDEX")
 @st_names("index")
 class CurrentTaskIndex:
@@ -102,7 +109,8 @@ class SystemInfo:
         self.vm = vm
         self.cycles = [0] * len(vm.tasks)
         self.index = {task.name: i + 1 for i, task in enumerate(vm.tasks[:MAX_TASKS])}
-        self.set = lambda path, value: vm.set(f"TwinCAT_SystemInfoVarList.{path}", value)
+        self.set = lambda path, value: (vm.set(f"TwinCAT_SystemInfoVarList.{path}", value),
+                                        vm.set(path, value))   # the bare `_TaskInfo[i]` too
         self.set("_AppInfo.TaskCnt", len(vm.tasks))
         self.set("_AppInfo.ProjectName", project_name.encode("latin-1", "replace")[:63])
         self.set("_AppInfo.AppName", b"Port_851")

@@ -72,3 +72,26 @@ def test_system_time_counts_100ns_from_1601() -> None:
     # the same instant seen from 1601: 2024-03-03 23:59:59.25 UTC
     assert dt.datetime(1601, 1, 1) + dt.timedelta(microseconds=vm["Main.stamp"] // 10) == \
         START + dt.timedelta(milliseconds=250)
+
+
+TASK_INFO = """
+PROGRAM Main
+VAR
+    i : BYTE;
+    bare, listed : UDINT;
+    first : BOOL;
+END_VAR
+i := GETCURTASKINDEXEX();
+bare := _TaskInfo[GETCURTASKINDEXEX()].CycleCount;
+listed := TwinCAT_SystemInfoVarList._TaskInfo[i].CycleCount;
+first := _TaskInfo[i].FirstCycle;
+END_PROGRAM
+"""
+
+
+def test_task_info_is_reached_bare_and_through_its_list() -> None:
+    vm = load(write_files({"main.st": TASK_INFO}), TWINCAT, use_cache=False).start(scan="10ms")
+    vm.run(cycles=1)
+    assert (vm["Main.i"], vm["Main.bare"], vm["Main.first"]) == (1, 0, True)
+    vm.run(cycles=2)
+    assert (vm["Main.bare"], vm["Main.listed"], vm["Main.first"]) == (2, 2, False)
