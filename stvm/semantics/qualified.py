@@ -60,8 +60,12 @@ def _collect(units: list[n.CompilationUnit]) -> _Scope:
 def resolve(units: list[n.CompilationUnit]) -> tuple[list[n.CompilationUnit], list[Diagnostic]]:
     """The units with qualified names resolved, and the diagnostics of `qualified_only`."""
     user = [u for u in units if not is_stdlib_file(u.path)]
+    # a platform library's enumeration (TcEventSeverity.Error) is reached the same way: a user unit
+    # naming one with a dot is walked even when the user declares no enumeration of its own
+    bases = set().union(*(u.member_bases for u in user)) if user else set()
     if not any(g.gvl for u in user for g in u.globals) and \
-            not any(isinstance(d.body, n.EnumDecl) for u in user for d in u.types):
+            not any(isinstance(d.body, n.EnumDecl) for u in user for d in u.types) and \
+            not any(isinstance(d.body, n.EnumDecl) and d.name.lower() in bases for u in units for d in u.types):
         return units, []
     scope = _collect(units)
     qualifiers = set(scope.gvls) | set(scope.enums)

@@ -28,7 +28,7 @@ from stvm.stdlib.registry import NATIVE_FBS, NATIVE_FUNCTIONS, native_fb, native
 # (the checker needs every declaration; `stdlib_sources` calls it), a VM from the cache imports
 # only the modules its program calls into (`Project.native_modules`). lazy: start-up
 IMPLEMENTATIONS = ("conversions", "numeric", "omron", "sockets", "strings", "timefns", "timers", "bcd", "tc2_system",
-                   "tc2_memory", "sys_file")
+                   "tc2_memory", "sys_file", "cds_operators", "sys_mem", "tc2_utilities")
 _SOCKET_NAMES = ("RealTcpTransport", "SocketTable", "Transport", "make_default_transport")
 
 
@@ -100,7 +100,11 @@ def _rewrite(text: str, marker_line: str, replacement: str) -> str:
 
 
 TWINCAT_LIBRARIES = ("tc2_standard.st", "tc2_system.st", "tc2_utilities.st", "type_classes.st", "tc2_memory.st",
-                     "sys_file.st")
+                     "sys_file.st", "tc3_module.st")
+# CODESYS V3 operators beyond IEC's (TIME(), TRUNC_INT, …), in CODESYS and in TwinCAT (built on it)
+CODESYS_OPERATORS = "cds_operators.st"
+CODESYS_UTIL = "cds_util.st"     # the CODESYS Util library (BLINK, HYSTERESIS, RAMP_*, CHARCURVE, …), CODESYS only
+CODESYS_LIBRARIES = (CODESYS_UTIL, "sys_mem.st")
 # namespaces of the platform libraries, reached as `IBaseLibrary.TypeClass.TYPE_INT` (stvm/libraries.py)
 TWINCAT_NAMESPACES = ("IBaseLibrary", "__SYSTEM", "SysFile", "SysDir", "SysTypes", "CmpErrors")
 
@@ -113,6 +117,11 @@ TC2_STANDARD_PINS = {
     "MID": "STR=In LEN=L POS=P", "FIND": "STR1=In1 STR2=In2", "INSERT": "STR1=In1 STR2=In2 POS=P",
     "DELETE": "STR=In LEN=L POS=P", "REPLACE": "STR1=In1 STR2=In2 LEN=L POS=P",
 }
+
+
+_OMRON_ROUNDING = tuple(
+    f"{{native generic}}\nFUNCTION {name} : ANY_INT\nVAR_INPUT\n    In : ANY_REAL;\nEND_VAR\nEND_FUNCTION\n"
+    for name in ("Round", "RoundUp"))
 
 
 def _tc2_standard_pins(text: str) -> str:
@@ -128,6 +137,19 @@ def _apply_settings(name: str, text: str, settings: SysmacSettings) -> str:
         text = _rewrite(text, "IN : ANY_BIT; (* dialect: shift_any_integer *)",
                         "IN : ANY_BIT_OR_INT; (* dialect: shift_any_integer *)")
         text = re.sub(r"FUNCTION (SHL|SHR|ROL|ROR) : ANY_BIT\n", r"FUNCTION \1 : ANY_BIT_OR_INT\n", text)
+        # and the count may be a bit string: CODESYS's and Beckhoff's own examples shift by a BYTE
+        # (CODESYS help "Operator: SHL": `n : BYTE := 2; erg_byte := SHL(in_byte, n);`)
+        text = text.replace("    N : ANY_INT;\n", "    N : ANY_BIT_OR_INT;\n")
+    if name == "iec_functions.st" and settings.dialect in (Dialect.TWINCAT, Dialect.CODESYS):
+        # EXPT's base may be any number (CODESYS help and Beckhoff Infosys "EXPT": "numeric base
+        # data types"; `EXPT(7, 2)` is 49.0); its result is then an LREAL (numeric._power_type)
+        text = _rewrite(text, "FUNCTION EXPT : ANY_REAL\nVAR_INPUT\n    IN1 : ANY_REAL;\n",
+                        "FUNCTION EXPT : ANY_REAL\nVAR_INPUT\n    IN1 : ANY_NUM;\n")
+    if name == "iec_functions.st" and settings.dialect in (Dialect.TWINCAT, Dialect.CODESYS):
+        # Round and RoundUp are Omron instructions: TwinCAT and CODESYS have none, and projects
+        # for them declare their own ROUND (OSCAT BASIC does); names are not case-sensitive
+        for block in _OMRON_ROUNDING:
+            text = _rewrite(text, block, "")
     if name == "iec_functions.st" and settings.dialect is Dialect.TWINCAT:
         text = _tc2_standard_pins(text)
     if name == "iec_standard.st":
@@ -173,6 +195,11 @@ def stdlib_sources(settings: SysmacSettings = DEFAULT_SETTINGS) -> list[tuple[st
     iec_standard = _apply_settings("iec_standard.st", _packaged_text("iec_standard.st"), settings)
     sources.append((f"{DISPLAY_PREFIX}typed_counters.st", typed_counters_source(iec_standard)))
     sources.append((f"{DISPLAY_PREFIX}bcd.st", bcd.bcd_declarations()))
+    if settings.dialect in (Dialect.TWINCAT, Dialect.CODESYS):
+        sources.append((DISPLAY_PREFIX + CODESYS_OPERATORS, _packaged_text(CODESYS_OPERATORS)))
+    if settings.dialect is Dialect.CODESYS:
+        for name in CODESYS_LIBRARIES:
+            sources.append((DISPLAY_PREFIX + name, _packaged_text(name)))
     if settings.dialect is Dialect.TWINCAT:   # vendor extras exist only in their dialect
         sources.append((f"{DISPLAY_PREFIX}twincat_types.st", _packaged_text("twincat_types.st")))
         # the Beckhoff platform libraries (docs/platform_libraries.md)

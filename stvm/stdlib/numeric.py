@@ -12,7 +12,7 @@ import math
 
 
 from stvm.runtime.values import FunctionError, STFault
-from stvm.semantics.types import BoolType, IntType, RealType, Type, DINT, LINT
+from stvm.semantics.types import BoolType, IntType, RealType, Type, DINT, LINT, LREAL
 from stvm.stdlib.registry import native_function
 from stvm.stdlib.typeops import coerce, common_type, real_to_integer
 from stvm.settings import IntDivZero
@@ -20,6 +20,12 @@ from stvm.settings import IntDivZero
 
 def _first_argument_type(arg_types) -> Type:
     return arg_types[0]
+
+
+def _power_type(arg_types) -> Type:
+    """EXPT's result: the base's real type; an integer base (CODESYS/TwinCAT allow one, stdlib
+    __init__ `_apply_settings`) gives LREAL, as TwinCAT documents ("return type is always LREAL")."""
+    return arg_types[0] if isinstance(arg_types[0], RealType) else LREAL
 
 
 def _common_after_first(arg_types) -> Type:
@@ -67,7 +73,7 @@ for _name, _function in REAL_FUNCTIONS.items():
     native_function(_name, generic=True)(_real_function(_function))
 
 
-@native_function("EXPT", generic=True, result_rule=_first_argument_type)
+@native_function("EXPT", generic=True, result_rule=_power_type)
 def expt(ctx, result_type, base, exponent):
     np = _numpy()
     with np.errstate(all="ignore"):

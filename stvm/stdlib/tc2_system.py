@@ -78,6 +78,13 @@ class CpuCounter:
         inst.cpuCntHiDW = (ticks >> 32) & 0xFFFFFFFF
 
 
+@native_function("GETCURTASKINDEXEX")
+def get_cur_task_index_ex(ctx) -> int:
+    """Tc2_System GETCURTASKINDEXEX: GETCURTASKINDEX as a function (the running task's index)."""
+    indices = getattr(ctx, "task_indices", None) or {}
+    return indices.get(ctx.task, 1)
+
+
 @native_fb("GETCURTASKINDEX")
 @st_names("index")
 class CurrentTaskIndex:
@@ -102,7 +109,8 @@ class SystemInfo:
         self.vm = vm
         self.cycles = [0] * len(vm.tasks)
         self.index = {task.name: i + 1 for i, task in enumerate(vm.tasks[:MAX_TASKS])}
-        self.set = lambda path, value: vm.set(f"TwinCAT_SystemInfoVarList.{path}", value)
+        self.set = lambda path, value: (vm.set(f"TwinCAT_SystemInfoVarList.{path}", value),
+                                        vm.set(path, value))   # the bare `_TaskInfo[i]` too
         self.set("_AppInfo.TaskCnt", len(vm.tasks))
         self.set("_AppInfo.ProjectName", project_name.encode("latin-1", "replace")[:63])
         self.set("_AppInfo.AppName", b"Port_851")
@@ -305,3 +313,17 @@ def fill_instance_paths(vm, project_name: str) -> None:
             for name in marked_members(node.type.qualname):
                 text = f"{project_name}.{node.path}".encode("latin-1", "replace")
                 vm.set(f"{node.path}.{name}", text)
+
+
+FILETIME_1970 = 116_444_736_000_000_000   # 100 ns intervals from 1601-01-01 to 1970-01-01
+
+
+@native_function("F_GetSystemTime")
+def f_get_system_time(ctx) -> int:
+    """Tc2_System F_GetSystemTime: 100 ns intervals since 1601-01-01, from the virtual date and
+    time (the run's start DT plus the virtual clock at the start of the scan), so it is the same
+    on every run; in a real-time run, the host's clock (UTC)."""
+    if ctx.realtime:
+        import time   # lazy: only a real-time run reads the host clock
+        return time.time_ns() // 100 + FILETIME_1970
+    return (ctx.start_dt_ns + ctx.now_ns) // 100 + FILETIME_1970

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import bisect
 import dataclasses
+import html
 import re
 from pathlib import Path
 
@@ -65,7 +66,8 @@ def plcproj_items(proj: Path) -> list[Path]:
         return []
     out = []
     for rel in _COMPILE_ITEM.findall(text):
-        path = proj.parent / rel.replace("\\", "/")
+        # an MSBuild attribute is XML text: `POUs\Time&amp;Date\X.TcPOU` names `Time&Date`
+        path = proj.parent / html.unescape(rel).replace("\\", "/")
         if path.suffix.lower() in TWINCAT_SUFFIXES and path.is_file():
             out.append(path)
     return out
