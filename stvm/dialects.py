@@ -146,8 +146,8 @@ ROWS: tuple[Row, ...] = (
     Row("void_function", "a FUNCTION without a return type, called as a statement (`FUNCTION RUN`)",
         False, False, True, True,
         f"{CDS} 'Function' / {TC3} 'Function': the return type may be left out; such a function "
-        "returns nothing and is called as a statement (TcUnit's RUN, TEST, ...); IEC 61131-3 and "
-        "Sysmac require one"),
+        "returns nothing and is called as a statement (TcUnit's RUN, TEST, ...); its name is then no "
+        "result variable, so a local may share it. IEC 61131-3 and Sysmac require one"),
     Row("mixed_arguments", "formal arguments followed by positional ones (`FIND(STR1 := s, '.')`)",
         False, False, True, True,
         f"{TC3} / {CDS}: the compiler accepts a call that names some inputs and gives the rest by "
@@ -156,7 +156,7 @@ ROWS: tuple[Row, ...] = (
     Row("fb_assign", "assigning a function block instance to another of its type (a copy of its variables)",
         False, False, True, True,
         f"{TC3} / {CDS}: an FB instance is assigned like a structure (its memory is copied) unless "
-        "the FB has {{attribute 'no_assign'}}; a METHOD may return an FB (TcUnit's GetTestByPosition). "
+        "the FB has {attribute 'no_assign'}; a METHOD may return an FB (TcUnit's GetTestByPosition). "
         "IEC 61131-3 and Sysmac: an instance cannot be assigned"),
     Row("fb_input_assign", "writing an input of an FB instance outside its call (`fbTimer.IN := TRUE;`)",
         False, False, True, True,
@@ -219,3 +219,27 @@ def known_library_prefix(parts: tuple[str, ...], known) -> tuple[str, ...]:
         if known(parts[start:]):
             return parts[start:]
     return parts
+
+
+def _cell(row: Row, value: Any) -> str:
+    """A value as docs/dialects.md shows it: yes/no for a rule, `code` for a setting's spelling or
+    a one-word value, plain text otherwise."""
+    if isinstance(value, bool):
+        return "yes" if value else "no"
+    text = str(value)
+    if row.setting or text.replace("_", "").isalnum():
+        return f"`{text}`"
+    return text
+
+
+def table_markdown() -> str:
+    """The table of docs/dialects.md, generated from ROWS (tools/gen_dialect_docs.py writes it;
+    tests/semantics/test_dialect_profiles.py checks the page against it)."""
+    lines = ["| row | what differs | sysmac | iec | codesys | twincat | sources |",
+             "|---|---|---|---|---|---|---|"]
+    for row in ROWS:
+        key = f"`{row.key}` (setting)" if row.setting else f"`{row.key}`"
+        cells = [_cell(row, row.value(d)) for d in (SYSMAC, IEC, CODESYS, TWINCAT)]
+        text = [key, row.subject, *cells, row.sources]
+        lines.append("| " + " | ".join(t.replace("|", "\\|") for t in text) + " |")
+    return "\n".join(lines) + "\n"
