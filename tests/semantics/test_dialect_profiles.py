@@ -13,7 +13,7 @@ import pytest
 
 import stvm
 from core_helpers import load_st
-from stvm.dialects import BY_KEY, PROFILE_FIELDS, ROWS, known_library_prefix, profile_value
+from stvm.dialects import BY_KEY, PROFILE_FIELDS, ROWS, allows, known_library_prefix, profile_value
 from stvm.settings import (ByteToStringFormat, DEFAULT_SETTINGS, Dialect, OpenArrayBounds, RealToStringFormat,
                            StringSize, SubrangeCheck, SysmacSettings)
 
@@ -176,9 +176,57 @@ def probe_unsigned_time(dialect, value):
 
 def probe_enum_integer(dialect, value):
     result = outcome("TYPE E : (A := 3, B := 5); END_TYPE\n"
-                     "PROGRAM Main VAR x : E := E.B; i : INT; f : E; END_VAR i := x; f := 3; END_PROGRAM",
-                     dialect, ["Main.i", "Main.f"])
-    assert (result == (5, 3)) is value
+                     "PROGRAM Main VAR x : E := E.B; i, j : INT; f, g : E; b : BOOL; END_VAR\n"
+                     "i := x; f := 3; j := x + 1; g := E.A + 1; b := x > 4; END_PROGRAM",
+                     dialect, ["Main.i", "Main.f", "Main.j", "Main.g", "Main.b"])
+    assert (result == (5, 3, 6, 4, True)) is value
+    if not value:
+        assert any("cannot be applied to E" in m for m in result[1])
+
+
+STRICT_ENUM = "{attribute 'strict'}\nTYPE E : (A := 3, B := 5); END_TYPE\n"
+
+
+def probe_enum_strict_attribute(dialect, value):
+    # read into an integer, compared, and given a constant that is one of its values: accepted
+    # where enumerations mix with integers, strict or not (Beckhoff's own example does the first)
+    kept = outcome(STRICT_ENUM + "PROGRAM Main VAR x : E := E.B; i : INT; b : BOOL; END_VAR\n"
+                   "i := x; b := x = 5; x := 3; END_PROGRAM", dialect, ["Main.i", "Main.b", "Main.x"])
+    assert (kept == (5, True, 3)) is (value or allows(dialect, "enum_integer"))
+    for body in ("x := x + 1;", "x := 4;", "x := i;"):
+        refused = outcome(STRICT_ENUM + "PROGRAM Main VAR x : E; i : INT := 3; END_VAR\n" + body + " END_PROGRAM",
+                          dialect, ["Main.x"])
+        assert not accepted(refused), body
+        plain = outcome(STRICT_ENUM.replace("{attribute 'strict'}", "") + "PROGRAM Main VAR x : E; i : INT := 3; "
+                        "END_VAR\n" + body + " END_PROGRAM", dialect, ["Main.x"])
+        # without the attribute, the dialects that mix take it (and only those)
+        assert accepted(plain) is allows(dialect, "enum_integer"), body
+    if value:
+        assert allows(dialect, "enum_integer")
+
+
+def probe_enum_to_string_attribute(dialect, value):
+    result = outcome("{attribute 'to_string'}\nTYPE E_Sample : (eInit := 0, eStart, eStop); END_TYPE\n"
+                     "TYPE E_Plain : (pInit := 0, pStart, pStop); END_TYPE\n"
+                     "PROGRAM Main VAR e : E_Sample; p : E_Plain := E_Plain.pStart; s, c, n : STRING; "
+                     "w : WSTRING; END_VAR\n"
+                     "s := TO_STRING(e); c := TO_STRING(E_Sample.eStart); n := TO_STRING(p); "
+                     "w := TO_WSTRING(E_Sample.eStop); END_PROGRAM",
+                     dialect, ["Main.s", "Main.c", "Main.n", "Main.w"])
+    if value:   # Beckhoff's example, and a plain enumeration's number
+        assert result == (b"eInit", b"eStart", b"1", "eStop")
+    else:
+        assert result == (b"0", b"1", b"1", "2")
+
+
+def probe_enum_qualified_only(dialect, value):
+    source = ("{attribute 'qualified_only'}\nTYPE E : (Red, Green); END_TYPE\n"
+              "PROGRAM Main VAR x : E; END_VAR x := %s; END_PROGRAM")
+    assert outcome(source % "E.Green", dialect, ["Main.x"]) == (1,)
+    bare = outcome(source % "Green", dialect, ["Main.x"])
+    assert (not accepted(bare)) is value
+    if value:
+        assert any("qualified_only" in m for m in bare[1])
 
 
 def probe_shift_any_integer(dialect, value):
@@ -310,8 +358,6 @@ def test_every_row_names_its_sources_and_every_dialect():
 KNOWN_GAPS = {
     # rows whose vendor behaviour stvm does not implement yet (docs/dialects.md says so)
     ("ref_initial_value", Dialect.IEC), ("ref_initial_value", Dialect.CODESYS), ("ref_initial_value", Dialect.TWINCAT),
-    # the __SYSTEM.AnyType descriptor is loaded with the TwinCAT platform libraries only
-    ("any_input", Dialect.CODESYS),
     ("assignment_expression", Dialect.CODESYS), ("assignment_expression", Dialect.TWINCAT),
 }
 
