@@ -1304,6 +1304,9 @@ class Checker:
                 sibling = self.sibling_instance(init.expr, ty, pou)
                 if sibling is not None:
                     return sibling
+                address = dialect_rules.address_initial_value(self, init.expr, ty, namespace, pou)
+                if address is not None:   # REF(x) / ADR(x): an AddressInit, or False when refused
+                    return address or None
                 self.error("initial value must be a constant expression", init.span, "E023")
                 return None
             if isinstance(ty, t.EnumType) and isinstance(init.expr, n.Name):

@@ -14,6 +14,8 @@ from __future__ import annotations
 
 from stvm.dialects import allows
 from stvm.semantics import types as t
+from stvm.semantics.model import EXTERNAL, IN_OUT, TEMP, AddressInit
+from stvm.syntax import nodes as n
 from stvm.syntax.pragmas import has_attribute
 
 
@@ -69,3 +71,94 @@ def enum_assignable(settings, src: t.Type, dst: t.Type, constant) -> bool:
         return isinstance(constant, int) and not isinstance(constant, bool) and dst.name_of(constant) is not None
     return False
 
+
+# ---- REF(variable) / ADR(variable) as an initial value (row `ref_initial_value`) -----------------
+# CODESYS V3 online help "REF_TO" / "Data Type: Reference", Beckhoff Infosys "Pointers" /
+# "References" and RuSTy: the address of a variable is known when the application is loaded, so
+# it may initialise a REF_TO / POINTER TO. stvm binds it when the instance (or the globals) are
+# made, in declaration order: the variable must be declared before the reference (an aggregate
+# object must exist to be referred to), in the same PROGRAM/FUNCTION_BLOCK or among the globals.
+
+_ADDRESS_FUNCTIONS = ("REF", "ADR")
+
+
+def is_address_call(expr: n.Expr) -> bool:
+    return (isinstance(expr, n.Call) and isinstance(expr.callee, n.Name) and len(expr.callee.parts) == 1
+            and expr.callee.parts[0].upper() in _ADDRESS_FUNCTIONS)
+
+
+def address_initial_value(c, expr: n.Expr, ty: t.Type, namespace: tuple[str, ...], pou):
+    """The AddressInit of `expr` (`REF(x)` / `ADR(x)`) for a variable of type `ty` declared in
+    `pou` (None: a global), or None when `expr` is no such call or the dialect has none. Reports
+    what it refuses on the checker `c` and then returns False."""
+    if not is_address_call(expr):
+        return None
+    func = expr.callee.parts[0].upper()   # type: ignore[attr-defined]
+    span = expr.span
+    if not allows(c.settings.dialect, "ref_initial_value"):
+        return None   # Sysmac: the checker's "initial value must be a constant expression", as before
+    if not isinstance(ty, t.RefType) or ty.flavour == "REFERENCE":
+        c.error(f"{func}() can initialise a REF_TO or POINTER TO variable, not {ty.name}", span, "E052")
+        return False
+    if len(expr.args) != 1 or expr.args[0].kind != "positional":
+        c.error(f"{func}() takes one variable", span, "E023")
+        return False
+    if pou is not None and pou.kind not in ("FUNCTION_BLOCK", "PROGRAM"):
+        c.error(f"{func}() as an initial value is bound when an instance is made: only in a PROGRAM, a "
+                "FUNCTION_BLOCK or VAR_GLOBAL, not in a {kind}".replace("{kind}", pou.kind), span, "E023")
+        return False
+    found = _address_steps(c, expr.args[0].value, namespace, pou)
+    if found is None:
+        c.error(f"{func}() as an initial value takes a variable declared before, in the same "
+                "PROGRAM/FUNCTION_BLOCK or in VAR_GLOBAL, its members and elements at constant indices",
+                expr.args[0].value.span, "E023")
+        return False
+    scope, steps, target = found
+    if not t.same_type(target, ty.target):
+        c.error(f"type mismatch: cannot initialise {ty.name} with {func}() of a {target.name}", span, "E052")
+        return False
+    _note_addressed(c, pou, steps)
+    return AddressInit(scope, tuple(steps), t.is_aggregate(target))
+
+
+def _note_addressed(c, pou, steps) -> None:
+    """The lowering keeps a referenced variable in its instance (never in a Python local)."""
+    if pou is not None:
+        c.facts.addressed.add((pou.key, str(steps[0][1]).lower()))
+
+
+def _address_steps(c, expr: n.Expr, namespace: tuple[str, ...], pou):
+    """(scope, steps, type) of a variable path made of a name, members and constant indices."""
+    if isinstance(expr, n.Name) and len(expr.parts) == 1 and not expr.rooted:
+        key = expr.parts[0].lower()
+        var = pou.variables.get(key) if pou is not None else None
+        if var is not None and var.section in (IN_OUT, TEMP):
+            return None
+        if var is None or var.section == EXTERNAL:
+            var = c.globals.get(key)
+            if var is None:
+                return None
+            return "global", [("field", var.name)], var.type
+        return "self", [("field", var.name)], var.type
+    if isinstance(expr, n.Member):
+        inner = _address_steps(c, expr.base, namespace, pou)
+        if inner is None or not isinstance(inner[2], t.StructType) or isinstance(inner[2], t.UnionType):
+            return None
+        scope, steps, ty = inner
+        name = ty.field_name(expr.name)
+        if name is None:
+            return None
+        return scope, steps + [("field", name)], ty.field_type(name)
+    if isinstance(expr, n.Index):
+        inner = _address_steps(c, expr.base, namespace, pou)
+        if inner is None or not isinstance(inner[2], t.ArrayType) or not inner[2].dims \
+                or len(expr.indices) != len(inner[2].dims):
+            return None
+        scope, steps, ty = inner
+        for index, (lo, hi) in zip(expr.indices, ty.dims):
+            value = c.const_value(index, namespace, pou)
+            if not (isinstance(value, int) and not isinstance(value, bool) and lo <= value <= hi):
+                return None
+            steps = steps + [("item", value - lo)]
+        return scope, steps, ty.element
+    return None
