@@ -621,6 +621,9 @@ class BodyChecker:
             self.facts.types[e.nid] = ty
         return ty
 
+    def expr_AssignExpr(self, e: n.AssignExpr, expected) -> t.Type | None:
+        return dialect_rules.check_assign_expr(self, e)   # CODESYS/TwinCAT `(x := v)`
+
     def expr_IntLiteral(self, e: n.IntLiteral, expected) -> t.Type:
         self.facts.untyped.add(e.nid)
         self.facts.consts[e.nid] = e.value

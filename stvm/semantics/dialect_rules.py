@@ -162,3 +162,29 @@ def _address_steps(c, expr: n.Expr, namespace: tuple[str, ...], pou):
             steps = steps + [("item", value - lo)]
         return scope, steps, ty.element
     return None
+
+
+# ---- an assignment used as an expression (row `assignment_expression`) ---------------------------
+# CODESYS V3 online help / Beckhoff Infosys "ExST assignment as expression": `a := b := c + 9`
+# gives both the value; `IF b := (i = 1) THEN` tests the value stored; `int := real := int` is an
+# error, so the value has the target's type. stvm stores through a reference to the target
+# (evaluated first: left to right, the target written once), so the target is kept in its
+# instance or frame, never in a Python local.
+
+def check_assign_expr(b, e: n.AssignExpr) -> t.Type | None:
+    """Check `target := value` inside an expression on the body checker `b`; its type is the
+    target's."""
+    target_type = b.lvalue(e.target)
+    value_type = b.expr(e.value, expected=target_type)
+    if target_type is None or value_type is None:
+        return None
+    b.require_assignable(e.value, value_type, target_type, e.value.span)
+    target = e.target
+    ref = b.facts.names.get(target.nid) if isinstance(target, n.Name) else None
+    if t.is_aggregate(target_type) or isinstance(target, (n.BitAccess, n.PartialAccess)) \
+            or (b.facts.props and target.nid in b.facts.props) or getattr(ref, "kind", None) == "result":
+        b.error(f"an assignment used as an expression needs a variable of an elementary type as its target "
+                f"(not {target_type.name}, a bit, a property or a function's result)", target.span, "E050")
+        return None
+    b.mark_addressed(target)
+    return target_type

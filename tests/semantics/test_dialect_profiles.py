@@ -295,6 +295,37 @@ def probe_assignment_expression(dialect, value):
                      "IF ((i := i + 1) = 2) THEN hits := hits + 1; END_IF; END_PROGRAM",
                      dialect, ["Main.i", "Main.hits"], cycles=3)
     assert (result == (3, 1)) is value
+    if not value:
+        assert any("assignment used as an expression" in m and "CODESYS/TwinCAT syntax, not" in m
+                   for m in result[1])
+        return
+    # the vendors' examples (chains, `IF b := (i = 1)`), WHILE, FB members, array elements and
+    # struct members as targets, left to right, the value converted to the target's type
+    result = outcome(ASSIGNMENT_EXPRESSIONS, dialect,
+                     ["Main.i", "Main.hits", "Main.a", "Main.b", "Main.r", "Main.loops", "Main.arr", "Main.s.m",
+                      "Main.fb.q", "Main.bb"])
+    assert result == (2, 100, 7, 7, 1.0, 4, [4, 0, 10], 6, 10, True)
+    wrong = outcome("PROGRAM Main VAR i : INT; r : REAL; END_VAR i := r := i; END_PROGRAM", dialect, [])
+    assert any("cannot assign REAL to INT" in m for m in wrong[1])   # the vendors' "incorrect" example
+
+
+ASSIGNMENT_EXPRESSIONS = """TYPE ST : STRUCT m : INT; END_STRUCT END_TYPE
+FUNCTION_BLOCK FB VAR_OUTPUT q : INT; END_VAR VAR k : INT; END_VAR
+IF (k := k + 1) = 2 THEN q := 10; END_IF
+END_FUNCTION_BLOCK
+FUNCTION Dec : INT VAR_IN_OUT c : INT; END_VAR c := c - 1; Dec := c; END_FUNCTION
+PROGRAM Main VAR i, hits, a, b, n, x, loops : INT := 0; r : REAL; arr : ARRAY[1..3] OF INT; s : ST; fb : FB;
+    bb : BOOL; END_VAR
+IF ((i := i + 1) = 2) THEN hits := hits + 1; END_IF;
+a := b := 7;
+r := (n := 3) / 2;
+n := 5; x := 0;
+WHILE (x := Dec(n)) > 0 DO loops := loops + 1; END_WHILE;
+arr[(i := 2) + 1] := (arr[1] := 4) + (s.m := 6);
+fb(); fb();
+IF bb := (a = 7) THEN hits := hits + 100; END_IF
+END_PROGRAM
+"""
 
 
 def probe_method_recursion(dialect, value):
@@ -394,7 +425,6 @@ def test_every_row_names_its_sources_and_every_dialect():
 
 KNOWN_GAPS = {
     # rows whose vendor behaviour stvm does not implement yet (docs/dialects.md says so)
-    ("assignment_expression", Dialect.CODESYS), ("assignment_expression", Dialect.TWINCAT),
 }
 
 
