@@ -559,6 +559,8 @@ class _ToNodes:
         del climb   # the closure refers to itself: left alone, each expression would be cyclic garbage
         return tree
 
+
+    init_expression = expression   # an initializer's expression (st.lark): the same chain
     def unary(self, meta, items):
         op, operand = items
         return n.Unary(str(op.type), operand, self._s(meta))
