@@ -136,11 +136,33 @@ ROWS: tuple[Row, ...] = (
         f"LTIME#0NS..LTIME#213503D23H34M33S709MS551US615NS; IEC 61131-3 and {W501}: signed 64-bit "
         "nanoseconds (±106751d23h47m16s854ms775us807ns), arithmetic wraps as a LINT, LTIME_TO_STRING "
         "writes LT#"),
-    Row("enum_integer", "an enumeration value assigned to an integer variable and an integer to an enumeration",
-        False, False, False, True,
-        f"{TC3} 'Enumerations': without {{attribute 'strict'}} an enumeration converts implicitly to and "
-        "from its integer base type (stvm reads no 'strict' attribute yet: every enumeration does); "
-        "IEC 61131-3 and Sysmac: enumerations are distinct types; CODESYS left strict in stvm"),
+    Row("enum_integer", "an enumeration without {attribute 'strict'} mixes with integers: assigned to and from "
+        "integer variables, in arithmetic and comparisons (`i := e + 1; e := 3;`)",
+        False, False, True, True,
+        f"{TC3} 'Enumerations' and 'Attribute strict' / {CDS} 'Data type: Enumeration': without the "
+        "attribute an enumeration value is used as its integer value (the static-analysis rules SA0034 "
+        "and SA0058 flag such uses); IEC 61131-3 and Sysmac: enumerations are distinct types"),
+    Row("enum_strict_attribute", "{attribute 'strict'} on an enumeration refuses arithmetic on it and assigning "
+        "it an integer that is not a constant equal to one of its values (reading it into an integer stays "
+        "allowed)",
+        False, False, True, True,
+        f"{TC3} 'Attribute strict' (compile errors for arithmetic, a constant that is no enumeration value, "
+        "a non-constant value of another type; its 'to_string' example assigns a strict enumeration to an "
+        f"INT) / {CDS} 'Data type: Enumeration' (C0354's example assigns 0, a value of the strict "
+        "enumeration); comparing with an integer is no arithmetic and stays allowed (stvm's choice). IEC "
+        "61131-3 and Sysmac: no attribute, every enumeration is strict"),
+    Row("enum_to_string_attribute", "TO_STRING of an enumeration with {attribute 'to_string'} gives the "
+        "enumerator's name ('eStart'); without it the number ('1')",
+        False, False, True, True,
+        f"{TC3} 'Attribute to_string' and 'TO_STRING/TO_WSTRING for enumeration variables' (TC3.1 build "
+        f"4024) / {CDS} 'Attribute: to_string'; IEC 61131-3 and Sysmac have no such attribute (TO_STRING "
+        "of an enumeration gives its number)"),
+    Row("enum_qualified_only", "an enumerator of an enumeration with {attribute 'qualified_only'} must be "
+        "written `E.member` (a bare `member` is an error)",
+        True, True, True, True,
+        f"{TC3} 'Attribute qualified_only' / {CDS} 'Attribute: qualified_only'; Sysmac and IEC have no "
+        "attributes, and stvm honours the pragma in every dialect (a pragma another vendor's compiler "
+        "ignores; code written without it is unchanged)"),
     Row("shift_any_integer", "SHL/SHR/ROL/ROR on signed and unsigned integers, not only bit strings",
         False, False, True, True,
         f"{IEC3} table 29 and {W502}: ANY_BIT operands; {TC3} / {CDS} 'SHL': any integer type"),
@@ -157,8 +179,8 @@ ROWS: tuple[Row, ...] = (
     Row("void_function", "a FUNCTION without a return type, called as a statement (`FUNCTION RUN`)",
         False, False, True, True,
         f"{CDS} 'Function' / {TC3} 'Function': the return type may be left out; such a function "
-        "returns nothing and is called as a statement (TcUnit's RUN, TEST, ...); IEC 61131-3 and "
-        "Sysmac require one"),
+        "returns nothing and is called as a statement (TcUnit's RUN, TEST, ...); its name is then no "
+        "result variable, so a local may share it. IEC 61131-3 and Sysmac require one"),
     Row("mixed_arguments", "formal arguments followed by positional ones (`FIND(STR1 := s, '.')`)",
         False, False, True, True,
         f"{TC3} / {CDS}: the compiler accepts a call that names some inputs and gives the rest by "
@@ -167,7 +189,7 @@ ROWS: tuple[Row, ...] = (
     Row("fb_assign", "assigning a function block instance to another of its type (a copy of its variables)",
         False, False, True, True,
         f"{TC3} / {CDS}: an FB instance is assigned like a structure (its memory is copied) unless "
-        "the FB has {{attribute 'no_assign'}}; a METHOD may return an FB (TcUnit's GetTestByPosition). "
+        "the FB has {attribute 'no_assign'}; a METHOD may return an FB (TcUnit's GetTestByPosition). "
         "IEC 61131-3 and Sysmac: an instance cannot be assigned"),
     Row("fb_input_assign", "writing an input of an FB instance outside its call (`fbTimer.IN := TRUE;`)",
         False, False, True, True,
@@ -230,3 +252,27 @@ def known_library_prefix(parts: tuple[str, ...], known) -> tuple[str, ...]:
         if known(parts[start:]):
             return parts[start:]
     return parts
+
+
+def _cell(row: Row, value: Any) -> str:
+    """A value as docs/dialects.md shows it: yes/no for a rule, `code` for a setting's spelling or
+    a one-word value, plain text otherwise."""
+    if isinstance(value, bool):
+        return "yes" if value else "no"
+    text = str(value)
+    if row.setting or text.replace("_", "").isalnum():
+        return f"`{text}`"
+    return text
+
+
+def table_markdown() -> str:
+    """The table of docs/dialects.md, generated from ROWS (tools/gen_dialect_docs.py writes it;
+    tests/semantics/test_dialect_profiles.py checks the page against it)."""
+    lines = ["| row | what differs | sysmac | iec | codesys | twincat | sources |",
+             "|---|---|---|---|---|---|---|"]
+    for row in ROWS:
+        key = f"`{row.key}` (setting)" if row.setting else f"`{row.key}`"
+        cells = [_cell(row, row.value(d)) for d in (SYSMAC, IEC, CODESYS, TWINCAT)]
+        text = [key, row.subject, *cells, row.sources]
+        lines.append("| " + " | ".join(t.replace("|", "\\|") for t in text) + " |")
+    return "\n".join(lines) + "\n"

@@ -383,11 +383,15 @@ class _Qualifier:
 
 def namespaces(spaces: Mapping[str, str], settings) -> set[str]:
     """The library names `Lib.X` may start with: the project's libraries, and under the twincat
-    dialect the platform's namespaces (`IBaseLibrary.TypeClass`, `__SYSTEM.TYPE_CLASS`)."""
+    dialect the platform's namespaces (`IBaseLibrary.TypeClass`, `__SYSTEM.TYPE_CLASS`), under
+    codesys those of its type classes and ANY descriptor."""
     names = set(spaces.values())
     if settings.dialect.value == "twincat":
         from stvm.stdlib import TWINCAT_NAMESPACES   # lazy: start-up
         names |= set(TWINCAT_NAMESPACES)
+    elif settings.dialect.value == "codesys":
+        from stvm.stdlib import CODESYS_NAMESPACES   # lazy: start-up
+        names |= set(CODESYS_NAMESPACES)
     return names
 
 

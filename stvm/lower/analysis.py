@@ -270,7 +270,7 @@ class _Planner:
         weight = 1                     # LOOP_WEIGHT ** the loops open around the node
         leave, unknown, fields_of = _LEAVE, _UNKNOWN, CHILD_FIELDS
         name_cls, call_cls, index_cls, argument_cls = n.Name, n.Call, n.Index, n.Argument
-        assign_classes, loops, statements = (n.Assign, n.RefAssign), _LOOPS, _STATEMENTS
+        assign_classes, loops, statements = (n.Assign, n.RefAssign, n.AssignExpr), _LOOPS, _STATEMENTS
         get = uses.get
         stack: list = list(body)
         pop, push = stack.pop, stack.append

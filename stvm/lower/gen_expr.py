@@ -199,6 +199,12 @@ class ExpressionGenerator:
             return self.expr(value)
         return self.ref_code(value)
 
+    def ex_AssignExpr(self, e: n.AssignExpr) -> str:
+        """`(x := v)` (CODESYS/TwinCAT): the target's reference first, then the value converted to
+        the target's type, stored once and returned (`_assigned`, runtime/helpers.py)."""
+        ty = self.facts.types.get(e.target.nid)
+        return f"_assigned({self.ref_code(e.target)}, {self.expr_as(e.value, ty)})"
+
     def ex_Member(self, e: n.Member) -> str:
         if self.facts.props and e.nid in self.facts.props:
             return self.property_get(e)

@@ -9,7 +9,8 @@ the sibling generators."""
 from __future__ import annotations
 
 from stvm.semantics import types as t
-from stvm.semantics.model import EXTERNAL, IN_OUT, INPUT, OUTPUT, TEMP, POUInfo, SiblingInstance, Variable
+from stvm.semantics.model import (EXTERNAL, IN_OUT, INPUT, OUTPUT, TEMP, AddressInit, POUInfo, SiblingInstance,
+                                  Variable)
 from stvm.dialects import allows
 from stvm.lower.names import method_attr, var_attr
 from stvm.lower.pycode import CodeWriter, py_literal
@@ -31,6 +32,8 @@ class PouGenerator:
     def default_expr(self, ty: t.Type, init: object = None, fb_args: dict | None = None) -> str:
         if isinstance(init, SiblingInstance):   # `itf := fbOther` in an FB's declaration
             return f"self.{var_attr(init.name)}"
+        if isinstance(init, AddressInit):       # `r : REF_TO INT := REF(x)`
+            return self.address_init_code(init)
         if isinstance(ty, t.BoolType):
             return py_literal(bool(init) if init is not None else False)
         if isinstance(ty, t.IntType):
@@ -62,6 +65,24 @@ class PouGenerator:
             values = init if isinstance(init, list) else []
             return self.array_expr(ty, list(ty.dims), values)
         return "None"
+
+    @staticmethod
+    def address_init_code(init: AddressInit) -> str:
+        """The reference an AddressInit binds: the instance's (`self`) or a global's (`_G`)
+        variable, its members and elements; a scalar's through an _AttrRef/_ItemRef, an
+        aggregate as the object itself (RefType). Names go through var_attr, offsets through
+        int(): no ST text becomes code."""
+        code = "_G" if init.scope == "global" else "self"
+        steps = list(init.steps)
+        last = None if init.aggregate else steps.pop()
+        for kind, value in steps:
+            code += f".{var_attr(str(value))}" if kind == "field" else f"[{int(value)}]"  # type: ignore[call-overload]
+        if last is None:
+            return code
+        kind, value = last
+        if kind == "field":
+            return f"_AttrRef({code}, {var_attr(str(value))!r})"
+        return f"_ItemRef({code}, {int(value)})"  # type: ignore[call-overload]
 
     def with_fb_init(self, ty: t.FBType, made: str, fb_args: dict | None = None) -> str:
         """CODESYS FB_init: the instance `made` queued for its FB_init methods (the base's first,
@@ -120,6 +141,14 @@ class PouGenerator:
 
     def var_default(self, var: Variable) -> str:
         return self.default_expr(var.type, var.init, var.fb_args)
+
+    def every_initial_value(self):
+        """The initial values of the globals, of every POU's variables and of STRUCT fields."""
+        yield from (v.init for v in self.model.globals.values())
+        for pou in self.model.pous.values():
+            yield from (v.init for v in pou.variables.values())
+        for inits in self.a.type_inits.values():
+            yield from inits.values()
 
     def class_order(self) -> list[tuple[str, POUInfo]]:
         """POUs in key order, except that a base FB comes before the FBs extending it."""
@@ -217,6 +246,11 @@ class PouGenerator:
         w.line(f"__slots__ = {tuple(attrs)!r}")
         w.line("def __init__(self):")
         w.indent += 1
+        if any(isinstance(v, AddressInit) and v.scope == "global" for v in self.every_initial_value()):
+            # a REF(global) initial value is bound while the globals are being made: `_G` is
+            # this object from the start (the VM sets the same object once it is made)
+            w.line("global _G")
+            w.line("_G = self")
         for var in self.model.globals.values():
             w.line(f"self.{var_attr(var.name)} = {self.var_default(var)}")
         if not attrs:

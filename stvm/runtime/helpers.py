@@ -196,6 +196,13 @@ def _setbit(word: int, bit: int, value: bool) -> int:
     return word | (1 << bit) if value else word & ~(1 << bit)
 
 
+def _assigned(ref, value):
+    """An assignment used as an expression (CODESYS/TwinCAT `(x := v)`): store, then give the
+    value stored (already converted to the target's type by the lowering)."""
+    ref.set(value)
+    return value
+
+
 def _with(obj, **fields):
     for name, value in fields.items():
         setattr(obj, name, value)
@@ -233,7 +240,7 @@ HELPERS = {
     "_tdiv": _tdiv, "_tdiv0": _tdiv0, "_expt": _expt, "_oob": _oob, "_subrange": _subrange, "_endless_for": _endless_for, "_strfit": strfit, "_copy_value": copy_value,
     "_assign_array": _assign_array, "_setbit": _setbit, "_with": _with, "_Frame": _Frame,
     "_fb_init_later": _fb_init_later, "_copy_fb": _copy_fb, "_assign_fb": _assign_fb,
-    "_AttrRef": AttrRef, "_MapRef": MapRef, "_ItemRef": ItemRef, "_ArrayRef": ArrayRef, "_FunctionError": FunctionError,
+    "_assigned": _assigned, "_AttrRef": AttrRef, "_MapRef": MapRef, "_ItemRef": ItemRef, "_ArrayRef": ArrayRef, "_FunctionError": FunctionError,
     "_STFault": STFault, "_null_ref": _null_ref, "_null_itf": _null_itf, "_query_itf": _query_itf, "_same_ref": _same_ref, "_ArrayIndexError": ArrayIndexError,
 }
 HELPERS.update(UNION_HELPERS)   # the base class and member descriptor of generated UNION classes

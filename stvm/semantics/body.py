@@ -15,6 +15,7 @@ from dataclasses import replace
 from typing import Any
 
 from stvm.semantics import types as t
+from stvm.semantics import dialect_rules
 from stvm.numeric import utf16_units
 from stvm.semantics.facts import NOT_CONST, CallInfo, NameRef
 from stvm.semantics.model import EXTERNAL, IN_OUT, INPUT, OUTPUT, POUInfo, Variable
@@ -516,10 +517,8 @@ class BodyChecker:
             return
         if implicit_ok(src, dst):
             return
-        if allows(self.settings.dialect, "enum_integer") and (
-                isinstance(src, t.EnumType) and isinstance(dst, t.IntType)
-                or isinstance(src, t.IntType) and isinstance(dst, t.EnumType)):
-            return   # TwinCAT: an enumeration converts to and from its integer value
+        if dialect_rules.enum_assignable(self.settings, src, dst, self.facts.consts.get(expr.nid)):
+            return   # TwinCAT/CODESYS: an enumeration converts to (and, unless strict, from) an integer
         if isinstance(src, t.IntType) and isinstance(dst, t.IntType):
             self.error(f"cannot assign {src.name} to {dst.name} implicitly (value may not fit){conversion_hint(src, dst)}", span, "E052")
             return
@@ -621,6 +620,9 @@ class BodyChecker:
         if ty is not None:
             self.facts.types[e.nid] = ty
         return ty
+
+    def expr_AssignExpr(self, e: n.AssignExpr, expected) -> t.Type | None:
+        return dialect_rules.check_assign_expr(self, e)   # CODESYS/TwinCAT `(x := v)`
 
     def expr_IntLiteral(self, e: n.IntLiteral, expected) -> t.Type:
         self.facts.untyped.add(e.nid)
@@ -1197,6 +1199,7 @@ class BodyChecker:
         rt = self.expr(e.right)
         if lt is None or rt is None:
             return None
+        lt, rt = dialect_rules.binary_operands(self.settings, lt, rt)   # non-strict enumerations as integers
         lu = e.left.nid in self.facts.untyped
         ru = e.right.nid in self.facts.untyped
         op = e.op
@@ -1301,11 +1304,8 @@ class BodyChecker:
             return lt.qualname.lower() == rt.qualname.lower()
         if isinstance(lt, t.BoolType) and isinstance(rt, t.BoolType):
             return True
-        if self.c.settings.dialect.value == "twincat" and \
-                {type(lt), type(rt)} <= {t.EnumType, t.IntType, t.SubrangeType} and t.EnumType in {type(lt), type(rt)}:
-            # TwinCAT: an enumeration without {attribute 'strict'} compares with integers as its
-            # value (Beckhoff, "Enumerations"); stvm does not read 'strict' yet: every one does
-            return True
+        if dialect_rules.enum_compares_with_integer(self.settings, lt, rt):
+            return True   # TwinCAT/CODESYS: an enumeration compares with integers as its value
         if isinstance(lt, t.TimeType) and isinstance(rt, t.TimeType):
             return lt.family == rt.family
         if (isinstance(lt, t.InterfaceType) or isinstance(rt, t.InterfaceType)) and op in ("EQ", "NE"):

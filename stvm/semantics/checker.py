@@ -18,6 +18,7 @@ from stvm.source import is_stdlib_file
 from stvm.dialects import profile_value
 from stvm.numeric import f32, utf16_units
 from stvm.semantics import types as t
+from stvm.semantics import dialect_rules
 from stvm.semantics.body import BodyChecker
 from stvm.syntax.pragmas import has_attribute
 from stvm.semantics.facts import NOT_CONST, CallInfo, Facts, NameRef  # noqa: F401 (API: checker.Facts)
@@ -923,6 +924,7 @@ class Checker:
                     self.error(f"'{body.default}' is not an enumerator of {decl.name}", body.span, "E016")
                 else:
                     result = t.EnumType(decl.name, qual, tuple(members), base, result.value_of(body.default))
+            result = dialect_rules.enum_attributes(result, decl.pragmas, self.settings)   # 'strict', 'to_string'
             for name, value in members:
                 self.enumerators.setdefault(name.lower(), []).append((result, value))
             self.enums[key] = result
@@ -1302,6 +1304,9 @@ class Checker:
                 sibling = self.sibling_instance(init.expr, ty, pou)
                 if sibling is not None:
                     return sibling
+                address = dialect_rules.address_initial_value(self, init.expr, ty, namespace, pou)
+                if address is not None:   # REF(x) / ADR(x): an AddressInit, or False when refused
+                    return address or None
                 self.error("initial value must be a constant expression", init.span, "E023")
                 return None
             if isinstance(ty, t.EnumType) and isinstance(init.expr, n.Name):

@@ -26,6 +26,21 @@ class SiblingInstance:
     name: str
 
 
+@dataclass(frozen=True)
+class AddressInit:
+    """The initial value `r : REF_TO INT := REF(counter);` (or ADR() for a POINTER TO; the
+    `ref_initial_value` row): a reference bound when the instance (`scope` "self": a PROGRAM's or
+    FUNCTION_BLOCK's variable) or the globals (`scope` "global") are made. `steps` lead from there
+    to the variable: ("field", declared name) for a variable or member, ("item", 0-based offset)
+    for an array element; `aggregate`: the target is a STRUCT, ARRAY or FB instance, whose
+    reference is the object itself (semantics/dialect_rules.py builds it, lower/gen_pou.py writes
+    it)."""
+
+    scope: str
+    steps: tuple[tuple[str, object], ...]
+    aggregate: bool
+
+
 @dataclass
 class Variable:
     name: str                 # the user's spelling

@@ -168,6 +168,10 @@ class EnumType(Type):
     members: tuple[tuple[str, int], ...] = ()
     base: Type | None = None
     default: int | None = None   # `TYPE E : (A, B) := B;` — the declared initial value
+    # {attribute 'strict'} / {attribute 'to_string'} on its declaration (TwinCAT/CODESYS; read by
+    # semantics/dialect_rules.py, which says what they change in which dialect)
+    strict: bool = False
+    to_string: bool = False
 
     @property
     def kind(self) -> str:

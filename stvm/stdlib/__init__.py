@@ -107,6 +107,10 @@ CODESYS_UTIL = "cds_util.st"     # the CODESYS Util library (BLINK, HYSTERESIS, 
 CODESYS_LIBRARIES = (CODESYS_UTIL, "sys_mem.st")
 # namespaces of the platform libraries, reached as `IBaseLibrary.TypeClass.TYPE_INT` (stvm/libraries.py)
 TWINCAT_NAMESPACES = ("IBaseLibrary", "__SYSTEM", "SysFile", "SysDir", "SysTypes", "CmpErrors")
+# CODESYS V3 has the same type classes and ANY descriptor (CODESYS online help "ANY": the compiler
+# passes `__SYSTEM.AnyType`; Base Interfaces library "TypeClass"), not Beckhoff's Tc2 libraries
+CODESYS_LIBRARIES = ("type_classes.st",)
+CODESYS_NAMESPACES = ("IBaseLibrary", "__SYSTEM")
 
 # Beckhoff Tc2_Standard names the inputs of the string functions STR/STR1/STR2/SIZE/LEN/POS
 # (infosys.beckhoff.com, Tc2_Standard "CONCAT": `STR1 : STRING(255); STR2 : STRING(255);`, and
@@ -204,6 +208,9 @@ def stdlib_sources(settings: SysmacSettings = DEFAULT_SETTINGS) -> list[tuple[st
         sources.append((f"{DISPLAY_PREFIX}twincat_types.st", _packaged_text("twincat_types.st")))
         # the Beckhoff platform libraries (docs/platform_libraries.md)
         for name in TWINCAT_LIBRARIES:
+            sources.append((DISPLAY_PREFIX + name, _packaged_text(name)))
+    elif settings.dialect is Dialect.CODESYS:
+        for name in CODESYS_LIBRARIES:
             sources.append((DISPLAY_PREFIX + name, _packaged_text(name)))
     return sources
 

@@ -567,8 +567,15 @@ def _generic_converter(what: str, target: str):
     """TO_<target>: the `<SRC>_TO_<target>` of the argument's static type (`{native typed}`),
     looked up once per source type."""
     by_source: dict = {}
+    textual = target in ("STRING", "WSTRING")
 
     def convert(ctx, arg_types, value):
+        if textual and isinstance(arg_types[0], EnumType) and arg_types[0].to_string:
+            # {attribute 'to_string'} (TwinCAT/CODESYS): the enumerator's name; a value that is
+            # none of its enumerators (a non-strict enumeration given an integer) stays a number
+            name = arg_types[0].name_of(value)
+            if name is not None:
+                return name if target == "WSTRING" else name.encode("ascii", "replace")
         source = source_type_name(arg_types[0])
         impl = by_source.get(source)
         if impl is None:

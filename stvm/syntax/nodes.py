@@ -150,6 +150,16 @@ class Call(Expr):
 
 
 @dataclass(frozen=True, slots=True)
+class AssignExpr(Expr):
+    """`target := value` used as an expression (CODESYS/TwinCAT): stores value, converted to the
+    target's type, and has that value."""
+
+    target: Expr
+    value: Expr
+    span: Span = _span()
+
+
+@dataclass(frozen=True, slots=True)
 class Unary(Expr):
     op: str
     operand: Expr

@@ -434,6 +434,15 @@ class _ToNodes:
     def assignment(self, meta, items):
         return n.Assign(items[0], items[1], self._s(meta))
 
+    def assign_chain(self, meta, items):
+        """`target := value` inside an expression, a condition or a chained assignment."""
+        span = self._s(meta)
+        if not allows(self.settings.dialect, "assignment_expression"):
+            self._error("an assignment used as an expression ('x := (y := v)', 'IF (i := i + 1) = n') is "
+                        f"CODESYS/TwinCAT syntax, not {self.settings.dialect.value} (use --dialect twincat|codesys)",
+                        span, "E009")
+        return n.AssignExpr(items[0], items[1], span)
+
     def ref_assignment(self, meta, items):
         return n.RefAssign(items[0], items[2], self._s(meta))
 
@@ -550,6 +559,8 @@ class _ToNodes:
         del climb   # the closure refers to itself: left alone, each expression would be cyclic garbage
         return tree
 
+
+    init_expression = expression   # an initializer's expression (st.lark): the same chain
     def unary(self, meta, items):
         op, operand = items
         return n.Unary(str(op.type), operand, self._s(meta))
