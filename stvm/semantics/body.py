@@ -376,7 +376,7 @@ class BodyChecker:
         return self.c.globals.get(hidden) if hidden else None
 
     def lookup_callable(self, name: n.Name) -> POUInfo | None:
-        key = self.c.lookup_pou_key(name.parts, self.pou_namespace)
+        key = self.c.index.lookup_pou_key(name.parts, self.pou_namespace)
         if key is None:
             return None
         return self.c.pous.get(key)
@@ -1062,7 +1062,7 @@ class BodyChecker:
         if isinstance(arg, n.Name) and self.resolve_name(arg) is None:
             spec = n.NamedTypeSpec(arg.parts, False, arg.span)
             if len(arg.parts) == 1 and (arg.parts[0].upper() in t.ELEMENTARY or arg.parts[0].upper() == "WSTRING") \
-                    or self.c.lookup_type_key(arg.parts, False, self.pou_namespace) is not None:
+                    or self.c.index.lookup_type_key(arg.parts, False, self.pou_namespace) is not None:
                 return self.c.resolve_type_spec(spec, self.pou_namespace)
         return self.expr(arg)
 

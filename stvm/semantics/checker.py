@@ -4,38 +4,38 @@
 declaration order never matter), then checks each POU body. It never raises for bad ST: each
 problem is a `Diagnostic`. For the code generator it records, per expression node, its type and
 what a name refers to (`Facts`).
+
+`Checker` runs the passes in order (docs/architecture.md, "Checker passes"): the index
+(index.py), type resolution and constants (resolve.py, constants.py), declarations, instance
+initialisers and object orientation (declarations.py, instance_inits.py, oo.py), the body checks
+(body.py) and the whole-program rules (program.py). They share one `CheckContext` (context.py).
 """
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 from typing import Any, Mapping
 
 from stvm.diagnostics import Diagnostic
-from stvm.semantics.limits import array_bounds_problem, array_size_problem
-from stvm.source import is_stdlib_file
-from stvm.dialects import profile_value
-from stvm.numeric import f32, utf16_units
 from stvm.semantics import types as t
 from stvm.semantics.body import BodyChecker
-from stvm.syntax.pragmas import has_attribute
+from stvm.semantics.context import CheckContext
 from stvm.semantics.facts import NOT_CONST, CallInfo, Facts, NameRef  # noqa: F401 (API: checker.Facts)
+from stvm.semantics.index import DeclarationIndex, Indexer
 from stvm.semantics.qualified import resolve as resolve_qualified
-from stvm.semantics.model import (SiblingInstance, EXTERNAL, GLOBAL, IN_OUT, INPUT, LOCAL, OUTPUT, POUInfo,
-                                  ProjectModel, PropertyInfo, TaskInfo, Variable)
-from stvm.dialects import allows, known_library_prefix
-from stvm.settings import BareEnumerators, DEFAULT_SETTINGS, Dialect, StringOverflow, StringSize, SysmacSettings
+from stvm.semantics.model import ProjectModel
+from stvm.settings import DEFAULT_SETTINGS, SysmacSettings
 from stvm.syntax import nodes as n
+import math
+from stvm.dialects import allows, profile_value
+from stvm.numeric import f32, utf16_units
+from stvm.semantics.limits import array_bounds_problem, array_size_problem
+from stvm.semantics.model import (SiblingInstance, EXTERNAL, GLOBAL, IN_OUT, INPUT, LOCAL, OUTPUT, POUInfo,
+                                  PropertyInfo, TaskInfo, Variable)
+from stvm.settings import BareEnumerators, Dialect, StringSize
+from stvm.source import is_stdlib_file
+from stvm.syntax.pragmas import has_attribute
 from stvm.syntax.walk import calls_in
-
-# Reserved words that the contextual lexer may still let through as names.
-_RESERVED = {
-    "if", "then", "else", "elsif", "end_if", "case", "of", "end_case", "for", "to", "by", "do", "end_for",
-    "while", "end_while", "repeat", "until", "end_repeat", "exit", "continue", "return", "and", "or", "xor",
-    "not", "mod", "true", "false", "var", "end_var", "function", "function_block", "program", "type",
-    "struct", "array", "constant", "retain",
-}
 
 
 @dataclass
@@ -47,14 +47,6 @@ class Analysis:
     diagnostics: list[Diagnostic]
     type_inits: dict[str, dict[str, object]]   # struct qualname key → field key → initial value
     method_nodes: dict[str, n.Method] = field(default_factory=dict)   # METHOD/GET/SET key → node
-
-
-class _Index:
-    def __init__(self) -> None:
-        self.type_decls: dict[str, n.TypeDecl] = {}
-        self.pou_nodes: dict[str, n.POU] = {}
-        self.short_types: dict[str, list[str]] = {}
-        self.short_pous: dict[str, list[str]] = {}
 
 
 NESTING_LIMIT = 200
@@ -101,84 +93,88 @@ def _longest_paths(graph: dict[str, list[tuple[str, str]]]) -> tuple[dict[str, i
     return depth, best
 
 
+
+def _shared(name: str) -> property:
+    """A table of the check's context, read (and, for the debugger's swap of `facts`, replaced)
+    through the Checker: the body checker and stvm/debug/scope.py use these names."""
+    return property(lambda self: getattr(self.ctx, name), lambda self, value: setattr(self.ctx, name, value))
+
+
 class Checker:
+    """The one entry point of the semantic check: makes the passes over one shared context and
+    runs them in order (`run`)."""
+
     def __init__(self, units: list[n.CompilationUnit], settings: SysmacSettings,
                  natives: Mapping[str, Any] | None = None) -> None:
         # `GVL.x`, `Enum.member`, qualified_only: resolved before anything else (the debug build
         # constructs a Checker too)
         units, qualified = resolve_qualified(list(units))
-        self.units = units
-        self.settings = settings
-        # the stdlib's native functions by upper-case name (stvm.stdlib.NATIVE_FUNCTIONS): their
-        # result-type rules. Given by the caller, which knows the stdlib; the checker sits below it.
-        self.natives = natives if natives is not None else {}
-        self.diags: list[Diagnostic] = qualified
-        self.facts = Facts()
-        self.index = _Index()
-        self.resolved_types: dict[str, t.Type | None] = {}
-        self.resolving: set[str] = set()
-        self.type_inits: dict[str, dict[str, object]] = {}
-        self.pous: dict[str, POUInfo] = {}
-        self.globals: dict[str, Variable] = {}
-        self.any_static = False    # a VAR_STAT was hoisted to a global (hoist_static_variables)
-        self.fb_instance_inits: list = []   # `fb : F := (x := 1)` waiting for F's variables (fb_instance_init)
-        self.fb_init_arg_decls: list = []   # `fb : F(1, 2)` waiting for F's FB_init (resolve_fb_init_args)
-        self.global_nodes: dict[str, n.VarDecl] = {}
-        self.enumerators: dict[str, list[tuple[t.EnumType, int]]] = {}
-        self.structs: dict[str, t.Type] = {}
-        self.enums: dict[str, t.Type] = {}
-        self.declaring: POUInfo | None = None   # the POU whose declarations are being resolved
-        self.method_nodes: dict[str, n.Method] = {}     # METHOD / GET / SET key → its node
+        self.ctx = CheckContext(units, settings, natives, qualified, DeclarationIndex(settings.dialect))
+        self.indexer = Indexer(self.ctx)
+
+    units = _shared("units")
+    settings = _shared("settings")
+    natives = _shared("natives")
+    diags = _shared("diags")
+    facts = _shared("facts")
+    index = _shared("index")
+    pous = _shared("pous")
+    globals = _shared("globals")
+    structs = _shared("structs")
+    enums = _shared("enums")
+    any_static = _shared("any_static")
+    type_inits = _shared("type_inits")
+    method_nodes = _shared("method_nodes")
 
     # ---- diagnostics
     def error(self, message: str, span: n.Span, code: str = "") -> None:
-        self.diags.append(Diagnostic.error(message, span, code))
+        self.ctx.error(message, span, code)
 
     def warning(self, message: str, span: n.Span, code: str = "") -> None:
-        self.diags.append(Diagnostic.warning(message, span, code))
+        self.ctx.warning(message, span, code)
 
     def string_overflow(self, length: int, dst: t.StringType, span: n.Span, initial: bool = False) -> None:
-        """A constant of `length` bytes stored into `dst` (sysmac.md 2, `string_overflow`): a
-        warning (the value is cut at build time), or an error under `string_overflow=error`."""
-        unit = "code units" if t.is_wide(dst) else "bytes"
-        if self.settings.string_overflow is StringOverflow.ERROR:
-            self.error(f"a string of {length} {unit} does not fit {dst.name} ({dst.max_bytes} {unit}; "
-                       "string_overflow=error)", span, "E054")
-        elif initial:
-            self.warning(f"initial value truncated to {dst.max_bytes} {unit} of {dst.name}", span, "W001")
-        else:
-            self.warning(f"a string of {length} {unit} is truncated to the {dst.max_bytes} {unit} of {dst.name}",
-                         span, "W001")
+        self.ctx.string_overflow(length, dst, span, initial)
 
-    # ---- indexing
+    # ---- entry
     def build_index(self) -> None:
-        for unit in self.units:
-            for name, span in getattr(unit, "namespace_names", ()):
-                self.check_identifier(name, span)
-            for decl in unit.types:
-                key = "\\".join(decl.namespace + (decl.name,)).lower()
-                known = self.index.type_decls.get(key)
-                if known is not None and known.span.file in _VENDOR_EXTRAS and not _is_stdlib(decl.span.file):
-                    self.index.type_decls[key] = decl   # a user declaration shadows a vendor extra
-                    continue
-                if key in self.index.type_decls or decl.name.upper() in t.ELEMENTARY:
-                    self.error(f"duplicate declaration of type '{decl.name}'", decl.span, "E010")
-                    continue
-                self.check_identifier(decl.name, decl.span)
-                self.index.type_decls[key] = decl
-                self.index.short_types.setdefault(decl.name.lower(), []).append(key)
-            for pou in unit.pous:
-                key = "\\".join(pou.namespace + (pou.name,)).lower()
-                if key in self.index.pou_nodes:
-                    self.error(f"duplicate declaration of POU '{pou.name}'", pou.span, "E010")
-                    continue
-                self.index.pou_nodes[key] = pou
-                self.index.short_pous.setdefault(pou.name.lower(), []).append(key)
+        """Passes 1 to 3: index, declare (resolving types and constants as declarations need
+        them), link the classes, resolve instance initialisers."""
+        self.indexer.build_index()
+        self.declare_all()
+        self.link_oo()
+        self.resolve_fb_instance_inits()
+        self.resolve_fb_init_args()
+
+    def run(self) -> Analysis:
+        self.build_index()
+        for key, pou in self.ctx.index.pou_nodes.items():
+            info = self.ctx.pous[key]
+            if info.native:
+                if pou.body:
+                    self.error(f"native POU '{pou.name}' must not have a body", pou.span, "E025")
+                continue
+            BodyChecker(self, info, pou).check()
+            for method in self.members_of(info):
+                BodyChecker(self, method, self.ctx.method_nodes[method.key], fb=info, fb_node=pou).check()
+        # the depth check walks iteratively and runs first: the two checks after it recurse,
+        # and a chain thousands deep must be a diagnostic naming it, not a RecursionError
+        if self.check_nesting_depth():
+            self.check_containment()
+            self.check_recursion()
+            self.check_method_recursion()
+        tasks, defaults = self.check_configuration()
+        model = ProjectModel(self.ctx.pous, self.ctx.globals, tasks, defaults, self.ctx.structs, self.ctx.enums)
+        return Analysis(model, self.ctx.facts, self.ctx.units, dict(self.ctx.index.pou_nodes), self.ctx.diags,
+                        self.ctx.type_inits, self.ctx.method_nodes)
+
+    def declare_all(self) -> None:
+        """Declare the globals, types and POU signatures the index holds."""
         # Order matters only inside this method: global constants of elementary types first (array
         # bounds and STRING sizes may use them), then types (enumerators must be known before
         # initial values resolve), then the other globals, then POU signatures.
         blocks = []
-        for unit in self.units:
+        for unit in self.ctx.units:
             blocks += [(g.block, g.namespace) for g in unit.globals]
             for conf in unit.configurations:
                 blocks += [(b, ()) for b in conf.globals]
@@ -187,45 +183,12 @@ class Checker:
         for block, namespace in blocks:
             if block.constant:
                 self.declare_globals(block, namespace, elementary_only=True)
-        for key, decl in self.index.type_decls.items():
+        for key, decl in self.ctx.index.type_decls.items():
             self.resolve_declared_type(key)
         for block, namespace in blocks:
             self.declare_globals(block, namespace, elementary_only=False if block.constant else None)
-        for key, pou in self.index.pou_nodes.items():
-            self.pous[key] = self.declare_pou(pou)
-        self.link_oo()
-        self.resolve_fb_instance_inits()
-        self.resolve_fb_init_args()
-
-    def check_identifier(self, name: str, span: n.Span) -> None:
-        if name.lower() in _RESERVED:
-            self.error(f"'{name}' is a reserved word and cannot be used as a name", span, "E011")
-            return
-        if _is_stdlib(span.file):
-            return  # system names (`_sSOCKET`, `_CLOSED`) live in the stdlib
-        dialect = self.settings.dialect
-        problem = None
-        if dialect is Dialect.IEC:
-            # IEC 61131-3 ed. 3 6.1.2: letters, digits and single underscores, not at the end
-            if "__" in name:
-                problem = "may not contain '__' (IEC 61131-3 6.1.2)"
-            elif name.endswith("_"):
-                problem = "may not end with '_' (IEC 61131-3 6.1.2)"
-        elif dialect is not Dialect.SYSMAC:
-            return    # CODESYS, TwinCAT: any identifier that is not a keyword
-        # sysmac.md 1 (CONFIRMED, W501): rules for user-defined names
-        elif name.startswith("_"):
-            problem = "may not start with '_' (reserved for system names)"
-        elif name.upper().startswith("P_"):
-            problem = "may not start with 'P_' (reserved for system-defined variables)"
-        elif name.endswith("_"):
-            problem = "may not end with '_'"
-        elif "__" in name:
-            problem = "may not contain '__'"
-        elif len(name.encode("utf-8")) > 127:
-            problem = "is longer than 127 bytes"
-        if problem:
-            self.error(f"name '{name[:40]}{'…' if len(name) > 40 else ''}' {problem}", span, "E011")
+        for key, pou in self.ctx.index.pou_nodes.items():
+            self.ctx.pous[key] = self.declare_pou(pou)
 
     def declare_globals(self, block: n.VarBlock, namespace: tuple[str, ...], elementary_only: bool | None = None) -> None:
         """Declare a VAR_GLOBAL block. `elementary_only` True: only its elementary-typed entries
@@ -239,8 +202,8 @@ class Checker:
                 continue
             vtype = self.resolve_type_spec(decl.type_spec, namespace)
             for name, span in decl.names:
-                self.check_identifier(name, span)
-                if name.lower() in self.globals:
+                self.indexer.check_identifier(name, span)
+                if name.lower() in self.ctx.globals:
                     self.error(f"duplicate declaration of global '{name}'", span, "E010")
                     continue
                 var = Variable(name, GLOBAL, vtype or t.DINT, block.constant, span)
@@ -250,10 +213,10 @@ class Checker:
                     var.init = self.initial_value(decl.init, vtype, namespace, None)
                 elif block.constant and decl.init is None:
                     self.error(f"constant '{name}' needs an initial value", span, "E013")
-                self.globals[name.lower()] = var
-                self.global_nodes[name.lower()] = decl
+                self.ctx.globals[name.lower()] = var
+                self.ctx.global_nodes[name.lower()] = decl
                 if decl.fb_args is not None:
-                    self.fb_init_arg_decls.append((var, decl, vtype, namespace, None))
+                    self.ctx.fb_init_arg_decls.append((var, decl, vtype, namespace, None))
 
     def alias_init(self, spec: n.TypeSpec, namespace: tuple[str, ...], seen: frozenset = frozenset()) -> object:
         """The initial value an alias type declares (`TYPE T : INT := 7;`), for variables of type
@@ -272,15 +235,15 @@ class Checker:
             return [element] * ty.length
         if not isinstance(spec, n.NamedTypeSpec):
             return None
-        key = self.lookup_type_key(spec.parts, spec.rooted, namespace)
-        if key is None or key in seen or not isinstance(self.index.type_decls[key].body, n.AliasDecl):
+        key = self.ctx.index.lookup_type_key(spec.parts, spec.rooted, namespace)
+        if key is None or key in seen or not isinstance(self.ctx.index.type_decls[key].body, n.AliasDecl):
             return None  # a cycle is reported by resolve_declared_type
-        if key not in self.resolved_types:
+        if key not in self.ctx.resolved_types:
             self.resolve_declared_type(key)   # its own initial value is known once it is resolved
-        inits = self.type_inits.get(key, {})
+        inits = self.ctx.type_inits.get(key, {})
         if "" in inits:
             return inits[""]
-        decl = self.index.type_decls[key]
+        decl = self.ctx.index.type_decls[key]
         return self.alias_init(decl.body.type_spec, decl.namespace, seen | {key})  # type: ignore[union-attr]
 
     def declare_pou(self, pou: n.POU) -> POUInfo:
@@ -301,7 +264,7 @@ class Checker:
                 alias, _, pin = word.split(":", 1)[-1].partition("=")
                 if alias and pin:
                     info.aliases[alias] = pin
-        self.check_identifier(pou.name, pou.span)
+        self.indexer.check_identifier(pou.name, pou.span)
         mods = set(pou.modifiers)
         info.abstract, info.final = "ABSTRACT" in mods, "FINAL" in mods
         if mods and pou.kind != "FUNCTION_BLOCK":
@@ -309,17 +272,17 @@ class Checker:
                        pou.name_span if pou.name_span.line else pou.span, "E060")
         if info.abstract and info.final:
             self.error(f"function block '{pou.name}' cannot be both ABSTRACT and FINAL", pou.span, "E060")
-        self.declaring = info   # its constants may size its arrays and strings (const_value)
+        self.ctx.declaring = info   # its constants may size its arrays and strings (const_value)
         if pou.kind == "INTERFACE":
             info.return_type = None
             self.declare_members(pou, info)
-            self.declaring = None
+            self.ctx.declaring = None
             return info
         if pou.kind == "FUNCTION":
             if pou.return_type is None:
                 # TwinCAT/CODESYS: a function without a result, called as a statement (like a METHOD
                 # without one: return_type None, so its name is no result variable)
-                if not allows(self.settings.dialect, "void_function"):
+                if not allows(self.ctx.settings.dialect, "void_function"):
                     self.error(f"function '{pou.name}' needs a return type", pou.span, "E014")
                     info.return_type = t.VOID
             else:
@@ -327,7 +290,7 @@ class Checker:
         elif pou.return_type is not None:
             self.error(f"a {pou.kind} has no return type", pou.span, "E014")
         self.declare_variables(pou, info, pou.namespace, native)
-        self.declaring = None
+        self.ctx.declaring = None
         if pou.kind == "FUNCTION" and (pou.methods or pou.properties):
             what = pou.methods[0] if pou.methods else pou.properties[0]
             self.error("a FUNCTION has no methods or properties; declare them in a FUNCTION_BLOCK",
@@ -352,13 +315,13 @@ class Checker:
                     continue
                 spec = decl.type_spec
                 if not native and kind == INPUT and isinstance(spec, n.NamedTypeSpec) \
-                        and [p.upper() for p in spec.parts] == ["ANY"] and allows(self.settings.dialect, "any_input"):
+                        and [p.upper() for p in spec.parts] == ["ANY"] and allows(self.ctx.settings.dialect, "any_input"):
                     # TwinCAT/CODESYS: an ANY input is the descriptor __SYSTEM.AnyType (docs/memory_model.md)
                     spec = n.NamedTypeSpec(("__SYSTEM", "AnyType"), False, spec.span)
                 vtype = self.resolve_type_spec(spec, namespace, allow_generic=native,
                                                allow_open_array=kind in (IN_OUT, INPUT))
                 for name, span in decl.names:
-                    self.check_identifier(name, span)
+                    self.indexer.check_identifier(name, span)
                     key = name.lower()
                     if key in info.variables:
                         self.error(f"duplicate declaration of '{name}' in {pou.name}", span, "E010")
@@ -370,7 +333,7 @@ class Checker:
                     # where the instance is declared or called, 0 by default (stvm/dialects.py
                     # `input_constant`): an input, not a compile-time constant
                     input_constant = (block.constant and kind == INPUT and decl.init is None
-                                      and allows(self.settings.dialect, "input_constant"))
+                                      and allows(self.ctx.settings.dialect, "input_constant"))
                     var = Variable(name, kind, vtype or t.DINT, block.constant and not input_constant, span)
                     var.instance_path = bool(decl.pragmas) and isinstance(vtype, t.StringType) \
                         and has_attribute(decl.pragmas, "instance-path")
@@ -382,7 +345,7 @@ class Checker:
                         self.error(f"constant '{name}' needs an initial value", span, "E013")
                     info.variables[key] = var
                     if decl.fb_args is not None:
-                        self.fb_init_arg_decls.append((var, decl, vtype, namespace, info))
+                        self.ctx.fb_init_arg_decls.append((var, decl, vtype, namespace, info))
                     if vtype is not None and decl.init is not None:
                         if kind == IN_OUT:
                             self.error(f"VAR_IN_OUT '{name}' cannot have an initial value", span, "E013")
@@ -422,7 +385,7 @@ class Checker:
             if key in info.methods or key in info.variables:
                 self.error(f"'{prop.name}' is declared twice in {pou.name}", prop.name_span, "E010")
                 continue
-            self.check_identifier(prop.name, prop.name_span)
+            self.indexer.check_identifier(prop.name, prop.name_span)
             ptype = self.resolve_type_spec(prop.type_spec, pou.namespace) or t.DINT
             access, abstract, final = self.member_modifiers(prop.modifiers, prop.name_span, "property")
             if not getters and not setters:
@@ -463,10 +426,10 @@ class Checker:
             owner = info.qualname.replace(".", "__").replace("\\", "__")
             hidden = Variable(f"{owner}__{var.name}", GLOBAL, var.type, False, var.span)
             hidden.init = var.init
-            self.globals[hidden.key] = hidden
+            self.ctx.globals[hidden.key] = hidden
             del info.variables[key]
             info.stat_vars[key] = hidden.key
-            self.any_static = True
+            self.ctx.any_static = True
 
     def check_lifecycle_method(self, m: n.Method, info: POUInfo) -> None:
         """CODESYS/TwinCAT FB_init(bInitRetains, bInCopyCode : BOOL) and FB_exit(bInCopyCode : BOOL)
@@ -506,11 +469,11 @@ class Checker:
         qual = owner.qualname + "." + (f"__{accessor.lower()}_" if accessor else "") + m.name
         info = POUInfo(m.name, qual, "METHOD", None, file=m.span.file, span=m.span)
         info.owner = owner.key
-        self.method_nodes[info.key] = m
+        self.ctx.method_nodes[info.key] = m
         info.access, info.abstract, info.final = self.member_modifiers(m.modifiers, m.name_span, "method")
         if not accessor:
-            self.check_identifier(m.name, m.name_span)
-        outer, self.declaring = self.declaring, info
+            self.indexer.check_identifier(m.name, m.name_span)
+        outer, self.ctx.declaring = self.ctx.declaring, info
         if accessor == "GET":
             info.return_type = prop_type
         elif m.return_type is not None:
@@ -518,7 +481,7 @@ class Checker:
         if accessor == "SET":   # the property's name is the value being set
             info.variables[m.name.lower()] = Variable(m.name, INPUT, prop_type or t.DINT, False, m.name_span)
         self.declare_variables(m, info, pou.namespace)
-        self.declaring = outer
+        self.ctx.declaring = outer
         for block in m.var_blocks:
             if block.kind == "VAR_STAT" and pou.kind == "INTERFACE":
                 self.error("an interface method declares only inputs, outputs and in-outs, not VAR_STAT",
@@ -548,7 +511,6 @@ class Checker:
             self.error(f"ABSTRACT method '{m.name}' cannot have statements", m.body[0].span, "E063")
         return info
 
-    # ---- object orientation: EXTENDS, IMPLEMENTS, method tables
     def members_of(self, info: POUInfo) -> list[POUInfo]:
         """The METHODs and property accessors an FB, PROGRAM or INTERFACE declares itself."""
         out = list(info.methods.values())
@@ -558,8 +520,8 @@ class Checker:
 
     def link_oo(self) -> None:
         """Resolve EXTENDS and IMPLEMENTS, report cycles, inherit the base's variables."""
-        for key, pou in self.index.pou_nodes.items():
-            info = self.pous[key]
+        for key, pou in self.ctx.index.pou_nodes.items():
+            info = self.ctx.pous[key]
             if pou.extends:
                 if pou.kind == "INTERFACE":
                     info.interfaces = tuple(k for k in (self.interface_key(name, pou) for name in pou.extends) if k)
@@ -570,8 +532,8 @@ class Checker:
                     self.error("a function block EXTENDS one base function block", pou.extends[1].span, "E064")
                 else:
                     base = pou.extends[0]
-                    bkey = self.lookup_pou_key(base.parts, pou.namespace)
-                    binfo = self.pous.get(bkey) if bkey else None
+                    bkey = self.ctx.index.lookup_pou_key(base.parts, pou.namespace)
+                    binfo = self.ctx.pous.get(bkey) if bkey else None
                     if binfo is None or binfo.kind != "FUNCTION_BLOCK" or binfo.native:
                         what = "unknown function block" if binfo is None else f"'{base.text}' is not a function block; cannot extend"
                         self.error(f"{what} '{base.text}'" if binfo is None else what, base.span, "E064")
@@ -585,15 +547,15 @@ class Checker:
                 else:
                     info.interfaces = tuple(k for k in (self.interface_key(name, pou) for name in pou.implements) if k)
         # cycles: a chain of bases that comes back
-        for key, info in self.pous.items():
+        for key, info in self.ctx.pous.items():
             if info.kind == "FUNCTION_BLOCK" and info.base:
                 chain, cur = [key], info.base
                 while cur is not None and cur not in chain:
                     chain.append(cur)
-                    cur = self.pous[cur].base
+                    cur = self.ctx.pous[cur].base
                 if cur == key:
-                    names = " -> ".join(self.pous[k].name for k in chain + [key])
-                    self.error(f"cycle in EXTENDS: {names}", self.index.pou_nodes[key].extends[0].span, "E065")
+                    names = " -> ".join(self.ctx.pous[k].name for k in chain + [key])
+                    self.error(f"cycle in EXTENDS: {names}", self.ctx.index.pou_nodes[key].extends[0].span, "E065")
                     info.base = None
             if info.kind == "INTERFACE" and info.interfaces:
                 seen: set[str] = set()
@@ -602,23 +564,23 @@ class Checker:
                     cur = stack.pop()
                     if cur == key:
                         self.error(f"cycle in INTERFACE EXTENDS through {info.name}",
-                                   self.index.pou_nodes[key].extends[0].span, "E065")
+                                   self.ctx.index.pou_nodes[key].extends[0].span, "E065")
                         info.interfaces = ()
                         break
                     if cur not in seen:
                         seen.add(cur)
-                        stack.extend(self.pous[cur].interfaces)
+                        stack.extend(self.ctx.pous[cur].interfaces)
         merged: set[str] = set()
 
         def inherit(key: str) -> None:
             if key in merged:
                 return
             merged.add(key)
-            info = self.pous[key]
+            info = self.ctx.pous[key]
             if info.base is None:
                 return
             inherit(info.base)
-            base = self.pous[info.base]
+            base = self.ctx.pous[info.base]
             variables = dict(base.variables)
             for vkey, var in info.variables.items():
                 if vkey in variables:
@@ -629,11 +591,11 @@ class Checker:
             info.inherited = len(base.variables)
             info.variables = variables
 
-        for key, info in list(self.pous.items()):
+        for key, info in list(self.ctx.pous.items()):
             if info.kind == "FUNCTION_BLOCK":
                 inherit(key)
         del inherit   # a closure calling itself is a cycle: it would keep the checker alive
-        for key, info in self.pous.items():
+        for key, info in self.ctx.pous.items():
             for method in info.methods.values():
                 if method.name.lower() in info.variables and info.inherited:
                     self.error(f"'{method.name}' is a variable of the base function block; a method cannot "
@@ -641,8 +603,8 @@ class Checker:
         self.check_oo_rules()
 
     def interface_key(self, name: n.Name, pou: n.POU) -> str | None:
-        key = self.lookup_pou_key(name.parts, pou.namespace)
-        if key is None or self.pous[key].kind != "INTERFACE":
+        key = self.ctx.index.lookup_pou_key(name.parts, pou.namespace)
+        if key is None or self.ctx.pous[key].kind != "INTERFACE":
             self.error(f"unknown interface '{name.text}'" if key is None else f"'{name.text}' is not an interface",
                        name.span, "E064")
             return None
@@ -652,21 +614,21 @@ class Checker:
         """The FB and its bases, the FB first."""
         out = []
         cur: str | None = key
-        while cur is not None and cur in self.pous and len(out) < 1000:
-            out.append(self.pous[cur])
-            cur = self.pous[cur].base
+        while cur is not None and cur in self.ctx.pous and len(out) < 1000:
+            out.append(self.ctx.pous[cur])
+            cur = self.ctx.pous[cur].base
         return out
 
     def find_method(self, key: str, name: str) -> POUInfo | None:
         """The method `name` of FB/PROGRAM `key` (own or inherited) or of interface `key` (own or
         from the interfaces it extends)."""
         low = name.lower()
-        info = self.pous.get(key)
+        info = self.ctx.pous.get(key)
         if info is None:
             return None
         if info.kind == "INTERFACE":
             for itf in self.interface_closure(key):
-                m = self.pous[itf].methods.get(low)
+                m = self.ctx.pous[itf].methods.get(low)
                 if m is not None:
                     return m
             return None
@@ -677,10 +639,10 @@ class Checker:
 
     def find_property(self, key: str, name: str) -> PropertyInfo | None:
         low = name.lower()
-        info = self.pous.get(key)
+        info = self.ctx.pous.get(key)
         if info is None:
             return None
-        chain = [self.pous[k] for k in self.interface_closure(key)] if info.kind == "INTERFACE" else self.base_chain(key)
+        chain = [self.ctx.pous[k] for k in self.interface_closure(key)] if info.kind == "INTERFACE" else self.base_chain(key)
         for fb in chain:
             if low in fb.properties:
                 return fb.properties[low]
@@ -691,9 +653,9 @@ class Checker:
         out, stack = [], [key]
         while stack:
             cur = stack.pop(0)
-            if cur not in out and cur in self.pous:
+            if cur not in out and cur in self.ctx.pous:
                 out.append(cur)
-                stack.extend(self.pous[cur].interfaces)
+                stack.extend(self.ctx.pous[cur].interfaces)
         return out
 
     def implemented_interfaces(self, key: str) -> set[str]:
@@ -710,10 +672,10 @@ class Checker:
     def check_oo_rules(self) -> None:
         """Overrides match, FINAL is not overridden, a concrete FB implements every ABSTRACT and
         interface method and property (IEC ed. 3 6.6.5.5-6.6.6)."""
-        for key, info in self.pous.items():
+        for key, info in self.ctx.pous.items():
             if info.kind != "FUNCTION_BLOCK":
                 continue
-            node = self.index.pou_nodes[key]
+            node = self.ctx.index.pou_nodes[key]
             bases = self.base_chain(key)[1:]
             for method in info.methods.values():
                 for base in bases:
@@ -722,7 +684,7 @@ class Checker:
                         continue
                     if over.final:
                         self.error(f"method '{method.name}' is FINAL in {base.name} and cannot be overridden",
-                                   self.method_nodes[method.key].name_span, "E066")
+                                   self.ctx.method_nodes[method.key].name_span, "E066")
                     elif over.access == "PRIVATE":
                         pass
                     else:
@@ -749,12 +711,12 @@ class Checker:
                         if impl.owner == key:
                             self.error(f"ABSTRACT method '{impl.name}' needs an ABSTRACT function block; "
                                        f"declare FUNCTION_BLOCK ABSTRACT {info.name}",
-                                       self.method_nodes[impl.key].name_span, "E068")
+                                       self.ctx.method_nodes[impl.key].name_span, "E068")
                             continue
                         self.error(f"function block '{info.name}' must implement the ABSTRACT method "
-                                   f"'{method.name}' of {self.pous[impl.owner].name} (or be ABSTRACT)", span, "E068")
+                                   f"'{method.name}' of {self.ctx.pous[impl.owner].name} (or be ABSTRACT)", span, "E068")
             for itf in sorted(self.implemented_interfaces(key)):
-                iinfo = self.pous[itf]
+                iinfo = self.ctx.pous[itf]
                 for method in iinfo.methods.values():
                     impl = self.find_method(key, method.name)
                     if impl is None:
@@ -763,7 +725,7 @@ class Checker:
                     else:
                         if impl.access != "PUBLIC":
                             self.error(f"method '{impl.name}' implements interface {iinfo.name} and must be PUBLIC",
-                                       self.method_nodes[impl.key].name_span, "E067")
+                                       self.ctx.method_nodes[impl.key].name_span, "E067")
                         self.same_signature(impl, method, f"{iinfo.name}.{method.name}", "implements")
                 for prop in iinfo.properties.values():
                     impl_p = self.find_property(key, prop.name)
@@ -780,7 +742,7 @@ class Checker:
                                            f"declares one)", impl_p.span, "E068")
         # an ABSTRACT function block has no instances (only references and interfaces to derived ones)
         seen_vars: set[int] = set()   # Variable objects (shared by a holder and its members), not nodes
-        for key, info in self.pous.items():
+        for key, info in self.ctx.pous.items():
             for holder in [info] + self.members_of(info):
                 for var in holder.variables.values():
                     if id(var) in seen_vars:   # not a node
@@ -790,22 +752,22 @@ class Checker:
                     while isinstance(ty, t.ArrayType):
                         ty = ty.element
                     if isinstance(ty, t.FBType) and var.section not in (IN_OUT, EXTERNAL):
-                        target = self.pous.get(ty.qualname.lower())
+                        target = self.ctx.pous.get(ty.qualname.lower())
                         if target is not None and target.abstract:
                             self.error(f"cannot instantiate ABSTRACT function block '{target.name}' "
                                        f"('{var.name}'); declare an instance of a derived one", var.span, "E069")
         # an interface method redeclared in an extending interface must keep its signature
-        for key, info in self.pous.items():
+        for key, info in self.ctx.pous.items():
             if info.kind == "INTERFACE":
                 for method in info.methods.values():
                     for other in self.interface_closure(key)[1:]:
-                        over = self.pous[other].methods.get(method.name.lower())
+                        over = self.ctx.pous[other].methods.get(method.name.lower())
                         if over is not None:
-                            self.same_signature(method, over, f"{self.pous[other].name}.{over.name}", "redeclares")
+                            self.same_signature(method, over, f"{self.ctx.pous[other].name}.{over.name}", "redeclares")
 
     def same_signature(self, method: POUInfo, other: POUInfo, what: str, verb: str) -> None:
         """Report where `method` differs from `other` (return type, parameters in order)."""
-        span = self.method_nodes[method.key].name_span if method.key in self.method_nodes else method.span
+        span = self.ctx.method_nodes[method.key].name_span if method.key in self.ctx.method_nodes else method.span
 
         def params(m: POUInfo) -> list[tuple[str, str, t.Type]]:
             return [(v.key, v.section, v.type) for v in m.variables.values() if v.section in (INPUT, OUTPUT, IN_OUT)]
@@ -840,65 +802,21 @@ class Checker:
                 if len(fresh) != len(decl.names):
                     continue   # a duplicate: the main pass reports it
                 for name, span in fresh:
-                    self.check_identifier(name, span)
+                    self.indexer.check_identifier(name, span)
                     var = Variable(name, LOCAL, vtype, True, span)
                     var.init = self.initial_value(decl.init, vtype, namespace, info)
                     info.variables[name.lower()] = var
                 done.add(decl.nid)
         return done
 
-    # ---- types
-    def lookup_type_key(self, parts: tuple[str, ...], rooted: bool, namespace: tuple[str, ...]) -> str | None:
-        if len(parts) > 1 and self.settings.dialect is not Dialect.SYSMAC:
-            # `Tc2_System.T_MaxString`: as lookup_pou_key, one place for a library's namespace
-            parts = known_library_prefix(parts, lambda p: self._lookup_type_key(p, rooted, namespace) is not None)
-        return self._lookup_type_key(parts, rooted, namespace)
-
-    def _lookup_type_key(self, parts: tuple[str, ...], rooted: bool, namespace: tuple[str, ...]) -> str | None:
-        key = "\\".join(parts).lower()
-        if key in self.index.type_decls:
-            return key
-        if not rooted:
-            for depth in range(len(namespace), 0, -1):
-                cand = "\\".join(namespace[:depth] + parts).lower()
-                if cand in self.index.type_decls:
-                    return cand
-            if len(parts) == 1:
-                # Choice: a short name unique across namespaces resolves (Sysmac resolves
-                # library types by short name when unambiguous; ambiguity is an error).
-                cands = self.index.short_types.get(parts[0].lower(), [])
-                if len(cands) == 1:
-                    return cands[0]
-        return None
-
-    def lookup_pou_key(self, parts: tuple[str, ...], namespace: tuple[str, ...]) -> str | None:
-        if len(parts) > 1 and self.settings.dialect is not Dialect.SYSMAC:
-            # `TcUnit.FB_TestSuite`: a library's namespace, taken off when only the POU is loaded
-            parts = known_library_prefix(parts, lambda p: self._lookup_pou_key(p, namespace) is not None)
-        return self._lookup_pou_key(parts, namespace)
-
-    def _lookup_pou_key(self, parts: tuple[str, ...], namespace: tuple[str, ...]) -> str | None:
-        key = "\\".join(parts).lower()
-        if key in self.index.pou_nodes:
-            return key
-        for depth in range(len(namespace), 0, -1):
-            cand = "\\".join(namespace[:depth] + parts).lower()
-            if cand in self.index.pou_nodes:
-                return cand
-        if len(parts) == 1:
-            cands = self.index.short_pous.get(parts[0].lower(), [])
-            if len(cands) == 1:
-                return cands[0]
-        return None
-
     def resolve_declared_type(self, key: str) -> t.Type | None:
-        if key in self.resolved_types:
-            return self.resolved_types[key]
-        decl = self.index.type_decls[key]
-        if key in self.resolving:
+        if key in self.ctx.resolved_types:
+            return self.ctx.resolved_types[key]
+        decl = self.ctx.index.type_decls[key]
+        if key in self.ctx.resolving:
             self.error(f"type '{decl.name}' is defined in terms of itself", decl.span, "E015")
             return None
-        self.resolving.add(key)
+        self.ctx.resolving.add(key)
         qual = "\\".join(decl.namespace + (decl.name,))
         result: t.Type | None
         body = decl.body
@@ -907,7 +825,7 @@ class Checker:
             next_value = 0
             seen = set()
             for name, value, span in body.members:
-                self.check_identifier(name, span)
+                self.indexer.check_identifier(name, span)
                 if name.lower() in seen:
                     self.error(f"duplicate enumerator '{name}'", span, "E010")
                     continue
@@ -924,19 +842,19 @@ class Checker:
                 else:
                     result = t.EnumType(decl.name, qual, tuple(members), base, result.value_of(body.default))
             for name, value in members:
-                self.enumerators.setdefault(name.lower(), []).append((result, value))
-            self.enums[key] = result
+                self.ctx.enumerators.setdefault(name.lower(), []).append((result, value))
+            self.ctx.enums[key] = result
         elif isinstance(body, n.UnionDecl):
             result = self.union_type(key, decl, body, qual)
         elif isinstance(body, n.StructDecl):
             fields: list[tuple[str, t.Type]] = []
             inits: dict[str, object] = {}
             placeholder = t.StructType(decl.name, qual, ())
-            self.resolved_types[key] = placeholder
+            self.ctx.resolved_types[key] = placeholder
             for fdecl in body.fields:
                 ftype = self.resolve_type_spec(fdecl.type_spec, decl.namespace)
                 for fname, fspan in fdecl.names:
-                    self.check_identifier(fname, fspan)
+                    self.indexer.check_identifier(fname, fspan)
                     if any(f[0].lower() == fname.lower() for f in fields):
                         self.error(f"duplicate field '{fname}' in {decl.name}", fspan, "E010")
                         continue
@@ -948,14 +866,14 @@ class Checker:
                         if alias_value is not None:
                             inits[fname.lower()] = alias_value
             result = t.StructType(decl.name, qual, tuple(fields))
-            self.type_inits[key] = inits
-            self.structs[key] = result
+            self.ctx.type_inits[key] = inits
+            self.ctx.structs[key] = result
         else:
             result = self.resolve_type_spec(body.type_spec, decl.namespace)
             if result is not None and body.init is not None:
-                self.type_inits[key] = {"": self.initial_value(body.init, result, decl.namespace, None)}
-        self.resolving.discard(key)
-        self.resolved_types[key] = result
+                self.ctx.type_inits[key] = {"": self.initial_value(body.init, result, decl.namespace, None)}
+        self.ctx.resolving.discard(key)
+        self.ctx.resolved_types[key] = result
         return result
 
     def union_type(self, key: str, decl: n.TypeDecl, body: n.UnionDecl, qual: str) -> t.UnionType:
@@ -963,7 +881,7 @@ class Checker:
         enumerations, STRING/WSTRING, arrays and structs of them), without initial values (the
         members share their bytes, which start as zeros)."""
         fields: list[tuple[str, t.Type]] = []
-        self.resolved_types[key] = t.UnionType(decl.name, qual, ())
+        self.ctx.resolved_types[key] = t.UnionType(decl.name, qual, ())
         for fdecl in body.fields:
             ftype = self.resolve_type_spec(fdecl.type_spec, decl.namespace)
             if fdecl.init is not None:
@@ -975,7 +893,7 @@ class Checker:
                            fdecl.type_spec.span, "E018")
                 ftype = None
             for fname, fspan in fdecl.names:
-                self.check_identifier(fname, fspan)
+                self.indexer.check_identifier(fname, fspan)
                 if any(f[0].lower() == fname.lower() for f in fields):
                     self.error(f"duplicate member '{fname}' in {decl.name}", fspan, "E010")
                     continue
@@ -983,8 +901,8 @@ class Checker:
         if not fields:
             self.error(f"UNION {decl.name} has no members", body.span, "E018")
         result = t.UnionType(decl.name, qual, tuple(fields))
-        self.type_inits[key] = {}
-        self.structs[key] = result
+        self.ctx.type_inits[key] = {}
+        self.ctx.structs[key] = result
         return result
 
     def open_array_of_rank(self, spec: n.ArrayTypeSpec, element: t.Type) -> t.ArrayType | None:
@@ -998,7 +916,7 @@ class Checker:
     def wstring_spec(self, spec: n.StringTypeSpec, namespace: tuple[str, ...]) -> t.Type:
         """WSTRING[n]: n UTF-16 code units (IEC; no NUL counted, unlike Sysmac's STRING[n])."""
         if spec.size is None and not _is_stdlib(spec.span.file) \
-                and profile_value(self.settings.dialect, "unsized_string") == "80 characters":
+                and profile_value(self.ctx.settings.dialect, "unsized_string") == "80 characters":
             return t.wstring_type(80)     # TwinCAT/CODESYS: a WSTRING without a size holds 80
         units = self.const_int(spec.size, namespace)
         if units is None:
@@ -1012,7 +930,7 @@ class Checker:
         """`STRING` without a size: 1985 characters (Sysmac), or 80 under the profiles whose
         `unsized_string` row says so (TwinCAT, CODESYS); the stdlib's own declarations keep the
         long form (its functions take any STRING)."""
-        if _is_stdlib(span.file) or profile_value(self.settings.dialect, "unsized_string") != "80 characters":
+        if _is_stdlib(span.file) or profile_value(self.ctx.settings.dialect, "unsized_string") != "80 characters":
             return t.STRING
         return t.string_type(81, "STRING[80]")
 
@@ -1024,7 +942,7 @@ class Checker:
                 if upper == "STRING":
                     return self.unsized_string(spec.span)
                 if upper == "WSTRING" and not _is_stdlib(spec.span.file) \
-                        and profile_value(self.settings.dialect, "unsized_string") == "80 characters":
+                        and profile_value(self.ctx.settings.dialect, "unsized_string") == "80 characters":
                     return t.wstring_type(80)
                 if upper in t.ELEMENTARY:
                     return t.ELEMENTARY[upper]
@@ -1033,12 +951,12 @@ class Checker:
                         return t.GENERICS[upper]
                     self.error(f"generic type {upper} is only allowed in library declarations", spec.span, "E017")
                     return None
-            key = self.lookup_type_key(spec.parts, spec.rooted, namespace)
+            key = self.ctx.index.lookup_type_key(spec.parts, spec.rooted, namespace)
             if key is not None:
                 return self.resolve_declared_type(key)
-            pkey = self.lookup_pou_key(spec.parts, namespace)
+            pkey = self.ctx.index.lookup_pou_key(spec.parts, namespace)
             if pkey is not None:
-                pou = self.index.pou_nodes[pkey]
+                pou = self.ctx.index.pou_nodes[pkey]
                 if pou.kind == "FUNCTION":
                     self.error(f"'{spec.text}' is a function, not a type", spec.span, "E018")
                     return None
@@ -1055,7 +973,7 @@ class Checker:
             size = self.const_int(spec.size, namespace)
             if size is None:
                 return t.STRING
-            if self.settings.string_size is StringSize.CHARACTERS:
+            if self.ctx.settings.string_size is StringSize.CHARACTERS:
                 # IEC ed. 3 / CODESYS / TwinCAT: STRING(n) holds n characters (n + 1 bytes with the NUL)
                 if not 1 <= size <= 1985:
                     self.error(f"STRING size {size} is outside 1..1985", spec.span, "E019")
@@ -1089,7 +1007,7 @@ class Checker:
                     self.error(f"array bounds {lo}..{hi} are empty", spec.span, "E019")
                     return None
                 dims.append((lo, hi))
-            problem = array_size_problem(dims, element, self.settings.max_array_elements)
+            problem = array_size_problem(dims, element, self.ctx.settings.max_array_elements)
             if problem:
                 self.error(problem, spec.span, "E019")
                 return None
@@ -1123,9 +1041,8 @@ class Checker:
         self.error("unsupported type specification", getattr(spec, "span", n.NO_SPAN), "E019")
         return None
 
-    # ---- constant evaluation
     def const_int(self, expr: n.Expr, namespace: tuple[str, ...]) -> int | None:
-        value = self.const_value(expr, namespace, self.declaring)
+        value = self.const_value(expr, namespace, self.ctx.declaring)
         if isinstance(value, bool) or not isinstance(value, int):
             if value is not NOT_CONST:
                 self.error("expected a constant integer", expr.span, "E020")
@@ -1138,7 +1055,7 @@ class Checker:
         """Evaluate a constant expression at compile time; `NOT_CONST` if it is not one."""
         if isinstance(expr, n.Call):
             # LOWER_BOUND/UPPER_BOUND of a declared array, SIZEOF: constants once checked
-            word, value = self.facts.type_queries.get(expr.nid, ("", None))
+            word, value = self.ctx.facts.type_queries.get(expr.nid, ("", None))
             if word == "CONST":
                 return value
             return self.declared_sizeof(expr, namespace, pou)
@@ -1188,7 +1105,7 @@ class Checker:
             key = expr.parts[0].lower()
             var = pou.variables.get(key) if pou else None
             if var is None:
-                var = self.globals.get(key)
+                var = self.ctx.globals.get(key)
             if var is not None:
                 if var.constant and var.init is not None:
                     return var.init
@@ -1209,22 +1126,22 @@ class Checker:
         var = None
         if len(arg.parts) == 1:
             key = arg.parts[0].lower()
-            var = (pou.variables.get(key) if pou else None) or self.globals.get(key)
+            var = (pou.variables.get(key) if pou else None) or self.ctx.globals.get(key)
         if var is not None:
             ty = var.type
         elif (len(arg.parts) == 1 and arg.parts[0].upper() in t.ELEMENTARY) \
-                or self.lookup_type_key(arg.parts, False, namespace) is not None:
+                or self.ctx.index.lookup_type_key(arg.parts, False, namespace) is not None:
             ty = self.resolve_type_spec(n.NamedTypeSpec(arg.parts, False, arg.span), namespace)
         else:
             return NOT_CONST
-        size = t.byte_size(ty, allows(self.settings.dialect, "short_times")) if ty is not None else None
+        size = t.byte_size(ty, allows(self.ctx.settings.dialect, "short_times")) if ty is not None else None
         return NOT_CONST if size is None else size
 
     def bare_enumerator(self, name: str, span: n.Span, report: bool = True) -> tuple[t.EnumType, int] | None:
-        cands = self.enumerators.get(name.lower(), [])
+        cands = self.ctx.enumerators.get(name.lower(), [])
         if not cands:
             return None
-        if self.settings.bare_enumerators is BareEnumerators.REQUIRE_TYPE:
+        if self.ctx.settings.bare_enumerators is BareEnumerators.REQUIRE_TYPE:
             if report:
                 self.error(f"enumerator '{name}' needs its type: write Type#{name}", span, "E021")
             return None
@@ -1266,7 +1183,7 @@ class Checker:
             if report:
                 self.error(f"malformed typed literal '{prefix[0]}#{text}'", expr.span, "E022")
             return None
-        key = self.lookup_type_key(prefix, expr.rooted, namespace)
+        key = self.ctx.index.lookup_type_key(prefix, expr.rooted, namespace)
         if key is None:
             # Sysmac listings sometimes print the enum type without its leading 'e' (sysmac.md 3 #1):
             # that stays an error; the restored source fixes it.
@@ -1285,7 +1202,6 @@ class Checker:
             return None
         return ty, value
 
-    # ---- initial values
     def initial_value(self, init: n.Initializer, ty: t.Type, namespace: tuple[str, ...], pou: POUInfo | None) -> object:
         """Compile-time initial value in runtime representation (structs: dict, arrays: list)."""
         if isinstance(init, n.ExprInit):
@@ -1344,13 +1260,13 @@ class Checker:
         variables (and its base's) may not be declared yet when a global or an earlier POU is:
         the dict is filled in place once every POU is (`resolve_fb_instance_inits`)."""
         out: dict = {}
-        self.fb_instance_inits.append((out, init, ty, namespace, pou))
+        self.ctx.fb_instance_inits.append((out, init, ty, namespace, pou))
         return out
 
     def resolve_fb_instance_inits(self) -> None:
-        while self.fb_instance_inits:
-            out, init, ty, namespace, pou = self.fb_instance_inits.pop(0)
-            info = self.pous.get(ty.qualname.lower())
+        while self.ctx.fb_instance_inits:
+            out, init, ty, namespace, pou = self.ctx.fb_instance_inits.pop(0)
+            info = self.ctx.pous.get(ty.qualname.lower())
             if info is None:
                 continue
             for fname, finit in init.items:
@@ -1374,8 +1290,8 @@ class Checker:
         base's; bInitRetains and bInCopyCode excluded, stvm passes them), positional in
         declaration order or by name, each a constant. They become `Variable.fb_args`, which the
         lowering passes to every FB_init of the chain that has such an input."""
-        while self.fb_init_arg_decls:
-            var, decl, vtype, namespace, pou = self.fb_init_arg_decls.pop(0)
+        while self.ctx.fb_init_arg_decls:
+            var, decl, vtype, namespace, pou = self.ctx.fb_init_arg_decls.pop(0)
             span = decl.type_spec.span
             if vtype is None:
                 continue   # an unknown type, already reported
@@ -1388,11 +1304,11 @@ class Checker:
                 self.error(f"FB_init arguments are given where an instance is declared, not on "
                            f"{var.section} '{var.name}'", span, "E063")
                 continue
-            fb = self.pous.get(vtype.qualname.lower())
+            fb = self.ctx.pous.get(vtype.qualname.lower())
             method = None
             while fb is not None and method is None:
                 method = fb.methods.get("fb_init")
-                fb = self.pous.get(fb.base) if fb.base else None
+                fb = self.ctx.pous.get(fb.base) if fb.base else None
             if method is None:
                 self.error(f"function block {vtype.name} has no FB_init method to take arguments", span, "E063")
                 continue
@@ -1453,7 +1369,7 @@ class Checker:
         instance must be declared before, as it is made first."""
         if not (isinstance(expr, n.Name) and len(expr.parts) == 1 and pou is not None
                 and pou.kind in ("FUNCTION_BLOCK", "PROGRAM") and isinstance(ty, t.InterfaceType)
-                and allows(self.settings.dialect, "ref_initial_value")):
+                and allows(self.ctx.settings.dialect, "ref_initial_value")):
             return None
         keys = list(pou.variables)
         key = expr.parts[0].lower()
@@ -1522,39 +1438,16 @@ class Checker:
             return value[: ty.max_bytes]
         return value
 
-    # ---- entry
-    def run(self) -> Analysis:
-        self.build_index()
-        for key, pou in self.index.pou_nodes.items():
-            info = self.pous[key]
-            if info.native:
-                if pou.body:
-                    self.error(f"native POU '{pou.name}' must not have a body", pou.span, "E025")
-                continue
-            BodyChecker(self, info, pou).check()
-            for method in self.members_of(info):
-                BodyChecker(self, method, self.method_nodes[method.key], fb=info, fb_node=pou).check()
-        # the depth check walks iteratively and runs first: the two checks after it recurse,
-        # and a chain thousands deep must be a diagnostic naming it, not a RecursionError
-        if self.check_nesting_depth():
-            self.check_containment()
-            self.check_recursion()
-            self.check_method_recursion()
-        tasks, defaults = self.check_configuration()
-        model = ProjectModel(self.pous, self.globals, tasks, defaults, self.structs, self.enums)
-        return Analysis(model, self.facts, self.units, dict(self.index.pou_nodes), self.diags, self.type_inits,
-                        self.method_nodes)
-
     def check_containment(self) -> None:
         """A FUNCTION_BLOCK or STRUCT may not contain itself, directly or through other members:
         its instance would be infinitely large."""
         state: dict[str, str] = {}   # key -> 'open' | 'done'
 
         def members(key: str) -> list[tuple[str, t.Type]]:
-            if key in self.pous:
-                return [(v.name, v.type) for v in self.pous[key].variables.values()
+            if key in self.ctx.pous:
+                return [(v.name, v.type) for v in self.ctx.pous[key].variables.values()
                         if v.section not in (IN_OUT, EXTERNAL)]
-            decl = self.index.type_decls.get(key)
+            decl = self.ctx.index.type_decls.get(key)
             if decl is not None and isinstance(decl.body, n.StructDecl):
                 out = []
                 for fdecl in decl.body.fields:
@@ -1563,8 +1456,8 @@ class Checker:
                         while isinstance(spec, n.ArrayTypeSpec):
                             spec = spec.element
                         if isinstance(spec, n.NamedTypeSpec):
-                            fkey = self.lookup_type_key(spec.parts, spec.rooted, decl.namespace) \
-                                or self.lookup_pou_key(spec.parts, decl.namespace)
+                            fkey = self.ctx.index.lookup_type_key(spec.parts, spec.rooted, decl.namespace) \
+                                or self.ctx.index.lookup_pou_key(spec.parts, decl.namespace)
                             if fkey is not None:
                                 out += [(name, t.StructType(fkey, fkey)) for name, _ in fdecl.names]
                 return out
@@ -1580,15 +1473,15 @@ class Checker:
         reported: set[str] = set()
 
         def display(key: str) -> str:
-            if key in self.pous:
-                return self.pous[key].name
-            decl = self.index.type_decls.get(key)
+            if key in self.ctx.pous:
+                return self.ctx.pous[key].name
+            decl = self.ctx.index.type_decls.get(key)
             return decl.name if decl is not None else key
 
         def span_of(key: str) -> n.Span:
-            if key in self.pous:
-                return self.pous[key].span
-            return self.index.type_decls[key].span
+            if key in self.ctx.pous:
+                return self.ctx.pous[key].span
+            return self.ctx.index.type_decls[key].span
 
         def visit(key: str, keys: list[str], names: list[str]) -> None:
             if state.get(key) == "done":
@@ -1607,10 +1500,10 @@ class Checker:
                     visit(inner, keys + [key], names + [name])
             state[key] = "done"
 
-        for key, pou in self.pous.items():
+        for key, pou in self.ctx.pous.items():
             if pou.kind != "FUNCTION":
                 visit(key, [], [])
-        for key, decl in self.index.type_decls.items():
+        for key, decl in self.ctx.index.type_decls.items():
             if isinstance(decl.body, n.StructDecl):
                 visit(key, [], [])
         del visit   # a closure calling itself is a cycle: it would keep the checker alive
@@ -1620,19 +1513,19 @@ class Checker:
         NESTING_LIMIT deep: the same limit for `stvm run` and `stvm debug` (the VM builds and
         calls them on the Python stack). Returns False if a chain is too deep."""
         contains: dict[str, list[tuple[str, str]]] = {}
-        for key, pou in self.pous.items():
+        for key, pou in self.ctx.pous.items():
             if pou.kind != "FUNCTION":
                 contains[key] = [(v.name, inner) for v in pou.variables.values()
                                  if v.section not in (IN_OUT, EXTERNAL)
                                  for inner in [_aggregate_key(v.type)] if inner is not None]
-        for key, decl in self.index.type_decls.items():
+        for key, decl in self.ctx.index.type_decls.items():
             if isinstance(decl.body, n.StructDecl):
                 contains[key] = [(name, inner) for name, inner in self._struct_members(key, decl)]
-        calls: dict[str, list[tuple[str, str]]] = {key: [] for key in self.index.pou_nodes}
-        for key, node in self.index.pou_nodes.items():
+        calls: dict[str, list[tuple[str, str]]] = {key: [] for key in self.ctx.index.pou_nodes}
+        for key, node in self.ctx.index.pou_nodes.items():
             seen: set[str] = set()
             for call in self._calls_of(key, node):
-                info = self.facts.calls.get(call.nid)
+                info = self.ctx.facts.calls.get(call.nid)
                 if info is not None and info.pou.key not in seen:
                     seen.add(info.pou.key)
                     calls[key].append((info.pou.name, info.pou.key))
@@ -1675,34 +1568,34 @@ class Checker:
             while isinstance(spec, n.ArrayTypeSpec):
                 spec = spec.element
             if isinstance(spec, n.NamedTypeSpec):
-                fkey = self.lookup_type_key(spec.parts, spec.rooted, decl.namespace) \
-                    or self.lookup_pou_key(spec.parts, decl.namespace)
+                fkey = self.ctx.index.lookup_type_key(spec.parts, spec.rooted, decl.namespace) \
+                    or self.ctx.index.lookup_pou_key(spec.parts, decl.namespace)
                 if fkey is not None:
                     out += [(name, fkey) for name, _ in fdecl.names]
         return out
 
     def _display(self, key: str) -> str:
-        if key in self.pous:
-            return self.pous[key].name
-        decl = self.index.type_decls.get(key)
+        if key in self.ctx.pous:
+            return self.ctx.pous[key].name
+        decl = self.ctx.index.type_decls.get(key)
         return decl.name if decl is not None else key
 
     def _span_of_key(self, key: str) -> n.Span:
-        if key in self.pous:
-            return self.pous[key].span
-        return self.index.type_decls[key].span
+        if key in self.ctx.pous:
+            return self.ctx.pous[key].span
+        return self.ctx.index.type_decls[key].span
 
     def check_recursion(self) -> None:
         """IEC 61131-3 (and Sysmac) forbid recursive calls of functions and FBs."""
-        graph: dict[str, set[str]] = {key: set() for key in self.index.pou_nodes}
-        for key, node in self.index.pou_nodes.items():
+        graph: dict[str, set[str]] = {key: set() for key in self.ctx.index.pou_nodes}
+        for key, node in self.ctx.index.pou_nodes.items():
             for call in self._calls_of(key, node):
-                info = self.facts.calls.get(call.nid)
+                info = self.ctx.facts.calls.get(call.nid)
                 if info is not None and info.pou.kind == "FUNCTION":
                     graph[key].add(info.pou.key)
         for cycle in _cycles_closed(graph):
-            names = " -> ".join(self.pous[k].name for k in cycle)
-            node = self.index.pou_nodes[cycle[0]]
+            names = " -> ".join(self.ctx.pous[k].name for k in cycle)
+            node = self.ctx.index.pou_nodes[cycle[0]]
             self.error(f"recursive call {names}: IEC 61131-3 does not allow recursion", node.span, "E027")
 
     def check_method_recursion(self) -> None:
@@ -1712,36 +1605,36 @@ class Checker:
         error under iec and sysmac. CODESYS and TwinCAT allow recursive methods (linked lists):
         a warning there, since a deep enough recursion ends in a stack-overflow fault."""
         graph: dict[str, set[str]] = {}
-        for info in list(self.pous.values()):
+        for info in list(self.ctx.pous.values()):
             if info.kind not in ("FUNCTION_BLOCK", "PROGRAM") or info.native:
                 continue
             for method in self.members_of(info):
-                node = self.method_nodes.get(method.key)
+                node = self.ctx.method_nodes.get(method.key)
                 if node is None:
                     continue
-                calls = (self.facts.calls.get(call.nid) for call in self._calls_of(method.key, node))
+                calls = (self.ctx.facts.calls.get(call.nid) for call in self._calls_of(method.key, node))
                 graph[method.key] = {call.pou.key for call in calls
                                      if call is not None and call.pou.kind == "METHOD" and call.oo != "itf"}
         if not any(graph.values()):
             return
-        methods = {m.key: m for info in self.pous.values() for m in self.members_of(info)}
-        allowed = self.settings.dialect in (Dialect.CODESYS, Dialect.TWINCAT)
+        methods = {m.key: m for info in self.ctx.pous.values() for m in self.members_of(info)}
+        allowed = self.ctx.settings.dialect in (Dialect.CODESYS, Dialect.TWINCAT)
 
         def name(key: str) -> str:
             m = methods[key]
-            return f"{self.pous[m.owner].name}.{m.name}" if m.owner in self.pous else m.name
+            return f"{self.ctx.pous[m.owner].name}.{m.name}" if m.owner in self.ctx.pous else m.name
 
         for cycle in _cycles_closed(graph):
             names = " -> ".join(name(k) for k in cycle)
-            span = self.method_nodes[cycle[0]].name_span
+            span = self.ctx.method_nodes[cycle[0]].name_span
             if allowed:
-                self.warning(f"recursive method call {names}: allowed in {self.settings.dialect.value}, "
+                self.warning(f"recursive method call {names}: allowed in {self.ctx.settings.dialect.value}, "
                              f"but a recursion too deep ends the run in a stack-overflow fault", span, "W002")
             else:
                 self.error(f"recursive method call {names}: IEC 61131-3 does not allow recursion", span, "E027")
 
     def check_configuration(self) -> tuple[list[TaskInfo], list[str]]:
-        configs = [c for u in self.units for c in u.configurations]
+        configs = [c for u in self.ctx.units for c in u.configurations]
         if len(configs) > 1:
             self.error("more than one CONFIGURATION", configs[1].span, "E030")
         if configs:
@@ -1749,7 +1642,7 @@ class Checker:
             tasks: dict[str, TaskInfo] = {}
             for res in conf.resources:
                 for task in res.tasks:
-                    self.check_identifier(task.name, task.span)
+                    self.indexer.check_identifier(task.name, task.span)
                     params = {k: v for k, v in task.params}
                     interval = params.get("INTERVAL")
                     if interval is None:
@@ -1764,9 +1657,9 @@ class Checker:
                         self.error(f"duplicate task '{task.name}'", task.span, "E010")
                     tasks[task.name.lower()] = TaskInfo(task.name, ns, prio if isinstance(prio, int) else 0, [])
                 for prog in res.programs:
-                    self.check_identifier(prog.instance, prog.span)
-                    key = self.lookup_pou_key(prog.type_name, ())
-                    if key is None or self.pous[key].kind != "PROGRAM":
+                    self.indexer.check_identifier(prog.instance, prog.span)
+                    key = self.ctx.index.lookup_pou_key(prog.type_name, ())
+                    if key is None or self.ctx.pous[key].kind != "PROGRAM":
                         self.error(f"unknown program type '{chr(92).join(prog.type_name)}'", prog.span, "E032")
                         continue
                     if prog.task is None or prog.task.lower() not in tasks:
@@ -1775,15 +1668,21 @@ class Checker:
                     if any(p[0].lower() == prog.instance.lower() for tk in tasks.values() for p in tk.programs):
                         self.error(f"duplicate program instance '{prog.instance}'", prog.span, "E010")
                         continue
-                    tasks[prog.task.lower()].programs.append((prog.instance, self.pous[key].qualname))
+                    tasks[prog.task.lower()].programs.append((prog.instance, self.ctx.pous[key].qualname))
             ordered = sorted(tasks.values(), key=lambda tk: tk.priority)
             return ordered, []
-        programs = [info.qualname for key, info in self.pous.items()
+        programs = [info.qualname for key, info in self.ctx.pous.items()
                     if info.kind == "PROGRAM" and not is_stdlib_file(info.file)]
         return [], programs
 
 
-_VENDOR_EXTRAS = {"<stdlib>/twincat_types.st"}   # a dialect's own types, which user code may redeclare
+def analyze(units: list[n.CompilationUnit], settings: SysmacSettings = DEFAULT_SETTINGS,
+            natives: Mapping[str, Any] | None = None) -> Analysis:
+    """Check all units together; returns the model, per-node facts and every diagnostic.
+
+    `natives`: the stdlib's native functions (stvm.stdlib.NATIVE_FUNCTIONS), for the result types
+    of generic ones (SHL, MUX, TRUNC, …); without it their result is the common input type."""
+    return Checker(units, settings, natives).run()
 
 
 def _is_stdlib(file: str) -> bool:
@@ -1800,16 +1699,6 @@ def _time_compatible(literal_type: str, target: str) -> bool:
     """May a T#/D#/TOD#/DT# literal (or its long form) initialise a variable of `target`?"""
     literal, wanted = t.ELEMENTARY[literal_type], t.ELEMENTARY[target]
     return literal.family == wanted.family and (wanted.long or not literal.long)  # type: ignore[attr-defined]
-
-
-
-def analyze(units: list[n.CompilationUnit], settings: SysmacSettings = DEFAULT_SETTINGS,
-            natives: Mapping[str, Any] | None = None) -> Analysis:
-    """Check all units together; returns the model, per-node facts and every diagnostic.
-
-    `natives`: the stdlib's native functions (stvm.stdlib.NATIVE_FUNCTIONS), for the result types
-    of generic ones (SHL, MUX, TRUNC, …); without it their result is the common input type."""
-    return Checker(units, settings, natives).run()
 
 
 def _cycles_closed(graph: Mapping[str, set[str]]) -> list[list[str]]:
