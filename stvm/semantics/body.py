@@ -254,14 +254,14 @@ class BodyChecker:
                 if value is not None:
                     self.facts.consts[expr.nid] = value
                     return value
-            value = self.c.const_value(expr, self.pou_namespace, self.pou)
+            value = self.c.constants.const_value(expr, self.pou_namespace, self.pou)
             if isinstance(value, int) and not isinstance(value, bool):
                 self.facts.consts[expr.nid] = value
                 return value
             self.error(f"case label '{expr.parts[0]}' is not a constant of the selector's type", expr.span, "E042")
             return None
         if isinstance(expr, n.HashLiteral):
-            lit = self.c.hash_literal(expr, self.pou_namespace)
+            lit = self.c.constants.hash_literal(expr, self.pou_namespace)
             if lit is None:
                 return None
             if isinstance(sel, t.EnumType) and lit[0] != sel:
@@ -288,7 +288,7 @@ class BodyChecker:
             if ty is not None and var_type is not None:
                 self.require_assignable(part, ty, var_type, part.span)
         if s.step is not None:
-            step = self.c.const_value(s.step, self.pou_namespace, self.pou)
+            step = self.c.constants.const_value(s.step, self.pou_namespace, self.pou)
             if step == 0:
                 self.error("FOR step is 0: the loop never ends", s.step.span, "E043")
         self.loop_depth += 1
@@ -359,7 +359,7 @@ class BodyChecker:
             g = self.c.globals.get(key)
             if g is not None:
                 return NameRef("global", g)
-            enum = self.c.bare_enumerator(name.parts[0], name.span)
+            enum = self.c.constants.bare_enumerator(name.parts[0], name.span)
             if enum is not None:
                 return NameRef("enum", value=enum[1], pou=None, variable=Variable(name.parts[0], "ENUM", enum[0]))
         return None
@@ -654,7 +654,7 @@ class BodyChecker:
         return t.ELEMENTARY[e.type_name]
 
     def expr_HashLiteral(self, e: n.HashLiteral, expected) -> t.Type | None:
-        lit = self.c.hash_literal(e, self.pou_namespace)
+        lit = self.c.constants.hash_literal(e, self.pou_namespace)
         if lit is None:
             return None
         self.facts.consts[e.nid] = lit[1]
@@ -1063,7 +1063,7 @@ class BodyChecker:
             spec = n.NamedTypeSpec(arg.parts, False, arg.span)
             if len(arg.parts) == 1 and (arg.parts[0].upper() in t.ELEMENTARY or arg.parts[0].upper() == "WSTRING") \
                     or self.c.index.lookup_type_key(arg.parts, False, self.pou_namespace) is not None:
-                return self.c.resolve_type_spec(spec, self.pou_namespace)
+                return self.c.types.resolve_type_spec(spec, self.pou_namespace)
         return self.expr(arg)
 
     def array_bound(self, e: n.Call, word: str) -> t.Type | None:
@@ -1080,7 +1080,7 @@ class BodyChecker:
         if not isinstance(ty, t.ArrayType):
             self.error(f"{word}() needs an array; '{self.describe(arr)}' is {ty.name}", arr.span, "E070")
             return None
-        dim = self.c.const_value(dim_expr, self.pou_namespace, self.pou)
+        dim = self.c.constants.const_value(dim_expr, self.pou_namespace, self.pou)
         ndims = ty.rank if ty.dims is None else len(ty.dims)
         if isinstance(dim, bool) or not isinstance(dim, int) or not 1 <= dim <= ndims:
             self.error(f"the dimension of {word}() must be a constant 1..{ndims}", dim_expr.span, "E070")
@@ -1235,7 +1235,7 @@ class BodyChecker:
             self.error(f"** needs numbers, not {lt.name} and {rt.name}", e.span, "E039")
             return None
         if lu and ru:
-            folded = self.c.const_value(e, self.pou_namespace, self.pou)
+            folded = self.c.constants.const_value(e, self.pou_namespace, self.pou)
             if folded is not NOT_CONST and isinstance(folded, (int, float)):
                 self.facts.untyped.add(e.nid)
                 self.facts.consts[e.nid] = folded

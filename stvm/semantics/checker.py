@@ -26,13 +26,12 @@ from stvm.semantics.qualified import resolve as resolve_qualified
 from stvm.semantics.model import ProjectModel
 from stvm.settings import DEFAULT_SETTINGS, SysmacSettings
 from stvm.syntax import nodes as n
-import math
-from stvm.dialects import allows, profile_value
-from stvm.numeric import f32, utf16_units
-from stvm.semantics.limits import array_bounds_problem, array_size_problem
-from stvm.semantics.model import (SiblingInstance, EXTERNAL, GLOBAL, IN_OUT, INPUT, LOCAL, OUTPUT, POUInfo,
+from stvm.semantics.resolve import TypeResolver
+from stvm.semantics.constants import ConstantEvaluator
+from stvm.dialects import allows
+from stvm.semantics.model import (EXTERNAL, GLOBAL, IN_OUT, INPUT, LOCAL, OUTPUT, POUInfo,
                                   PropertyInfo, TaskInfo, Variable)
-from stvm.settings import BareEnumerators, Dialect, StringSize
+from stvm.settings import Dialect
 from stvm.source import is_stdlib_file
 from stvm.syntax.pragmas import has_attribute
 from stvm.syntax.walk import calls_in
@@ -111,6 +110,8 @@ class Checker:
         units, qualified = resolve_qualified(list(units))
         self.ctx = CheckContext(units, settings, natives, qualified, DeclarationIndex(settings.dialect))
         self.indexer = Indexer(self.ctx)
+        self.types = TypeResolver(self.ctx, self.indexer)
+        self.constants = ConstantEvaluator(self.ctx, self.types)
 
     units = _shared("units")
     settings = _shared("settings")
@@ -184,7 +185,7 @@ class Checker:
             if block.constant:
                 self.declare_globals(block, namespace, elementary_only=True)
         for key, decl in self.ctx.index.type_decls.items():
-            self.resolve_declared_type(key)
+            self.types.resolve_declared_type(key)
         for block, namespace in blocks:
             self.declare_globals(block, namespace, elementary_only=False if block.constant else None)
         for key, pou in self.ctx.index.pou_nodes.items():
@@ -200,7 +201,7 @@ class Checker:
                 and decl.type_spec.parts[0].upper() in t.ELEMENTARY
             if elementary_only is not None and elementary != elementary_only:
                 continue
-            vtype = self.resolve_type_spec(decl.type_spec, namespace)
+            vtype = self.types.resolve_type_spec(decl.type_spec, namespace)
             for name, span in decl.names:
                 self.indexer.check_identifier(name, span)
                 if name.lower() in self.ctx.globals:
@@ -208,43 +209,15 @@ class Checker:
                     continue
                 var = Variable(name, GLOBAL, vtype or t.DINT, block.constant, span)
                 if decl.init is None:
-                    var.init = self.alias_init(decl.type_spec, namespace)
+                    var.init = self.types.alias_init(decl.type_spec, namespace)
                 if vtype is not None and decl.init is not None:
-                    var.init = self.initial_value(decl.init, vtype, namespace, None)
+                    var.init = self.constants.initial_value(decl.init, vtype, namespace, None)
                 elif block.constant and decl.init is None:
                     self.error(f"constant '{name}' needs an initial value", span, "E013")
                 self.ctx.globals[name.lower()] = var
                 self.ctx.global_nodes[name.lower()] = decl
                 if decl.fb_args is not None:
                     self.ctx.fb_init_arg_decls.append((var, decl, vtype, namespace, None))
-
-    def alias_init(self, spec: n.TypeSpec, namespace: tuple[str, ...], seen: frozenset = frozenset()) -> object:
-        """The initial value an alias type declares (`TYPE T : INT := 7;`), for variables of type
-        T that have no initialiser of their own; None if there is none."""
-        if isinstance(spec, n.SubrangeTypeSpec):
-            return spec.low   # IEC 6.4.4.3: a subrange variable starts at its lower bound
-        if isinstance(spec, n.ArrayTypeSpec):
-            # each element starts at its type's initial value (TcUnit: `ARRAY[1..n] OF UINT(1..m)`
-            # starts as n ones); the flat list is what an array initialiser gives
-            element = self.alias_init(spec.element, namespace, seen)
-            if element is None or any(r is None for r in spec.ranges):
-                return None
-            ty = self.resolve_type_spec(spec, namespace)
-            if not isinstance(ty, t.ArrayType) or not ty.dims:
-                return None
-            return [element] * ty.length
-        if not isinstance(spec, n.NamedTypeSpec):
-            return None
-        key = self.ctx.index.lookup_type_key(spec.parts, spec.rooted, namespace)
-        if key is None or key in seen or not isinstance(self.ctx.index.type_decls[key].body, n.AliasDecl):
-            return None  # a cycle is reported by resolve_declared_type
-        if key not in self.ctx.resolved_types:
-            self.resolve_declared_type(key)   # its own initial value is known once it is resolved
-        inits = self.ctx.type_inits.get(key, {})
-        if "" in inits:
-            return inits[""]
-        decl = self.ctx.index.type_decls[key]
-        return self.alias_init(decl.body.type_spec, decl.namespace, seen | {key})  # type: ignore[union-attr]
 
     def declare_pou(self, pou: n.POU) -> POUInfo:
         qual = "\\".join(pou.namespace + (pou.name,))
@@ -286,7 +259,7 @@ class Checker:
                     self.error(f"function '{pou.name}' needs a return type", pou.span, "E014")
                     info.return_type = t.VOID
             else:
-                info.return_type = self.resolve_type_spec(pou.return_type, pou.namespace, allow_generic=native) or t.DINT
+                info.return_type = self.types.resolve_type_spec(pou.return_type, pou.namespace, allow_generic=native) or t.DINT
         elif pou.return_type is not None:
             self.error(f"a {pou.kind} has no return type", pou.span, "E014")
         self.declare_variables(pou, info, pou.namespace, native)
@@ -318,7 +291,7 @@ class Checker:
                         and [p.upper() for p in spec.parts] == ["ANY"] and allows(self.ctx.settings.dialect, "any_input"):
                     # TwinCAT/CODESYS: an ANY input is the descriptor __SYSTEM.AnyType (docs/memory_model.md)
                     spec = n.NamedTypeSpec(("__SYSTEM", "AnyType"), False, spec.span)
-                vtype = self.resolve_type_spec(spec, namespace, allow_generic=native,
+                vtype = self.types.resolve_type_spec(spec, namespace, allow_generic=native,
                                                allow_open_array=kind in (IN_OUT, INPUT))
                 for name, span in decl.names:
                     self.indexer.check_identifier(name, span)
@@ -338,7 +311,7 @@ class Checker:
                     var.instance_path = bool(decl.pragmas) and isinstance(vtype, t.StringType) \
                         and has_attribute(decl.pragmas, "instance-path")
                     if decl.init is None and kind not in (IN_OUT, EXTERNAL):
-                        var.init = self.alias_init(decl.type_spec, namespace)
+                        var.init = self.types.alias_init(decl.type_spec, namespace)
                     # VAR_IN_OUT CONSTANT (CODESYS/TwinCAT): an in-out the POU may not write; its
                     # value is the caller's
                     if block.constant and decl.init is None and kind not in (EXTERNAL, IN_OUT) and not input_constant:
@@ -350,7 +323,7 @@ class Checker:
                         if kind == IN_OUT:
                             self.error(f"VAR_IN_OUT '{name}' cannot have an initial value", span, "E013")
                         else:
-                            var.init = self.initial_value(decl.init, vtype, namespace, info)
+                            var.init = self.constants.initial_value(decl.init, vtype, namespace, info)
         if early:   # back to declaration order (positional parameters, formatting, traces)
             order = [name.lower() for block in pou.var_blocks for decl in block.decls for name, _ in decl.names]
             rank = {key: i for i, key in reversed(list(enumerate(order)))}
@@ -378,7 +351,7 @@ class Checker:
             getters = [p.getter for p in props if p.getter is not None]
             setters = [p.setter for p in props if p.setter is not None]
             if len(getters) > 1 or len(setters) > 1 or (len(props) > 1 and any(
-                    self.resolve_type_spec(p.type_spec, pou.namespace) != self.resolve_type_spec(prop.type_spec, pou.namespace)
+                    self.types.resolve_type_spec(p.type_spec, pou.namespace) != self.types.resolve_type_spec(prop.type_spec, pou.namespace)
                     for p in props[1:])):
                 self.error(f"duplicate property '{prop.name}' in {pou.name}", props[-1].name_span, "E010")
                 continue
@@ -386,7 +359,7 @@ class Checker:
                 self.error(f"'{prop.name}' is declared twice in {pou.name}", prop.name_span, "E010")
                 continue
             self.indexer.check_identifier(prop.name, prop.name_span)
-            ptype = self.resolve_type_spec(prop.type_spec, pou.namespace) or t.DINT
+            ptype = self.types.resolve_type_spec(prop.type_spec, pou.namespace) or t.DINT
             access, abstract, final = self.member_modifiers(prop.modifiers, prop.name_span, "property")
             if not getters and not setters:
                 self.error(f"property '{prop.name}' needs a GET or a SET", prop.name_span, "E062")
@@ -477,7 +450,7 @@ class Checker:
         if accessor == "GET":
             info.return_type = prop_type
         elif m.return_type is not None:
-            info.return_type = self.resolve_type_spec(m.return_type, pou.namespace) or t.DINT
+            info.return_type = self.types.resolve_type_spec(m.return_type, pou.namespace) or t.DINT
         if accessor == "SET":   # the property's name is the value being set
             info.variables[m.name.lower()] = Variable(m.name, INPUT, prop_type or t.DINT, False, m.name_span)
         self.declare_variables(m, info, pou.namespace)
@@ -804,464 +777,10 @@ class Checker:
                 for name, span in fresh:
                     self.indexer.check_identifier(name, span)
                     var = Variable(name, LOCAL, vtype, True, span)
-                    var.init = self.initial_value(decl.init, vtype, namespace, info)
+                    var.init = self.constants.initial_value(decl.init, vtype, namespace, info)
                     info.variables[name.lower()] = var
                 done.add(decl.nid)
         return done
-
-    def resolve_declared_type(self, key: str) -> t.Type | None:
-        if key in self.ctx.resolved_types:
-            return self.ctx.resolved_types[key]
-        decl = self.ctx.index.type_decls[key]
-        if key in self.ctx.resolving:
-            self.error(f"type '{decl.name}' is defined in terms of itself", decl.span, "E015")
-            return None
-        self.ctx.resolving.add(key)
-        qual = "\\".join(decl.namespace + (decl.name,))
-        result: t.Type | None
-        body = decl.body
-        if isinstance(body, n.EnumDecl):
-            members = []
-            next_value = 0
-            seen = set()
-            for name, value, span in body.members:
-                self.indexer.check_identifier(name, span)
-                if name.lower() in seen:
-                    self.error(f"duplicate enumerator '{name}'", span, "E010")
-                    continue
-                seen.add(name.lower())
-                if value is not None:
-                    next_value = value
-                members.append((name, next_value))
-                next_value += 1
-            base = t.ELEMENTARY.get((body.base or "INT").upper(), t.INT)
-            result = t.EnumType(decl.name, qual, tuple(members), base)
-            if body.default is not None:
-                if result.value_of(body.default) is None:
-                    self.error(f"'{body.default}' is not an enumerator of {decl.name}", body.span, "E016")
-                else:
-                    result = t.EnumType(decl.name, qual, tuple(members), base, result.value_of(body.default))
-            for name, value in members:
-                self.ctx.enumerators.setdefault(name.lower(), []).append((result, value))
-            self.ctx.enums[key] = result
-        elif isinstance(body, n.UnionDecl):
-            result = self.union_type(key, decl, body, qual)
-        elif isinstance(body, n.StructDecl):
-            fields: list[tuple[str, t.Type]] = []
-            inits: dict[str, object] = {}
-            placeholder = t.StructType(decl.name, qual, ())
-            self.ctx.resolved_types[key] = placeholder
-            for fdecl in body.fields:
-                ftype = self.resolve_type_spec(fdecl.type_spec, decl.namespace)
-                for fname, fspan in fdecl.names:
-                    self.indexer.check_identifier(fname, fspan)
-                    if any(f[0].lower() == fname.lower() for f in fields):
-                        self.error(f"duplicate field '{fname}' in {decl.name}", fspan, "E010")
-                        continue
-                    fields.append((fname, ftype or t.DINT))
-                    if ftype is not None and fdecl.init is not None:
-                        inits[fname.lower()] = self.initial_value(fdecl.init, ftype, decl.namespace, None)
-                    elif ftype is not None:
-                        alias_value = self.alias_init(fdecl.type_spec, decl.namespace)
-                        if alias_value is not None:
-                            inits[fname.lower()] = alias_value
-            result = t.StructType(decl.name, qual, tuple(fields))
-            self.ctx.type_inits[key] = inits
-            self.ctx.structs[key] = result
-        else:
-            result = self.resolve_type_spec(body.type_spec, decl.namespace)
-            if result is not None and body.init is not None:
-                self.ctx.type_inits[key] = {"": self.initial_value(body.init, result, decl.namespace, None)}
-        self.ctx.resolving.discard(key)
-        self.ctx.resolved_types[key] = result
-        return result
-
-    def union_type(self, key: str, decl: n.TypeDecl, body: n.UnionDecl, qual: str) -> t.UnionType:
-        """`TYPE U : UNION … END_UNION`: members of types with a byte image (elementary types,
-        enumerations, STRING/WSTRING, arrays and structs of them), without initial values (the
-        members share their bytes, which start as zeros)."""
-        fields: list[tuple[str, t.Type]] = []
-        self.ctx.resolved_types[key] = t.UnionType(decl.name, qual, ())
-        for fdecl in body.fields:
-            ftype = self.resolve_type_spec(fdecl.type_spec, decl.namespace)
-            if fdecl.init is not None:
-                self.error(f"a member of UNION {decl.name} has no initial value (the members share "
-                           "their bytes)", fdecl.init.span, "E023")
-            if ftype is not None and t.byte_size(ftype) is None:
-                self.error(f"UNION member of type {ftype.name} has no byte image to overlay (allowed: "
-                           "elementary types, enumerations, strings, arrays and structs of them)",
-                           fdecl.type_spec.span, "E018")
-                ftype = None
-            for fname, fspan in fdecl.names:
-                self.indexer.check_identifier(fname, fspan)
-                if any(f[0].lower() == fname.lower() for f in fields):
-                    self.error(f"duplicate member '{fname}' in {decl.name}", fspan, "E010")
-                    continue
-                fields.append((fname, ftype or t.DINT))
-        if not fields:
-            self.error(f"UNION {decl.name} has no members", body.span, "E018")
-        result = t.UnionType(decl.name, qual, tuple(fields))
-        self.ctx.type_inits[key] = {}
-        self.ctx.structs[key] = result
-        return result
-
-    def open_array_of_rank(self, spec: n.ArrayTypeSpec, element: t.Type) -> t.ArrayType | None:
-        """ARRAY[*, *] (IEC ed. 3 6.5.3.2): an open array of several dimensions, each `*`."""
-        if any(r is not None for r in spec.ranges):
-            self.error("an open array has '*' for every dimension: ARRAY[*, *]", spec.span, "E019")
-            return None
-        rank = len(spec.ranges)
-        return t.ArrayType(f"ARRAY[{', '.join('*' * rank)}] OF {element.name}", element, None, rank)
-
-    def wstring_spec(self, spec: n.StringTypeSpec, namespace: tuple[str, ...]) -> t.Type:
-        """WSTRING[n]: n UTF-16 code units (IEC; no NUL counted, unlike Sysmac's STRING[n])."""
-        if spec.size is None and not _is_stdlib(spec.span.file) \
-                and profile_value(self.ctx.settings.dialect, "unsized_string") == "80 characters":
-            return t.wstring_type(80)     # TwinCAT/CODESYS: a WSTRING without a size holds 80
-        units = self.const_int(spec.size, namespace)
-        if units is None:
-            return t.WSTRING
-        if not 1 <= units <= t.WSTRING.max_bytes:
-            self.error(f"WSTRING size {units} is outside 1..{t.WSTRING.max_bytes}", spec.span, "E019")
-            return t.WSTRING
-        return t.wstring_type(units)
-
-    def unsized_string(self, span: n.Span) -> t.Type:
-        """`STRING` without a size: 1985 characters (Sysmac), or 80 under the profiles whose
-        `unsized_string` row says so (TwinCAT, CODESYS); the stdlib's own declarations keep the
-        long form (its functions take any STRING)."""
-        if _is_stdlib(span.file) or profile_value(self.ctx.settings.dialect, "unsized_string") != "80 characters":
-            return t.STRING
-        return t.string_type(81, "STRING[80]")
-
-    def resolve_type_spec(self, spec: n.TypeSpec, namespace: tuple[str, ...], allow_generic: bool = False,
-                          allow_open_array: bool = False) -> t.Type | None:
-        if isinstance(spec, n.NamedTypeSpec):
-            if len(spec.parts) == 1:
-                upper = spec.parts[0].upper()
-                if upper == "STRING":
-                    return self.unsized_string(spec.span)
-                if upper == "WSTRING" and not _is_stdlib(spec.span.file) \
-                        and profile_value(self.ctx.settings.dialect, "unsized_string") == "80 characters":
-                    return t.wstring_type(80)
-                if upper in t.ELEMENTARY:
-                    return t.ELEMENTARY[upper]
-                if upper in t.GENERICS:
-                    if allow_generic:
-                        return t.GENERICS[upper]
-                    self.error(f"generic type {upper} is only allowed in library declarations", spec.span, "E017")
-                    return None
-            key = self.ctx.index.lookup_type_key(spec.parts, spec.rooted, namespace)
-            if key is not None:
-                return self.resolve_declared_type(key)
-            pkey = self.ctx.index.lookup_pou_key(spec.parts, namespace)
-            if pkey is not None:
-                pou = self.ctx.index.pou_nodes[pkey]
-                if pou.kind == "FUNCTION":
-                    self.error(f"'{spec.text}' is a function, not a type", spec.span, "E018")
-                    return None
-                if pou.kind == "INTERFACE":
-                    return t.InterfaceType(pou.name, "\\".join(pou.namespace + (pou.name,)))
-                return t.FBType(pou.name, "\\".join(pou.namespace + (pou.name,)), pou.kind == "PROGRAM")
-            self.error(f"unknown type '{spec.text}'", spec.span, "E018")
-            return None
-        if isinstance(spec, n.StringTypeSpec) and spec.wide:
-            return self.wstring_spec(spec, namespace)
-        if isinstance(spec, n.StringTypeSpec):
-            if spec.size is None:
-                return self.unsized_string(spec.span)
-            size = self.const_int(spec.size, namespace)
-            if size is None:
-                return t.STRING
-            if self.ctx.settings.string_size is StringSize.CHARACTERS:
-                # IEC ed. 3 / CODESYS / TwinCAT: STRING(n) holds n characters (n + 1 bytes with the NUL)
-                if not 1 <= size <= 1985:
-                    self.error(f"STRING size {size} is outside 1..1985", spec.span, "E019")
-                    return t.STRING
-                return t.string_type(size + 1, f"STRING[{size}]")
-            if not 1 <= size <= 1986:
-                self.error(f"STRING size {size} is outside 1..1986", spec.span, "E019")
-                return t.STRING
-            return t.string_type(size)
-        if isinstance(spec, n.ArrayTypeSpec):
-            element = self.resolve_type_spec(spec.element, namespace)
-            if element is None:
-                return None
-            if any(r is None for r in spec.ranges):
-                if not allow_open_array:
-                    self.error("ARRAY[*] is only allowed for VAR_IN_OUT and inputs of library POUs", spec.span, "E019")
-                if len(spec.ranges) > 1:
-                    return self.open_array_of_rank(spec, element)
-                return t.ArrayType(f"ARRAY[*] OF {element.name}", element, None)
-            dims = []
-            for lo_expr, hi_expr in spec.ranges:  # type: ignore[misc]
-                lo = self.const_int(lo_expr, namespace)
-                hi = self.const_int(hi_expr, namespace)
-                if lo is None or hi is None:
-                    return None
-                problem = array_bounds_problem(lo, hi)
-                if problem:
-                    self.error(problem, spec.span, "E019")
-                    return None
-                if hi < lo:
-                    self.error(f"array bounds {lo}..{hi} are empty", spec.span, "E019")
-                    return None
-                dims.append((lo, hi))
-            problem = array_size_problem(dims, element, self.ctx.settings.max_array_elements)
-            if problem:
-                self.error(problem, spec.span, "E019")
-                return None
-            # ARRAY[..] OF ARRAY[..] stays an array of arrays (indexed a[i][j]); a[i, j] needs
-            # ARRAY[.., ..]
-            text = ",".join(f"{lo}..{hi}" for lo, hi in dims)
-            return t.ArrayType(f"ARRAY[{text}] OF {element.name}", element, tuple(dims))
-        if isinstance(spec, n.SubrangeTypeSpec):
-            base = t.ELEMENTARY.get(spec.base.upper())
-            if not isinstance(base, t.IntType):
-                self.error(f"subrange base must be an integer type, not {spec.base}", spec.span, "E019")
-                return None
-            low, high = (b if isinstance(b, int) else self.const_value(b, namespace, None)
-                         for b in (spec.low, spec.high))
-            if not (isinstance(low, int) and isinstance(high, int)):
-                self.error("a subrange bound must be a constant integer expression", spec.span, "E019")
-                return base
-            if not base.lo <= low <= high <= base.hi:
-                self.error(f"subrange {low}..{high} is empty or outside {base.name} ({base.lo}..{base.hi})",
-                           spec.span, "E019")
-                return base
-            return t.subrange_of(base, low, high)
-        if isinstance(spec, n.RefTypeSpec):
-            target = self.resolve_type_spec(spec.target, namespace)
-            if target is None:
-                return None
-            if isinstance(target, t.RefType) and spec.flavour == "REFERENCE":
-                self.error("REFERENCE TO a reference is not allowed", spec.span, "E019")
-                return None
-            return t.ref_type(target, spec.flavour)
-        self.error("unsupported type specification", getattr(spec, "span", n.NO_SPAN), "E019")
-        return None
-
-    def const_int(self, expr: n.Expr, namespace: tuple[str, ...]) -> int | None:
-        value = self.const_value(expr, namespace, self.ctx.declaring)
-        if isinstance(value, bool) or not isinstance(value, int):
-            if value is not NOT_CONST:
-                self.error("expected a constant integer", expr.span, "E020")
-            else:
-                self.error("expected a constant integer expression", expr.span, "E020")
-            return None
-        return value
-
-    def const_value(self, expr: n.Expr, namespace: tuple[str, ...], pou: POUInfo | None) -> object:
-        """Evaluate a constant expression at compile time; `NOT_CONST` if it is not one."""
-        if isinstance(expr, n.Call):
-            # LOWER_BOUND/UPPER_BOUND of a declared array, SIZEOF: constants once checked
-            word, value = self.ctx.facts.type_queries.get(expr.nid, ("", None))
-            if word == "CONST":
-                return value
-            return self.declared_sizeof(expr, namespace, pou)
-        if isinstance(expr, (n.IntLiteral, n.BoolLiteral, n.StringLiteral)):
-            return expr.value
-        if isinstance(expr, n.RealLiteral):
-            return expr.value
-        if isinstance(expr, n.TimeLiteral):
-            return expr.value_ns
-        if isinstance(expr, n.HashLiteral):
-            lit = self.hash_literal(expr, namespace, report=False)
-            return NOT_CONST if lit is None else lit[1]
-        if isinstance(expr, n.Unary):
-            v = self.const_value(expr.operand, namespace, pou)
-            if v is NOT_CONST:
-                return v
-            if expr.op == "MINUS" and isinstance(v, (int, float)) and not isinstance(v, bool):
-                return -v
-            if expr.op == "PLUS":
-                return v
-            if expr.op == "NOT" and isinstance(v, bool):
-                return not v
-            return NOT_CONST
-        if isinstance(expr, n.Binary):
-            a = self.const_value(expr.left, namespace, pou)
-            b = self.const_value(expr.right, namespace, pou)
-            if a is NOT_CONST or b is NOT_CONST or isinstance(a, (bytes, bool)) or isinstance(b, (bytes, bool)):
-                return NOT_CONST
-            try:
-                if expr.op == "PLUS":
-                    return a + b
-                if expr.op == "MINUS":
-                    return a - b
-                if expr.op == "STAR":
-                    return a * b
-                if expr.op == "SLASH":
-                    if isinstance(a, int) and isinstance(b, int):
-                        q = abs(a) // abs(b)
-                        return q if (a < 0) == (b < 0) else -q
-                    return a / b
-                if expr.op == "MOD" and isinstance(a, int) and isinstance(b, int):
-                    return int(math.fmod(a, b))
-            except ZeroDivisionError:
-                return NOT_CONST
-            return NOT_CONST
-        if isinstance(expr, n.Name) and len(expr.parts) == 1:
-            key = expr.parts[0].lower()
-            var = pou.variables.get(key) if pou else None
-            if var is None:
-                var = self.ctx.globals.get(key)
-            if var is not None:
-                if var.constant and var.init is not None:
-                    return var.init
-                return NOT_CONST
-            enum = self.bare_enumerator(expr.parts[0], expr.span, report=False)
-            if enum is not None:
-                return enum[1]
-        return NOT_CONST
-
-    def declared_sizeof(self, expr: n.Call, namespace: tuple[str, ...], pou: POUInfo | None) -> object:
-        """SIZEOF(T) / SIZEOF(v) in a declaration (an array bound: `ARRAY[0..n * SIZEOF(ST_X) - 1]`),
-        before any body is checked: the size of the named type, or of a declared variable's type."""
-        callee = expr.callee
-        if not (isinstance(callee, n.Name) and len(callee.parts) == 1 and callee.parts[0].upper() in ("SIZEOF", "XSIZEOF")
-                and len(expr.args) == 1 and expr.args[0].kind == "positional" and isinstance(expr.args[0].value, n.Name)):
-            return NOT_CONST
-        arg = expr.args[0].value
-        var = None
-        if len(arg.parts) == 1:
-            key = arg.parts[0].lower()
-            var = (pou.variables.get(key) if pou else None) or self.ctx.globals.get(key)
-        if var is not None:
-            ty = var.type
-        elif (len(arg.parts) == 1 and arg.parts[0].upper() in t.ELEMENTARY) \
-                or self.ctx.index.lookup_type_key(arg.parts, False, namespace) is not None:
-            ty = self.resolve_type_spec(n.NamedTypeSpec(arg.parts, False, arg.span), namespace)
-        else:
-            return NOT_CONST
-        size = t.byte_size(ty, allows(self.ctx.settings.dialect, "short_times")) if ty is not None else None
-        return NOT_CONST if size is None else size
-
-    def bare_enumerator(self, name: str, span: n.Span, report: bool = True) -> tuple[t.EnumType, int] | None:
-        cands = self.ctx.enumerators.get(name.lower(), [])
-        if not cands:
-            return None
-        if self.ctx.settings.bare_enumerators is BareEnumerators.REQUIRE_TYPE:
-            if report:
-                self.error(f"enumerator '{name}' needs its type: write Type#{name}", span, "E021")
-            return None
-        distinct = {c[0].qualname.lower(): c for c in cands}
-        if len(distinct) > 1:
-            if report:
-                names = ", ".join(sorted(c[0].name for c in distinct.values()))
-                self.error(f"enumerator '{name}' is ambiguous (in {names}); write Type#{name}", span, "E021")
-            return None
-        return cands[0]
-
-    def hash_literal(self, expr: n.HashLiteral, namespace: tuple[str, ...], report: bool = True) -> tuple[t.Type, object] | None:
-        """Resolve `Prefix#value`: (type, runtime value) or None (with a diagnostic when `report`)."""
-        prefix = expr.prefix
-        if len(prefix) == 1 and prefix[0].upper() in t.ELEMENTARY and not expr.rooted:
-            ty = t.ELEMENTARY[prefix[0].upper()]
-            text = expr.text
-            try:
-                if isinstance(ty, t.IntType):
-                    value = int(text.replace("_", "").split("#")[-1], int(text.split("#")[0]) if text.count("#") else 10) \
-                        if "#" in text else int(text.replace("_", ""))
-                    if text.startswith("-") and "#" in text:
-                        value = -int(text[1:].replace("_", "").split("#")[1], int(text[1:].split("#")[0]))
-                    if not ty.lo <= value <= ty.hi:
-                        if report:
-                            self.error(f"{value} is out of range for {ty.name} ({ty.lo}..{ty.hi})", expr.span, "E022")
-                        return None
-                    return ty, value
-                if isinstance(ty, t.RealType):
-                    value = float(text.replace("_", ""))
-                    return ty, _round_real(value, ty)
-                if isinstance(ty, t.BoolType):
-                    if text.upper() in ("TRUE", "1"):
-                        return ty, True
-                    if text.upper() in ("FALSE", "0"):
-                        return ty, False
-            except ValueError:
-                pass
-            if report:
-                self.error(f"malformed typed literal '{prefix[0]}#{text}'", expr.span, "E022")
-            return None
-        key = self.ctx.index.lookup_type_key(prefix, expr.rooted, namespace)
-        if key is None:
-            # Sysmac listings sometimes print the enum type without its leading 'e' (sysmac.md 3 #1):
-            # that stays an error; the restored source fixes it.
-            if report:
-                self.error(f"unknown enumeration type '{chr(92).join(prefix)}' in '{chr(92).join(prefix)}#{expr.text}'", expr.span, "E018")
-            return None
-        ty = self.resolve_declared_type(key)
-        if not isinstance(ty, t.EnumType):
-            if report:
-                self.error(f"'{chr(92).join(prefix)}' is not an enumeration type", expr.span, "E018")
-            return None
-        value = ty.value_of(expr.text)
-        if value is None:
-            if report:
-                self.error(f"'{expr.text}' is not an enumerator of {ty.name}", expr.span, "E016")
-            return None
-        return ty, value
-
-    def initial_value(self, init: n.Initializer, ty: t.Type, namespace: tuple[str, ...], pou: POUInfo | None) -> object:
-        """Compile-time initial value in runtime representation (structs: dict, arrays: list)."""
-        if isinstance(init, n.ExprInit):
-            if isinstance(ty, t.ArrayType) and ty.dims:
-                # `ARRAY … := 5` is not an initialiser for the whole array
-                self.error("an array initialiser is written in brackets: [1, 2, 3(0)]", init.span, "E023")
-                return None
-            value = self.const_value(init.expr, namespace, pou)
-            if value is NOT_CONST:
-                if isinstance(init.expr, n.Name) and len(init.expr.parts) == 1 and isinstance(ty, t.EnumType):
-                    v = ty.value_of(init.expr.parts[0])
-                    if v is not None:
-                        return v
-                sibling = self.sibling_instance(init.expr, ty, pou)
-                if sibling is not None:
-                    return sibling
-                self.error("initial value must be a constant expression", init.span, "E023")
-                return None
-            if isinstance(ty, t.EnumType) and isinstance(init.expr, n.Name):
-                v = ty.value_of(init.expr.parts[0])
-                if v is not None:
-                    return v
-            return self.convert_constant(value, ty, init.span, init.expr)
-        if isinstance(init, n.ArrayInit):
-            if not isinstance(ty, t.ArrayType) or not ty.dims:
-                self.error(f"an array initialiser cannot initialise {ty.name}", init.span, "E023")
-                return None
-            values: list = []
-            for count, item in init.items:
-                v = self.initial_value(item, ty.element, namespace, pou) if item is not None else None
-                values.extend([v] * count)
-            if len(values) > ty.length:
-                self.error(f"{len(values)} initial values for an array of {ty.length} elements", init.span, "E023")
-                values = values[: ty.length]
-            return values
-        if isinstance(init, n.StructInit) and isinstance(ty, t.FBType):
-            return self.fb_instance_init(init, ty, namespace, pou)
-        if isinstance(init, n.StructInit):
-            if not isinstance(ty, t.StructType):
-                self.error(f"a structure initialiser cannot initialise {ty.name}", init.span, "E023")
-                return None
-            out = {}
-            for fname, finit in init.items:
-                ftype = ty.field_type(fname)
-                if ftype is None:
-                    self.error(f"{ty.name} has no member '{fname}'", finit.span, "E024")
-                    continue
-                out[fname.lower()] = self.initial_value(finit, ftype, namespace, pou)
-            return out
-        return None
-
-    def fb_instance_init(self, init: n.StructInit, ty: t.FBType, namespace: tuple[str, ...],
-                         pou: POUInfo | None) -> dict:
-        """`fb : F := (x := 1, y := 2)` (IEC 61131-3 ed. 3 6.5.2.2, CODESYS): the instance's inputs,
-        outputs and internal variables set at its creation, as {variable key: value}. The FB's
-        variables (and its base's) may not be declared yet when a global or an earlier POU is:
-        the dict is filled in place once every POU is (`resolve_fb_instance_inits`)."""
-        out: dict = {}
-        self.ctx.fb_instance_inits.append((out, init, ty, namespace, pou))
-        return out
 
     def resolve_fb_instance_inits(self) -> None:
         while self.ctx.fb_instance_inits:
@@ -1283,7 +802,7 @@ class Checker:
                 if fname.lower() in out:
                     self.error(f"'{var.name}' is initialised twice", finit.span, "E024")
                     continue
-                out[var.key] = self.initial_value(finit, var.type, namespace, pou)
+                out[var.key] = self.constants.initial_value(finit, var.type, namespace, pou)
 
     def resolve_fb_init_args(self) -> None:
         """CODESYS/TwinCAT `fb : F(1, nMax := 5)`: the inputs of F's FB_init (its own or its
@@ -1344,16 +863,16 @@ class Checker:
                 else:
                     self.error("FB_init takes inputs only: no '=>' in a declaration", arg.span, "E063")
                     continue
-                value = self.const_value(arg.value, namespace, pou)
+                value = self.constants.const_value(arg.value, namespace, pou)
                 if value is NOT_CONST:
-                    sibling = self.sibling_instance(arg.value, target.type, pou, before=var.key)
+                    sibling = self.constants.sibling_instance(arg.value, target.type, pou, before=var.key)
                     if sibling is not None:
                         values[target.key] = sibling
                         continue
                     self.error("an FB_init argument in a declaration must be a constant expression",
                                arg.value.span, "E063")
                     continue
-                value = self.convert_constant(value, target.type, arg.value.span, arg.value)
+                value = self.constants.convert_constant(value, target.type, arg.value.span, arg.value)
                 if value is not None:
                     values[target.key] = value
             if 0 < positional < len(params) and not named:
@@ -1361,82 +880,6 @@ class Checker:
                            f"{len(params)} inputs of {vtype.name}'s FB_init: give all of them, or name them",
                            span, "E063")
             var.fb_args = values
-
-    def sibling_instance(self, expr: n.Expr, ty: t.Type, pou: POUInfo | None, before: str | None = None):
-        """`itf : I_X := fbOther;` or `fb : F(fbOther)` (TwinCAT/CODESYS, the `ref_initial_value`
-        row): an interface given an FB instance declared earlier in the same FUNCTION_BLOCK or
-        PROGRAM (TcUnit's FB_TcUnitRunner). None when `expr` is not such an instance. Choice: the
-        instance must be declared before, as it is made first."""
-        if not (isinstance(expr, n.Name) and len(expr.parts) == 1 and pou is not None
-                and pou.kind in ("FUNCTION_BLOCK", "PROGRAM") and isinstance(ty, t.InterfaceType)
-                and allows(self.ctx.settings.dialect, "ref_initial_value")):
-            return None
-        keys = list(pou.variables)
-        key = expr.parts[0].lower()
-        var = pou.variables.get(key)
-        if var is None or not isinstance(var.type, t.FBType) or var.section in (IN_OUT, EXTERNAL):
-            return None
-        if before is not None and before in keys and keys.index(key) > keys.index(before):
-            return None
-        return SiblingInstance(var.name)
-
-    def convert_constant(self, value: object, ty: t.Type, span: n.Span, expr: n.Expr | None = None) -> object:
-        if isinstance(ty, t.BoolType):
-            if isinstance(value, bool):
-                return value
-            if isinstance(expr, n.IntLiteral) and value in (0, 1):
-                return bool(value)   # IEC 61131-3 ed. 3 table 5: 0 and 1 are BOOL literals
-        elif isinstance(ty, t.IntType):
-            if isinstance(value, int) and not isinstance(value, bool):
-                if not ty.lo <= value <= ty.hi:
-                    typed = isinstance(expr, n.HashLiteral)
-                    if not typed:
-                        self.error(f"{value} is out of range for {ty.name} ({ty.lo}..{ty.hi})", span, "E022")
-                        return None
-                    value = ty.wrap(value)
-                if isinstance(ty, t.SubrangeType) and not ty.low <= value <= ty.high:
-                    self.error(f"{value} is outside the subrange {ty.text}", span, "E022")
-                    return None
-                return value
-        elif isinstance(ty, t.RealType):
-            if isinstance(value, (int, float)) and not isinstance(value, bool):
-                return _round_real(float(value), ty)
-        elif t.is_wide(ty):
-            return self.wstring_initial_value(value, ty, span)
-        elif isinstance(ty, t.StringType):
-            if isinstance(value, str):
-                self.error(f"a WSTRING literal cannot initialise {ty.name}: write STRING literals in single "
-                           "quotes, or convert with WSTRING_TO_STRING", span, "E023")
-                return None
-            if isinstance(value, bytes):
-                if len(value) > ty.max_bytes:
-                    self.string_overflow(len(value), ty, span, initial=True)
-                    return value[: ty.max_bytes]
-                return value
-        elif isinstance(ty, t.TimeType):
-            if isinstance(value, int) and not isinstance(value, bool) and expr is not None:
-                if isinstance(expr, n.TimeLiteral) and _time_compatible(expr.type_name, ty.name):
-                    return value
-                if not isinstance(expr, n.TimeLiteral) and not isinstance(expr, n.IntLiteral):
-                    return value
-        elif isinstance(ty, t.EnumType):
-            if isinstance(value, int) and isinstance(expr, (n.HashLiteral, n.Name)):
-                return value
-        self.error(f"initial value does not fit type {ty.name}", span, "E023")
-        return None
-
-    def wstring_initial_value(self, value: object, ty: t.StringType, span: n.Span) -> object:
-        """The initial value of a WSTRING: a WSTRING literal, or a STRING literal taken as its
-        characters (CODESYS accepts `ws : WSTRING := 'abc'`)."""
-        if isinstance(value, bytes):
-            value = utf16_units(value.decode("utf-8", "replace"))
-        if not isinstance(value, str):
-            self.error(f"initial value does not fit type {ty.name}", span, "E023")
-            return None
-        if len(value) > ty.max_bytes:
-            self.string_overflow(len(value), ty, span, initial=True)
-            return value[: ty.max_bytes]
-        return value
 
     def check_containment(self) -> None:
         """A FUNCTION_BLOCK or STRUCT may not contain itself, directly or through other members:
@@ -1648,11 +1091,11 @@ class Checker:
                     if interval is None:
                         self.error(f"task '{task.name}' needs INTERVAL (event tasks are not supported)", task.span, "E030")
                         continue
-                    ns = self.const_value(interval, (), None)
+                    ns = self.constants.const_value(interval, (), None)
                     if not isinstance(ns, int) or isinstance(interval, n.IntLiteral) or ns <= 0:
                         self.error("INTERVAL must be a positive TIME literal", interval.span, "E030")
                         continue
-                    prio = self.const_value(params.get("PRIORITY", n.IntLiteral(0)), (), None)
+                    prio = self.constants.const_value(params.get("PRIORITY", n.IntLiteral(0)), (), None)
                     if task.name.lower() in tasks:
                         self.error(f"duplicate task '{task.name}'", task.span, "E010")
                     tasks[task.name.lower()] = TaskInfo(task.name, ns, prio if isinstance(prio, int) else 0, [])
@@ -1687,18 +1130,6 @@ def analyze(units: list[n.CompilationUnit], settings: SysmacSettings = DEFAULT_S
 
 def _is_stdlib(file: str) -> bool:
     return is_stdlib_file(file)
-
-
-def _round_real(value: float, ty: t.Type) -> float:
-    if isinstance(ty, t.RealType) and ty.bits == 32:
-        return f32(value)
-    return float(value)
-
-
-def _time_compatible(literal_type: str, target: str) -> bool:
-    """May a T#/D#/TOD#/DT# literal (or its long form) initialise a variable of `target`?"""
-    literal, wanted = t.ELEMENTARY[literal_type], t.ELEMENTARY[target]
-    return literal.family == wanted.family and (wanted.long or not literal.long)  # type: ignore[attr-defined]
 
 
 def _cycles_closed(graph: Mapping[str, set[str]]) -> list[list[str]]:
