@@ -353,7 +353,7 @@ class BodyChecker:
                         return NameRef("global", g) if g is not None else None
                     return NameRef("field", var)
             if self.fb is not None:
-                prop = self.c.find_property(self.fb.key, key)
+                prop = self.c.oo.find_property(self.fb.key, key)
                 if prop is not None:
                     return NameRef("prop", pou=prop.getter, value=prop)
             g = self.c.globals.get(key)
@@ -415,7 +415,7 @@ class BodyChecker:
             if base_type is None:
                 return None
             if isinstance(base_type, (t.FBType, t.InterfaceType)):
-                prop = self.c.find_property(base_type.qualname.lower(), target.name)
+                prop = self.c.oo.find_property(base_type.qualname.lower(), target.name)
                 if prop is not None:
                     self.facts.names.pop(target.nid, None)
                     return self.property_store(target, prop, self.member_how(target.base, base_type))
@@ -548,11 +548,11 @@ class BodyChecker:
             return
         key = dst.qualname.lower()
         if isinstance(src, t.FBType):
-            if key not in self.c.implemented_interfaces(src.qualname.lower()):
+            if key not in self.c.oo.implemented_interfaces(src.qualname.lower()):
                 self.error(f"function block {src.name} does not implement interface {dst.name}", span, "E052")
             return
         if isinstance(src, t.InterfaceType):
-            if key not in self.c.interface_closure(src.qualname.lower()):
+            if key not in self.c.oo.interface_closure(src.qualname.lower()):
                 self.error(f"type mismatch: interface {src.name} does not extend {dst.name}", span, "E052")
             return
         if (isinstance(src, t.RefType) and src.is_null) or self.is_zero_literal(expr):
@@ -697,11 +697,11 @@ class BodyChecker:
                 self.error(f"{base.name} has no member '{e.name}'", e.span, "E034")
             return fty
         if isinstance(base, (t.FBType, t.InterfaceType)):
-            prop = self.c.find_property(base.qualname.lower(), e.name)
+            prop = self.c.oo.find_property(base.qualname.lower(), e.name)
             if prop is not None:
                 return self.property_load(e, prop, self.member_how(e.base, base))
         if isinstance(base, t.InterfaceType):
-            what = "method" if self.c.find_method(base.qualname.lower(), e.name) else "member"
+            what = "method" if self.c.oo.find_method(base.qualname.lower(), e.name) else "member"
             self.error(f"interface {base.name} has no property '{e.name}'" if what == "member" else
                        f"'{e.name}' is a method of interface {base.name}; call it: {e.name}(…)", e.span, "E034")
             return None
@@ -709,7 +709,7 @@ class BodyChecker:
             fb = self.c.pous.get(base.qualname.lower())
             var = fb.pin(e.name) if fb else None
             if var is None:
-                if fb is not None and self.c.find_method(fb.key, e.name) is not None:
+                if fb is not None and self.c.oo.find_method(fb.key, e.name) is not None:
                     self.error(f"'{e.name}' is a method of {base.name}; call it: {e.name}(…)", e.span, "E034")
                     return None
                 self.error(f"function block {base.name} has no member '{e.name}'", e.span, "E034")
@@ -796,7 +796,7 @@ class BodyChecker:
         if access == "PRIVATE":
             ok = here == member.owner
         elif access == "PROTECTED":
-            ok = here is not None and self.c.is_derived(here, member.owner)
+            ok = here is not None and self.c.oo.is_derived(here, member.owner)
         elif access == "INTERNAL":
             ok = owner is None or self.c.index.pou_nodes[member.owner].namespace == self.pou_namespace
         if not ok:
@@ -846,7 +846,7 @@ class BodyChecker:
         callee = e.callee
         if isinstance(callee, n.Name):
             if len(callee.parts) == 1 and not callee.rooted and self.fb is not None:
-                method = self.c.find_method(self.fb.key, callee.parts[0])
+                method = self.c.oo.find_method(self.fb.key, callee.parts[0])
                 if method is not None and self.resolve_name(callee) is None:
                     return True, self.method_call(e, method, "self", None, "", expected)
             return False, None
@@ -870,14 +870,14 @@ class BodyChecker:
             self.check_args_loosely(e)
             return True, None
         if isinstance(base_type, t.InterfaceType):
-            method = self.c.find_method(base_type.qualname.lower(), callee.name)
+            method = self.c.oo.find_method(base_type.qualname.lower(), callee.name)
             if method is None:
                 self.error(f"interface {base_type.name} has no method '{callee.name}'", callee.span, "E045")
                 self.check_args_loosely(e)
                 return True, None
             return True, self.method_call(e, method, "itf", callee.base, "", expected)
         if isinstance(base_type, t.FBType):
-            method = self.c.find_method(base_type.qualname.lower(), callee.name)
+            method = self.c.oo.find_method(base_type.qualname.lower(), callee.name)
             if method is None:
                 fb = self.c.pous.get(base_type.qualname.lower())
                 if fb is not None and fb.pin(callee.name) is None and (fb.methods or fb.base or fb.properties):
@@ -1702,7 +1702,7 @@ class BodyChecker:
                 if not self.element_ok(ty.element, ptype.element) or not open_rank_ok(ty, ptype):
                     self.error(f"'{var.name}' of {self.display(pou)} needs {ptype.name}, got {ty.name}", arg.value.span, "E052")
             elif isinstance(ty, t.FBType) and isinstance(ptype, t.FBType) \
-                    and self.c.is_derived(ty.qualname.lower(), ptype.qualname.lower()):
+                    and self.c.oo.is_derived(ty.qualname.lower(), ptype.qualname.lower()):
                 pass   # an instance of a derived FB is an instance of its base
             elif not (ty == ptype or (isinstance(ty, t.StringType) and isinstance(ptype, t.StringType)
                                       and t.is_wide(ty) == t.is_wide(ptype))
