@@ -270,7 +270,7 @@ class ScopeCompiler:
         with self._lock:
             checker, lowerer, facts, saved_facts, saved_diags = self._session(scope)
             try:
-                checker.stmt_Assign(statement)
+                checker.statement(statement)
             finally:
                 self._finish(saved_facts, saved_diags, f"{target_text} := {value_text}")
             ty = facts.types.get(target.nid)

@@ -29,3 +29,18 @@ def declared(*sources: str, **kwargs) -> Checker:
 
 def messages(ck: Checker) -> list[tuple[str, str]]:
     return [(d.code, d.message) for d in ck.ctx.diags]
+
+
+def body_checker(source: str, pou: str = "main", **kwargs):
+    """(Checker, BodyChecker) for POU `pou` of `source`, after passes 1 to 3: its parts can be
+    called one by one."""
+    from stvm.semantics.body import BodyChecker   # lazy: only the body tests need it
+    ck = declared(source, **kwargs)
+    return ck, BodyChecker(ck, ck.ctx.pous[pou], ck.ctx.index.pou_nodes[pou])
+
+
+def expression(text: str):
+    from stvm.syntax.parser import parse_expression   # lazy: only the body tests need it
+    expr, diags = parse_expression(text)
+    assert expr is not None and not diags, diags
+    return expr
