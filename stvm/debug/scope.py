@@ -250,6 +250,7 @@ class ScopeCompiler:
             try:
                 ty = checker.expr(expr)
             finally:
+                checker.release()
                 self._finish(saved_facts, saved_diags, text)
             if ty is None or isinstance(ty, t.VoidType):
                 raise DebugError(f"{text.strip()!r} has no value")
@@ -272,6 +273,7 @@ class ScopeCompiler:
             try:
                 checker.statement(statement)
             finally:
+                checker.release()
                 self._finish(saved_facts, saved_diags, f"{target_text} := {value_text}")
             ty = facts.types.get(target.nid)
             if ty is None:

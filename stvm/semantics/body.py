@@ -69,13 +69,23 @@ class BodyChecker:
 
     # ---- statements
     def check(self) -> None:
-        for var in self.pou.variables.values():
-            if var.section == EXTERNAL and var.key not in self.c.globals:
-                self.error(f"VAR_EXTERNAL '{var.name}' has no matching VAR_GLOBAL", var.span, "E033")
-            elif var.section == EXTERNAL and self.c.globals[var.key].type != var.type:
-                self.error(f"VAR_EXTERNAL '{var.name}' is {var.type.name} but the global is "
-                           f"{self.c.globals[var.key].type.name}", var.span, "E033")
-        self.statements(self.node.body)
+        try:
+            for var in self.pou.variables.values():
+                if var.section == EXTERNAL and var.key not in self.c.globals:
+                    self.error(f"VAR_EXTERNAL '{var.name}' has no matching VAR_GLOBAL", var.span, "E033")
+                elif var.section == EXTERNAL and self.c.globals[var.key].type != var.type:
+                    self.error(f"VAR_EXTERNAL '{var.name}' is {var.type.name} but the global is "
+                               f"{self.c.globals[var.key].type.name}", var.span, "E033")
+            self.statements(self.node.body)
+        finally:
+            self.release()
+
+    def release(self) -> None:
+        """Drop the parts: each refers back to this checker (bodypart.py), a cycle that would keep
+        the Checker and the syntax tree alive until the collector runs. The body checker is done."""
+        self.stmts = self.exprs = self.members = self.calls = self.intrinsics = None
+        self._stmt_methods.clear()
+        self._expr_methods.clear()
 
     def statements(self, body: tuple[n.Statement, ...]) -> None:
         for stmt in body:
