@@ -250,6 +250,7 @@ class ScopeCompiler:
             try:
                 ty = checker.expr(expr)
             finally:
+                checker.release()
                 self._finish(saved_facts, saved_diags, text)
             if ty is None or isinstance(ty, t.VoidType):
                 raise DebugError(f"{text.strip()!r} has no value")
@@ -270,8 +271,9 @@ class ScopeCompiler:
         with self._lock:
             checker, lowerer, facts, saved_facts, saved_diags = self._session(scope)
             try:
-                checker.stmt_Assign(statement)
+                checker.statement(statement)
             finally:
+                checker.release()
                 self._finish(saved_facts, saved_diags, f"{target_text} := {value_text}")
             ty = facts.types.get(target.nid)
             if ty is None:

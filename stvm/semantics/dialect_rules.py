@@ -87,47 +87,47 @@ def is_address_call(expr: n.Expr) -> bool:
             and expr.callee.parts[0].upper() in _ADDRESS_FUNCTIONS)
 
 
-def address_initial_value(c, expr: n.Expr, ty: t.Type, namespace: tuple[str, ...], pou):
+def address_initial_value(ev, expr: n.Expr, ty: t.Type, namespace: tuple[str, ...], pou):
     """The AddressInit of `expr` (`REF(x)` / `ADR(x)`) for a variable of type `ty` declared in
     `pou` (None: a global), or None when `expr` is no such call or the dialect has none. Reports
-    what it refuses on the checker `c` and then returns False."""
+    what it refuses through the constant evaluator `ev` (constants.py) and then returns False."""
     if not is_address_call(expr):
         return None
     func = expr.callee.parts[0].upper()   # type: ignore[attr-defined]
     span = expr.span
-    if not allows(c.settings.dialect, "ref_initial_value"):
+    if not allows(ev.ctx.settings.dialect, "ref_initial_value"):
         return None   # Sysmac: the checker's "initial value must be a constant expression", as before
     if not isinstance(ty, t.RefType) or ty.flavour == "REFERENCE":
-        c.error(f"{func}() can initialise a REF_TO or POINTER TO variable, not {ty.name}", span, "E052")
+        ev.error(f"{func}() can initialise a REF_TO or POINTER TO variable, not {ty.name}", span, "E052")
         return False
     if len(expr.args) != 1 or expr.args[0].kind != "positional":
-        c.error(f"{func}() takes one variable", span, "E023")
+        ev.error(f"{func}() takes one variable", span, "E023")
         return False
     if pou is not None and pou.kind not in ("FUNCTION_BLOCK", "PROGRAM"):
-        c.error(f"{func}() as an initial value is bound when an instance is made: only in a PROGRAM, a "
+        ev.error(f"{func}() as an initial value is bound when an instance is made: only in a PROGRAM, a "
                 "FUNCTION_BLOCK or VAR_GLOBAL, not in a {kind}".replace("{kind}", pou.kind), span, "E023")
         return False
-    found = _address_steps(c, expr.args[0].value, namespace, pou)
+    found = _address_steps(ev, expr.args[0].value, namespace, pou)
     if found is None:
-        c.error(f"{func}() as an initial value takes a variable declared before, in the same "
+        ev.error(f"{func}() as an initial value takes a variable declared before, in the same "
                 "PROGRAM/FUNCTION_BLOCK or in VAR_GLOBAL, its members and elements at constant indices",
                 expr.args[0].value.span, "E023")
         return False
     scope, steps, target = found
     if not t.same_type(target, ty.target):
-        c.error(f"type mismatch: cannot initialise {ty.name} with {func}() of a {target.name}", span, "E052")
+        ev.error(f"type mismatch: cannot initialise {ty.name} with {func}() of a {target.name}", span, "E052")
         return False
-    _note_addressed(c, pou, steps)
+    _note_addressed(ev.ctx, pou, steps)
     return AddressInit(scope, tuple(steps), t.is_aggregate(target))
 
 
-def _note_addressed(c, pou, steps) -> None:
+def _note_addressed(ctx, pou, steps) -> None:
     """The lowering keeps a referenced variable in its instance (never in a Python local)."""
     if pou is not None:
-        c.facts.addressed.add((pou.key, str(steps[0][1]).lower()))
+        ctx.facts.addressed.add((pou.key, str(steps[0][1]).lower()))
 
 
-def _address_steps(c, expr: n.Expr, namespace: tuple[str, ...], pou):
+def _address_steps(ev, expr: n.Expr, namespace: tuple[str, ...], pou):
     """(scope, steps, type) of a variable path made of a name, members and constant indices."""
     if isinstance(expr, n.Name) and len(expr.parts) == 1 and not expr.rooted:
         key = expr.parts[0].lower()
@@ -135,13 +135,13 @@ def _address_steps(c, expr: n.Expr, namespace: tuple[str, ...], pou):
         if var is not None and var.section in (IN_OUT, TEMP):
             return None
         if var is None or var.section == EXTERNAL:
-            var = c.globals.get(key)
+            var = ev.ctx.globals.get(key)
             if var is None:
                 return None
             return "global", [("field", var.name)], var.type
         return "self", [("field", var.name)], var.type
     if isinstance(expr, n.Member):
-        inner = _address_steps(c, expr.base, namespace, pou)
+        inner = _address_steps(ev, expr.base, namespace, pou)
         if inner is None or not isinstance(inner[2], t.StructType) or isinstance(inner[2], t.UnionType):
             return None
         scope, steps, ty = inner
@@ -150,13 +150,13 @@ def _address_steps(c, expr: n.Expr, namespace: tuple[str, ...], pou):
             return None
         return scope, steps + [("field", name)], ty.field_type(name)
     if isinstance(expr, n.Index):
-        inner = _address_steps(c, expr.base, namespace, pou)
+        inner = _address_steps(ev, expr.base, namespace, pou)
         if inner is None or not isinstance(inner[2], t.ArrayType) or not inner[2].dims \
                 or len(expr.indices) != len(inner[2].dims):
             return None
         scope, steps, ty = inner
         for index, (lo, hi) in zip(expr.indices, ty.dims):
-            value = c.const_value(index, namespace, pou)
+            value = ev.const_value(index, namespace, pou)
             if not (isinstance(value, int) and not isinstance(value, bool) and lo <= value <= hi):
                 return None
             steps = steps + [("item", value - lo)]
@@ -172,13 +172,13 @@ def _address_steps(c, expr: n.Expr, namespace: tuple[str, ...], pou):
 # instance or frame, never in a Python local.
 
 def check_assign_expr(b, e: n.AssignExpr) -> t.Type | None:
-    """Check `target := value` inside an expression on the body checker `b`; its type is the
-    target's."""
+    """Check `target := value` inside an expression on the body checker `b` (body.py); its type
+    is the target's."""
     target_type = b.lvalue(e.target)
     value_type = b.expr(e.value, expected=target_type)
     if target_type is None or value_type is None:
         return None
-    b.require_assignable(e.value, value_type, target_type, e.value.span)
+    b.stmts.require_assignable(e.value, value_type, target_type, e.value.span)
     target = e.target
     ref = b.facts.names.get(target.nid) if isinstance(target, n.Name) else None
     if t.is_aggregate(target_type) or isinstance(target, (n.BitAccess, n.PartialAccess)) \
@@ -186,5 +186,5 @@ def check_assign_expr(b, e: n.AssignExpr) -> t.Type | None:
         b.error(f"an assignment used as an expression needs a variable of an elementary type as its target "
                 f"(not {target_type.name}, a bit, a property or a function's result)", target.span, "E050")
         return None
-    b.mark_addressed(target)
+    b.stmts.mark_addressed(target)
     return target_type
