@@ -16,6 +16,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from stvm.dialects import table_markdown  # noqa: E402
+from tools.generated_page import write_or_check  # noqa: E402
 
 PAGE = ROOT / "docs" / "dialects.md"
 HEADING = "## The table\n\n"
@@ -29,17 +30,8 @@ def with_table(page: str) -> str:
 
 
 def main(argv: list[str]) -> int:
-    current = PAGE.read_text(encoding="utf-8")
-    text = with_table(current)
-    if "--check" in argv:
-        if current != text:
-            print(f"{PAGE.relative_to(ROOT)} is out of date: run python tools/gen_dialect_docs.py", file=sys.stderr)
-            return 1
-        return 0
-    PAGE.write_text(text, encoding="utf-8")
-    print(f"wrote {PAGE.relative_to(ROOT)}")
-    return 0
-
+    return write_or_check(PAGE, with_table(PAGE.read_text(encoding="utf-8")), argv,
+                          "python tools/gen_dialect_docs.py")
 
 if __name__ == "__main__":
     raise SystemExit(main(sys.argv[1:]))
