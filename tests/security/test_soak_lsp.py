@@ -22,7 +22,6 @@ import threading
 import time
 from pathlib import Path
 
-import pytest
 
 from soak_harness import Attackers, Sampler, fd_count, pct, rss_kb
 
