@@ -104,12 +104,12 @@ TWINCAT_LIBRARIES = ("tc2_standard.st", "tc2_system.st", "tc2_utilities.st", "ty
 # CODESYS V3 operators beyond IEC's (TIME(), TRUNC_INT, …), in CODESYS and in TwinCAT (built on it)
 CODESYS_OPERATORS = "cds_operators.st"
 CODESYS_UTIL = "cds_util.st"     # the CODESYS Util library (BLINK, HYSTERESIS, RAMP_*, CHARCURVE, …), CODESYS only
-CODESYS_LIBRARIES = (CODESYS_UTIL, "sys_mem.st")
 # namespaces of the platform libraries, reached as `IBaseLibrary.TypeClass.TYPE_INT` (stvm/libraries.py)
 TWINCAT_NAMESPACES = ("IBaseLibrary", "__SYSTEM", "SysFile", "SysDir", "SysTypes", "CmpErrors")
 # CODESYS V3 has the same type classes and ANY descriptor (CODESYS online help "ANY": the compiler
-# passes `__SYSTEM.AnyType`; Base Interfaces library "TypeClass"), not Beckhoff's Tc2 libraries
-CODESYS_LIBRARIES = ("type_classes.st",)
+# passes `__SYSTEM.AnyType`; Base Interfaces library "TypeClass"), not Beckhoff's Tc2 libraries;
+# then its Util and SysMem libraries
+CODESYS_LIBRARIES = ("type_classes.st", CODESYS_UTIL, "sys_mem.st")
 CODESYS_NAMESPACES = ("IBaseLibrary", "__SYSTEM")
 
 # Beckhoff Tc2_Standard names the inputs of the string functions STR/STR1/STR2/SIZE/LEN/POS
@@ -201,9 +201,6 @@ def stdlib_sources(settings: SysmacSettings = DEFAULT_SETTINGS) -> list[tuple[st
     sources.append((f"{DISPLAY_PREFIX}bcd.st", bcd.bcd_declarations()))
     if settings.dialect in (Dialect.TWINCAT, Dialect.CODESYS):
         sources.append((DISPLAY_PREFIX + CODESYS_OPERATORS, _packaged_text(CODESYS_OPERATORS)))
-    if settings.dialect is Dialect.CODESYS:
-        for name in CODESYS_LIBRARIES:
-            sources.append((DISPLAY_PREFIX + name, _packaged_text(name)))
     if settings.dialect is Dialect.TWINCAT:   # vendor extras exist only in their dialect
         sources.append((f"{DISPLAY_PREFIX}twincat_types.st", _packaged_text("twincat_types.st")))
         # the Beckhoff platform libraries (docs/platform_libraries.md)
