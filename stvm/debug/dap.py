@@ -56,6 +56,7 @@ class BadMessage(Exception):
 MAX_MESSAGE_BYTES = 16 * 2**20   # a DAP message (setBreakpoints of a huge file is far below)
 MAX_HEADER_LINE = 8192
 MAX_HANDLES = 100_000            # variablesReferences alive at one stop (see DapServer._handle)
+MAX_BREAKPOINTS_PER_FILE = 1000  # a conditional one is compiled when set (~15 ms): 1,000 is ~15 s at most
 
 
 def _int_arg(args: dict, name: str, default: int = 0) -> int:
@@ -356,6 +357,8 @@ class DapServer:
             specs = [{"line": line} for line in lines]
         if not isinstance(specs, list) or not all(isinstance(spec, dict) for spec in specs):
             raise ProtocolError("argument 'breakpoints' must be a list of {\"line\": N} objects")
+        if len(specs) > MAX_BREAKPOINTS_PER_FILE:
+            raise ProtocolError(f"{len(specs)} breakpoints in one file: the limit is {MAX_BREAKPOINTS_PER_FILE}")
         for spec in specs:
             if _int_arg(spec, "line", -1) < 1:
                 raise ProtocolError("each breakpoint needs \"line\": a line number >= 1")

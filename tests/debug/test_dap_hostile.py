@@ -78,3 +78,12 @@ def test_malformed_request_is_answered_under_its_own_seq(dap, request_body: dict
     response = dap.responses.pop(seq)
     assert response["request_seq"] == seq and not response["success"]
     assert "a request needs" in response["message"]
+
+
+def test_too_many_breakpoints_in_one_file_is_an_error_and_the_session_goes_on(dap) -> None:
+    _launched(dap)
+    prog = write_st(PROGRAM, "dap_hostile.st")
+    specs = [{"line": 3, "condition": f"Main.x = {i}"} for i in range(1001)]
+    failed = dap.request("setBreakpoints", ok=False, source={"path": str(prog)}, breakpoints=specs)
+    assert not failed["success"] and "the limit is 1000" in failed["message"]
+    assert dap.evaluate("Main.x + 1")["result"] == "1"
