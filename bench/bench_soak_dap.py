@@ -24,7 +24,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "tests" / "security"))
 
-from soak_harness import pct  # noqa: E402
+from soak_harness import print_soak  # noqa: E402
 from test_soak_dap import framing_churn, soak  # noqa: E402
 
 
@@ -37,14 +37,7 @@ def main() -> int:
     with tempfile.TemporaryDirectory() as tmp:
         f = soak(args.seconds, Path(tmp), quiet_rounds=100, big_mb=args.big_mb)
     print(f"dap soak: {args.seconds:.0f} s of hostile messages (load {os.getloadavg()[0]:.2f})")
-    for phase in ("quiet", "hostile", "after_latencies"):
-        values = f[phase]
-        print(f"  good loop {phase.split('_')[0]:8s}: {len(values):5d} rounds of 4 requests, "
-              f"p50 {pct(values, 0.5) * 1e3:8.1f} ms  p99 {pct(values, 0.99) * 1e3:8.1f} ms")
-    print(f"  adapter RSS MB: before {f['base']['rss'] / 1024:.1f}  peak {f['peak_rss'] / 1024:.1f}  "
-          f"after {f['after']['rss'] / 1024:.1f}")
-    print(f"  adapter descriptors: before {f['base']['fds']}  peak {f['peak_fds']}  after {f['after']['fds']}")
-    print("  attacks: " + ", ".join(f"{name} {count}" for name, count in f["counts"].items()))
+    print_soak(f, "rounds of 4 requests", "adapter")
     print(f"  requests sent {f['sent']}, responses {f['answered']}, internal errors {len(f['bad'])}, "
           f"exit {f['exit']}")
     started = time.monotonic()

@@ -19,7 +19,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "tests" / "security"))
 
-from soak_harness import pct  # noqa: E402
+from soak_harness import print_soak  # noqa: E402
 from test_soak_emulator import soak  # noqa: E402
 
 
@@ -31,15 +31,8 @@ def main() -> int:
     f = soak(args.seconds, max_connections=args.max_connections, quiet_requests=2000)
     print(f"emulator soak: {args.seconds:.0f} s of attack, max-connections {args.max_connections} "
           f"(load {os.getloadavg()[0]:.2f})")
-    for phase in ("quiet", "hostile", "after_latencies"):
-        values = f[phase]
-        print(f"  good client {phase.split('_')[0]:8s}: {len(values):6d} requests, "
-              f"p50 {pct(values, 0.5) * 1e3:7.2f} ms  p99 {pct(values, 0.99) * 1e3:7.2f} ms")
-    print(f"  server RSS MB: before {f['base']['rss'] / 1024:.1f}  peak {f['peak_rss'] / 1024:.1f}  "
-          f"after {f['after']['rss'] / 1024:.1f}")
-    print(f"  server descriptors: before {f['base']['fds']}  peak {f['peak_fds']}  after {f['after']['fds']}")
-    print("  attacks: " + ", ".join(f"{name} {count}" for name, count in f["counts"].items())
-          + f"; refused past the limit {f['resets']}")
+    print_soak(f, "requests", "server")
+    print(f"  refused past the limit {f['resets']}")
     print(f"  server alive: {f['alive']}; unexpected attack errors: {f['errors'] or 'none'}")
     return 0 if f["alive"] and not f["errors"] else 1
 

@@ -101,3 +101,29 @@ class Attackers:
 
     def __exit__(self, *exc) -> None:
         self.join()
+
+
+def footprint(pid: int) -> dict:
+    """The server's resident memory (KiB) and open descriptors now."""
+    return {"rss": rss_kb(pid), "fds": fd_count(pid)}
+
+
+def soak_figures(quiet: list[float], hostile: list[float], after_latencies: list[float], base: dict,
+                 sampler: Sampler, after: dict, attackers: Attackers, **extra) -> dict:
+    """The figures every soak returns (latencies in seconds, RSS in KiB), plus its own `extra`."""
+    return {"quiet": quiet, "hostile": hostile, "after_latencies": after_latencies, "base": base,
+            "peak_rss": max(sampler.rss, default=base["rss"]), "peak_fds": max(sampler.fds, default=base["fds"]),
+            "after": after, "counts": attackers.counts, "errors": attackers.errors, **extra}
+
+
+def print_soak(f: dict, good: str, process: str) -> None:
+    """The lines every soak bench prints: the good client's latency per phase (`good` names one of
+    its rounds), the `process`'s memory and descriptors, and what each attack did."""
+    for phase in ("quiet", "hostile", "after_latencies"):
+        values = f[phase]
+        print(f"  good {phase.split('_')[0]:8s}: {len(values):6d} {good}, "
+              f"p50 {pct(values, 0.5) * 1e3:8.2f} ms  p99 {pct(values, 0.99) * 1e3:8.2f} ms")
+    print(f"  {process} RSS MB: before {f['base']['rss'] / 1024:.1f}  peak {f['peak_rss'] / 1024:.1f}  "
+          f"after {f['after']['rss'] / 1024:.1f}")
+    print(f"  {process} descriptors: before {f['base']['fds']}  peak {f['peak_fds']}  after {f['after']['fds']}")
+    print("  attacks: " + ", ".join(f"{name} {count}" for name, count in f["counts"].items()))

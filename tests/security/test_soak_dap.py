@@ -24,7 +24,7 @@ import threading
 import time
 from pathlib import Path
 
-from soak_harness import Attackers, Sampler, fd_count, pct, rss_kb
+from soak_harness import Attackers, Sampler, fd_count, pct, rss_kb, soak_figures
 
 ROOT = Path(__file__).resolve().parents[2]
 PROGRAM = """TYPE Pt : STRUCT x : REAL; y : REAL; END_STRUCT END_TYPE
@@ -242,10 +242,8 @@ def soak(seconds: float, tmp: Path, quiet_rounds: int = 40, big_mb: int = 8) -> 
         sent, answered, bad = adapter.seq, adapter.responses, list(adapter.bad)
     finally:
         code, stderr = adapter.close()
-    return {"quiet": quiet, "hostile": hostile, "after_latencies": after_lat, "base": base,
-            "peak_rss": max(sampler.rss, default=base["rss"]), "peak_fds": max(sampler.fds, default=base["fds"]),
-            "after": after, "counts": attackers.counts, "errors": attackers.errors, "sent": sent,
-            "answered": answered, "bad": bad, "exit": code, "stderr": stderr}
+    return soak_figures(quiet, hostile, after_lat, base, sampler, after, attackers,
+                        sent=sent, answered=answered, bad=bad, exit=code, stderr=stderr)
 
 
 def test_dap_soak_stays_flat_and_keeps_answering(tmp_path):

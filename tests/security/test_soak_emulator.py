@@ -21,7 +21,7 @@ import sys
 import time
 from pathlib import Path
 
-from soak_harness import Attackers, Sampler, fd_count, pct, rss_kb
+from soak_harness import Attackers, Sampler, fd_count, pct, rss_kb, soak_figures
 
 ROOT = Path(__file__).resolve().parents[2]
 QUERY = b"$TMSTA,2,00,*41\r\n"
@@ -238,10 +238,8 @@ def soak(seconds: float, max_connections: int = 16, quiet_requests: int = 300) -
         for sock in held:
             sock.close()
         stderr = server.close()
-    return {"quiet": quiet, "hostile": hostile, "after_latencies": after_lat, "base": base,
-            "peak_rss": max(sampler.rss, default=base["rss"]), "peak_fds": max(sampler.fds, default=base["fds"]),
-            "after": after, "counts": attackers.counts, "errors": attackers.errors,
-            "resets": resets[0], "alive": alive, "stderr": stderr}
+    return soak_figures(quiet, hostile, after_lat, base, sampler, after, attackers,
+                        resets=resets[0], alive=alive, stderr=stderr)
 
 
 def test_emulator_soak_stays_flat_and_keeps_serving():

@@ -23,7 +23,7 @@ import time
 from pathlib import Path
 
 
-from soak_harness import Attackers, Sampler, fd_count, pct, rss_kb
+from soak_harness import Attackers, Sampler, fd_count, pct, rss_kb, soak_figures
 
 ROOT = Path(__file__).resolve().parents[2]
 PROGRAM = """FUNCTION_BLOCK Counter
@@ -257,10 +257,8 @@ def soak(seconds: float, tmp: Path, quiet_rounds: int = 30, big_mb: int = 4) -> 
         sent, answered, internal = server.next_id, server.answered, list(server.internal)
     finally:
         code, stderr = server.close()
-    return {"quiet": quiet, "hostile": hostile, "after_latencies": after_lat, "base": base,
-            "peak_rss": max(sampler.rss, default=base["rss"]), "peak_fds": max(sampler.fds, default=base["fds"]),
-            "after": after, "counts": attackers.counts, "errors": attackers.errors, "sent": sent,
-            "answered": answered, "internal": internal, "exit": code, "stderr": stderr}
+    return soak_figures(quiet, hostile, after_lat, base, sampler, after, attackers,
+                        sent=sent, answered=answered, internal=internal, exit=code, stderr=stderr)
 
 
 def test_lsp_soak_stays_flat_and_keeps_answering(tmp_path):
