@@ -35,6 +35,8 @@ from typing import Any, Callable, Sequence
 
 @dataclass
 class SessionConfig:
+    """How a session runs: task period, scenario, robot link, front ends and limits."""
+
     scan: str | int | None = None          # the default task period; None: the scenario's, else default_scan
     default_scan: str = "10ms"
     scenario: str | Path | None = None

@@ -29,6 +29,8 @@ class Severity(str, Enum):
 
 @dataclass(frozen=True)
 class Diagnostic:
+    """One error, warning or note at a source span, with its registered code."""
+
     severity: Severity
     message: str
     span: Span

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import sys
-from stvm.opcua.config import load_config
 
 OPTION_HELP = ("serve the variables over OPC UA (default endpoint: the manifest's [opcua] endpoint, "
                "else opc.tcp://127.0.0.1:4840; see README)")
@@ -19,6 +18,7 @@ def start_server(args, project, vm, files, run_control: bool = True):
     for a bad URL or `[opcua]` table and RuntimeError when the endpoint cannot be served."""
     if getattr(args, "opcua", None) is None:
         return None
+    from stvm.opcua.config import load_config   # lazy: start-up (every run builds this option)
     config = load_config(project.manifest, project.root, files, args.opcua or None)
     try:
         from stvm.opcua.server import OpcUaServer   # lazy: start-up (asyncua)

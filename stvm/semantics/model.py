@@ -43,6 +43,8 @@ class AddressInit:
 
 @dataclass
 class Variable:
+    """One declared variable: its section, type, initial value and attributes."""
+
     name: str                 # the user's spelling
     section: str              # VAR_INPUT, VAR_OUTPUT, VAR_IN_OUT, VAR, VAR_TEMP, VAR_GLOBAL, VAR_EXTERNAL
     type: Type
@@ -62,6 +64,8 @@ class Variable:
 
 @dataclass
 class POUInfo:
+    """One PROGRAM, FUNCTION_BLOCK, FUNCTION or METHOD: its kind, result and variables."""
+
     name: str
     qualname: str             # namespace path joined with '\'
     kind: str                 # FUNCTION, FUNCTION_BLOCK, PROGRAM
@@ -128,6 +132,8 @@ class PropertyInfo:
 
 @dataclass
 class TaskInfo:
+    """One task of the configuration: period, priority and the program instances it runs."""
+
     name: str
     interval_ns: int
     priority: int
@@ -136,6 +142,8 @@ class TaskInfo:
 
 @dataclass
 class ProjectModel:
+    """What the checker hands the lowering: POUs, globals, tasks and the declared types."""
+
     pous: dict[str, POUInfo]              # qualname key → POU
     globals: dict[str, Variable]          # key → global variable
     tasks: list[TaskInfo]                 # empty: a default task for the lone programs

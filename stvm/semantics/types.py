@@ -27,6 +27,8 @@ from dataclasses import dataclass, field
 
 @dataclass(frozen=True)
 class Type:
+    """An ST data type as the checker and the lowering see it; `name` is the user's spelling."""
+
     name: str
 
     @property
@@ -39,6 +41,8 @@ class Type:
 
 @dataclass(frozen=True)
 class BoolType(Type):
+    """BOOL."""
+
     @property
     def kind(self) -> str:
         return "bool"
@@ -97,6 +101,8 @@ def subrange_of(base: IntType, low: int, high: int) -> SubrangeType:
 
 @dataclass(frozen=True)
 class RealType(Type):
+    """REAL (32 bits) or LREAL (64 bits)."""
+
     bits: int = 32
 
     @property
@@ -164,6 +170,8 @@ def is_wide(ty: Type | None) -> bool:
 
 @dataclass(frozen=True)
 class EnumType(Type):
+    """An enumeration: its enumerators and values, base type, declared default and attributes."""
+
     qualname: str = ""
     members: tuple[tuple[str, int], ...] = ()
     base: Type | None = None
@@ -192,6 +200,8 @@ class EnumType(Type):
 
 @dataclass(frozen=True)
 class StructType(Type):
+    """A STRUCT: its fields in declaration order."""
+
     qualname: str = ""
     # (field name, field type) in declaration order
     fields: tuple[tuple[str, Type], ...] = field(default=(), compare=False, hash=False)
@@ -223,6 +233,8 @@ class UnionType(StructType):
 
 @dataclass(frozen=True)
 class ArrayType(Type):
+    """An ARRAY: element type and bounds per dimension (none for an `ARRAY[*]` parameter)."""
+
     element: Type = None  # type: ignore[assignment]
     # (lo, hi) per dimension; None for an `ARRAY[*]` parameter (any bounds)
     dims: tuple[tuple[int, int], ...] | None = ()
@@ -345,6 +357,8 @@ def is_aggregate(ty: Type) -> bool:
 
 @dataclass(frozen=True)
 class VoidType(Type):
+    """What a FUNCTION or METHOD without a result type returns."""
+
     @property
     def kind(self) -> str:
         return "void"

@@ -44,6 +44,8 @@ from typing import Callable
 
 @dataclass(frozen=True)
 class NativeFunction:
+    """A stdlib FUNCTION written in Python: its implementation and how its calls are typed."""
+
     name: str
     impl: Callable
     generic: bool = False

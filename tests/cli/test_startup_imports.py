@@ -12,7 +12,8 @@ import sys
 HEAVY_AT_REGISTRATION = ("numpy", "stvm.trace.golden", "stvm.trace.run", "stvm.trace.recorder",
                          "stvm.lint.context", "stvm.lint.cfg", "stvm.syntax.nodes", "stvm.project")
 HEAVY_FOR_A_CACHED_RUN = ("numpy", "stvm.syntax.parser", "stvm.syntax.nodes", "stvm.semantics.checker",
-                          "stvm.lower.codegen", "stvm.trace.golden", "stvm.lint.context", "emulator")
+                          "stvm.lower.codegen", "stvm.trace.golden", "stvm.lint.context", "emulator",
+                          "stvm.opcua.config")
 
 
 def loaded_after(code: str) -> set[str]:
