@@ -7,7 +7,8 @@ the real `stvm lsp` through bridge.py. Not VS Code itself, which cannot run on t
 Runs `npm install monaco-editor` into a temporary folder (nothing of it is committed), opens
 st_src/PnP_Example.st and triggers each feature with the editor's own actions: hover
 (`editor.action.showHover`), completion (typing `.`), signature help
-(`editor.action.triggerParameterHints`), and the live values (inlay hints) while
+(`editor.action.triggerParameterHints`), definition (`editor.action.peekDefinition`), and the
+live values (inlay hints) while
 `stvm run st_src/PnP_Example.st --scan 1ms --opcua …` runs.
 """
 
@@ -84,7 +85,8 @@ class Session:
                            [line, column, top])
 
     def action(self, name: str) -> None:
-        self.page.evaluate("(name) => editor.getAction(name).run()", name)
+        # editor.trigger runs a command as a keybinding would (the peek actions are not in getAction)
+        self.page.evaluate("(name) => editor.trigger('keyboard', name, null)", name)
 
     def shot(self, out: Path, name: str) -> None:
         time.sleep(0.4)   # let the widget's fade-in finish
@@ -128,6 +130,14 @@ def shoot(browser, monaco: Path, out: Path) -> None:
         session.action("editor.action.triggerParameterHints")
         session.page.locator(".parameter-hints-widget.visible").first.wait_for(state="visible", timeout=30_000)
         session.shot(out, "signature-help")
+        session.page.keyboard.press("Escape")
+
+        # definition: Monaco's peek view shows the declaration the server points to
+        line, column = position(text, "IF MoveDone THEN", "IF ")
+        session.go(line, column, line - 3)
+        session.action("editor.action.peekDefinition")
+        session.page.locator(".peekview-widget").first.wait_for(state="visible", timeout=30_000)
+        session.shot(out, "definition")
     finally:
         session.close()
 
