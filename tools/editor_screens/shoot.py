@@ -62,6 +62,19 @@ def position(text: str, line_text: str, column_after: str = "") -> tuple[int, in
     raise ValueError(f"{line_text!r} is not in {SOURCE}")
 
 
+def wait_listening(port: int, run: subprocess.Popen, timeout: float = 120.0) -> None:
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        if run.poll() is not None:
+            raise RuntimeError(f"stvm run exited with {run.returncode} before serving OPC UA")
+        try:
+            socket.create_connection(("127.0.0.1", port), timeout=1).close()
+            return
+        except OSError:
+            time.sleep(0.5)
+    raise RuntimeError(f"nothing listens on 127.0.0.1:{port} after {timeout} s")
+
+
 class Session:
     """One page of Monaco with its own bridge and `stvm lsp`."""
 
@@ -92,7 +105,7 @@ class Session:
         time.sleep(0.4)   # let the widget's fade-in finish
         path = out / f"{name}.png"
         self.page.locator("#editor").screenshot(path=str(path))
-        print(f"{path.relative_to(ROOT)}: {path.stat().st_size // 1024} KB", flush=True)
+        print(f"{path}: {path.stat().st_size // 1024} KB", flush=True)
 
     def close(self) -> None:
         self.page.close()
@@ -143,12 +156,13 @@ def shoot(browser, monaco: Path, out: Path) -> None:
 
 
 def shoot_live(browser, monaco: Path, out: Path) -> None:
-    endpoint = f"opc.tcp://127.0.0.1:{free_port()}"
+    port = free_port()
+    endpoint = f"opc.tcp://127.0.0.1:{port}"
     run = subprocess.Popen([sys.executable, "-m", "stvm", "run", str(SOURCE), "--scan", "1ms", "--realtime",
                             "--opcua", endpoint], cwd=ROOT, stdout=subprocess.DEVNULL,
                            stderr=subprocess.DEVNULL)
     try:
-        time.sleep(8)   # compile, start the emulator and the OPC UA server
+        wait_listening(port, run)   # compiled, emulator and OPC UA server started
         session = Session(browser, monaco, {"liveValues": {"enable": True, "endpoint": endpoint}})
         try:
             line, _ = position(session.text, "IF PnP_Example_Execute THEN")
