@@ -20,27 +20,27 @@ import threading
 from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 from pathlib import Path
 
+from stvm.lsp.stdio_client import StdioClient
+
 REQUEST_TIMEOUT = 60.0   # the first request waits for the whole project's check
 
 
 class StdioServer:
-    """`stvm lsp` as a subprocess: framed JSON-RPC in and out (Content-Length headers)."""
+    """`stvm lsp` as a subprocess, shared by the browser's concurrent HTTP requests: the framing is
+    stvm/lsp/stdio_client.py's; this routes each answer to the HTTP request waiting for it and keeps
+    what the server sends on its own (diagnostics, refreshes) for GET /events."""
 
     def __init__(self, command: list[str], cwd: Path | None = None) -> None:
-        self.proc = subprocess.Popen(command, stdin=subprocess.PIPE, stdout=subprocess.PIPE,
-                                     cwd=cwd)
-        self.lock = threading.Lock()
+        self.client = StdioClient(command, cwd=cwd, timeout=REQUEST_TIMEOUT)
+        self.proc = self.client.proc
         self.pending: dict[object, tuple[threading.Event, list]] = {}
         self.events: list[dict] = []
         self.ids = itertools.count(1)
-        self.reader = threading.Thread(target=self._read, daemon=True)
-        self.reader.start()
+        self.router = threading.Thread(target=self._route, daemon=True)
+        self.router.start()
 
     def send(self, message: dict) -> None:
-        body = json.dumps(message).encode("utf-8")
-        with self.lock:
-            self.proc.stdin.write(b"Content-Length: %d\r\n\r\n" % len(body) + body)
-            self.proc.stdin.flush()
+        self.client.send(message)
 
     def request(self, message: dict, timeout: float = REQUEST_TIMEOUT) -> dict:
         # the browser's ids are its own; the bridge renumbers so two tabs cannot collide
@@ -54,42 +54,32 @@ class StdioServer:
                     "error": {"code": -32603, "message": f"no answer from stvm lsp in {timeout} s"}}
         return {**box[0], "id": message.get("id")}
 
-    def _read(self) -> None:
-        out = self.proc.stdout
+    def _route(self) -> None:
         while True:
-            length = None
-            while True:
-                line = out.readline()
-                if not line:
-                    return
-                line = line.strip()
-                if not line:
-                    break
-                name, _, value = line.decode("ascii").partition(":")
-                if name.lower() == "content-length":
-                    length = int(value)
-            if length is None:
-                continue
-            message = json.loads(out.read(length))
+            _, message = self.client.messages.get()
             if "method" not in message:
                 waiter = self.pending.pop(message.get("id"), None)
                 if waiter:
                     waiter[1].append(message)
                     waiter[0].set()
-            elif "id" in message:
+            elif "id" in message:   # a request of the server's (e.g. a refresh): answered here
                 self.send({"jsonrpc": "2.0", "id": message["id"], "result": None})
                 self.events.append(message)
             else:
                 self.events.append(message)
 
     def close(self) -> None:
+        proc = self.proc
         try:
             self.request({"jsonrpc": "2.0", "method": "shutdown"}, timeout=10)
             self.send({"jsonrpc": "2.0", "method": "exit"})
-            self.proc.wait(10)
+            proc.wait(10)
         except (OSError, subprocess.TimeoutExpired):
-            self.proc.kill()
-            self.proc.wait()
+            pass
+        if proc.poll() is None:   # not the client's own shutdown: the router reads its queue
+            proc.kill()
+            proc.wait()
+        self.client.close()
 
 
 def make_handler(server: StdioServer, static: Path | None, mounts: dict[str, Path]):
