@@ -899,7 +899,7 @@ def build_server(options=None) -> StvmLanguageServer:
 
         ls.live.watch(list(values), changed)
         return [lsp.InlayHint(position=lsp.Position(occ.line, occ.end), label=f"= {format_value(values[path], sym.type)}",
-                              padding_left=True, tooltip=f"live value of {path} ({ls.live.endpoint})")
+                              padding_left=True, padding_right=True, tooltip=f"live value of {path} ({ls.live.endpoint})")
                 for occ, path, sym in spots if path in values]
 
     @server.command("stvm.timings")
