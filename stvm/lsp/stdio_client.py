@@ -147,3 +147,76 @@ class StdioClient:
             self._stderr.close()
         self._stderr_text = text
         return text
+
+
+class SharedClient(StdioClient):
+    """A StdioClient that several threads use at once (a soak's attackers beside its good client,
+    the browser bridge's concurrent HTTP requests): writes are serialised, and one router thread
+    takes every message off the queue and hands each answer to the request waiting for its id.
+    A request the server makes of the client is answered with a null result; it and every
+    notification go to `unsolicited`. Answers are counted, and those with JSON-RPC's
+    Internal error (-32603, a server bug) kept in `internal`."""
+
+    INTERNAL_ERROR = -32603
+
+    def __init__(self, *args, **kwargs) -> None:
+        self._write_lock = threading.Lock()
+        self._waiting: dict[object, queue.Queue] = {}
+        self.unsolicited: queue.Queue[dict] = queue.Queue()
+        self.answered = 0
+        self.internal: list[str] = []
+        super().__init__(*args, **kwargs)
+        self.pid = self.proc.pid
+        threading.Thread(target=self._route, daemon=True).start()
+
+    def frame(self, body: bytes) -> float:
+        with self._write_lock:
+            return super().frame(body)
+
+    def fresh_id(self) -> int:
+        with self._write_lock:
+            return super().fresh_id()
+
+    def _route(self) -> None:
+        while True:
+            at, message = self.messages.get()
+            if "method" not in message:
+                self.answered += 1
+                error = message.get("error")
+                if isinstance(error, dict) and error.get("code") == self.INTERNAL_ERROR:
+                    self.internal.append(str(error.get("message"))[:300])
+                box = self._waiting.pop(message.get("id"), None)
+                if box is not None:
+                    box.put((at, message))
+                continue
+            if "id" in message:
+                self.send({"jsonrpc": "2.0", "id": message["id"], "result": None})
+            self.unsolicited.put(message)
+
+    def _ask(self, message: dict, msg_id, timeout: float | None) -> tuple[float, dict]:
+        box: queue.Queue = queue.Queue()
+        self._waiting[msg_id] = box
+        sent = self.send({**message, "id": msg_id})
+        try:
+            at, answer = box.get(timeout=self.timeout if timeout is None else timeout)
+        except queue.Empty:
+            self._waiting.pop(msg_id, None)
+            raise
+        return at - sent, answer
+
+    def timed_request(self, method: str, params, timeout: float | None = None) -> tuple[float, dict]:
+        return self._ask({"jsonrpc": "2.0", "method": method, "params": params}, self.fresh_id(), timeout)
+
+    def forward(self, message: dict, timeout: float | None = None) -> dict:
+        """The answer to `message`, a request with an id of its sender's (renumbered on the way,
+        so two senders cannot collide), under that id again."""
+        _, answer = self._ask(message, f"fwd-{self.fresh_id()}", timeout)
+        return {**answer, "id": message.get("id")}
+
+    def wait_diagnostics(self, uri: str, ready: Callable[[list], bool] | None = None) -> tuple[float, list]:
+        deadline = time.monotonic() + self.timeout
+        while True:
+            msg = self.unsolicited.get(timeout=max(0.01, deadline - time.monotonic()))
+            if msg.get("method") == "textDocument/publishDiagnostics" and msg["params"]["uri"] == uri \
+                    and (ready is None or ready(msg["params"]["diagnostics"])):
+                return time.perf_counter(), msg["params"]["diagnostics"]

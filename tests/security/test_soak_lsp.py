@@ -16,14 +16,12 @@ from __future__ import annotations
 import json
 import os
 import queue
-import subprocess
-import sys
-import threading
 import time
 from pathlib import Path
 
 
 from soak_harness import Attackers, Sampler, fd_count, pct, rss_kb, soak_figures
+from stvm.lsp.stdio_client import SharedClient
 
 ROOT = Path(__file__).resolve().parents[2]
 PROGRAM = """FUNCTION_BLOCK Counter
@@ -47,99 +45,31 @@ def _env() -> dict:
     return dict(os.environ, PYTHONPATH=str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", ""))
 
 
-class Server:
-    """`stvm lsp` with a reader thread; messages may be written from any thread."""
+class Server(SharedClient):
+    """`stvm lsp` shared by the good client and the attackers (stvm/lsp/stdio_client.py)."""
 
     def __init__(self) -> None:
-        self.proc = subprocess.Popen([sys.executable, "-m", "stvm", "lsp"], cwd=ROOT, env=_env(),
-                                     stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
-        self.pid = self.proc.pid
-        self.lock = threading.Lock()
-        self.next_id = 0
-        self.waiting: dict[int, queue.Queue] = {}
-        self.answered = 0
-        self.internal: list[str] = []   # Internal error (-32603) answers: a server bug
-        self.diagnostics: queue.Queue = queue.Queue()
-        threading.Thread(target=self._read, daemon=True).start()
-        self.stderr_lines: list[str] = []
-        threading.Thread(target=self._read_stderr, daemon=True).start()
-
-    def _read_stderr(self) -> None:
-        for line in self.proc.stderr:
-            self.stderr_lines.append(line.decode(errors="replace"))
-
-    def _read(self) -> None:
-        stream = self.proc.stdout
-        while True:
-            length = None
-            while True:
-                line = stream.readline()
-                if not line:
-                    return
-                line = line.strip()
-                if not line:
-                    break
-                name, _, value = line.decode().partition(":")
-                if name.lower() == "content-length":
-                    length = int(value)
-            message = json.loads(stream.read(length))
-            if "id" in message and "method" not in message:
-                self.answered += 1
-                error = message.get("error")
-                if error and error.get("code") == -32603:
-                    self.internal.append(str(error.get("message"))[:300])
-                box = self.waiting.pop(message["id"], None)
-                if box is not None:
-                    box.put(message)
-            elif message.get("method") == "textDocument/publishDiagnostics":
-                self.diagnostics.put(message["params"]["uri"])
-            elif "id" in message and "method" in message:   # a request from the server: answer it
-                self.write(json.dumps({"jsonrpc": "2.0", "id": message["id"], "result": None}).encode())
+        super().__init__(cwd=ROOT, env=_env(), timeout=120.0, capture_stderr=True)
 
     def write(self, body: bytes) -> None:
-        with self.lock:
-            self.proc.stdin.write(b"Content-Length: %d\r\n\r\n" % len(body) + body)
-            self.proc.stdin.flush()
-
-    def notify(self, method: str, params) -> None:
-        self.write(json.dumps({"jsonrpc": "2.0", "method": method, "params": params}).encode())
+        self.frame(body)
 
     def request(self, method: str, params, wait: bool = True, timeout: float = 120.0) -> dict | None:
-        box: queue.Queue = queue.Queue()
-        with self.lock:
-            self.next_id += 1
-            msg_id = self.next_id
-            if wait:
-                self.waiting[msg_id] = box
-            body = json.dumps({"jsonrpc": "2.0", "id": msg_id, "method": method, "params": params}).encode()
-            self.proc.stdin.write(b"Content-Length: %d\r\n\r\n" % len(body) + body)
-            self.proc.stdin.flush()
-        if not wait:
+        if not wait:   # an attacker's flood: the answer is counted, nobody waits for it
+            self.send({"jsonrpc": "2.0", "id": self.fresh_id(), "method": method, "params": params})
             return None
         try:
-            return box.get(timeout=timeout)
+            return self.timed_request(method, params, timeout)[1]
         except queue.Empty:
-            raise AssertionError(f"no answer to {method} (id {msg_id})") from None
-
-    def wait_diagnostics(self, uri: str, timeout: float = 120.0) -> None:
-        end = time.monotonic() + timeout
-        while self.diagnostics.get(timeout=max(0.01, end - time.monotonic())) != uri:
-            pass
+            raise AssertionError(f"no answer to {method}") from None
 
     def close(self) -> tuple[int, str]:
         try:
-            self.request("shutdown", None, timeout=60)
-            self.notify("exit", None)
-            self.proc.stdin.close()
-        except (AssertionError, OSError):
-            pass
-        try:
-            code = self.proc.wait(timeout=30)
-        except subprocess.TimeoutExpired:
+            stderr = super().close()
+        except (AssertionError, OSError, queue.Empty):
             self.proc.kill()
-            code = self.proc.wait()
-        time.sleep(0.1)
-        return code, "".join(self.stderr_lines)
+            stderr = super().close()
+        return self.proc.wait(), stderr
 
 
 def _open(server: Server, path: Path, text: str, version: int = 1) -> str:

@@ -11,78 +11,20 @@ Only 127.0.0.1: this is a local tool, not a server for a network.
 
 from __future__ import annotations
 
-import itertools
 import json
 import mimetypes
-import subprocess
+import queue
 import sys
 import threading
 from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 from pathlib import Path
 
-from stvm.lsp.stdio_client import StdioClient
+from stvm.lsp.stdio_client import SharedClient
 
 REQUEST_TIMEOUT = 60.0   # the first request waits for the whole project's check
 
 
-class StdioServer:
-    """`stvm lsp` as a subprocess, shared by the browser's concurrent HTTP requests: the framing is
-    stvm/lsp/stdio_client.py's; this routes each answer to the HTTP request waiting for it and keeps
-    what the server sends on its own (diagnostics, refreshes) for GET /events."""
-
-    def __init__(self, command: list[str], cwd: Path | None = None) -> None:
-        self.client = StdioClient(command, cwd=cwd, timeout=REQUEST_TIMEOUT)
-        self.proc = self.client.proc
-        self.pending: dict[object, tuple[threading.Event, list]] = {}
-        self.events: list[dict] = []
-        self.ids = itertools.count(1)
-        self.router = threading.Thread(target=self._route, daemon=True)
-        self.router.start()
-
-    def send(self, message: dict) -> None:
-        self.client.send(message)
-
-    def request(self, message: dict, timeout: float = REQUEST_TIMEOUT) -> dict:
-        # the browser's ids are its own; the bridge renumbers so two tabs cannot collide
-        own = f"bridge-{next(self.ids)}"
-        done, box = threading.Event(), []
-        self.pending[own] = (done, box)
-        self.send({**message, "id": own})
-        if not done.wait(timeout):
-            self.pending.pop(own, None)
-            return {"jsonrpc": "2.0", "id": message.get("id"),
-                    "error": {"code": -32603, "message": f"no answer from stvm lsp in {timeout} s"}}
-        return {**box[0], "id": message.get("id")}
-
-    def _route(self) -> None:
-        while True:
-            _, message = self.client.messages.get()
-            if "method" not in message:
-                waiter = self.pending.pop(message.get("id"), None)
-                if waiter:
-                    waiter[1].append(message)
-                    waiter[0].set()
-            elif "id" in message:   # a request of the server's (e.g. a refresh): answered here
-                self.send({"jsonrpc": "2.0", "id": message["id"], "result": None})
-                self.events.append(message)
-            else:
-                self.events.append(message)
-
-    def close(self) -> None:
-        proc = self.proc
-        try:
-            self.request({"jsonrpc": "2.0", "method": "shutdown"}, timeout=10)
-            self.send({"jsonrpc": "2.0", "method": "exit"})
-            proc.wait(10)
-        except (OSError, subprocess.TimeoutExpired):
-            pass
-        if proc.poll() is None:   # not the client's own shutdown: the router reads its queue
-            proc.kill()
-            proc.wait()
-        self.client.close()
-
-
-def make_handler(server: StdioServer, static: Path | None, mounts: dict[str, Path]):
+def make_handler(server: SharedClient, static: Path | None, mounts: dict[str, Path]):
     class Handler(BaseHTTPRequestHandler):
         def log_message(self, *args) -> None:   # quiet: the screenshot run prints its own steps
             pass
@@ -107,11 +49,18 @@ def make_handler(server: StdioServer, static: Path | None, mounts: dict[str, Pat
             if "id" not in message:
                 server.send(message)
                 return self._send(204)
-            self._send(200, json.dumps(server.request(message)).encode())
+            try:
+                answer = server.forward(message, timeout=REQUEST_TIMEOUT)
+            except queue.Empty:
+                answer = {"jsonrpc": "2.0", "id": message.get("id"), "error": {
+                    "code": -32603, "message": f"no answer from stvm lsp in {REQUEST_TIMEOUT} s"}}
+            self._send(200, json.dumps(answer).encode())
 
         def do_GET(self) -> None:
             if self.path == "/events":
-                events, server.events[:] = list(server.events), []
+                events = []
+                while not server.unsolicited.empty():
+                    events.append(server.unsolicited.get())
                 return self._send(200, json.dumps(events).encode())
             for prefix, root in [*mounts.items(), ("/", static)]:
                 if root is None or not self.path.startswith(prefix):
@@ -129,13 +78,13 @@ def start(command: list[str] | None = None, static: Path | None = None,
           mounts: dict[str, Path] | None = None, cwd: Path | None = None):
     """Start `stvm lsp` and the HTTP bridge on a free port of 127.0.0.1 (a thread);
     returns (http server, stdio server). Stop with `stop(...)`."""
-    lsp = StdioServer(command or [sys.executable, "-m", "stvm", "lsp"], cwd=cwd)
+    lsp = SharedClient(command or [sys.executable, "-m", "stvm", "lsp"], cwd=cwd, timeout=REQUEST_TIMEOUT)
     http = ThreadingHTTPServer(("127.0.0.1", 0), make_handler(lsp, static, mounts or {}))
     threading.Thread(target=http.serve_forever, daemon=True).start()
     return http, lsp
 
 
-def stop(http: ThreadingHTTPServer, lsp: StdioServer) -> None:
+def stop(http: ThreadingHTTPServer, lsp: SharedClient) -> None:
     http.shutdown()
     http.server_close()
     lsp.close()
