@@ -70,13 +70,7 @@ class IntrinsicCalls(BodyPart):
             shown = "this expression" if shown == "expression" else f"'{shown}'"
             self.error(f"{word}() needs a variable; {shown} is {what}", arg.span, "E055")
             return None
-        root: n.Expr = arg
-        while isinstance(root, (n.Member, n.Index)):
-            if isinstance(root, n.Member):
-                base_type = self.facts.types.get(root.base.nid)
-                if isinstance(base_type, t.FBType):
-                    self.facts.addressed.add((base_type.qualname.lower(), root.name.lower()))
-            root = root.base
+        root = self.bc.stmts.mark_members_addressed(arg)
         if isinstance(root, n.Name):
             ref = self.facts.names.get(root.nid)
             kind = getattr(ref, "kind", None)

@@ -113,18 +113,7 @@ class ProgramChecks(Pass):
                         if v.section not in (IN_OUT, EXTERNAL)]
             decl = self.ctx.index.type_decls.get(key)
             if decl is not None and isinstance(decl.body, n.StructDecl):
-                out = []
-                for fdecl in decl.body.fields:
-                    if isinstance(fdecl.type_spec, (n.NamedTypeSpec, n.ArrayTypeSpec)):
-                        spec = fdecl.type_spec
-                        while isinstance(spec, n.ArrayTypeSpec):
-                            spec = spec.element
-                        if isinstance(spec, n.NamedTypeSpec):
-                            fkey = self.ctx.index.lookup_type_key(spec.parts, spec.rooted, decl.namespace) \
-                                or self.ctx.index.lookup_pou_key(spec.parts, decl.namespace)
-                            if fkey is not None:
-                                out += [(name, t.StructType(fkey, fkey)) for name, _ in fdecl.names]
-                return out
+                return [(name, t.StructType(fkey, fkey)) for name, fkey in self._struct_members(key, decl)]
             return []
 
         def key_of(ty: t.Type) -> str | None:

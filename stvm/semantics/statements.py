@@ -278,9 +278,9 @@ class StatementChecker(BodyPart):
             return
         self.error(f"type mismatch: cannot assign {src.name} to {dst.name}{conversion_hint(src, dst)}", span, "E052")
 
-    def mark_addressed(self, expr: n.Expr) -> None:
-        """The variable under `expr` (a name, field, element) has its address taken: lowering keeps
-        it where a reference can reach it (never in a Python local)."""
+    def mark_members_addressed(self, expr: n.Expr) -> n.Expr:
+        """Mark every FB member on the path `expr` (fields, elements) as addressed; the path's
+        root (a name, or whatever expression the path starts from)."""
         root = expr
         while isinstance(root, (n.Member, n.Index)):
             if isinstance(root, n.Member):
@@ -288,6 +288,12 @@ class StatementChecker(BodyPart):
                 if isinstance(base_type, t.FBType):
                     self.facts.addressed.add((base_type.qualname.lower(), root.name.lower()))
             root = root.base
+        return root
+
+    def mark_addressed(self, expr: n.Expr) -> None:
+        """The variable under `expr` (a name, field, element) has its address taken: lowering keeps
+        it where a reference can reach it (never in a Python local)."""
+        root = self.mark_members_addressed(expr)
         if isinstance(root, n.Name):
             ref = self.facts.names.get(root.nid)
             if getattr(ref, "kind", None) == "var":
