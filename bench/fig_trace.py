@@ -13,9 +13,14 @@ Run alone: `python -m bench --only trace`; the part table: `python bench/fig_tra
 
 from __future__ import annotations
 
+import sys
 import time
+from pathlib import Path
 
-from bench.registry import ROOT, Row, figure, for_loop_us
+if __name__ == "__main__":      # run as a script: the repository root makes `bench` importable
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+from bench.registry import ROOT, Row, figure, for_loop_us  # noqa: E402
 
 SCENARIO = ROOT / "st_src" / "scenarios" / "golden_pnp_cycle.toml"
 FILES = [ROOT / "st_src" / "PnP_Example.st"]
@@ -206,9 +211,6 @@ def opcode_parts(project, scans: int = CYCLES, top: int = 30) -> None:
 
 if __name__ == "__main__":
     import argparse
-    import sys
-    sys.path.insert(0, str(ROOT))
-    sys.path.insert(0, str(ROOT / "bench"))
     ap = argparse.ArgumentParser(description="the per-part tables of the traced PnP golden run")
     ap.add_argument("--opcodes", action="store_true",
                     help="bytecodes and Python calls per scan per POU (exact; ~1 min) instead of CPU shares")
