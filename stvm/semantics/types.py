@@ -1,7 +1,14 @@
 """The ST type model shared by the checker, the code generator, the runtime and the stdlib.
 
-Types are frozen dataclasses so they can be compared, hashed and pickled into the load cache.
+Types are frozen value records so they can be compared, hashed and pickled into the load cache.
 Elementary types are singletons in `ELEMENTARY`; derived types are built by the checker.
+
+They behave as `dataclass(frozen=True)` classes did (the same `__init__` parameters, `==` of
+the same class and fields, `hash`, `repr`, assignment raising `FrozenInstanceError`, the
+instance `__dict__` that pickle stores), but are written out: `dataclass` builds each class's
+methods with `exec` when the module is imported, ~10 ms of every `stvm run` for these 17
+classes (issue 33 item 5). Each class lists its fields in `_FIELDS`; a test compares every
+class with the dataclass it replaces (tests/semantics/test_types_records.py).
 
 Runtime representation of each type (what generated code and native POUs see):
 
@@ -22,14 +29,38 @@ Runtime representation of each type (what generated code and native POUs see):
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import FrozenInstanceError
+from reprlib import recursive_repr
+
+_set = object.__setattr__
 
 
-@dataclass(frozen=True)
 class Type:
     """An ST data type as the checker and the lowering see it; `name` is the user's spelling."""
 
-    name: str
+    _FIELDS = ("name",)
+    __match_args__ = _FIELDS
+
+    def __init__(self, name: str) -> None:
+        _set(self, "name", name)
+
+    @recursive_repr()
+    def __repr__(self) -> str:
+        return f"{self.__class__.__qualname__}(name={self.name!r})"
+
+    def __eq__(self, other: object):
+        if other.__class__ is self.__class__:
+            return (self.name,) == (other.name,)   # type: ignore[attr-defined]
+        return NotImplemented
+
+    def __hash__(self) -> int:
+        return hash((self.name,))
+
+    def __setattr__(self, name: str, value: object) -> None:
+        raise FrozenInstanceError(f"cannot assign to field {name!r}")
+
+    def __delattr__(self, name: str) -> None:
+        raise FrozenInstanceError(f"cannot delete field {name!r}")
 
     @property
     def kind(self) -> str:
@@ -39,7 +70,6 @@ class Type:
         return self.name
 
 
-@dataclass(frozen=True)
 class BoolType(Type):
     """BOOL."""
 
@@ -48,13 +78,29 @@ class BoolType(Type):
         return "bool"
 
 
-@dataclass(frozen=True)
 class IntType(Type):
     """Signed/unsigned integers and bit strings (BYTE…LWORD are unsigned, `bitstring`)."""
 
-    bits: int = 16
-    signed: bool = True
-    bitstring: bool = False
+    _FIELDS = ('name', 'bits', 'signed', 'bitstring')
+    __match_args__ = _FIELDS
+
+    def __init__(self, name: str, bits: int = 16, signed: bool = True, bitstring: bool = False) -> None:
+        _set(self, "name", name)
+        _set(self, "bits", bits)
+        _set(self, "signed", signed)
+        _set(self, "bitstring", bitstring)
+
+    @recursive_repr()
+    def __repr__(self) -> str:
+        return f"{self.__class__.__qualname__}(name={self.name!r}, bits={self.bits!r}, signed={self.signed!r}, bitstring={self.bitstring!r})"
+
+    def __eq__(self, other: object):
+        if other.__class__ is self.__class__:
+            return (self.name, self.bits, self.signed, self.bitstring) == (other.name, other.bits, other.signed, other.bitstring)   # type: ignore[attr-defined]
+        return NotImplemented
+
+    def __hash__(self) -> int:
+        return hash((self.name, self.bits, self.signed, self.bitstring))
 
     @property
     def kind(self) -> str:
@@ -81,14 +127,34 @@ class IntType(Type):
         return value
 
 
-@dataclass(frozen=True)
 class SubrangeType(IntType):
     """`INT(0..100)` (IEC 61131-3 ed. 3, 6.4.4.3): an integer of the base type (same `name`,
     width and wrap) whose values must lie in low..high. A constant outside is a check-time error;
     a value computed at run time outside follows `subrange_check`."""
 
-    low: int = 0
-    high: int = 0
+    _FIELDS = ('name', 'bits', 'signed', 'bitstring', 'low', 'high')
+    __match_args__ = _FIELDS
+
+    def __init__(self, name: str, bits: int = 16, signed: bool = True, bitstring: bool = False,
+                 low: int = 0, high: int = 0) -> None:
+        _set(self, "name", name)
+        _set(self, "bits", bits)
+        _set(self, "signed", signed)
+        _set(self, "bitstring", bitstring)
+        _set(self, "low", low)
+        _set(self, "high", high)
+
+    @recursive_repr()
+    def __repr__(self) -> str:
+        return f"{self.__class__.__qualname__}(name={self.name!r}, bits={self.bits!r}, signed={self.signed!r}, bitstring={self.bitstring!r}, low={self.low!r}, high={self.high!r})"
+
+    def __eq__(self, other: object):
+        if other.__class__ is self.__class__:
+            return (self.name, self.bits, self.signed, self.bitstring, self.low, self.high) == (other.name, other.bits, other.signed, other.bitstring, other.low, other.high)   # type: ignore[attr-defined]
+        return NotImplemented
+
+    def __hash__(self) -> int:
+        return hash((self.name, self.bits, self.signed, self.bitstring, self.low, self.high))
 
     @property
     def text(self) -> str:
@@ -99,11 +165,27 @@ def subrange_of(base: IntType, low: int, high: int) -> SubrangeType:
     return SubrangeType(base.name, base.bits, base.signed, base.bitstring, low, high)
 
 
-@dataclass(frozen=True)
 class RealType(Type):
     """REAL (32 bits) or LREAL (64 bits)."""
 
-    bits: int = 32
+    _FIELDS = ('name', 'bits')
+    __match_args__ = _FIELDS
+
+    def __init__(self, name: str, bits: int = 32) -> None:
+        _set(self, "name", name)
+        _set(self, "bits", bits)
+
+    @recursive_repr()
+    def __repr__(self) -> str:
+        return f"{self.__class__.__qualname__}(name={self.name!r}, bits={self.bits!r})"
+
+    def __eq__(self, other: object):
+        if other.__class__ is self.__class__:
+            return (self.name, self.bits) == (other.name, other.bits)   # type: ignore[attr-defined]
+        return NotImplemented
+
+    def __hash__(self) -> int:
+        return hash((self.name, self.bits))
 
     @property
     def kind(self) -> str:
@@ -117,7 +199,6 @@ class RealType(Type):
 _LONG_TIMES = {"LTIME": "TIME", "LDATE": "DATE", "LTIME_OF_DAY": "TIME_OF_DAY", "LDATE_AND_TIME": "DATE_AND_TIME"}
 
 
-@dataclass(frozen=True)
 class TimeType(Type):
     """TIME (a duration) and DATE/TOD/DT (points in time), all integer nanoseconds; their long
     forms LTIME, LDATE, LTIME_OF_DAY, LDATE_AND_TIME (IEC ed. 3) are distinct types of the same
@@ -137,11 +218,27 @@ class TimeType(Type):
         return self.name in _LONG_TIMES
 
 
-@dataclass(frozen=True)
 class StringType(Type):
     """STRING[size]: `size` bytes of storage including the terminating NUL (Omron)."""
 
-    size: int = 1986
+    _FIELDS = ('name', 'size')
+    __match_args__ = _FIELDS
+
+    def __init__(self, name: str, size: int = 1986) -> None:
+        _set(self, "name", name)
+        _set(self, "size", size)
+
+    @recursive_repr()
+    def __repr__(self) -> str:
+        return f"{self.__class__.__qualname__}(name={self.name!r}, size={self.size!r})"
+
+    def __eq__(self, other: object):
+        if other.__class__ is self.__class__:
+            return (self.name, self.size) == (other.name, other.size)   # type: ignore[attr-defined]
+        return NotImplemented
+
+    def __hash__(self) -> int:
+        return hash((self.name, self.size))
 
     @property
     def kind(self) -> str:
@@ -152,7 +249,6 @@ class StringType(Type):
         return self.size - 1
 
 
-@dataclass(frozen=True)
 class WStringType(StringType):
     """WSTRING[n] (IEC 61131-3 ed. 3, 6.3.3): at most n UTF-16 code units. `size` is n + 1, so
     that `max_bytes` (the code units it holds, here) reads as for STRING, whose size counts the NUL.
@@ -168,18 +264,38 @@ def is_wide(ty: Type | None) -> bool:
     return isinstance(ty, WStringType)
 
 
-@dataclass(frozen=True)
 class EnumType(Type):
-    """An enumeration: its enumerators and values, base type, declared default and attributes."""
+    """An enumeration: its enumerators and values, base type, declared default and attributes.
 
-    qualname: str = ""
-    members: tuple[tuple[str, int], ...] = ()
-    base: Type | None = None
-    default: int | None = None   # `TYPE E : (A, B) := B;` — the declared initial value
-    # {attribute 'strict'} / {attribute 'to_string'} on its declaration (TwinCAT/CODESYS; read by
-    # semantics/dialect_rules.py, which says what they change in which dialect)
-    strict: bool = False
-    to_string: bool = False
+    `members`: (enumerator, value) in declaration order; `default`: the declared initial value
+    (`TYPE E : (A, B) := B;`); `strict`, `to_string`: {attribute 'strict'} / {attribute
+    'to_string'} on its declaration (TwinCAT/CODESYS; read by semantics/dialect_rules.py, which
+    says what they change in which dialect)."""
+
+    _FIELDS = ('name', 'qualname', 'members', 'base', 'default', 'strict', 'to_string')
+    __match_args__ = _FIELDS
+
+    def __init__(self, name: str, qualname: str = "", members: tuple[tuple[str, int], ...] = (), base: Type | None = None,
+                 default: int | None = None, strict: bool = False, to_string: bool = False) -> None:
+        _set(self, "name", name)
+        _set(self, "qualname", qualname)
+        _set(self, "members", members)
+        _set(self, "base", base)
+        _set(self, "default", default)
+        _set(self, "strict", strict)
+        _set(self, "to_string", to_string)
+
+    @recursive_repr()
+    def __repr__(self) -> str:
+        return f"{self.__class__.__qualname__}(name={self.name!r}, qualname={self.qualname!r}, members={self.members!r}, base={self.base!r}, default={self.default!r}, strict={self.strict!r}, to_string={self.to_string!r})"
+
+    def __eq__(self, other: object):
+        if other.__class__ is self.__class__:
+            return (self.name, self.qualname, self.members, self.base, self.default, self.strict, self.to_string) == (other.name, other.qualname, other.members, other.base, other.default, other.strict, other.to_string)   # type: ignore[attr-defined]
+        return NotImplemented
+
+    def __hash__(self) -> int:
+        return hash((self.name, self.qualname, self.members, self.base, self.default, self.strict, self.to_string))
 
     @property
     def kind(self) -> str:
@@ -198,13 +314,29 @@ class EnumType(Type):
         return None
 
 
-@dataclass(frozen=True)
 class StructType(Type):
-    """A STRUCT: its fields in declaration order."""
+    """A STRUCT: its fields, (field name, field type) in declaration order, which `==` and `hash`
+    leave out (two structs are the same type by name and qualified name)."""
 
-    qualname: str = ""
-    # (field name, field type) in declaration order
-    fields: tuple[tuple[str, Type], ...] = field(default=(), compare=False, hash=False)
+    _FIELDS = ('name', 'qualname', 'fields')
+    __match_args__ = _FIELDS
+
+    def __init__(self, name: str, qualname: str = "", fields: tuple[tuple[str, Type], ...] = ()) -> None:
+        _set(self, "name", name)
+        _set(self, "qualname", qualname)
+        _set(self, "fields", fields)
+
+    @recursive_repr()
+    def __repr__(self) -> str:
+        return f"{self.__class__.__qualname__}(name={self.name!r}, qualname={self.qualname!r}, fields={self.fields!r})"
+
+    def __eq__(self, other: object):
+        if other.__class__ is self.__class__:
+            return (self.name, self.qualname) == (other.name, other.qualname)   # type: ignore[attr-defined]
+        return NotImplemented
+
+    def __hash__(self) -> int:
+        return hash((self.name, self.qualname))
 
     @property
     def kind(self) -> str:
@@ -223,7 +355,6 @@ class StructType(Type):
         return None
 
 
-@dataclass(frozen=True)
 class UnionType(StructType):
     """CODESYS UNION: the members overlay the same bytes, each at offset 0 (little-endian, as on
     an x86 CODESYS target); its size is the largest member's, padded to the largest alignment.
@@ -231,15 +362,33 @@ class UnionType(StructType):
     keeps the union's bytes (`stvm.runtime.unions`)."""
 
 
-@dataclass(frozen=True)
 class ArrayType(Type):
-    """An ARRAY: element type and bounds per dimension (none for an `ARRAY[*]` parameter)."""
+    """An ARRAY: element type and bounds per dimension (none for an `ARRAY[*]` parameter).
 
-    element: Type = None  # type: ignore[assignment]
-    # (lo, hi) per dimension; None for an `ARRAY[*]` parameter (any bounds)
-    dims: tuple[tuple[int, int], ...] | None = ()
-    # the dimensions of an open array (`dims` None): 1 for ARRAY[*], 2 for ARRAY[*, *], …
-    rank: int = 1
+    `dims`: (lo, hi) per dimension; None for an `ARRAY[*]` parameter (any bounds). `rank`: the
+    dimensions of an open array (`dims` None): 1 for ARRAY[*], 2 for ARRAY[*, *], …"""
+
+    _FIELDS = ('name', 'element', 'dims', 'rank')
+    __match_args__ = _FIELDS
+
+    def __init__(self, name: str, element: Type = None,   # type: ignore[assignment]
+                 dims: tuple[tuple[int, int], ...] | None = (), rank: int = 1) -> None:
+        _set(self, "name", name)
+        _set(self, "element", element)
+        _set(self, "dims", dims)
+        _set(self, "rank", rank)
+
+    @recursive_repr()
+    def __repr__(self) -> str:
+        return f"{self.__class__.__qualname__}(name={self.name!r}, element={self.element!r}, dims={self.dims!r}, rank={self.rank!r})"
+
+    def __eq__(self, other: object):
+        if other.__class__ is self.__class__:
+            return (self.name, self.element, self.dims, self.rank) == (other.name, other.element, other.dims, other.rank)   # type: ignore[attr-defined]
+        return NotImplemented
+
+    def __hash__(self) -> int:
+        return hash((self.name, self.element, self.dims, self.rank))
 
     @property
     def kind(self) -> str:
@@ -253,31 +402,62 @@ class ArrayType(Type):
         return total
 
 
-@dataclass(frozen=True)
 class FBType(Type):
     """A FUNCTION_BLOCK or PROGRAM type; members are looked up in the project index."""
 
-    qualname: str = ""
-    is_program: bool = False
+    _FIELDS = ('name', 'qualname', 'is_program')
+    __match_args__ = _FIELDS
+
+    def __init__(self, name: str, qualname: str = "", is_program: bool = False) -> None:
+        _set(self, "name", name)
+        _set(self, "qualname", qualname)
+        _set(self, "is_program", is_program)
+
+    @recursive_repr()
+    def __repr__(self) -> str:
+        return f"{self.__class__.__qualname__}(name={self.name!r}, qualname={self.qualname!r}, is_program={self.is_program!r})"
+
+    def __eq__(self, other: object):
+        if other.__class__ is self.__class__:
+            return (self.name, self.qualname, self.is_program) == (other.name, other.qualname, other.is_program)   # type: ignore[attr-defined]
+        return NotImplemented
+
+    def __hash__(self) -> int:
+        return hash((self.name, self.qualname, self.is_program))
 
     @property
     def kind(self) -> str:
         return "program" if self.is_program else "fb"
 
 
-@dataclass(frozen=True)
 class InterfaceType(Type):
     """An INTERFACE type (IEC ed. 3 6.6.6): a variable of it holds a reference to an FB instance
     implementing it (at run time the instance object itself), or NULL (None)."""
 
-    qualname: str = ""
+    _FIELDS = ('name', 'qualname')
+    __match_args__ = _FIELDS
+
+    def __init__(self, name: str, qualname: str = "") -> None:
+        _set(self, "name", name)
+        _set(self, "qualname", qualname)
+
+    @recursive_repr()
+    def __repr__(self) -> str:
+        return f"{self.__class__.__qualname__}(name={self.name!r}, qualname={self.qualname!r})"
+
+    def __eq__(self, other: object):
+        if other.__class__ is self.__class__:
+            return (self.name, self.qualname) == (other.name, other.qualname)   # type: ignore[attr-defined]
+        return NotImplemented
+
+    def __hash__(self) -> int:
+        return hash((self.name, self.qualname))
 
     @property
     def kind(self) -> str:
         return "interface"
 
 
-@dataclass(frozen=True)
 class GenericType(Type):
     """IEC generic types (ANY, ANY_NUM, …) usable only in stdlib signatures."""
 
@@ -309,7 +489,6 @@ class GenericType(Type):
         return False
 
 
-@dataclass(frozen=True)
 class RefType(Type):
     """REF_TO T (IEC), POINTER TO T and REFERENCE TO T (CODESYS): a reference to a variable.
 
@@ -318,8 +497,26 @@ class RefType(Type):
     rebound), and NULL is None. `flavour` REFERENCE is dereferenced implicitly where it is used.
     """
 
-    target: Type = None  # type: ignore[assignment]  # None only for the NULL literal's type
-    flavour: str = "REF_TO"
+    _FIELDS = ('name', 'target', 'flavour')
+    __match_args__ = _FIELDS
+
+    def __init__(self, name: str, target: Type = None,   # type: ignore[assignment]  # None only for the NULL literal's type
+                 flavour: str = "REF_TO") -> None:
+        _set(self, "name", name)
+        _set(self, "target", target)
+        _set(self, "flavour", flavour)
+
+    @recursive_repr()
+    def __repr__(self) -> str:
+        return f"{self.__class__.__qualname__}(name={self.name!r}, target={self.target!r}, flavour={self.flavour!r})"
+
+    def __eq__(self, other: object):
+        if other.__class__ is self.__class__:
+            return (self.name, self.target, self.flavour) == (other.name, other.target, other.flavour)   # type: ignore[attr-defined]
+        return NotImplemented
+
+    def __hash__(self) -> int:
+        return hash((self.name, self.target, self.flavour))
 
     @property
     def kind(self) -> str:
@@ -355,7 +552,6 @@ def is_aggregate(ty: Type) -> bool:
     return isinstance(ty, (StructType, ArrayType, FBType))
 
 
-@dataclass(frozen=True)
 class VoidType(Type):
     """What a FUNCTION or METHOD without a result type returns."""
 
