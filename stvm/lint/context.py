@@ -45,7 +45,6 @@ class ProjectContext:
     def method_contexts(self, node: n.POU, info) -> list["PouContext"]:
         """The FB's METHODs and property accessors, linted like FUNCTIONs (their variables are
         fresh on every call; the instance's variables they use are not tracked)."""
-        from dataclasses import replace
         methods = getattr(self.analysis, "method_nodes", {})
         members = list(info.methods.values())
         for prop in info.properties.values():
@@ -60,7 +59,7 @@ class ProjectContext:
             end = n.Span(sp.file, sp.end_line, max(1, sp.end_column - len(word)), sp.end_line, sp.end_column)
             view = n.POU("FUNCTION", method.name, node.namespace, mnode.return_type, mnode.var_blocks, mnode.body,
                          mnode.pragmas, sp, end)
-            as_function = replace(method, kind="FUNCTION", return_type=method.return_type or t.VOID)
+            as_function = method.replace(kind="FUNCTION", return_type=method.return_type or t.VOID)
             ctx = PouContext(self, view, as_function)
             ctx.method_of = info.name
             out.append(ctx)

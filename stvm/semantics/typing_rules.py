@@ -11,7 +11,6 @@ Typing rules follow docs/sysmac.md section 2:
 
 from __future__ import annotations
 
-from dataclasses import replace
 
 from stvm.semantics import types as t
 from stvm.semantics.model import POUInfo
@@ -123,7 +122,7 @@ def trunc_result_from_context(settings) -> bool:
 
 def with_access(method: POUInfo, access: str) -> POUInfo:
     """A property accessor checked with its property's access specifier."""
-    return replace(method, access=access)
+    return method.replace(access=access)
 
 
 def native_result_rule(pou: POUInfo, natives):
