@@ -15,7 +15,6 @@ whose message lists the allowed values; the CLI turns it into a usage error, exi
 
 from __future__ import annotations
 
-import difflib
 import re
 from dataclasses import MISSING, FrozenInstanceError, dataclass, field, fields, replace
 from enum import Enum
@@ -748,6 +747,7 @@ def declaration(name: str) -> Declaration:
     """The declaration of setting `name`; SettingError (naming close matches) if there is none."""
     found = _declarations().get(name)
     if found is None:
+        import difflib   # lazy: start-up (heapq and difflib, ~2-5 ms, only for this message)
         close = difflib.get_close_matches(name, list(_declarations()), n=3)
         hint = f"; did you mean {' or '.join(close)}?" if close else ""
         raise SettingError(f"unknown Sysmac setting {name!r}{hint} (known: {', '.join(_declarations())})")
