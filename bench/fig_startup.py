@@ -14,7 +14,8 @@ yardstick, has its own. A session with `PYTHONDONTWRITEBYTECODE` set compiles st
 modules from source on every run (~0.13 s CPU here, two thirds of the whole yardstick), which
 measures the environment, not stvm: the figures run with bytecode written to a temporary
 `PYTHONPYCACHEPREFIX` (filled by the first runs, never the source tree), for stvm and the
-yardstick alike; the 100,000-line load too (a first load of the program, not of stvm's modules). The run figure is also given without a bytecode cache, for comparison.
+yardstick alike; the 100,000-line load too (a first load of the program, not of stvm's
+modules). The run figure is also given without a bytecode cache, for comparison.
 """
 
 from __future__ import annotations
