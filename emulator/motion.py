@@ -36,7 +36,7 @@ import math
 from collections import deque
 from dataclasses import dataclass, field
 from fractions import Fraction
-from typing import Any, Sequence
+from typing import Any, Callable, Sequence
 
 import numpy as np
 
@@ -156,8 +156,7 @@ class Kinematics:
         rows = self._link_rows.get(key) if q != 0.0 else None   # (-0.0 == 0.0: not cached)
         if rows is None:
             alpha, a, d, offset, ca, sa = self._links[index]
-            th = dm.radians(q + offset)
-            ct, st = dm.cos(th), dm.sin(th)
+            st, ct = dm.sincos(dm.radians(q + offset))
             rows = ((ct, -st * ca, st * sa, a * ct), (st, ct * ca, -ct * sa, a * st), (0.0, sa, ca, d))
             if q != 0.0:
                 if len(self._link_rows) >= 256:   # bounded small: the reuse is within one step (the Jacobian), a run visits ever new angles
@@ -174,11 +173,12 @@ class Kinematics:
         if out is None:
             out = self._IDENTITY_ROWS
         for index in range(start, min(len(self._links), len(joints_deg))):
-            link = self._link(index, float(joints_deg[index]))
-            l0, l1, l2 = link
-            # out = out @ link, row by row; the implicit last rows are (0, 0, 0, 1)
-            out = [[r[0] * l0[j] + r[1] * l1[j] + r[2] * l2[j] + (r[3] if j == 3 else 0.0)
-                    for j in range(4)] for r in out]
+            (a0, a1, a2, a3), (b0, b1, b2, b3), (c0, c1, c2, c3) = self._link(index, float(joints_deg[index]))
+            # out = out @ link, row by row; the implicit last rows are (0, 0, 0, 1): each sum in
+            # the order r0*a + r1*b + r2*c + (r3 in the last column, else 0.0), written out
+            out = [[r0 * a0 + r1 * b0 + r2 * c0 + 0.0, r0 * a1 + r1 * b1 + r2 * c1 + 0.0,
+                    r0 * a2 + r1 * b2 + r2 * c2 + 0.0, r0 * a3 + r1 * b3 + r2 * c3 + r3]
+                   for r0, r1, r2, r3 in out]
             if prefixes is not None:
                 prefixes.append(out)
         return out
@@ -211,6 +211,95 @@ class Kinematics:
 
     def _ik(self, target: np.ndarray, seed_deg: Sequence[float], tool: np.ndarray | None,
             max_iterations: int) -> np.ndarray | None:
+        """`_ik_arrays` on plain lists of floats: the same operations in the same order (so the
+        same bits), without a numpy call per small step (a solve took ~2 ms, most of it numpy's
+        per-call cost on 3- to 6-element arrays). Anything but 4x4 poses takes `_ik_arrays`."""
+        target_rows = np.asarray(target, dtype=float).tolist()
+        tool_rows = None if tool is None else np.asarray(tool, dtype=float).tolist()
+        seed = np.asarray(seed_deg, dtype=float)
+        if np.shape(target) != (4, 4) or (tool is not None and np.shape(tool) != (4, 4)) or seed.ndim != 1 \
+                or len(seed) != len(self._links):
+            return self._ik_arrays(target, seed_deg, tool, max_iterations)
+        rad, deg = dm.RAD_PER_DEG, dm.DEG_PER_RAD
+        q = [v * rad for v in seed.tolist()]
+        position_tolerance, angle_tolerance = 1e-2, dm.radians(1e-2)
+        dot, solve = dm._dot_floats, dm.solve_lists
+        for _ in range(max_iterations):
+            q_deg = [v * deg for v in q]
+            err = self._pose_error_rows(target_rows, q_deg, tool_rows)
+            if math.sqrt(dot(err[:3], err[:3])) < position_tolerance \
+                    and math.sqrt(dot(err[3:], err[3:])) < angle_tolerance:
+                result = np.array(q) * deg
+                # Keep angles near the seed (joints rotate more than 360 deg on a TM).
+                result = np.asarray(seed_deg) + (result - np.asarray(seed_deg) + 180.0) % 360.0 - 180.0
+                return result if self.within_limits(result) else None
+            jac = self._jacobian_rows(q_deg, tool_rows)
+            for row in jac[3:]:
+                row[:] = [v * 300.0 for v in row]   # weight rotation like ~300 mm of lever arm
+            scaled = err[:3] + [v * 300.0 for v in err[3:]]
+            # (J J^T + damping * I): the damping (1.0) is added to every element times the
+            # identity's; J J^T is symmetric to the bit (x*y == y*x, the same order of the sums)
+            normal = [[0.0] * len(jac) for _ in jac]
+            for i, row in enumerate(jac):
+                normal[i][i] = dot(row, row) + 1.0
+                for j in range(i):
+                    normal[i][j] = normal[j][i] = dot(row, jac[j]) + 0.0
+            x = solve(normal, scaled)
+            q = [v + dot(column, x) for v, column in zip(q, zip(*jac))]   # q + J^T x
+        return None
+
+    @staticmethod
+    def _times_rows(left: list, right: list) -> list:
+        """left @ right for 4x4 row lists: `dm.matmul`'s sums, in its order."""
+        columns = list(zip(*right))
+        return [[0.0 + r0 * c0 + r1 * c1 + r2 * c2 + r3 * c3 for c0, c1, c2, c3 in columns]
+                for r0, r1, r2, r3 in left]
+
+    def _pose_error_rows(self, target: list, q_deg: list, tool: list | None) -> list:
+        """`_pose_error` on row lists (the same operations in the same order)."""
+        cur = self._chain(q_deg) + [[0.0, 0.0, 0.0, 1.0]]
+        if tool is not None:
+            cur = self._times_rows(cur, tool)
+        t0, t1, t2 = target[0], target[1], target[2]
+        c0, c1, c2 = cur[0], cur[1], cur[2]
+        dp = [t0[3] - c0[3], t1[3] - c1[3], t2[3] - c2[3]]
+        # r_err = target[:3, :3] @ cur[:3, :3].T: element (i, j) sums target row i times cur row j
+        r_err = [[0.0 + t[0] * c[0] + t[1] * c[1] + t[2] * c[2] for c in (c0, c1, c2)] for t in (t0, t1, t2)]
+        angle = dm.acos(max(-1.0, min(1.0, (r_err[0][0] + r_err[1][1] + r_err[2][2] - 1) / 2)))
+        if angle < 1e-12:
+            return dp + [0.0, 0.0, 0.0]
+        axis = [r_err[2][1] - r_err[1][2], r_err[0][2] - r_err[2][0], r_err[1][0] - r_err[0][1]]
+        norm = math.sqrt(dm._dot_floats(axis, axis))
+        return dp + ([v / norm * angle for v in axis] if norm > 1e-12 else [0.0, 0.0, 0.0])
+
+    def _jacobian_rows(self, q_deg: list, tool: list | None) -> list:
+        """`_jacobian` on row lists (the same operations in the same order), as rows."""
+        prefixes = [self._IDENTITY_ROWS]
+        base = self._chain(q_deg, prefixes=prefixes) + [[0.0, 0.0, 0.0, 1.0]]
+        if tool is not None:
+            base = self._times_rows(base, tool)
+        b0, b1, b2 = base[0], base[1], base[2]
+        h = 1e-6
+        step, two_h = dm.degrees(h), 2 * h
+        columns = []
+        for i in range(len(q_deg)):
+            dq = list(q_deg)
+            dq[i] += step
+            moved = self._chain(dq, i, prefixes[i]) + [[0.0, 0.0, 0.0, 1.0]]
+            if tool is not None:
+                moved = self._times_rows(moved, tool)
+            m0, m1, m2 = moved[0], moved[1], moved[2]
+
+            def r_d(m: list, b: list) -> float:   # (moved[:3, :3] @ base[:3, :3].T)[row m, column b]
+                return 0.0 + m[0] * b[0] + m[1] * b[1] + m[2] * b[2]
+            columns.append(((m0[3] - b0[3]) / h, (m1[3] - b1[3]) / h, (m2[3] - b2[3]) / h,
+                            (r_d(m2, b1) - r_d(m1, b2)) / two_h, (r_d(m0, b2) - r_d(m2, b0)) / two_h,
+                            (r_d(m1, b0) - r_d(m0, b1)) / two_h))
+        return [list(row) for row in zip(*columns)]
+
+    def _ik_arrays(self, target: np.ndarray, seed_deg: Sequence[float], tool: np.ndarray | None,
+                   max_iterations: int) -> np.ndarray | None:
+        """Damped least squares on numpy arrays (the reference `_ik` follows)."""
         q = np.asarray(seed_deg, dtype=float) * dm.RAD_PER_DEG
         damping = 1.0
         for _ in range(max_iterations):
@@ -447,6 +536,9 @@ class MotionExecutor:
         self.rest_tcp = kinematics.fk(self.rest_joints, tool)
         self.time_ns = 0
         self.stalled = False  # fault "busy": motion never progresses
+        # set by an `InProcessLink` that lets the clocks lag on quiet steps (see there): brings
+        # `time_ns` up to date before the pose is read
+        self.catch_up: Callable[[], None] | None = None
 
     # -- queries ---------------------------------------------------------------------------------
 
@@ -472,6 +564,8 @@ class MotionExecutor:
         return end if head is None or end < head else head
 
     def current_tcp(self) -> np.ndarray:
+        if self.catch_up is not None:
+            self.catch_up()
         if not self.active:
             return self.rest_tcp
         current = self.active[-1]
@@ -481,6 +575,8 @@ class MotionExecutor:
         return tcp
 
     def current_joints(self, tool: np.ndarray | None = None) -> np.ndarray:
+        if self.catch_up is not None:
+            self.catch_up()
         if not self.active:
             return self.rest_joints
         current = self.active[-1]
