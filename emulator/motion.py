@@ -142,11 +142,25 @@ class Kinematics:
         # is most of an fk, and a Jacobian's six fks differ from the base in one joint each
         self._link_rows: dict[tuple[int, float], tuple] = {}
         self._ik_results: dict[tuple, np.ndarray | None] = {}   # see `ik`
+        self._fk_results: dict[tuple, np.ndarray] = {}          # see `fk`
 
     def fk(self, joints_deg: Sequence[float], tool: np.ndarray | None = None) -> np.ndarray:
-        """4x4 pose of the TCP in the robot base (``tool`` = flange -> TCP transform)."""
-        result = np.array(self._chain(joints_deg) + [[0.0, 0.0, 0.0, 1.0]])
-        return dm.matmul(result, tool) if tool is not None else result
+        """4x4 pose of the TCP in the robot base (``tool`` = flange -> TCP transform).
+
+        Kept by the exact bytes of the arguments, as `ik`: a motion is planned twice (the dry
+        run, then the run) and a cycle repeats its targets."""
+        joints, tool_array = np.asarray(joints_deg), None if tool is None else np.asarray(tool)
+        key = (joints.dtype.str, joints.shape, joints.tobytes(),
+               None if tool_array is None else (tool_array.dtype.str, tool_array.shape, tool_array.tobytes()))
+        found = self._fk_results.get(key) if joints.dtype.kind in "fiu" else None
+        if found is None:
+            result = np.array(self._chain(joints_deg) + [[0.0, 0.0, 0.0, 1.0]])
+            found = dm.matmul(result, tool) if tool is not None else result
+            if joints.dtype.kind in "fiu" and (tool_array is None or tool_array.dtype.kind in "fiu"):
+                if len(self._fk_results) >= 128:
+                    self._fk_results.clear()
+                self._fk_results[key] = found
+        return found.copy()
 
     _IDENTITY_ROWS = [[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0]]
 
@@ -682,6 +696,9 @@ class Planner:
     def __init__(self, kinematics: Kinematics, settings: EmulatorSettings = DEFAULT_SETTINGS):
         self.kin = kinematics
         self.settings = settings
+        # joint_motion's timing by its exact inputs: a script is planned twice (the dry run,
+        # then the run) and a cycle repeats its motions; `SegmentTiming` is immutable
+        self._joint_timings: dict[tuple, tuple[EmulatorSettings, SegmentTiming, tuple[int, int, int, int]]] = {}
 
     def _accel_s(self, accel_ms: float) -> Fraction:
         return max(Fraction(accel_ms), Fraction(self.settings.min_accel_ms)) / 1000
@@ -696,11 +713,24 @@ class Planner:
                      blend_pct: float, precise: bool, label: str) -> Segment:
         if not self.kin.within_limits(target_joints):
             raise PlanError("joint target outside the joint limits")
-        pct = Fraction(speed_pct) / 100
-        speeds = [Fraction(v) * pct for v in self.settings.max_joint_speed_deg_s]
-        distances = [abs(Fraction(float(t)) - Fraction(float(q))) for t, q in zip(target_joints, state.joints)]
-        timing = self._timing(distances, speeds, accel_ms, blend_pct, False, Fraction(1), precise)
-        duration_ns, accel_ns, blend_ns, settle_ns = timing.times_ns()
+        target_array, joints_array = np.asarray(target_joints), np.asarray(state.joints)
+        key = (target_array.dtype.str, target_array.shape, target_array.tobytes(), joints_array.dtype.str,
+               joints_array.shape, joints_array.tobytes(), speed_pct, accel_ms, blend_pct, precise)
+        cacheable = target_array.dtype.kind == joints_array.dtype.kind == "f"
+        known = self._joint_timings.get(key) if cacheable else None
+        if known is not None and known[0] is self.settings:
+            timing, times = known[1], known[2]
+        else:
+            pct = Fraction(speed_pct) / 100
+            speeds = [Fraction(v) * pct for v in self.settings.max_joint_speed_deg_s]
+            distances = [abs(Fraction(float(t)) - Fraction(float(q))) for t, q in zip(target_joints, state.joints)]
+            timing = self._timing(distances, speeds, accel_ms, blend_pct, False, Fraction(1), precise)
+            times = timing.times_ns()
+            if cacheable:
+                if len(self._joint_timings) >= 128:   # bounded, as Kinematics._ik_results
+                    self._joint_timings.clear()
+                self._joint_timings[key] = (self.settings, timing, times)
+        duration_ns, accel_ns, blend_ns, settle_ns = times
         end_tcp = self.kin.fk(target_joints, state.tool)
         seg = Segment("joint", state.joints.copy(), target_joints.copy(), state.tcp.copy(), end_tcp,
                       duration_ns, accel_ns, blend_ns, settle_ns, label=label, timing=timing)
