@@ -211,6 +211,17 @@ class LockstepTransport(SocketTable):
                     return ESTABLISHED
         return super().poll(handle, now_ns)
 
+    def quiet_receive(self, handle: int) -> bool:
+        # `poll` (above) would return ESTABLISHED by its first branch and nothing is buffered
+        entry = self._sockets.get(handle)
+        if entry is None or entry.received:
+            return False
+        link = entry.link
+        if link.state != ESTABLISHED:
+            return False
+        endpoint = link._endpoint
+        return endpoint.status == "connected" and not endpoint._rx   # (`available` without its call)
+
     def pending(self, handle: int) -> int:
         entry = self._sockets.get(handle)
         return len(entry.received) if entry is not None else super().pending(handle)
