@@ -129,6 +129,15 @@ TM5_700_DH = ((-90.0, 0.0, 145.1, 0.0), (0.0, 329.0, 0.0, -90.0), (0.0, 311.5, 0
               (90.0, 0.0, -122.3, 90.0), (90.0, 0.0, 106.0, 0.0), (0.0, 0.0, 113.2, 0.0))
 
 
+# Kinematics results kept per arm model: (DH table bytes, joint limit bytes) -> (ik results, fk
+# results), each bounded by `_KEPT_RESULTS` entries (cleared when full)
+_RESULTS_BY_MODEL: dict[tuple[bytes, bytes], tuple[dict, dict]] = {}
+_KEPT_RESULTS = 512
+# PTP timings by their exact inputs and the settings object (kept in the entry, compared with
+# `is`): shared by the planners of every robot, bounded as above
+_JOINT_TIMINGS: dict[tuple, tuple] = {}
+
+
 class Kinematics:
     """Forward kinematics by DH and damped-least-squares inverse kinematics (numpy)."""
 
@@ -141,8 +150,10 @@ class Kinematics:
         # (link index, joint angle) -> that link's rows: the pure-Python trigonometry of detmath
         # is most of an fk, and a Jacobian's six fks differ from the base in one joint each
         self._link_rows: dict[tuple[int, float], tuple] = {}
-        self._ik_results: dict[tuple, np.ndarray | None] = {}   # see `ik`
-        self._fk_results: dict[tuple, np.ndarray] = {}          # see `fk`
+        # `ik` and `fk` results (see there), shared by every arm of the same model (DH table and
+        # joint limits): the robots of a cell are identical arms, often on identical paths
+        self._ik_results, self._fk_results = _RESULTS_BY_MODEL.setdefault(
+            (self.dh.tobytes(), self.limits.tobytes()), ({}, {}))
 
     def fk(self, joints_deg: Sequence[float], tool: np.ndarray | None = None) -> np.ndarray:
         """4x4 pose of the TCP in the robot base (``tool`` = flange -> TCP transform).
@@ -157,7 +168,7 @@ class Kinematics:
             result = np.array(self._chain(joints_deg) + [[0.0, 0.0, 0.0, 1.0]])
             found = dm.matmul(result, tool) if tool is not None else result
             if joints.dtype.kind in "fiu" and (tool_array is None or tool_array.dtype.kind in "fiu"):
-                if len(self._fk_results) >= 128:
+                if len(self._fk_results) >= _KEPT_RESULTS:
                     self._fk_results.clear()
                 self._fk_results[key] = found
         return found.copy()
@@ -218,7 +229,7 @@ class Kinematics:
             found = self._ik_results[key]
             return None if found is None else found.copy()
         found = self._ik(target, seed_deg, tool, max_iterations)
-        if len(self._ik_results) >= 128:   # bounded: a cycle repeats a few targets; a long run with ever new ones stays small
+        if len(self._ik_results) >= _KEPT_RESULTS:   # bounded: a cycle repeats a few targets; a long run with ever new ones stays small
             self._ik_results.clear()
         self._ik_results[key] = None if found is None else found.copy()
         return found
@@ -696,9 +707,10 @@ class Planner:
     def __init__(self, kinematics: Kinematics, settings: EmulatorSettings = DEFAULT_SETTINGS):
         self.kin = kinematics
         self.settings = settings
-        # joint_motion's timing by its exact inputs: a script is planned twice (the dry run,
-        # then the run) and a cycle repeats its motions; `SegmentTiming` is immutable
-        self._joint_timings: dict[tuple, tuple[EmulatorSettings, SegmentTiming, tuple[int, int, int, int]]] = {}
+        # joint_motion's timing by its exact inputs (`_JOINT_TIMINGS`): a script is planned
+        # twice (the dry run, then the run) and a cycle repeats its motions; `SegmentTiming` is
+        # immutable
+        self._joint_timings = _JOINT_TIMINGS
 
     def _accel_s(self, accel_ms: float) -> Fraction:
         return max(Fraction(accel_ms), Fraction(self.settings.min_accel_ms)) / 1000
@@ -715,7 +727,7 @@ class Planner:
             raise PlanError("joint target outside the joint limits")
         target_array, joints_array = np.asarray(target_joints), np.asarray(state.joints)
         key = (target_array.dtype.str, target_array.shape, target_array.tobytes(), joints_array.dtype.str,
-               joints_array.shape, joints_array.tobytes(), speed_pct, accel_ms, blend_pct, precise)
+               joints_array.shape, joints_array.tobytes(), speed_pct, accel_ms, blend_pct, precise, id(self.settings))
         cacheable = target_array.dtype.kind == joints_array.dtype.kind == "f"
         known = self._joint_timings.get(key) if cacheable else None
         if known is not None and known[0] is self.settings:
@@ -727,7 +739,7 @@ class Planner:
             timing = self._timing(distances, speeds, accel_ms, blend_pct, False, Fraction(1), precise)
             times = timing.times_ns()
             if cacheable:
-                if len(self._joint_timings) >= 128:   # bounded, as Kinematics._ik_results
+                if len(self._joint_timings) >= _KEPT_RESULTS:
                     self._joint_timings.clear()
                 self._joint_timings[key] = (self.settings, timing, times)
         duration_ns, accel_ns, blend_ns, settle_ns = times
