@@ -249,16 +249,21 @@ class Kinematics:
         q = [v * rad for v in seed.tolist()]
         position_tolerance, angle_tolerance = 1e-2, dm.radians(1e-2)
         dot, solve = dm._dot_floats, dm.solve_lists
+        norm = math.sqrt
         for _ in range(max_iterations):
             q_deg = [v * deg for v in q]
-            err = self._pose_error_rows(target_rows, q_deg, tool_rows)
-            if math.sqrt(dot(err[:3], err[:3])) < position_tolerance \
-                    and math.sqrt(dot(err[3:], err[3:])) < angle_tolerance:
+            # the TCP pose at q: the pose error's and the Jacobian's base (one chain for both)
+            prefixes = [self._IDENTITY_ROWS]
+            pose = self._chain(q_deg, prefixes=prefixes) + [[0.0, 0.0, 0.0, 1.0]]
+            if tool_rows is not None:
+                pose = self._times_rows(pose, tool_rows)
+            err = self._pose_error_rows(target_rows, pose)
+            if norm(dot(err[:3], err[:3])) < position_tolerance and norm(dot(err[3:], err[3:])) < angle_tolerance:
                 result = np.array(q) * deg
                 # Keep angles near the seed (joints rotate more than 360 deg on a TM).
                 result = np.asarray(seed_deg) + (result - np.asarray(seed_deg) + 180.0) % 360.0 - 180.0
                 return result if self.within_limits(result) else None
-            jac = self._jacobian_rows(q_deg, tool_rows)
+            jac = self._jacobian_rows(q_deg, tool_rows, pose, prefixes)
             for row in jac[3:]:
                 row[:] = [v * 300.0 for v in row]   # weight rotation like ~300 mm of lever arm
             scaled = err[:3] + [v * 300.0 for v in err[3:]]
@@ -280,11 +285,10 @@ class Kinematics:
         return [[0.0 + r0 * c0 + r1 * c1 + r2 * c2 + r3 * c3 for c0, c1, c2, c3 in columns]
                 for r0, r1, r2, r3 in left]
 
-    def _pose_error_rows(self, target: list, q_deg: list, tool: list | None) -> list:
-        """`_pose_error` on row lists (the same operations in the same order)."""
-        cur = self._chain(q_deg) + [[0.0, 0.0, 0.0, 1.0]]
-        if tool is not None:
-            cur = self._times_rows(cur, tool)
+    @staticmethod
+    def _pose_error_rows(target: list, cur: list) -> list:
+        """`_pose_error` on row lists (the same operations in the same order), from the current
+        pose `cur` (`fk`'s rows)."""
         t0, t1, t2 = target[0], target[1], target[2]
         c0, c1, c2 = cur[0], cur[1], cur[2]
         dp = [t0[3] - c0[3], t1[3] - c1[3], t2[3] - c2[3]]
@@ -297,12 +301,9 @@ class Kinematics:
         norm = math.sqrt(dm._dot_floats(axis, axis))
         return dp + ([v / norm * angle for v in axis] if norm > 1e-12 else [0.0, 0.0, 0.0])
 
-    def _jacobian_rows(self, q_deg: list, tool: list | None) -> list:
-        """`_jacobian` on row lists (the same operations in the same order), as rows."""
-        prefixes = [self._IDENTITY_ROWS]
-        base = self._chain(q_deg, prefixes=prefixes) + [[0.0, 0.0, 0.0, 1.0]]
-        if tool is not None:
-            base = self._times_rows(base, tool)
+    def _jacobian_rows(self, q_deg: list, tool: list | None, base: list, prefixes: list) -> list:
+        """`_jacobian` on row lists (the same operations in the same order), as rows; `base` is
+        the pose at `q_deg` (`fk`'s rows), `prefixes` the products of its first links."""
         b0, b1, b2 = base[0], base[1], base[2]
         h = 1e-6
         step, two_h = dm.degrees(h), 2 * h
