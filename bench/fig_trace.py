@@ -61,9 +61,16 @@ _PARTS = (  # (where the innermost matching frame's code lives, the part): first
 GLUE = "VM scan loop and the rest"
 
 
+_ROOT_TEXT = str(ROOT)
+
+
 def _classify(frame) -> str:
     while frame is not None:
         name = frame.f_code.co_filename
+        if name.startswith(_ROOT_TEXT):
+            # inside the repository: match on the path from its root (a checkout whose own path
+            # holds "/emulator/", e.g. a worktree of that name, would otherwise match everything)
+            name = name[len(_ROOT_TEXT):]
         for needle, part in _PARTS:
             if needle in name:
                 return part

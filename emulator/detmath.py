@@ -146,6 +146,22 @@ def cos(x: float) -> float:
     return _sin_kernel(r)
 
 
+def sincos(x: float) -> tuple[float, float]:
+    """(sin(x), cos(x)) with one argument reduction: the same bits as the two calls."""
+    x = float(x)
+    if not math.isfinite(x):
+        return math.nan, math.nan
+    n, r = _reduce(x)
+    quadrant = n & 3
+    if quadrant == 0:
+        return _sin_kernel(r), _cos_kernel(r)
+    if quadrant == 1:
+        return _cos_kernel(r), -_sin_kernel(r)
+    if quadrant == 2:
+        return -_sin_kernel(r), -_cos_kernel(r)
+    return -_cos_kernel(r), _sin_kernel(r)
+
+
 def _atan_small(t: float) -> float:
     """atan for 0 <= t <= 1: halve the angle until t < 0.1, then the series."""
     halvings = 0
@@ -278,8 +294,11 @@ def rigid_inverse(t: np.ndarray) -> np.ndarray:
 
 def solve(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """x with a @ x = b (Gaussian elimination, partial pivoting, fixed order)."""
-    m = np.asarray(a, dtype=float).tolist()
-    rhs = [float(v) for v in b]
+    return np.array(solve_lists(np.asarray(a, dtype=float).tolist(), [float(v) for v in b]))
+
+
+def solve_lists(m: list[list[float]], rhs: list[float]) -> list[float]:
+    """`solve` on lists of Python floats (changed in place), returning a list."""
     size = len(m)
     for col in range(size):
         pivot = max(range(col, size), key=lambda r: abs(m[r][col]))
@@ -303,4 +322,4 @@ def solve(a: np.ndarray, b: np.ndarray) -> np.ndarray:
         for k in range(r + 1, size):
             total -= row[k] * x[k]
         x[r] = total / row[r]
-    return np.array(x)
+    return x

@@ -36,7 +36,7 @@ import math
 from collections import deque
 from dataclasses import dataclass, field
 from fractions import Fraction
-from typing import Any, Sequence
+from typing import Any, Callable, Sequence
 
 import numpy as np
 
@@ -129,6 +129,15 @@ TM5_700_DH = ((-90.0, 0.0, 145.1, 0.0), (0.0, 329.0, 0.0, -90.0), (0.0, 311.5, 0
               (90.0, 0.0, -122.3, 90.0), (90.0, 0.0, 106.0, 0.0), (0.0, 0.0, 113.2, 0.0))
 
 
+# Kinematics results kept per arm model: (DH table bytes, joint limit bytes) -> (ik results, fk
+# results), each bounded by `_KEPT_RESULTS` entries (cleared when full)
+_RESULTS_BY_MODEL: dict[tuple[bytes, bytes], tuple[dict, dict]] = {}
+_KEPT_RESULTS = 512
+# PTP timings by their exact inputs and the settings object (kept in the entry, compared with
+# `is`): shared by the planners of every robot, bounded as above
+_JOINT_TIMINGS: dict[tuple, tuple] = {}
+
+
 class Kinematics:
     """Forward kinematics by DH and damped-least-squares inverse kinematics (numpy)."""
 
@@ -141,12 +150,28 @@ class Kinematics:
         # (link index, joint angle) -> that link's rows: the pure-Python trigonometry of detmath
         # is most of an fk, and a Jacobian's six fks differ from the base in one joint each
         self._link_rows: dict[tuple[int, float], tuple] = {}
-        self._ik_results: dict[tuple, np.ndarray | None] = {}   # see `ik`
+        # `ik` and `fk` results (see there), shared by every arm of the same model (DH table and
+        # joint limits): the robots of a cell are identical arms, often on identical paths
+        self._ik_results, self._fk_results = _RESULTS_BY_MODEL.setdefault(
+            (self.dh.tobytes(), self.limits.tobytes()), ({}, {}))
 
     def fk(self, joints_deg: Sequence[float], tool: np.ndarray | None = None) -> np.ndarray:
-        """4x4 pose of the TCP in the robot base (``tool`` = flange -> TCP transform)."""
-        result = np.array(self._chain(joints_deg) + [[0.0, 0.0, 0.0, 1.0]])
-        return dm.matmul(result, tool) if tool is not None else result
+        """4x4 pose of the TCP in the robot base (``tool`` = flange -> TCP transform).
+
+        Kept by the exact bytes of the arguments, as `ik`: a motion is planned twice (the dry
+        run, then the run) and a cycle repeats its targets."""
+        joints, tool_array = np.asarray(joints_deg), None if tool is None else np.asarray(tool)
+        key = (joints.dtype.str, joints.shape, joints.tobytes(),
+               None if tool_array is None else (tool_array.dtype.str, tool_array.shape, tool_array.tobytes()))
+        found = self._fk_results.get(key) if joints.dtype.kind in "fiu" else None
+        if found is None:
+            result = np.array(self._chain(joints_deg) + [[0.0, 0.0, 0.0, 1.0]])
+            found = dm.matmul(result, tool) if tool is not None else result
+            if joints.dtype.kind in "fiu" and (tool_array is None or tool_array.dtype.kind in "fiu"):
+                if len(self._fk_results) >= _KEPT_RESULTS:
+                    self._fk_results.clear()
+                self._fk_results[key] = found
+        return found.copy()
 
     _IDENTITY_ROWS = [[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0]]
 
@@ -156,8 +181,7 @@ class Kinematics:
         rows = self._link_rows.get(key) if q != 0.0 else None   # (-0.0 == 0.0: not cached)
         if rows is None:
             alpha, a, d, offset, ca, sa = self._links[index]
-            th = dm.radians(q + offset)
-            ct, st = dm.cos(th), dm.sin(th)
+            st, ct = dm.sincos(dm.radians(q + offset))
             rows = ((ct, -st * ca, st * sa, a * ct), (st, ct * ca, -ct * sa, a * st), (0.0, sa, ca, d))
             if q != 0.0:
                 if len(self._link_rows) >= 256:   # bounded small: the reuse is within one step (the Jacobian), a run visits ever new angles
@@ -174,11 +198,12 @@ class Kinematics:
         if out is None:
             out = self._IDENTITY_ROWS
         for index in range(start, min(len(self._links), len(joints_deg))):
-            link = self._link(index, float(joints_deg[index]))
-            l0, l1, l2 = link
-            # out = out @ link, row by row; the implicit last rows are (0, 0, 0, 1)
-            out = [[r[0] * l0[j] + r[1] * l1[j] + r[2] * l2[j] + (r[3] if j == 3 else 0.0)
-                    for j in range(4)] for r in out]
+            (a0, a1, a2, a3), (b0, b1, b2, b3), (c0, c1, c2, c3) = self._link(index, float(joints_deg[index]))
+            # out = out @ link, row by row; the implicit last rows are (0, 0, 0, 1): each sum in
+            # the order r0*a + r1*b + r2*c + (r3 in the last column, else 0.0), written out
+            out = [[r0 * a0 + r1 * b0 + r2 * c0 + 0.0, r0 * a1 + r1 * b1 + r2 * c1 + 0.0,
+                    r0 * a2 + r1 * b2 + r2 * c2 + 0.0, r0 * a3 + r1 * b3 + r2 * c3 + r3]
+                   for r0, r1, r2, r3 in out]
             if prefixes is not None:
                 prefixes.append(out)
         return out
@@ -204,13 +229,103 @@ class Kinematics:
             found = self._ik_results[key]
             return None if found is None else found.copy()
         found = self._ik(target, seed_deg, tool, max_iterations)
-        if len(self._ik_results) >= 128:   # bounded: a cycle repeats a few targets; a long run with ever new ones stays small
+        if len(self._ik_results) >= _KEPT_RESULTS:   # bounded: a cycle repeats a few targets; a long run with ever new ones stays small
             self._ik_results.clear()
         self._ik_results[key] = None if found is None else found.copy()
         return found
 
     def _ik(self, target: np.ndarray, seed_deg: Sequence[float], tool: np.ndarray | None,
             max_iterations: int) -> np.ndarray | None:
+        """`_ik_arrays` on plain lists of floats: the same operations in the same order (so the
+        same bits), without a numpy call per small step (a solve took ~2 ms, most of it numpy's
+        per-call cost on 3- to 6-element arrays). Anything but 4x4 poses takes `_ik_arrays`."""
+        target_rows = np.asarray(target, dtype=float).tolist()
+        tool_rows = None if tool is None else np.asarray(tool, dtype=float).tolist()
+        seed = np.asarray(seed_deg, dtype=float)
+        if np.shape(target) != (4, 4) or (tool is not None and np.shape(tool) != (4, 4)) or seed.ndim != 1 \
+                or len(seed) != len(self._links):
+            return self._ik_arrays(target, seed_deg, tool, max_iterations)
+        rad, deg = dm.RAD_PER_DEG, dm.DEG_PER_RAD
+        q = [v * rad for v in seed.tolist()]
+        position_tolerance, angle_tolerance = 1e-2, dm.radians(1e-2)
+        dot, solve = dm._dot_floats, dm.solve_lists
+        norm = math.sqrt
+        for _ in range(max_iterations):
+            q_deg = [v * deg for v in q]
+            # the TCP pose at q: the pose error's and the Jacobian's base (one chain for both)
+            prefixes = [self._IDENTITY_ROWS]
+            pose = self._chain(q_deg, prefixes=prefixes) + [[0.0, 0.0, 0.0, 1.0]]
+            if tool_rows is not None:
+                pose = self._times_rows(pose, tool_rows)
+            err = self._pose_error_rows(target_rows, pose)
+            if norm(dot(err[:3], err[:3])) < position_tolerance and norm(dot(err[3:], err[3:])) < angle_tolerance:
+                result = np.array(q) * deg
+                # Keep angles near the seed (joints rotate more than 360 deg on a TM).
+                result = np.asarray(seed_deg) + (result - np.asarray(seed_deg) + 180.0) % 360.0 - 180.0
+                return result if self.within_limits(result) else None
+            jac = self._jacobian_rows(q_deg, tool_rows, pose, prefixes)
+            for row in jac[3:]:
+                row[:] = [v * 300.0 for v in row]   # weight rotation like ~300 mm of lever arm
+            scaled = err[:3] + [v * 300.0 for v in err[3:]]
+            # (J J^T + damping * I): the damping (1.0) is added to every element times the
+            # identity's; J J^T is symmetric to the bit (x*y == y*x, the same order of the sums)
+            normal = [[0.0] * len(jac) for _ in jac]
+            for i, row in enumerate(jac):
+                normal[i][i] = dot(row, row) + 1.0
+                for j in range(i):
+                    normal[i][j] = normal[j][i] = dot(row, jac[j]) + 0.0
+            x = solve(normal, scaled)
+            q = [v + dot(column, x) for v, column in zip(q, zip(*jac))]   # q + J^T x
+        return None
+
+    @staticmethod
+    def _times_rows(left: list, right: list) -> list:
+        """left @ right for 4x4 row lists: `dm.matmul`'s sums, in its order."""
+        columns = list(zip(*right))
+        return [[0.0 + r0 * c0 + r1 * c1 + r2 * c2 + r3 * c3 for c0, c1, c2, c3 in columns]
+                for r0, r1, r2, r3 in left]
+
+    @staticmethod
+    def _pose_error_rows(target: list, cur: list) -> list:
+        """`_pose_error` on row lists (the same operations in the same order), from the current
+        pose `cur` (`fk`'s rows)."""
+        t0, t1, t2 = target[0], target[1], target[2]
+        c0, c1, c2 = cur[0], cur[1], cur[2]
+        dp = [t0[3] - c0[3], t1[3] - c1[3], t2[3] - c2[3]]
+        # r_err = target[:3, :3] @ cur[:3, :3].T: element (i, j) sums target row i times cur row j
+        r_err = [[0.0 + t[0] * c[0] + t[1] * c[1] + t[2] * c[2] for c in (c0, c1, c2)] for t in (t0, t1, t2)]
+        angle = dm.acos(max(-1.0, min(1.0, (r_err[0][0] + r_err[1][1] + r_err[2][2] - 1) / 2)))
+        if angle < 1e-12:
+            return dp + [0.0, 0.0, 0.0]
+        axis = [r_err[2][1] - r_err[1][2], r_err[0][2] - r_err[2][0], r_err[1][0] - r_err[0][1]]
+        norm = math.sqrt(dm._dot_floats(axis, axis))
+        return dp + ([v / norm * angle for v in axis] if norm > 1e-12 else [0.0, 0.0, 0.0])
+
+    def _jacobian_rows(self, q_deg: list, tool: list | None, base: list, prefixes: list) -> list:
+        """`_jacobian` on row lists (the same operations in the same order), as rows; `base` is
+        the pose at `q_deg` (`fk`'s rows), `prefixes` the products of its first links."""
+        b0, b1, b2 = base[0], base[1], base[2]
+        h = 1e-6
+        step, two_h = dm.degrees(h), 2 * h
+        columns = []
+        for i in range(len(q_deg)):
+            dq = list(q_deg)
+            dq[i] += step
+            moved = self._chain(dq, i, prefixes[i]) + [[0.0, 0.0, 0.0, 1.0]]
+            if tool is not None:
+                moved = self._times_rows(moved, tool)
+            m0, m1, m2 = moved[0], moved[1], moved[2]
+
+            def r_d(m: list, b: list) -> float:   # (moved[:3, :3] @ base[:3, :3].T)[row m, column b]
+                return 0.0 + m[0] * b[0] + m[1] * b[1] + m[2] * b[2]
+            columns.append(((m0[3] - b0[3]) / h, (m1[3] - b1[3]) / h, (m2[3] - b2[3]) / h,
+                            (r_d(m2, b1) - r_d(m1, b2)) / two_h, (r_d(m0, b2) - r_d(m2, b0)) / two_h,
+                            (r_d(m1, b0) - r_d(m0, b1)) / two_h))
+        return [list(row) for row in zip(*columns)]
+
+    def _ik_arrays(self, target: np.ndarray, seed_deg: Sequence[float], tool: np.ndarray | None,
+                   max_iterations: int) -> np.ndarray | None:
+        """Damped least squares on numpy arrays (the reference `_ik` follows)."""
         q = np.asarray(seed_deg, dtype=float) * dm.RAD_PER_DEG
         damping = 1.0
         for _ in range(max_iterations):
@@ -447,6 +562,9 @@ class MotionExecutor:
         self.rest_tcp = kinematics.fk(self.rest_joints, tool)
         self.time_ns = 0
         self.stalled = False  # fault "busy": motion never progresses
+        # set by an `InProcessLink` that lets the clocks lag on quiet steps (see there): brings
+        # `time_ns` up to date before the pose is read
+        self.catch_up: Callable[[], None] | None = None
 
     # -- queries ---------------------------------------------------------------------------------
 
@@ -472,6 +590,8 @@ class MotionExecutor:
         return end if head is None or end < head else head
 
     def current_tcp(self) -> np.ndarray:
+        if self.catch_up is not None:
+            self.catch_up()
         if not self.active:
             return self.rest_tcp
         current = self.active[-1]
@@ -481,6 +601,8 @@ class MotionExecutor:
         return tcp
 
     def current_joints(self, tool: np.ndarray | None = None) -> np.ndarray:
+        if self.catch_up is not None:
+            self.catch_up()
         if not self.active:
             return self.rest_joints
         current = self.active[-1]
@@ -586,6 +708,10 @@ class Planner:
     def __init__(self, kinematics: Kinematics, settings: EmulatorSettings = DEFAULT_SETTINGS):
         self.kin = kinematics
         self.settings = settings
+        # joint_motion's timing by its exact inputs (`_JOINT_TIMINGS`): a script is planned
+        # twice (the dry run, then the run) and a cycle repeats its motions; `SegmentTiming` is
+        # immutable
+        self._joint_timings = _JOINT_TIMINGS
 
     def _accel_s(self, accel_ms: float) -> Fraction:
         return max(Fraction(accel_ms), Fraction(self.settings.min_accel_ms)) / 1000
@@ -600,11 +726,24 @@ class Planner:
                      blend_pct: float, precise: bool, label: str) -> Segment:
         if not self.kin.within_limits(target_joints):
             raise PlanError("joint target outside the joint limits")
-        pct = Fraction(speed_pct) / 100
-        speeds = [Fraction(v) * pct for v in self.settings.max_joint_speed_deg_s]
-        distances = [abs(Fraction(float(t)) - Fraction(float(q))) for t, q in zip(target_joints, state.joints)]
-        timing = self._timing(distances, speeds, accel_ms, blend_pct, False, Fraction(1), precise)
-        duration_ns, accel_ns, blend_ns, settle_ns = timing.times_ns()
+        target_array, joints_array = np.asarray(target_joints), np.asarray(state.joints)
+        key = (target_array.dtype.str, target_array.shape, target_array.tobytes(), joints_array.dtype.str,
+               joints_array.shape, joints_array.tobytes(), speed_pct, accel_ms, blend_pct, precise, id(self.settings))
+        cacheable = target_array.dtype.kind == joints_array.dtype.kind == "f"
+        known = self._joint_timings.get(key) if cacheable else None
+        if known is not None and known[0] is self.settings:
+            timing, times = known[1], known[2]
+        else:
+            pct = Fraction(speed_pct) / 100
+            speeds = [Fraction(v) * pct for v in self.settings.max_joint_speed_deg_s]
+            distances = [abs(Fraction(float(t)) - Fraction(float(q))) for t, q in zip(target_joints, state.joints)]
+            timing = self._timing(distances, speeds, accel_ms, blend_pct, False, Fraction(1), precise)
+            times = timing.times_ns()
+            if cacheable:
+                if len(self._joint_timings) >= _KEPT_RESULTS:
+                    self._joint_timings.clear()
+                self._joint_timings[key] = (self.settings, timing, times)
+        duration_ns, accel_ns, blend_ns, settle_ns = times
         end_tcp = self.kin.fk(target_joints, state.tool)
         seg = Segment("joint", state.joints.copy(), target_joints.copy(), state.tcp.copy(), end_tcp,
                       duration_ns, accel_ns, blend_ns, settle_ns, label=label, timing=timing)

@@ -28,7 +28,7 @@ from __future__ import annotations
 from collections import OrderedDict, deque
 from enum import Enum
 from functools import lru_cache
-from typing import Any, NamedTuple
+from typing import Any, Callable, NamedTuple
 
 import numpy as np
 
@@ -181,6 +181,9 @@ class Robot:
         # that deliver a frame or reach a motion's end (about 800 bytecodes a scan otherwise).
         self._deadline_known = False
         self._deadline_ns: int | None = None
+        # set by an `InProcessLink` that lets the clocks lag on quiet steps: brings them up to
+        # date before `snapshot` reads them
+        self.catch_up: Callable[[], None] | None = None
         self._process_due()
 
     # ================================================================ public API
@@ -291,6 +294,8 @@ class Robot:
 
     def snapshot(self) -> dict[str, Any]:
         """Plain-data view of the robot for the live terminal view and tests."""
+        if self.catch_up is not None:
+            self.catch_up()
         tcp = self.executor.current_tcp()
         return {
             "t_s": (self.now_ns - self.start_ns) / 1e9,

@@ -81,6 +81,7 @@ _RESOURCE_ERRNOS = frozenset({errno.EMFILE, errno.ENFILE, errno.ENOBUFS, errno.E
 # flood of idle connections cannot take every descriptor of the process. A TM robot's Listen node
 # serves a handful of clients; `tm-emulator --max-connections N` changes it.
 MAX_CONNECTIONS = 64
+_FOREVER = 1 << 63   # `InProcessLink._quiet_until` when nothing is pending at all
 
 # ============================================================================ frame log
 
@@ -522,14 +523,42 @@ class InProcessLink:
         self.latency_ns = int(latency_ns)
         self.now_ns = int(start_ns)
         self.frame_log = JsonFrameLog(log_path, start_ns)
-        self.core = EmulatorCore(settings, faults, self.frame_log, now_ns=self.now_ns)
+        self._core = core = EmulatorCore(settings, faults, self.frame_log, now_ns=self.now_ns)
+        self._robot = core.robot
         self._events: list[tuple[int, int, str, ClientEndpoint, Any, int]] = []
         self._seq = 0
         self._by_conn: dict[int, ClientEndpoint] = {}
+        # Quiet steps (issue 33): after a full `advance_to`, nothing is due before `_quiet_until`
+        # (the earliest of the next event, the core's next deadline and its first pending
+        # delivery), and while the robot keeps its deadline (`Robot._deadline_known`: every call
+        # that changes its state forgets it) an `advance_to` earlier than that only moves the
+        # clocks. Then only this link's clock moves and the core stays `_behind`: the robot
+        # would reach the same state by one later `advance` as by one per step (its clocks add
+        # up; nothing else changes while nothing is due, see `Robot.advance`). Whatever reads or
+        # changes the core catches it up first: the `core` and `robot` properties, the robot's
+        # `snapshot` and the executor's pose (their `catch_up` hook), and the full path here.
+        self._quiet_until = -1
+        self._behind = False
+        core.robot.catch_up = core.robot.executor.catch_up = self._catch_up
+
+    @property
+    def core(self) -> EmulatorCore:
+        """The connection core, caught up with this link's clock."""
+        if self._behind:
+            self._catch_up()
+        return self._core
 
     @property
     def robot(self):  # -> Robot (not imported for typing to keep the import graph flat)
-        return self.core.robot
+        if self._behind:
+            self._catch_up()
+        return self._robot
+
+    def _catch_up(self) -> None:
+        """Bring the core's clocks to this link's after quiet steps (nothing is due by then)."""
+        if self._behind:
+            self._behind = False
+            self._core.advance(self.now_ns)
 
     def endpoint(self) -> ClientEndpoint:
         return ClientEndpoint(self)
@@ -540,11 +569,20 @@ class InProcessLink:
     def advance_to(self, now_ns: int) -> None:
         """Process everything up to and including ``now_ns``, in time order."""
         target = int(now_ns)
+        if target < self._quiet_until and self._robot._deadline_known:
+            # a quiet step (see __init__): nothing is due by `target`
+            if target < self.now_ns:
+                raise ValueError("time cannot go backwards")
+            self.now_ns = target
+            self._behind = True
+            return
         if target < self.now_ns:
             raise ValueError("time cannot go backwards")
+        self._behind = False   # the core's own calls below move its clocks (a jump is a step)
+        core = self._core
         for _ in range(10_000_000):
             t_event = self._events[0][0] if self._events else None
-            t_core = self.core.next_deadline_ns()
+            t_core = core.next_deadline_ns()
             # the earlier of the two that are due by `target` (no list: this runs every VM scan)
             due = t_event if t_event is not None and t_event <= target else None
             if t_core is not None and t_core <= target and (due is None or t_core < due):
@@ -557,13 +595,12 @@ class InProcessLink:
                 _, _, kind, ep, payload, gen = heapq.heappop(self._events)
                 self._process(kind, ep, payload, gen, t)
             else:
-                before = self.core.next_deadline_ns()
-                self.core.advance(t)
+                before = core.next_deadline_ns()
+                core.advance(t)
                 self._collect(t)
-                if self.core.next_deadline_ns() == before and before is not None and before <= t:
+                if core.next_deadline_ns() == before and before is not None and before <= t:
                     break  # nothing consumed the deadline; do not spin
         self.now_ns = target
-        core = self.core
         core.advance(target)
         # `core.pop_ready(target)` only when it could return something or tick: after `advance`
         # it has ticked at target, and with nothing due by then it returns [] and changes
@@ -574,6 +611,13 @@ class InProcessLink:
             ready = core.pop_ready(target)
             if ready:   # (`_collect` without its call on the scans when nothing is sent)
                 self._deliver(ready)
+        # nothing is due before the earliest of the next event and the core's next deadline
+        # (which counts its first pending delivery); `_schedule` lowers it
+        quiet = core.next_deadline_ns()
+        events = self._events
+        if events and (quiet is None or events[0][0] < quiet):
+            quiet = events[0][0]
+        self._quiet_until = _FOREVER if quiet is None else quiet
 
     def close(self) -> None:
         self.frame_log.close()
@@ -582,13 +626,16 @@ class InProcessLink:
 
     def _schedule(self, delay_ns: int, kind: str, ep: ClientEndpoint, payload: Any) -> None:
         self._seq += 1
-        heapq.heappush(self._events, (self.now_ns + delay_ns, self._seq, kind, ep, payload, ep._generation))
+        at = self.now_ns + delay_ns
+        heapq.heappush(self._events, (at, self._seq, kind, ep, payload, ep._generation))
+        if at < self._quiet_until:
+            self._quiet_until = at
 
     def _process(self, kind: str, ep: ClientEndpoint, payload: Any, gen: int, t: int) -> None:
         if kind == "syn":
             if gen != ep._generation:
                 return
-            conn = self.core.open(t)
+            conn = self._core.open(t)
             if conn is None:
                 self._schedule(self.latency_ns, "refused", ep, None)
             else:
@@ -603,10 +650,10 @@ class InProcessLink:
                 ep.status = "refused"
         elif kind == "c2s":
             if gen == ep._generation and ep.conn_id is not None:
-                self.core.receive(ep.conn_id, payload, t)
+                self._core.receive(ep.conn_id, payload, t)
         elif kind == "cfin":
             self._by_conn.pop(payload, None)
-            self.core.close(payload, t)
+            self._core.close(payload, t)
         elif kind == "s2c":
             if gen == ep._generation:
                 ep._rx.extend(payload)
@@ -617,7 +664,7 @@ class InProcessLink:
         self._collect(t)
 
     def _collect(self, t: int) -> None:
-        self._deliver(self.core.pop_ready(t))
+        self._deliver(self._core.pop_ready(t))
 
     def _deliver(self, ready: list[Delivery]) -> None:
         for delivery in ready:

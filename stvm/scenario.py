@@ -312,6 +312,24 @@ class ScenarioDriver:
         self.fault_sink = fault_sink   # callable(fault text) for emulator faults, or None
         self.on_event = on_event       # callable(event, scan it is for), e.g. a trace recorder
         self._check(vm)
+        self._plan()
+
+    def _plan(self) -> None:
+        """What `after_scan` compares with so that a scan with nothing due costs two
+        comparisons: whether an unfired event watches a variable (`when`, read every scan), and
+        the earliest scan number and instant of the unfired events set at one."""
+        never = 1 << 63
+        self._watching = False
+        self._next_scan = self._next_time = never
+        for event in self.scenario.events:
+            if event.fired:
+                continue
+            if event.when is not None:
+                self._watching = True
+            if event.scan is not None and event.scan < self._next_scan:
+                self._next_scan = event.scan
+            if event.time_ns is not None and event.time_ns < self._next_time:
+                self._next_time = event.time_ns
 
     def _check(self, vm) -> None:
         """Every name and fault of the scenario, checked before the first scan (a typo found at
@@ -377,15 +395,18 @@ class ScenarioDriver:
 
     def _fire_due(self, before_first: bool = False) -> None:
         vm = self.vm
-        for event in self.scenario.events:
-            if event.fired:
-                continue
-            if event.scan is not None and event.scan <= vm.scan_count:
-                self._fire(event)
-            elif event.time_ns is not None and event.time_ns <= vm.now_ns:
-                self._fire(event)
-            elif event.when is not None and not before_first and self._is_true(event.when):
-                self._fire(event)
+        try:
+            for event in self.scenario.events:
+                if event.fired:
+                    continue
+                if event.scan is not None and event.scan <= vm.scan_count:
+                    self._fire(event)
+                elif event.time_ns is not None and event.time_ns <= vm.now_ns:
+                    self._fire(event)
+                elif event.when is not None and not before_first and self._is_true(event.when):
+                    self._fire(event)
+        finally:
+            self._plan()
 
     def _is_true(self, path: str) -> bool:
         try:
@@ -396,6 +417,8 @@ class ScenarioDriver:
     def after_scan(self, vm) -> None:
         """VM hook: runs at the end of every scan (the VM has not advanced its clock yet)."""
         # scan_count/now_ns still name the scan that just ran: events for the next scan fire now
+        if not self._watching and vm.scan_count + 1 < self._next_scan and vm.now_ns + vm.base_ns < self._next_time:
+            return   # nothing due for the next scan (`_plan`): `_fire_due` would fire nothing
         saved = vm.scan_count, vm.now_ns
         vm.scan_count, vm.now_ns = saved[0] + 1, saved[1] + vm.base_ns
         try:

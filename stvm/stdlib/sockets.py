@@ -382,6 +382,14 @@ class SocketTable:
     def pending(self, handle: int) -> int:
         return len(self._get(handle).received)
 
+    def quiet_receive(self, handle: int) -> bool:
+        """Whether a receive on `handle` would find nothing, with nothing changing: `poll` would
+        return ESTABLISHED without I/O (a service runs between the scans) and nothing is
+        buffered. A busy SktTCPRcv asks this before its full call (`SktTCPRcv.call`)."""
+        entry = self._sockets.get(handle)
+        return (self.between_scans and entry is not None and not entry.received
+                and entry.link.state == ESTABLISHED)
+
     def discarded(self, handle: int) -> int:
         return self._get(handle).discarded_bytes
 
@@ -851,16 +859,49 @@ class SktTCPSend(SocketRequestFB):
 class SktTCPRcv(SocketRequestFB):
     """Take min(available, Size, 2000) bytes once at least one is buffered (sysmac.md 5)."""
 
+    # set by `_start` once the request is under way without an error on a `SocketTable`
+    # (whose `quiet_receive` `call` asks), with what `call` compares with
+    _probe = False
+
+    def call(self, inst, ctx) -> None:
+        # A request waiting for bytes that have not come (every scan of a robot's motion): when
+        # the transport says nothing arrived and nothing changed (`quiet_receive`), the full call
+        # would only note the call (Execute, scan, count) and return with the request BUSY: the
+        # latency is served, it is not cancelled (called in the next scan, or no cancelling), the
+        # timeout has not run out and the link is established with nothing buffered.
+        if self._probe and self._phase is BUSY and self._calls_since_start >= self._calls_before_progress:
+            scan = ctx.scan
+            if (scan <= self._last_scan + 1 or not self._cancel_unpolled) and ctx.now_ns < self._waits_until_ns \
+                    and ctx.transport.quiet_receive(self._handle):
+                self._previous_execute = True if inst.Execute else False
+                self._last_scan = scan
+                self._calls_since_start += 1
+                return
+        SocketRequestFB.call(self, inst, ctx)
+
     def _start(self, inst, ctx, transport: Transport) -> None:
+        self._probe = False
+        settings = ctx.settings
         self._handle = _handle_of(inst)
         self._size = inst.Size
-        self._timeout_ns = inst.TimeOut * ctx.settings.skt_rcv_timeout_unit_ns
+        self._timeout_ns = inst.TimeOut * settings.skt_rcv_timeout_unit_ns
         self._start_ns = ctx.now_ns
         if not 0 < self._size <= RECEIVE_MAX_BYTES:
             raise SocketError("out_of_range", f"Size {self._size} not in 1..{RECEIVE_MAX_BYTES}")
         if self._size > len(as_array_ref(inst.RcvDat)):
             raise SocketError("too_few_elements", f"Size {self._size} > elements passed")
         _require_open(transport, self._handle, ctx.now_ns)
+        if isinstance(transport, SocketTable):
+            # what `call` compares with: `_progress` runs from the call where the count reaches
+            # skt_min_latency_calls; it times out at start + timeout (at once with TimeOut 0
+            # under error_if_empty, never under wait)
+            self._calls_before_progress = settings.skt_min_latency_calls - 1
+            self._cancel_unpolled = settings.skt_progress_without_call is _CANCEL
+            if self._timeout_ns:
+                self._waits_until_ns = self._start_ns + self._timeout_ns
+            else:
+                self._waits_until_ns = -1 if settings.skt_rcv_timeout0 is _TIMEOUT0_ERROR_IF_EMPTY else 1 << 127
+            self._probe = transport is ctx.transport
 
     def _progress(self, inst, ctx, transport: Transport) -> str | None:
         settings = ctx.settings

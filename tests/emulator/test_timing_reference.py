@@ -18,6 +18,7 @@ from decimal import ROUND_HALF_EVEN, Decimal, localcontext
 from fractions import Fraction
 from pathlib import Path
 
+import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
@@ -166,3 +167,28 @@ def test_other_blas_kernels_and_simd_levels_write_the_same_golden(tmp_path):
                             cwd=ROOT, env=env, capture_output=True, text=True, timeout=300)
     assert result.returncode == 0, result.stderr
     assert out.read_bytes() == (ROOT / "tests" / "golden" / "pnp_cycle.jsonl").read_bytes()
+
+
+@settings(max_examples=300, deadline=None, derandomize=True)
+@given(st.floats(-1e7, 1e7, allow_nan=False))
+def test_detmath_sincos_is_sin_and_cos_to_the_bit(x):
+    s, c = dm.sincos(x)
+    assert (s.hex(), c.hex()) == (dm.sin(x).hex(), dm.cos(x).hex())
+
+
+@settings(max_examples=60, deadline=None, derandomize=True)
+@given(st.lists(st.floats(-170, 170, allow_nan=False), min_size=6, max_size=6),
+       st.lists(st.floats(-60, 60, allow_nan=False), min_size=6, max_size=6),
+       st.booleans())
+def test_ik_on_lists_gives_the_bits_of_the_ik_on_arrays(seed, offset, with_tool):
+    """`Kinematics._ik` (plain lists) against `_ik_arrays` (numpy, the reference): the same
+    solution to the bit, or None for both, from targets near and far from the seed."""
+    from emulator.motion import Kinematics, pose_to_matrix
+    kin = Kinematics()
+    target = kin.fk(np.array(seed) + np.array(offset))
+    tool = pose_to_matrix([1.5, -2.0, 110.0, 0.0, 0.0, 30.0]) if with_tool else None
+    fast = kin._ik(target, np.array(seed), tool, 100)
+    reference = Kinematics()._ik_arrays(target, np.array(seed), tool, 100)
+    assert (fast is None) == (reference is None)
+    if fast is not None:
+        assert fast.tobytes() == reference.tobytes()

@@ -237,3 +237,41 @@ def test_garbage_over_tcp_then_still_serving(server) -> None:
     noisy.send(QUERY)
     assert noisy.read_frame() == IN_NODE
     noisy.close()
+
+
+def _stepped_run(full_steps: bool) -> list:
+    """A motion script, a pause and a resume over an in-process link stepped by 1 ms, with the
+    pose read through a robot reference held from the start (as a view holds it) after every
+    step; `full_steps` forces the full `advance_to` path on every step (no quiet steps)."""
+    link = InProcessLink(latency_ns=MS)
+    robot = link.robot
+    client = link.endpoint()
+    client.connect()
+    trace = []
+    for i in range(2500):
+        if full_steps:
+            link._quiet_until = -1
+        link.step(MS)
+        if i == 5:
+            client.send(encode("TMSCT", '1,PTP("JPP",0,0,90,0,90,30,50,150,50,false)\r\nQueueTag(1)\r\n'
+                                        'Line("CAP",400,-100,350,180,0,90,200,100,0,false)\r\nQueueTag(2,1)'))
+        if i == 400:
+            client.send(encode("TMSCT", "2,Pause()"))
+        if i == 700:
+            client.send(encode("TMSCT", "3,Resume()"))
+        data = client.recv(65536)
+        if data:
+            trace.append((link.now_ns, data))
+        if i % 7 == 0:
+            trace.append((robot.executor.current_tcp().tobytes(), robot.now_ns, robot.executor.time_ns))
+    trace.append(robot.snapshot())
+    return trace
+
+
+def test_quiet_steps_change_nothing() -> None:
+    """The link lets the core's clocks lag while nothing is due (`InProcessLink._quiet_until`);
+    what the client receives, when, and the pose read in between are those of a link that steps
+    the core every time."""
+    quiet, full = _stepped_run(False), _stepped_run(True)
+    assert quiet == full
+    assert any(isinstance(item[1], bytes) and b"01,02,true" in item[1] for item in quiet[:-1])

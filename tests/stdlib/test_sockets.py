@@ -1051,3 +1051,52 @@ def test_a_send_queued_in_the_scan_of_the_close_still_goes_out_before_the_fin(pe
     plc.fb("SktClose", Socket=sock).step(Execute=True)  # the same scan
     assert read_exactly(server_side, 4) == b"last"
     assert server_side.recv(1) == b""
+
+
+# --- a busy SktTCPRcv with nothing to read (`SktTCPRcv.call`'s shortcut) ---------------------
+
+def _receive_run(timeout: int, shortcut: bool) -> tuple[list, int]:
+    """A receive request polled every scan for 400 scans, bytes arriving now and then, Execute
+    toggled at random and the link reset near the end, on a table whose service runs between the
+    scans (`poll_all` before each scan): the instance and implementation after every call, and
+    how many calls took the shortcut (`quiet_receive` TRUE)."""
+    rng = random.Random(timeout)
+    ScriptedLink.opened = []
+    plc = Plc(SocketTable(ScriptedLink))
+    sock = scripted_socket(plc)
+    table = plc.ctx.transport
+    table.between_scans = True
+    quiet = [0]
+    probe = table.quiet_receive
+
+    def counted(handle: int) -> bool:
+        answer = shortcut and probe(handle)
+        quiet[0] += answer
+        return answer
+    table.quiet_receive = counted
+    runner = plc.fb("SktTCPRcv", Socket=sock, Size=4, RcvDat=[0] * 4, TimeOut=timeout)
+    history = []
+    for scan in range(400):
+        plc.next_scan()
+        link = ScriptedLink.opened[-1]
+        if rng.random() < 0.03:
+            link.incoming += b"xy"
+        if scan == 380:
+            link.state = RESET
+        table.poll_all(plc.ctx.now_ns)
+        if rng.random() < 0.08:
+            runner.inst.v_execute = not runner.inst.v_execute
+        runner.step()
+        history.append(state_of(runner))
+    return history, quiet[0]
+
+
+@pytest.mark.parametrize("timeout", [0, 1])
+def test_a_waiting_receive_changes_what_the_full_call_changes(timeout):
+    """With nothing buffered and the link unchanged, a busy SktTCPRcv returns after noting the
+    call: every call leaves the instance and its state as the full call does (TimeOut 0: wait for
+    ever; 1: time out after 100 ms, the default unit, when nothing came)."""
+    fast, taken = _receive_run(timeout, True)
+    full, _ = _receive_run(timeout, False)
+    assert fast == full
+    assert taken > 50
