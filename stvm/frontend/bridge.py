@@ -290,7 +290,10 @@ class VariableBridge:
         self._routes: dict | None = None   # path → (type, root, steps), built on the first watch
         self._fb_routes: set | None = None   # (id(root), steps) of every FB instance, for `_anchored`
         self._lock = threading.Lock()
-        vm.on_scan_start.append(self._apply_pending)
+        # `_apply_pending` is a scan-start hook only while writes wait (`_arm`): a scan without
+        # writes calls nothing of the bridge before it
+        self._armed = False
+        self._arm_lock = threading.Lock()
         vm.on_scan_end.append(self._sample_due)
         vm.on_idle.append(self.serve_between_scans)
 
@@ -448,12 +451,18 @@ class VariableBridge:
                 if watch.every_wall_ns:
                     wall = wall or time.monotonic_ns()
                     if wall < watch._next_wall_ns:
+                        # VM time runs faster than the wall clock (a virtual clock): the wall
+                        # interval ends at the earliest this much VM time later, so the clock is
+                        # not read at every scan until then
+                        watch._next_ns = now + (watch._next_wall_ns - wall)
                         continue
                     watch._next_wall_ns = wall + watch.every_wall_ns
                 watch._next_ns = now + watch.every_ns
                 watch._sample(vm.scan_count, now)
         if self._samples.queue:   # (the deque itself: `empty()` takes the queue's lock every scan)
             self._answer_samples(vm.scan_count, now)
+        if self._armed and not self._pending.queue:
+            self._disarm()
 
     def _answer_samples(self, scan: int, now_ns: int) -> None:
         while True:
@@ -513,7 +522,27 @@ class VariableBridge:
             self._pending.put_nowait((checked, future))
         except queue.Full:
             raise WriteRejected("busy: too many writes waiting for the next scan") from None
+        self._arm()
         return future
+
+    def _arm(self) -> None:
+        """Any thread, after queueing a batch: make `_apply_pending` a scan-start hook. The VM
+        thread takes it out again at a scan end that finds the queue empty (`_disarm`); the lock
+        orders the two, so a batch queued meanwhile always finds the hook in place."""
+        with self._arm_lock:
+            if not self._armed:
+                self._armed = True
+                self.vm.on_scan_start.append(self._apply_pending)   # (list.append: atomic)
+
+    def _disarm(self) -> None:
+        # VM thread, in the scan-end hook: not while the VM iterates its scan-start hooks
+        with self._arm_lock:
+            if self._armed and not self._pending.queue:
+                self._armed = False
+                try:
+                    self.vm.on_scan_start.remove(self._apply_pending)
+                except ValueError:   # someone replaced the hook list: nothing to take out
+                    pass
 
     def _apply_pending(self, vm: VM) -> None:
         pending = self._pending

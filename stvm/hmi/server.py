@@ -7,8 +7,10 @@ snapshots (taken by the VM thread between two scans), everything it writes goes 
 Threads and queues (why a slow browser never slows the scan):
 
     VM thread       bridge watch → `_on_snapshot`: keeps the newest snapshot (and, in lockstep,
-                    the robot pose of the same instant) and wakes the event loop once; it never
-                    waits for the loop, formats nothing and touches no socket
+                    the robot pose of the same instant) and wakes the event loop once, through a
+                    relay thread (`LoopWaker`: no system call that would hand the GIL to the
+                    server mid-scan); it never waits for the loop, formats nothing and touches no
+                    socket
     event loop      `_publish`: compares with what was published, formats the changed values
                     only, merges them into each client's pending dict (latest value per path:
                     a client that cannot keep up skips intermediate values, its backlog is
@@ -48,6 +50,7 @@ from stvm.numeric import utf16_text
 from stvm.frontend import VariableBridge, WriteRejected
 from stvm.frontend.alarms import AlarmList
 from stvm.frontend.limits import LimitTable
+from stvm.frontend.waker import LoopWaker
 from stvm.hmi.pages import Hmi, RunParameter, check_limits
 from stvm.hmi.robot import PoseSource, robot_state
 from stvm.hmi.app import build_app
@@ -163,6 +166,7 @@ class HmiServer:
         self._watch_paths: tuple[str, ...] = ()
         self._latest: tuple | None = None
         self._wake_pending = False
+        self._waker: LoopWaker | None = None
         self._server = None
         self._socket: socket.socket | None = None
         self._thread: threading.Thread | None = None
@@ -223,6 +227,7 @@ class HmiServer:
         async def main() -> None:
             self.loop = asyncio.get_running_loop()
             self.loop.set_exception_handler(quiet_exception_handler)
+            self._waker = LoopWaker(self.loop, self._publish, name=f"stvm-hmi-wake:{self.port}")
             if self.alarms is None:
                 self.alarms = AlarmList.attach(self.bridge)
             heartbeat = asyncio.create_task(self._heartbeat())
@@ -231,6 +236,7 @@ class HmiServer:
                 await self._server.serve(sockets=[self._socket])
             finally:
                 heartbeat.cancel()
+                self._waker.close()
         try:
             asyncio.run(main())
         except BaseException as exc:   # noqa: BLE001 - reported by start()/stop(), never silently
@@ -256,12 +262,9 @@ class HmiServer:
     def _on_snapshot(self, snapshot) -> None:
         pose = self.pose.read() if self.pose is not None and self.pose.in_vm_thread else None
         self._latest = (snapshot, pose)
-        if not self._wake_pending:
+        if not self._wake_pending and self._waker is not None:
             self._wake_pending = True
-            try:
-                self.loop.call_soon_threadsafe(self._publish)
-            except RuntimeError:   # the loop has closed (shutting down)
-                pass
+            self._waker.wake()   # a lock released: the GIL stays with the scan (stvm/frontend/waker.py)
 
     # ------------------------------------------------------------------ event loop
     def _publish(self) -> None:
@@ -272,6 +275,8 @@ class HmiServer:
         snapshot, pose = latest
         if pose is None and self.pose is not None and not self.pose.in_vm_thread:
             pose = self.pose.read()
+        elif pose is not None and self.pose.finish is not None:
+            pose = self.pose.finish(pose)   # the costly part of a VM-thread reading, here
         changed: dict[str, Any] = {}
         raw_seen = self._raw
         for path, value in snapshot.values.items():
