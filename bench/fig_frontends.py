@@ -98,8 +98,9 @@ def opcua_like(vm, items: int = 200):
 
 
 def alarms_like(vm):
-    """The alarm list the OPC UA server (and the HMI: one list per VM) attaches: every FB's
-    Error/ErrorID/ErrorDescrip read at every scan end (a one-scan Error must not be missed)."""
+    """The alarm list the OPC UA server (and the HMI: one list per VM) attaches: every FB's Error
+    flag read at every scan end (a one-scan Error must not be missed), ErrorID/ErrorDescrip only
+    of the FBs whose Error is TRUE (`VariableBridge.watch_flags`; none in this cycle)."""
     from stvm.frontend import VariableBridge
     from stvm.frontend.alarms import AlarmList
     return len(AlarmList.attach(VariableBridge(vm)).sources)

@@ -2,9 +2,13 @@
 
 Detection. `AlarmList.attach(bridge)` finds every FB instance (in programs, globals, structs and
 arrays: the catalog's tree) whose type has a BOOL output `Error`, and watches those outputs with
-one bridge watch (`changes_only`): after each scan the VM thread reads the Error flags, IDs and
-texts with one generated reader (about 0.05 µs a value) and compares one tuple; only a change
-makes a snapshot and reaches `_on_change`. A thesis project has 8 such instances: 24 values a scan.
+one flag watch of the bridge (`VariableBridge.watch_flags`): after each scan the VM thread runs one
+generated probe that reads the Error flag of every source without an active error and, for a
+source whose Error is TRUE, its Error, ErrorID and ErrorDescrip compared with their last values.
+Only a difference makes a snapshot (all the outputs, read at that scan) and reaches `_on_change`,
+so an alarm's VM time is the scan that changed and its code and text are what the FB output then;
+ErrorID/ErrorDescrip changing while Error is FALSE change no alarm and cost nothing. The thesis
+project has 35 such instances: 35 flag reads a scan while no error is active.
 
 Model (after ISA-18.2 / OPC UA Part 9's AlarmConditionType, simplified):
 
@@ -137,12 +141,12 @@ class AlarmList:
     def _watching(cls, bridge: Any, clock: Callable[[], float]) -> "AlarmList":
         alarms = cls(find_sources(bridge.vm), clock)
         alarms.vm = bridge.vm
-        paths: list[str] = []
-        for s in alarms.sources:
-            paths.extend(p for p in (s.error, s.code, s.text) if p is not None)
-        alarms._paths = paths
-        if paths:
-            alarms._watch = bridge.watch(paths, changes_only=True, on_snapshot=alarms._on_change)
+        groups = [tuple(p for p in (s.error, s.code, s.text) if p is not None) for s in alarms.sources]
+        alarms._paths = [path for group in groups for path in group]
+        if groups:
+            # ErrorID/ErrorDescrip change nothing while Error is FALSE (`update`): only the Error
+            # flags are read every scan, a source's code and text only while its Error is TRUE
+            alarms._watch = bridge.watch_flags(groups, on_snapshot=alarms._on_change)
         return alarms
 
     def close(self) -> None:

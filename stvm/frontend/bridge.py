@@ -36,6 +36,7 @@ from concurrent.futures import Future
 from dataclasses import dataclass
 from typing import Any, Callable, Iterable, Mapping
 
+from stvm.lower.layout import is_storage_name
 from stvm.runtime.catalog import Catalog
 from stvm.runtime.format import format_value
 from stvm.runtime.vm import VM, PathError, UnboundInOut, coerce_python_value
@@ -136,11 +137,135 @@ class Watch:
             if values == self._last:
                 return          # nothing changed: no snapshot, nothing handed over
             self._last = values
+        self._emit(scan, now_ns, values)
+
+    def _emit(self, scan: int, now_ns: int, values: tuple) -> None:
         self._version += 1
         snapshot = Snapshot(scan, now_ns, SnapshotValues(self.paths, values), self._version)
         self._latest = snapshot   # one reference assignment: readers see the old or the new one
         if self.on_snapshot is not None:
             self.on_snapshot(snapshot)
+
+
+class FlagWatch(Watch):
+    """A watch of groups `(flag, detail, ...)` whose details matter only while the flag is TRUE
+    (an FB's `Error` and its `ErrorID` / `ErrorDescrip`); made by `VariableBridge.watch_flags`.
+
+    Every scan end the VM thread calls one generated probe: it reads the flag of each group whose
+    flag was FALSE at the last snapshot (`a.v_error or b.v_error or ...`, stopping at the first
+    TRUE) and, for the groups whose flag was TRUE, the whole group compared with its last values
+    as one tuple. Only when the probe finds a difference are all paths read (by the watch's one
+    reader) and a snapshot made, at that scan, so a flag TRUE for one scan is never missed and the
+    snapshot holds every value of that scan. A detail that changes while its flag stays FALSE makes
+    no snapshot. One probe is compiled per set of TRUE flags (kept, so a flag that comes and goes
+    compiles nothing new). The probe starts each read at the deepest FB instance its path reaches
+    through members alone (`VariableBridge._anchored`): one attribute read per flag. A path the
+    compiled readers cannot reach (through a VAR_IN_OUT) makes this an ordinary `changes_only`
+    watch of every path."""
+
+    MAX_PROBES = 64   # compiled probes kept (one per set of TRUE flags seen)
+
+    def __init__(self, bridge: "VariableBridge", groups: list[tuple[str, ...]],
+                 on_snapshot: Callable[[Snapshot], None] | None) -> None:
+        paths = [path for group in groups for path in group]
+        super().__init__(bridge, paths, 0, on_snapshot, changes_only=True)
+        self._spans: list[tuple[int, int]] = []
+        start = 0
+        for group in groups:
+            self._spans.append((start, start + len(group)))
+            start += len(group)
+        self._signals = bridge._signals(paths)   # None: some path has no compiled route
+        self._probes: dict[tuple[int, ...], Callable[[tuple], bool]] = {}
+        self._probe: Callable[[tuple], bool] | None = None   # None: the next sample reads all
+        self._hot_last: tuple = ()
+        if self._signals is not None:
+            self._probe_for(())   # compiled here, not in the VM thread: the probe of "no flag TRUE"
+
+    def _sample(self, scan: int, now_ns: int) -> None:
+        # VM thread, between scans.
+        probe = self._probe
+        if probe is not None and not probe(self._hot_last):
+            return              # no flag rose, no TRUE group changed: nothing read, nothing handed over
+        values = self._read()
+        if values == self._last:
+            return
+        self._last = values
+        if self._signals is not None:
+            spans = self._spans
+            hot = tuple(i for i, (start, _) in enumerate(spans) if values[start])
+            self._hot_last = tuple(v for i in hot for v in values[spans[i][0]:spans[i][1]])
+            self._probe = self._probe_for(hot)
+        self._emit(scan, now_ns, values)
+
+    def _probe_for(self, hot: tuple[int, ...]) -> Callable[[tuple], bool]:
+        probe = self._probes.get(hot)
+        if probe is None:
+            if len(self._probes) >= self.MAX_PROBES:
+                self._probes.clear()
+            hot_set = set(hot)
+            signals = self._signals
+            cold = [signals[start] for i, (start, _) in enumerate(self._spans) if i not in hot_set]
+            hot_signals = [signal for i in hot for signal in signals[self._spans[i][0]:self._spans[i][1]]]
+            anchored = self.bridge._anchored
+            probe = self._probes[hot] = make_probe([anchored(s) for s in cold], [anchored(s) for s in hot_signals])
+        return probe
+
+
+def make_probe(flags: list[Signal], group: list[Signal]) -> Callable[[tuple], bool]:
+    """A compiled `probe(last)`: whether one of `flags` is TRUE or the values of `group` differ
+    from the tuple `last`, reading from the roots as `make_sampler` does (shared prefixes once,
+    one attribute or item access per step; only validated storage names and integer indices go
+    into the text) and stopping at the first TRUE flag."""
+    roots: list[Any] = []
+    root_ids: dict[int, int] = {}
+    routes: list[tuple] = []
+    for signal in flags + group:
+        index = root_ids.get(id(signal.root))
+        if index is None:
+            index = root_ids[id(signal.root)] = len(roots)
+            roots.append(signal.root)
+        routes.append((index,) + tuple(signal.steps))
+    uses: dict[tuple, int] = {}
+    for route in routes:
+        for k in range(2, len(route)):
+            uses[route[:k]] = uses.get(route[:k], 0) + 1
+    local_of: dict[tuple, str] = {}
+    lines: list[str] = []
+
+    def expression(route: tuple) -> str:
+        for k in range(len(route) - 1, 1, -1):
+            name = local_of.get(route[:k])
+            if name is not None:
+                return _steps_text(name, route[k:])
+        return _steps_text(f"r{route[0]}", route[1:])
+
+    for prefix in sorted((p for p, count in uses.items() if count > 1), key=len):
+        name = f"p{len(local_of)}"
+        lines.append(f"        {name} = {expression(prefix)}")
+        local_of[prefix] = name
+    texts = [expression(route) for route in routes]
+    tests = texts[:len(flags)]
+    if group:
+        tests.append(f"({', '.join(texts[len(flags):])},) != last")
+    params = "".join(f", r{i}=r{i}" for i in range(len(roots)))
+    source = (f"def make({', '.join(f'r{i}' for i in range(len(roots)))}):\n"
+              f"    def probe(last{params}):\n" + "".join(line + "\n" for line in lines) +
+              f"        return {' or '.join(tests) or 'False'}\n    return probe\n")
+    namespace: dict[str, Any] = {}
+    exec(compile(source, "<stvm-bridge-probe>", "exec"), namespace)
+    return namespace["make"](*roots)
+
+
+def _steps_text(root_name: str, steps: tuple) -> str:
+    parts = [root_name]
+    for step in steps:
+        if isinstance(step, int):
+            parts.append(f"[{int(step)}]")
+        elif is_storage_name(step):
+            parts.append("." + step)
+        else:   # the catalog hands out the layout's storage names only: an stvm bug if not
+            raise AssertionError(f"unsafe attribute {step!r}")
+    return "".join(parts)
 
 
 def _read_all(paths: list[str], accessors: list) -> dict[str, Any]:
@@ -163,8 +288,12 @@ class VariableBridge:
         self._samples: queue.Queue = queue.Queue(maxsize=MAX_PENDING_SAMPLES)
         self._watches: list[Watch] = []
         self._routes: dict | None = None   # path → (type, root, steps), built on the first watch
+        self._fb_routes: set | None = None   # (id(root), steps) of every FB instance, for `_anchored`
         self._lock = threading.Lock()
-        vm.on_scan_start.append(self._apply_pending)
+        # `_apply_pending` is a scan-start hook only while writes wait (`_arm`): a scan without
+        # writes calls nothing of the bridge before it
+        self._armed = False
+        self._arm_lock = threading.Lock()
         vm.on_scan_end.append(self._sample_due)
         vm.on_idle.append(self.serve_between_scans)
 
@@ -187,6 +316,18 @@ class VariableBridge:
             self._watches = self._watches + [watch]
         return watch
 
+    def watch_flags(self, groups: Iterable[Iterable[str]],
+                    on_snapshot: Callable[[Snapshot], None] | None = None) -> FlagWatch:
+        """Watch groups of paths `(flag, detail, ...)` at every scan end, where a group's details
+        matter only while its BOOL flag is TRUE (an FB's Error, ErrorID, ErrorDescrip: the alarm
+        list). A snapshot of every path is made at the scan where a flag changed or a detail of a
+        group whose flag is TRUE changed; the scan loop pays one read per FALSE flag otherwise
+        (see `FlagWatch`). `on_snapshot` runs in the VM thread, as for `watch`."""
+        watch = FlagWatch(self, [tuple(group) for group in groups], on_snapshot)
+        with self._lock:
+            self._watches = self._watches + [watch]
+        return watch
+
     def read_now(self, paths: Iterable[str]) -> dict[str, Any]:
         """The values of `paths` read at once: only in the VM's thread between two scans, or before
         the run starts (a front end's initial values). Raises `PathError` for an unknown path."""
@@ -200,17 +341,14 @@ class VariableBridge:
         by one generated function, one attribute or item access per step from the globals or a
         program instance (~0.05 µs a value instead of a path lookup per value); the rest (paths
         through a VAR_IN_OUT) through their accessors."""
-        if self._routes is None:
-            self._routes = {node.path.lower(): (node.type, node.root, node.steps)
-                            for node in Catalog(self.vm).walk() if node.kind != "program"}
         fast: list[Signal] = []
         slow: list[int] = []
         for index, path in enumerate(paths):
-            route = self._routes.get(path.lower().replace(" ", ""))
-            if route is None or route[0].kind not in ("bool", "int", "real", "time", "string", "enum"):
+            signal = self._signal(path)
+            if signal is None:
                 slow.append(index)
             else:
-                fast.append(Signal(path, *route))
+                fast.append(signal)
         sampler = make_sampler(fast) if fast else (lambda: ())
         if not slow:
             return sampler
@@ -225,6 +363,49 @@ class VariableBridge:
                 values[position] = value
             return tuple(values)
         return read
+
+    def _index(self) -> dict:
+        """path → (type, root, steps) of every variable the catalog lists, built once, on the first
+        watch, in the thread that makes it (the catalog walk takes a while on a large project)."""
+        if self._routes is None:
+            nodes = [node for node in Catalog(self.vm).walk() if node.kind != "program"]
+            self._fb_routes = {(id(node.root), tuple(node.steps)) for node in nodes
+                               if isinstance(node.type, t.FBType) and not node.type.is_program}
+            self._routes = {node.path.lower(): (node.type, node.root, node.steps) for node in nodes}
+        return self._routes
+
+    def _signal(self, path: str) -> Signal | None:
+        """How a compiled reader reaches `path` (None: not from a root, e.g. through a VAR_IN_OUT)."""
+        route = self._index().get(path.lower().replace(" ", ""))
+        if route is None or route[0].kind not in ("bool", "int", "real", "time", "string", "enum"):
+            return None
+        return Signal(path, *route)
+
+    def _anchored(self, signal: Signal) -> Signal:
+        """`signal` read from the deepest FB instance its route reaches through members alone (no
+        array element) instead of from its root, for readers compiled once and called every scan.
+
+        Such an instance object lives as long as the VM: an ST assignment of an FB instance copies
+        into it (`_assign`), `vm.set` refuses FB values, and programs and globals are made once.
+        An array's elements can be replaced (an array assigned as a whole stores copies), so an
+        index ends the anchor."""
+        self._index()
+        depth = 0
+        for k, step in enumerate(signal.steps[:-1]):
+            if not isinstance(step, str) or (id(signal.root), tuple(signal.steps[:k + 1])) not in self._fb_routes:
+                break
+            depth = k + 1
+        if depth == 0:
+            return signal
+        instance = signal.root
+        for step in signal.steps[:depth]:
+            instance = getattr(instance, step)
+        return Signal(signal.name, signal.type, instance, tuple(signal.steps[depth:]))
+
+    def _signals(self, paths: list[str]) -> list[Signal] | None:
+        """The compiled routes of every path, or None if one has none."""
+        signals = [self._signal(path) for path in paths]
+        return None if None in signals else signals   # type: ignore[return-value]
 
     def _remove_watch(self, watch: Watch) -> None:
         with self._lock:
@@ -270,12 +451,18 @@ class VariableBridge:
                 if watch.every_wall_ns:
                     wall = wall or time.monotonic_ns()
                     if wall < watch._next_wall_ns:
+                        # VM time runs faster than the wall clock (a virtual clock): the wall
+                        # interval ends at the earliest this much VM time later, so the clock is
+                        # not read at every scan until then
+                        watch._next_ns = now + (watch._next_wall_ns - wall)
                         continue
                     watch._next_wall_ns = wall + watch.every_wall_ns
                 watch._next_ns = now + watch.every_ns
                 watch._sample(vm.scan_count, now)
         if self._samples.queue:   # (the deque itself: `empty()` takes the queue's lock every scan)
             self._answer_samples(vm.scan_count, now)
+        if self._armed and not self._pending.queue:
+            self._disarm()
 
     def _answer_samples(self, scan: int, now_ns: int) -> None:
         while True:
@@ -335,7 +522,27 @@ class VariableBridge:
             self._pending.put_nowait((checked, future))
         except queue.Full:
             raise WriteRejected("busy: too many writes waiting for the next scan") from None
+        self._arm()
         return future
+
+    def _arm(self) -> None:
+        """Any thread, after queueing a batch: make `_apply_pending` a scan-start hook. The VM
+        thread takes it out again at a scan end that finds the queue empty (`_disarm`); the lock
+        orders the two, so a batch queued meanwhile always finds the hook in place."""
+        with self._arm_lock:
+            if not self._armed:
+                self._armed = True
+                self.vm.on_scan_start.append(self._apply_pending)   # (list.append: atomic)
+
+    def _disarm(self) -> None:
+        # VM thread, in the scan-end hook: not while the VM iterates its scan-start hooks
+        with self._arm_lock:
+            if self._armed and not self._pending.queue:
+                self._armed = False
+                try:
+                    self.vm.on_scan_start.remove(self._apply_pending)
+                except ValueError:   # someone replaced the hook list: nothing to take out
+                    pass
 
     def _apply_pending(self, vm: VM) -> None:
         pending = self._pending

@@ -284,7 +284,8 @@ async def _send_loop(server: Any, client: Client) -> None:
             await client.wake.wait()
             client.wake.clear()
             message = client.take()
-            await asyncio.wait_for(ws.send_text(json_dumps(message)), SEND_TIMEOUT_S)
+            async with asyncio.timeout(SEND_TIMEOUT_S):   # (not wait_for: no task per message)
+                await ws.send_text(json_dumps(message))
     except asyncio.CancelledError:
         raise
     except Exception:   # noqa: BLE001 - a vanished or stalled client: drop it, never the server

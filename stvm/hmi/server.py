@@ -7,9 +7,14 @@ snapshots (taken by the VM thread between two scans), everything it writes goes 
 Threads and queues (why a slow browser never slows the scan):
 
     VM thread       bridge watch → `_on_snapshot`: keeps the newest snapshot (and, in lockstep,
-                    the robot pose of the same instant) and wakes the event loop once; it never
-                    waits for the loop, formats nothing and touches no socket
-    event loop      `_publish`: compares with what was published, formats the changed values
+                    a copy of the robot's frames of the same instant) in one reference; it wakes
+                    nobody (waking a thread costs the scan a system call, ~20 µs on a virtual
+                    machine, and may hand the GIL to the server mid-scan), never waits for the
+                    loop, formats nothing and touches no socket
+    event loop      `_pump`: picks the newest snapshot up when the next one is due (the watch
+                    samples every `update_ns` of wall time: it looks again that long after each
+                    one it found, then every `PUMP_RETRY_S`, so a value waits at most a few ms)
+                    `_publish`: compares with what was published, formats the changed values
                     only, merges them into each client's pending dict (latest value per path:
                     a client that cannot keep up skips intermediate values, its backlog is
                     bounded by the number of paths) and wakes each client's sender task
@@ -59,6 +64,7 @@ from stvm.semantics import types as t
 MAX_PATHS_PER_REQUEST = 512
 WRITE_WAIT_S = 2.0                 # a write answers 200 once applied, 202 if the VM did not scan by then
 UPDATE_NS = 50_000_000             # 20 updates per second (the issue asks for at least 10)
+PUMP_RETRY_S = 0.002             # a snapshot not there yet when due: looked for again this soon
 HEARTBEAT_S = 0.5                  # VM state and alarms reach every page at least this often
 STALE_S = 1.0                      # no scan for this long: the page shows the VM as stopped
 _DECIMAL = re.compile(r"[+-]?(\d+([.,]\d*)?|[.,]\d+)([eE][+-]?\d+)?\Z")
@@ -162,7 +168,6 @@ class HmiServer:
         self._watch = None
         self._watch_paths: tuple[str, ...] = ()
         self._latest: tuple | None = None
-        self._wake_pending = False
         self._server = None
         self._socket: socket.socket | None = None
         self._thread: threading.Thread | None = None
@@ -226,11 +231,13 @@ class HmiServer:
             if self.alarms is None:
                 self.alarms = AlarmList.attach(self.bridge)
             heartbeat = asyncio.create_task(self._heartbeat())
+            pump = asyncio.create_task(self._pump())
             self._ready.set()
             try:
                 await self._server.serve(sockets=[self._socket])
             finally:
                 heartbeat.cancel()
+                pump.cancel()
         try:
             asyncio.run(main())
         except BaseException as exc:   # noqa: BLE001 - reported by start()/stop(), never silently
@@ -256,22 +263,34 @@ class HmiServer:
     def _on_snapshot(self, snapshot) -> None:
         pose = self.pose.read() if self.pose is not None and self.pose.in_vm_thread else None
         self._latest = (snapshot, pose)
-        if not self._wake_pending:
-            self._wake_pending = True
-            try:
-                self.loop.call_soon_threadsafe(self._publish)
-            except RuntimeError:   # the loop has closed (shutting down)
-                pass
 
     # ------------------------------------------------------------------ event loop
+    async def _pump(self) -> None:
+        """Publish each new snapshot soon after the VM thread took it, without being woken."""
+        period = self.update_ns / 1e9
+        delay = retry = PUMP_RETRY_S
+        while True:
+            await asyncio.sleep(delay)
+            if self._latest is not None:
+                try:
+                    self._publish()
+                except Exception:   # noqa: BLE001 - one bad update must not end the updates
+                    pass
+                delay = max(PUMP_RETRY_S, period - PUMP_RETRY_S)   # the next sample is about one period away
+                retry = PUMP_RETRY_S
+            else:   # not there yet: look again soon, less and less often while none comes (no page
+                delay = retry   # open, the VM paused or slower than the update period)
+                retry = min(retry * 1.5, max(period, PUMP_RETRY_S))
+
     def _publish(self) -> None:
-        self._wake_pending = False
         latest, self._latest = self._latest, None
         if latest is None:
             return
         snapshot, pose = latest
         if pose is None and self.pose is not None and not self.pose.in_vm_thread:
             pose = self.pose.read()
+        elif pose is not None and self.pose.finish is not None:
+            pose = self.pose.finish(pose)   # the costly part of a VM-thread reading, here
         changed: dict[str, Any] = {}
         raw_seen = self._raw
         for path, value in snapshot.values.items():

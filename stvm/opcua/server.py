@@ -5,7 +5,8 @@ What the VM thread does for it, and nothing more (design: "the VM owns time"):
 * **Monitored items** become bridge watches, grouped by sampling interval: a watch samples at
   the end of a scan, at most once per scan and no faster than the interval the client asked for
   (0 or -1: every scan). Its callback only drops the snapshot into a slot and, if none is
-  pending, wakes the server loop (`call_soon_threadsafe`).
+  pending, wakes the server loop (through a `LoopWaker`: a lock released, so the scan keeps the
+  GIL; the relay thread makes the `call_soon_threadsafe` call between scans).
 * **Reads** of variable values ask the bridge for a one-shot snapshot of exactly the nodes read,
   answered at the end of the running scan (or at once while a `RunControl` holds the VM), so a
   Read is a consistent snapshot between two scans. Only if no scan ends within `READ_WAIT_S`
@@ -49,6 +50,7 @@ from asyncua.server.internal_session import InternalSession
 from stvm.frontend import RunControl, Snapshot, VariableBridge, WriteRejected, catalog
 from stvm.frontend.alarms import AlarmList
 from stvm.frontend.limits import LimitTable
+from stvm.frontend.waker import LoopWaker
 from stvm.opcua import bounds
 from stvm.opcua.alarms import AlarmConditions
 from stvm.opcua.arrays import PublishedArray, RangeError, find_arrays, flat, read_range, write_positions
@@ -108,6 +110,7 @@ class OpcUaServer:
         self._array_monitors: dict[int, tuple[PublishedArray, int]] = {}   # handle → (array, every_ns)
         self._group_arrays: dict[tuple, dict[PublishedArray, list[int]]] = {}
         self._loop: asyncio.AbstractEventLoop | None = None
+        self._waker: LoopWaker | None = None   # wakes the loop for new snapshots (VM thread)
         self._thread: threading.Thread | None = None
         self._ready = threading.Event()
         self._startup_error: BaseException | None = None
@@ -204,12 +207,15 @@ class OpcUaServer:
             loop.close()
             return
         self._loop = loop
+        self._waker = LoopWaker(loop, self._schedule_drain, name="stvm-opcua-wake")
         if self.conditions is not None:
             self.conditions.start(loop)
         self._ready.set()
         try:
             loop.run_forever()
         finally:
+            waker, self._waker = self._waker, None
+            waker.close()
             if self.conditions is not None:
                 self.conditions.stop()
             for watch in list(self._watches.values()) + list(self._runtime_watches.values()) + \
@@ -410,13 +416,10 @@ class OpcUaServer:
     def _handover_for(self, key):
         def handover(snapshot: Snapshot) -> None:   # VM thread: hand over, never block
             self._inbox[key] = snapshot
-            if not self._drain_pending and not self._stopping:
+            waker = self._waker
+            if not self._drain_pending and not self._stopping and waker is not None:
                 self._drain_pending = True
-                loop = self._loop
-                try:
-                    loop.call_soon_threadsafe(self._schedule_drain)
-                except (RuntimeError, AttributeError):   # the loop is closing: the run ends
-                    pass
+                waker.wake()   # a lock released: the GIL stays with the scan (stvm/frontend/waker.py)
         return handover
 
     def _schedule_drain(self) -> None:

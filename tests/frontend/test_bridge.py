@@ -193,3 +193,38 @@ def test_parse_reads_iec_literals_for_the_path_type(vm):
         bridge.parse("Main.nope", "1")
     with pytest.raises(WriteRejected):
         bridge.parse("Main.run", "maybe")
+
+
+def test_the_write_hook_is_a_scan_start_hook_only_while_writes_wait(vm):
+    bridge = VariableBridge(vm)
+    assert bridge._apply_pending not in vm.on_scan_start        # no write: the scan start calls nothing
+    first = bridge.submit({"g_count": 1})
+    second = bridge.submit({"g_count": 2})
+    assert vm.on_scan_start.count(bridge._apply_pending) == 1
+    vm.scan()                                                  # applies both, then the scan end takes it out
+    assert first.done() and second.done() and vm["Main.seen"] == 2
+    assert bridge._apply_pending not in vm.on_scan_start
+    third = bridge.submit({"g_count": 3})                      # armed again for the next scan
+    assert not third.done() and vm["g_count"] == 2
+    vm.scan()
+    assert third.done() and vm["Main.seen"] == 3
+
+
+def test_a_wall_clock_limited_watch_reads_the_clock_only_when_vm_time_may_have_caught_up(vm, monkeypatch):
+    bridge = VariableBridge(vm)
+    reads = []
+    wall = [10_000_000_000]
+
+    def monotonic_ns():
+        reads.append(wall[0])
+        return wall[0]
+    monkeypatch.setattr("stvm.frontend.bridge.time.monotonic_ns", monotonic_ns)
+    seen = []
+    bridge.watch(["Main.n"], every_ns=2_000_000, every_wall_ns=20_000_000, on_snapshot=seen.append)
+    vm.run(cycles=30)                # 30 ms of VM time, the wall clock stands still
+    assert [s.scan for s in seen] == [0]
+    # after the first refusal the next look is 20 ms of VM time later, not at every scan
+    assert len(reads) <= 3
+    wall[0] += 20_000_000
+    vm.run(cycles=25)
+    assert len(seen) == 2

@@ -46,3 +46,40 @@ def test_pose_at_a_later_time_is_the_pose_the_robot_then_reports():
     for guess, seen in zip(predicted, reported):
         assert max(abs(a - b) for a, b in zip(guess, seen)) < 1.0, (guess, seen)
     vm.close()
+
+
+def test_the_lockstep_pose_source_reads_in_the_vm_thread_what_the_robot_reports():
+    """`from_lockstep`: the VM thread only takes references (`read`), the server thread computes
+    the pose (`finish`); the result is `Robot.snapshot()`'s, at rest and along a move."""
+    from stvm.hmi.robot import from_lockstep
+    transport = LockstepTransport(latency_scans=1, settings=DEFAULT_SETTINGS.with_(time_scale=0.25))
+    vm = stvm.load([str(THESIS)]).start(scan="1ms", transport=transport)
+    transport.attach(vm)
+    robot = transport.link.robot
+    source = from_lockstep(transport)
+    assert source.in_vm_thread and source.finish is not None
+    vm["Connect_AddressIP"], vm["Connect_Dest_PortIP"], vm["Connect_Time_Out"] = LOCKSTEP_HOST, LOCKSTEP_PORT, 100
+    vm["Connect_Execute"] = True
+    vm.run(cycles=3000)
+    keys = ("pose", "state", "paused", "moving", "base")
+
+    def same() -> dict:
+        raw = source.read()
+        expected = {k: robot.snapshot()[k] for k in keys}
+        vm.run(cycles=7)            # the robot moves on before the server thread converts
+        assert source.finish(raw) == expected
+        return expected
+    assert not same()["moving"]
+    for path, value in {"MoveAbs_Param.CommandID": 2, "MoveAbs_Param.MovementCommand": "PTP",
+                        "MoveAbs_Param.DataFormat": "CPP_Abs", "MoveAbs_Param.Speed": 50,
+                        "MoveAbs_Param.AccelTime": 200, "MoveAbs_Param.TargetPosition.X": 350.0,
+                        "MoveAbs_Param.TargetPosition.Z": 350.0, "MoveAbs_Param.TargetPosition.RX": 180.0,
+                        "MoveAbs_Param.TargetPosition.RZ": 90.0, "MoveAbs_Param.RobotPose.Pose2": 2,
+                        "MoveAbs_Param.RobotPose.Pose3": 4}.items():
+        vm[path] = literal_value(value, vm.accessor(path).type) if isinstance(value, str) else value
+    vm["MoveAbs_Execute"] = True
+    seen_moving = 0
+    for _ in range(300):
+        seen_moving += same()["moving"]
+    assert seen_moving >= 5         # poses along the move compared too
+    vm.close()
