@@ -70,10 +70,6 @@ class Lowerer(PouGenerator, StatementGenerator, ExpressionGenerator):
         # references whose scalar target a loop keeps in a Python local (hold_derefs_in_loops):
         # the reference variable's key → the local
         self.held: dict[str, str] = {}
-        # `forward_inlined_values`: while an inlined FB call is written, the Python local holding
-        # the value last stored into each of the inlined instance's variables (key → local);
-        # None outside an inlined call
-        self.forwarded: dict[str, str] | None = None
 
     def assign_names(self) -> None:
         for i, (key, st) in enumerate(sorted(self.model.structs.items())):

@@ -37,8 +37,6 @@ class ExpressionGenerator:
         if is_global or var.section in (GLOBAL, EXTERNAL):
             return f"_G.{var_attr(var.name)}"
         key = var.key
-        if self.forwarded is not None and key in self.forwarded:
-            return self.forwarded[key]
         if key in self.cached:
             self.used.add(key)
             return var_attr(var.name)

@@ -364,14 +364,6 @@ class StatementGenerator:
                 return [f"{result} = {value}" if not aggregate else f"{result} = _copy_value({value})"]
             var = ref.variable
             assert var is not None
-            if self.forwarded is not None and ref.kind == "var" and not aggregate:
-                # an inlined FB's own BOOL (inlinable_fb): stored, and its value kept in a local
-                # for the reads that follow (`forward_inlined_values`)
-                forwarded, self.forwarded = self.forwarded, None
-                place = self.name_place(ref)
-                self.forwarded = forwarded
-                local = forwarded[var.key] = f"_i_{var_attr(var.name)}"
-                return [f"{place} = {local} = {value}"]
             place = self.name_place(ref)
             if target.nid in self.facts.auto_deref:
                 return self.store_through(place, value, ty)
@@ -432,11 +424,6 @@ class StatementGenerator:
             tmp = self.new_tmp("fb")
             self.w.line(f"{tmp} = {inst}")
             inst = tmp
-        # `forward_inlined_values`: the values the inlined body stores, kept in locals for its
-        # own reads and the outputs (nothing between can change the instance: the body only
-        # assigns its own BOOLs from its own BOOLs, and the debug build inlines nothing)
-        forwarded: dict[str, str] | None = {} \
-            if inlined is not None and self.options.forward_inlined_values else None
         for var, value in info.inputs:
             attr = var_attr(var.name)
             code = self.arg_code(var, value)
@@ -445,19 +432,15 @@ class StatementGenerator:
                     self.w.line(f"{inst}.{attr}._assign({self.expr(value)})")
             elif var.section != IN_OUT and isinstance(var.type, t.ArrayType) and var.type.dims is not None:
                 self.w.line(f"_assign_array({inst}.{attr}, {self.expr(value)})")
-            elif forwarded is not None:
-                local = forwarded[var.key] = f"_i_{attr}"
-                self.w.line(f"{inst}.{attr} = {local} = {code}")
             elif not self.reused_array_ref(f"{inst}.{attr}", var, value):
                 self.w.line(f"{inst}.{attr} = {code}")
         if inlined is not None:
-            self.inline_fb_body(inst, info.pou, inlined, forwarded)
+            self.inline_fb_body(inst, info.pou, inlined)
         else:
             self.w.line(self.direct_native_call(inst, e, info.pou) or f"{inst}()")
         for var, target, negate in info.outputs:
             target_type = self.facts.types.get(target.nid)
-            value = forwarded.get(var.key) if forwarded is not None else None
-            value = value or f"{inst}.{var_attr(var.name)}"
+            value = f"{inst}.{var_attr(var.name)}"
             if negate:
                 value = f"(not {value})"
             elif target_type is not None:
@@ -526,20 +509,16 @@ class StatementGenerator:
         self.w.line(f"if (_ar := {place}) is None or {same}: {place} = {made}")
         return True
 
-    def inline_fb_body(self, inst: str, pou, node: n.POU, forwarded: dict[str, str] | None = None) -> None:
-        """Lower `node`'s body here with `inst` (a plain name) as the owner of its variables;
-        `forwarded`: its variables' values already held in locals (`forward_inlined_values`)."""
-        saved = (self.pou, self.owner, self.cached, self.used, self.assigned, self.range_vars, self.unchecked,
-                 self.forwarded)
+    def inline_fb_body(self, inst: str, pou, node: n.POU) -> None:
+        """Lower `node`'s body here with `inst` (a plain name) as the owner of its variables."""
+        saved = (self.pou, self.owner, self.cached, self.used, self.assigned, self.range_vars, self.unchecked)
         span = self.w.span
         self.pou, self.owner = pou, inst
         self.cached, self.used, self.assigned, self.range_vars, self.unchecked = {}, set(), set(), {}, set()
-        self.forwarded = forwarded
         try:
             self.body(node.body)
         finally:
-            (self.pou, self.owner, self.cached, self.used, self.assigned, self.range_vars, self.unchecked,
-             self.forwarded) = saved
+            self.pou, self.owner, self.cached, self.used, self.assigned, self.range_vars, self.unchecked = saved
             self.w.span = span
 
 

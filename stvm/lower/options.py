@@ -72,13 +72,6 @@ class LowerOptions:
     # instance; not for FBs with methods, a base, temporaries or in-outs, nor FBs some POU extends.
     # The debug build switches it off (breakpoints in the FB's body must hit).
     inline_small_fbs: bool = True
-    # In an inlined FB call, each value stored into the instance (its inputs, then each statement
-    # of its body) is also kept in a Python local, and the body's later reads and the call's
-    # outputs read that local (`R_TRIG`: `Q := CLK AND NOT M; M := CLK` reads CLK from the local
-    # it was stored from). Safe: the same stores in the same order; nothing runs between a store
-    # and those reads (the inlined body is BOOL assignments among the instance's own variables,
-    # and the debug build inlines nothing, so no breakpoint stops inside). Needs `inline_small_fbs`.
-    forward_inlined_values: bool = True
     # A loop whose only storage is Python locals and one reference's scalar target (`r^ := r^ + i`
     # with nothing else that could alias it: no calls, no member, index or other dereference)
     # reads `r^` into a local before the loop and writes it back in a `finally` after it (a NULL

@@ -22,7 +22,7 @@ from stvm.lower import codegen
 from stvm.lower.options import DEFAULT_OPTIONS, LowerOptions
 
 SCAN_OPTIONS = ("hot_path_cache", "inline_input_copy", "direct_native_calls", "skip_quiet_native_calls",
-                "reuse_array_refs", "inline_small_fbs", "forward_inlined_values")
+                "reuse_array_refs", "inline_small_fbs")
 
 
 @contextlib.contextmanager
@@ -285,19 +285,6 @@ def test_inline_small_fbs_writes_the_edge_detectors_into_the_caller():
     assert "v_r()" not in main_on.replace("self.", "") and "v_r.v_m = " in main_on.replace("self.", "")
     assert "v_r()" in main_off.replace("self.", "")
     assert seen[-1]["Main.up"] == 3 and seen[-1]["Main.down"] == 2 and seen[-1]["Main.held"] is True
-
-
-def test_forward_inlined_values_reads_the_stored_values_from_locals():
-    pattern = [False, True, True, False, True, False, False, True, True]
-    paths = ["Main.up", "Main.down", "Main.held", "Main.r.Q", "Main.r.CLK", "Main.f.Q", "Main.f.M",
-             "Main.latch.Q1", "Main.latch.S1", "Main.latch.R"]
-    on, off, seen = run_both(EDGES, "forward_inlined_values", len(pattern), lambda k: {"Main.x": pattern[k]}, paths)
-    main_on, main_off = (code[code.rindex("_main:"):].replace("self.", "") for code in (on, off))
-    # every store stays on the instance; the reads after it take the local
-    assert "v_r.v_clk = _i_v_clk = " in main_on and "v_r.v_m = _i_v_m = _i_v_clk" in main_on
-    assert "(_i_v_clk & (not v_r.v_m))" in main_on and "_i_v_" not in main_off
-    assert "v_r.v_m = v_r.v_clk" in main_off
-    assert seen[-1]["Main.up"] == 3 and seen[-1]["Main.down"] == 2 and seen[-1]["Main.r.CLK"] is True
 
 
 def test_inline_small_fbs_leaves_larger_or_richer_fbs_alone():
