@@ -104,6 +104,40 @@ def test_hot_path_cache_leaves_step_variables_on_the_instance():
     assert seen[-1]["Main.s.total"] > 0 and any(row["Main.done"] for row in seen)
 
 
+COLD_FOR = """
+FUNCTION_BLOCK Sender
+VAR_INPUT go : BOOL; END_VAR
+VAR_OUTPUT sum : BYTE; END_VAR
+VAR step : INT; i : UINT; data : ARRAY[0..9] OF BYTE; END_VAR
+IF go AND step = 0 THEN step := 10; END_IF;
+IF step > 0 THEN
+  CASE step OF
+    10: data[3] := 7; data[5] := 9; step := 20;
+    20: step := 30;
+    30: step := 40;
+    40: sum := 0; FOR i := 1 TO 9 DO sum := sum XOR data[i]; END_FOR; step := 50;
+    50: IF NOT go THEN step := 0; END_IF;
+  END_CASE;
+END_IF;
+END_FUNCTION_BLOCK
+PROGRAM Main
+VAR s : Sender; go : BOOL; sum : BYTE; END_VAR
+s(go := go, sum => sum);
+END_PROGRAM
+"""
+
+
+def test_hot_path_cache_leaves_a_cold_for_variable_on_the_instance():
+    # the FOR runs in one step of five: a local would cost a load and a write-back on every call
+    paths = ["Main.sum", "Main.s.i", "Main.s.step"]
+    on, off, seen = run_both(COLD_FOR, "hot_path_cache", 16, lambda k: {"Main.go": k % 8 < 6}, paths)
+    sender_on, sender_off = (code[code.index("_sender:"):code.index("class ", code.index("_sender:"))]
+                             for code in (on, off))
+    assert not re.search(r"^\s+v_i = self\.v_i$", sender_on, re.M) and "while self.v_i <= " in sender_on
+    assert re.search(r"^\s+v_i = self\.v_i$", sender_off, re.M) and "for v_i in _range" in sender_off
+    assert seen[-1]["Main.sum"] == 7 ^ 9 and seen[-1]["Main.s.i"] == 10
+
+
 SOCKET_COPY = """
 TYPE Addr : STRUCT port : UINT; ip : STRING[16]; END_STRUCT; END_TYPE
 TYPE Sock : STRUCT handle : UDINT; src : Addr; dst : Addr; END_STRUCT; END_TYPE
