@@ -37,7 +37,8 @@ Rows: the generated call and the hand-written call in CPU µs per call (each the
 alternating rounds), the ratio generated / hand, and each against the FOR-100 yardstick; then the
 ST programs' CPU per scan over the golden run (both programs, generated code and the natives they
 call), and that divided by the cases' median ratio: an estimate of the same scan written by hand.
-Run alone: `python -m bench --only floor`, or `python bench/fig_floor.py`.
+Run alone: `python -m bench --only floor`, or `python bench/fig_floor.py` (`--opcodes`: bytecodes
+and Python calls per call of both versions, exact).
 """
 
 from __future__ import annotations
@@ -80,7 +81,56 @@ def changebase_hand(fb, ctx, array_ref) -> None:
         fb.v_toerror_sts = True
         fb.v_toerrorid = 153
         fb.v_toerrordescrip = b'Robot not connected'
-    _status_case(fb, execute)
+    status = fb.v_fb_status
+    if status == 0:
+        pass            # FB_Status := 0 stores what it holds
+    elif status == 1:
+        fb.v_toerror_sts = False
+        fb.v_todone_sts = False
+        fb.v_done = False
+        fb.v_busy = False
+        fb.v_error = False
+        fb.v_errorid = 0
+        fb.v_errordescrip = b''
+        fb.v_fb_status = 2
+    elif status == 2:
+        fb.v_done = False
+        fb.v_busy = True
+        fb.v_error = False
+        fb.v_errorid = 0
+        fb.v_errordescrip = b''
+        if fb.v_toerror_sts:
+            fb.v_fb_status = 3
+        if fb.v_todone_sts:
+            fb.v_fb_status = 5
+    elif status == 3:
+        fb.v_done = False
+        fb.v_busy = False
+        fb.v_error = True
+        fb.v_errorid = fb.v_toerrorid
+        fb.v_errordescrip = fb.v_toerrordescrip
+        if not execute:
+            fb.v_fb_status = 4
+    elif status == 4:
+        fb.v_done = False
+        fb.v_busy = False
+        fb.v_error = False
+        fb.v_errorid = fb.v_toerrorid
+        fb.v_errordescrip = fb.v_toerrordescrip
+    elif status == 5:
+        fb.v_done = True
+        fb.v_busy = False
+        fb.v_error = False
+        fb.v_errorid = 0
+        fb.v_errordescrip = b''
+        if not execute:
+            fb.v_fb_status = 6
+    elif status == 6:
+        fb.v_done = False
+        fb.v_busy = False
+        fb.v_error = False
+        fb.v_errorid = 0
+        fb.v_errordescrip = b''
     if fb.v_busy:
         step = fb.v_fb_step
         if step == 10:
@@ -152,12 +202,48 @@ def changebase_hand(fb, ctx, array_ref) -> None:
     fb.v_tcp_rcv_rcvsize = rcv.v_rcvsize
 
 
-def _status_case(fb, execute) -> None:
-    """The FB_Status CASE every thesis command FB (and CBT_Connect) runs first."""
+def _socket_in(target, handle, src_port, src_ip, dst_port, dst_ip) -> None:
+    """A socket struct's five leaves stored into `target` (CBT_Connect's `Socket => CBT.Socket`,
+    once a call; the five socket FB inputs after it are written inline)."""
+    target.v_handle = handle
+    a = target.v_srcadr
+    a.v_portno = src_port
+    a.v_ipadr = src_ip
+    a = target.v_dstadr
+    a.v_portno = dst_port
+    a.v_ipadr = dst_ip
+
+
+def connect_hand(fb, ctx, array_ref, get_time) -> None:
+    """CBT_Connect (st_src/CBT_Connect.st) by hand: every statement of its body with the steps 80
+    and 90 of its step CASE (the connected scans), and none of the others (idle: not busy)."""
+    execute = fb.v_execute
+    cbt = fb.v_cbt
+    trig = fb.v_r_trig_execute          # R_TRIG(CLK := Execute, Q => FlagExecute)
+    rising = execute and not trig.v_m
+    trig.v_clk = execute
+    trig.v_q = rising
+    trig.v_m = execute
+    fb.v_flagexecute = rising
+    if rising and fb.v_fb_status != 2:
+        fb.v_fb_status = 1
+        fb.v_fb_step = 10
+        fb.v_local_portip = 0
+        fb.v_addressip = fb.v_ipaddress
+        fb.v_dest_portip = fb.v_ipport
+        fb.v_connectiontimeout = fb.v_time_out
+    trig = fb.v_f_trig_execute          # F_TRIG(CLK := Execute, Q => FalseExecute)
+    falling = not execute and trig.v_m
+    trig.v_clk = execute
+    trig.v_q = falling
+    trig.v_m = execute
+    fb.v_falseexecute = falling
+    if falling:
+        fb.v_fb_step = 100
     status = fb.v_fb_status
     if status == 0:
-        return
-    if status == 1:
+        pass            # FB_Status := 0 stores what it holds
+    elif status == 1:
         fb.v_toerror_sts = False
         fb.v_todone_sts = False
         fb.v_done = False
@@ -204,47 +290,6 @@ def _status_case(fb, execute) -> None:
         fb.v_error = False
         fb.v_errorid = 0
         fb.v_errordescrip = b''
-
-
-def _socket_in(target, handle, src_port, src_ip, dst_port, dst_ip) -> None:
-    """A socket struct's five leaves stored into `target` (CBT_Connect's `Socket => CBT.Socket`,
-    once a call; the five socket FB inputs after it are written inline)."""
-    target.v_handle = handle
-    a = target.v_srcadr
-    a.v_portno = src_port
-    a.v_ipadr = src_ip
-    a = target.v_dstadr
-    a.v_portno = dst_port
-    a.v_ipadr = dst_ip
-
-
-def connect_hand(fb, ctx, array_ref, get_time) -> None:
-    """CBT_Connect (st_src/CBT_Connect.st) by hand: every statement of its body with the steps 80
-    and 90 of its step CASE (the connected scans), and none of the others (idle: not busy)."""
-    execute = fb.v_execute
-    cbt = fb.v_cbt
-    trig = fb.v_r_trig_execute          # R_TRIG(CLK := Execute, Q => FlagExecute)
-    rising = execute and not trig.v_m
-    trig.v_clk = execute
-    trig.v_q = rising
-    trig.v_m = execute
-    fb.v_flagexecute = rising
-    if rising and fb.v_fb_status != 2:
-        fb.v_fb_status = 1
-        fb.v_fb_step = 10
-        fb.v_local_portip = 0
-        fb.v_addressip = fb.v_ipaddress
-        fb.v_dest_portip = fb.v_ipport
-        fb.v_connectiontimeout = fb.v_time_out
-    trig = fb.v_f_trig_execute          # F_TRIG(CLK := Execute, Q => FalseExecute)
-    falling = not execute and trig.v_m
-    trig.v_clk = execute
-    trig.v_q = falling
-    trig.v_m = execute
-    fb.v_falseexecute = falling
-    if falling:
-        fb.v_fb_step = 100
-    _status_case(fb, execute)
     if fb.v_busy:
         step = fb.v_fb_step
         if step == 90:
@@ -428,6 +473,26 @@ def cpu_us(fn, number: int) -> float:
     return best / number * 1e6
 
 
+def bytecodes_per_call(fn, instance) -> tuple[int, int]:
+    """(bytecodes, Python calls) of one `fn(instance)`: `sys.settrace` opcode events, exact and
+    the same on every run (the view for a loaded machine)."""
+    counts = [0, 0]
+
+    def tracer(frame, event, arg):
+        frame.f_trace_opcodes = True
+        if event == "opcode":
+            counts[0] += 1
+        elif event == "call":
+            counts[1] += 1
+        return tracer
+    sys.settrace(tracer)
+    try:
+        fn(instance)
+    finally:
+        sys.settrace(None)
+    return counts[0], counts[1]
+
+
 def steady_session(scans: int):
     from stvm.project import load
     from stvm.trace import TraceSpec
@@ -548,7 +613,7 @@ def measure(smoke: bool) -> list[tuple[str, float, float, list[float]]]:
         session.close()
 
 
-@figure("floor: generated vs hand-written thesis FB scans", item="issue 33 items 2, 4", tags=("trace", "scale"))
+@figure("floor: generated vs hand-written", item="issue 33 items 2, 4", tags=("trace", "scale"))
 def floor_figure(smoke: bool) -> list[Row]:
     yard = for_loop_us(rounds=3 if smoke else 5)
     rows = []
@@ -575,7 +640,17 @@ if __name__ == "__main__":
     import argparse
     ap = argparse.ArgumentParser(description="generated code vs hand-written Python, thesis FB scans")
     ap.add_argument("--smoke", action="store_true")
+    ap.add_argument("--opcodes", action="store_true", help="bytecodes and Python calls per call instead of CPU")
     args = ap.parse_args()
+    if args.opcodes:
+        session, vm = steady_session(STEADY_SCAN)
+        for label, instance, generated, hand, _ in floor_cases(vm):
+            generated(instance)
+            (gen_ops, gen_calls), (hand_ops, hand_calls) = (bytecodes_per_call(f, instance) for f in (generated, hand))
+            print(f"{label}: generated {gen_ops} bytecodes, {gen_calls} calls; hand {hand_ops} bytecodes, "
+                  f"{hand_calls} calls; ratio {gen_ops / hand_ops:.2f}")
+        session.close()
+        raise SystemExit(0)
     yard = for_loop_us()
     print(f"FOR-100 yardstick {yard:.2f} us")
     for label, gen_us, hand_us, ratios in measure(args.smoke):
