@@ -22,7 +22,7 @@ from stvm.lower import codegen
 from stvm.lower.options import DEFAULT_OPTIONS, LowerOptions
 
 SCAN_OPTIONS = ("hot_path_cache", "inline_input_copy", "direct_native_calls", "skip_quiet_native_calls",
-                "reuse_array_refs", "inline_small_fbs")
+                "reuse_array_refs", "inline_small_fbs", "share_struct_sources")
 
 
 @contextlib.contextmanager
@@ -154,6 +154,45 @@ u(s := mine, h => h, port => port);
 u(s := u.s);   (* a struct onto itself: a no-op *)
 END_PROGRAM
 """
+
+
+SOCKET_RUN = """
+PROGRAM Main
+VAR clr : SktClearBuf; send : SktTCPSend; rcv : SktTCPRcv; other : SktClearBuf; last : SktClose;
+    sock : _sSOCKET; data : ARRAY[0..9] OF BYTE; got : UINT; n : INT; END_VAR
+n := n + 1;
+sock.Handle := sock.Handle + 1;
+sock.DstAdr.PortNo := sock.DstAdr.PortNo + 2;
+sock.SrcAdr.IpAdr := CONCAT('10.0.0.', INT_TO_STRING(n));
+clr(Execute := FALSE, Socket := sock);
+send(Execute := FALSE, Socket := sock, SendDat := data[0], Size := 3);
+rcv(Execute := FALSE, Socket := sock, TimeOut := 0, Size := 4, RcvDat := data[0], RcvSize => got);
+other(Execute := FALSE, Socket := sock);
+last(Execute := FALSE, Socket := other.Socket);   (* a source inside a called instance *)
+other(Execute := FALSE, Socket := send.Socket);
+last(Execute := FALSE, Socket := other.Socket);   (* other was called since: read again *)
+END_PROGRAM
+"""
+
+
+def test_share_struct_sources_copies_one_source_into_a_run_of_socket_fbs():
+    paths = ["Main.clr.Socket.Handle", "Main.send.Socket.DstAdr.PortNo", "Main.rcv.Socket.SrcAdr.IpAdr",
+             "Main.other.Socket.Handle", "Main.last.Socket.Handle", "Main.last.Socket.SrcAdr.IpAdr", "Main.got"]
+    on, off, seen = run_both(SOCKET_RUN, "share_struct_sources", 4, lambda k: {}, paths)
+    main_on, main_off = (code[code.rindex("_main:"):] for code in (on, off))
+    # the first copy from `sock` keeps the five leaves, the next three store them; each other
+    # source is read by its first copy
+    assert main_on.count("_sd.v_handle = _h0 = _ss.v_handle") == 4 and main_on.count("_sd.v_handle = _h0\n") == 3
+    assert "_h0" not in main_off
+    # `other.Socket` is read again after `other` was called: nothing kept across that call
+    assert main_on.count("_ss = self.v_other.v_socket") == 2 or main_on.count("_ss = v_other.v_socket") == 2
+    assert seen[-1]["Main.last.Socket.Handle"] == 4 and seen[-1]["Main.rcv.Socket.SrcAdr.IpAdr"] == b"10.0.0.4"
+
+
+def test_share_struct_sources_not_in_the_debug_build():
+    from stvm.debug.build import DEBUG_OPTIONS
+    code = load_with(SOCKET_RUN, DEBUG_OPTIONS).lowered.source
+    assert "_h0" not in code[code.rindex("_main:"):]
 
 
 def test_inline_input_copy_copies_field_by_field_at_the_call():
