@@ -22,9 +22,9 @@ values read twice, the R_TRIG/F_TRIG inlined with its result kept in a local, th
 struct's five leaves read once and stored into each socket FB, stores that cannot change anything
 (`FB_Status := 0` in state 0) left out; every ST-visible store the ST makes is kept (the FBs'
 inputs hold the copied values after the call, as the trace, the HMI, OPC UA and the debugger
-expect). They use what the programmer knows and the lowering cannot prove: a socket FB's native
-touches only its own instance, so the connection's socket struct is the same before and after
-each socket FB call. They implement the CASE steps the timed and checked scans take; any other
+expect). They use what the programmer knows: a socket FB's native touches only its own instance,
+so the connection's socket struct is the same before and after each socket FB call (the
+lowering's `share_struct_sources` proves the same for a run of such calls). They implement the CASE steps the timed and checked scans take; any other
 step raises, so the equivalence check below cannot pass by accident.
 
 Before timing, each case checks equivalence: two deep copies of the instance (and everything it
