@@ -22,11 +22,16 @@ class StatementGenerator:
     """Statements: `statement(s)` writes the lines of one ST statement."""
 
     def body(self, stmts: tuple[n.Statement, ...]) -> None:
+        # `share_struct_sources` keeps a source only within one statement list: a list starts
+        # with nothing kept (the previous POU's last call, a block's enclosing statement) and
+        # leaves nothing kept behind
+        self.hoisted = None
         if not stmts:
             self.w.line("pass")
             return
         for s in stmts:
             self.statement(s)
+        self.hoisted = None
 
     def statement(self, s: n.Statement) -> None:
         self.w.span = s.span

@@ -189,6 +189,37 @@ def test_share_struct_sources_copies_one_source_into_a_run_of_socket_fbs():
     assert seen[-1]["Main.last.Socket.Handle"] == 4 and seen[-1]["Main.rcv.Socket.SrcAdr.IpAdr"] == b"10.0.0.4"
 
 
+def test_share_struct_sources_keeps_nothing_from_one_pou_to_the_next():
+    source = """
+PROGRAM First
+VAR clr : SktClearBuf; sock : _sSOCKET; END_VAR
+sock.Handle := 5;
+clr(Execute := FALSE, Socket := sock);
+clr(Execute := FALSE, Socket := sock);
+END_PROGRAM
+PROGRAM Second
+VAR clr : SktClearBuf; sock : _sSOCKET; END_VAR
+clr(Execute := FALSE, Socket := sock);
+clr(Execute := FALSE, Socket := sock);
+END_PROGRAM
+CONFIGURATION C RESOURCE R ON PLC
+TASK T(INTERVAL := T#10ms, PRIORITY := 1);
+PROGRAM First_Instance WITH T : First;
+PROGRAM Second_Instance WITH T : Second;
+END_RESOURCE END_CONFIGURATION
+"""
+    project = load_with(source, DEFAULT_OPTIONS)
+    code = project.lowered.source
+    for name in ("_first:", "_second:"):
+        body = code[code.index(name):]
+        body = body[body.index("def __call__"):]
+        body = body[:body.index("class ")] if "class " in body else body
+        assert body.count("_sd.v_handle = _h0 = _ss.v_handle") == 1 and body.count("_sd.v_handle = _h0\n") == 1
+    vm = project.start(scan="10ms")
+    vm.scan()
+    assert vm["First_Instance.clr.Socket.Handle"] == 5 and vm["Second_Instance.clr.Socket.Handle"] == 0
+
+
 def test_share_struct_sources_not_in_the_debug_build():
     from stvm.debug.build import DEBUG_OPTIONS
     code = load_with(SOCKET_RUN, DEBUG_OPTIONS).lowered.source
