@@ -674,13 +674,16 @@ def _through_deref(target: n.Expr) -> bool:
 
 def hot_enough(var: Variable, hot: tuple[dict[str, float], set[str]]) -> bool:
     """`hot_path_cache`: is a local worth its load on entry (and store on exit) on a typical
-    call? Yes for a FOR variable (a range-FOR needs it in a local), or when the uses one call
-    is expected to make (branches weighted, loops multiplied by `hot_uses`) reach the
-    threshold; an aggregate is only aliased (no write-back), so it pays off sooner. A
-    temporary keeps the plain rule: uncached, it is reset on the instance every call anyway."""
+    call? Yes when the uses one call is expected to make (branches weighted, loops multiplied
+    by `hot_uses`) reach the threshold; an aggregate is only aliased (no write-back), so it pays
+    off sooner. A FOR variable (a range-FOR needs it in a local) pays off sooner too; one whose
+    loops sit in a cold branch (the thesis FBs' checksum loop in one step of twelve, run once per
+    command, while the prologue and write-back would run on every call) stays on the instance
+    and its loop is the plain WHILE form. A temporary keeps the plain rule: uncached, it is reset
+    on the instance every call anyway."""
     counts, for_vars = hot
     if var.key in for_vars:
-        return True
+        return counts.get(var.key, 0.0) >= _HOT_MIN_USES_FOR
     aggregate = isinstance(var.type, (t.StructType, t.ArrayType, t.FBType))
     return counts.get(var.key, 0.0) >= (_HOT_MIN_USES_AGGREGATE if aggregate else _HOT_MIN_USES)
 
@@ -725,4 +728,5 @@ _CACHE_MIN_USES = 3          # uses of a variable in a body (a use inside a loop
 # a cached scalar costs ~6 bytecodes (load on entry, store back on exit) and saves ~1.5 per use
 _HOT_MIN_USES = 3.0
 _HOT_MIN_USES_AGGREGATE = 2.0
+_HOT_MIN_USES_FOR = 2.0
 _INLINE_FB_STATEMENTS = 4

@@ -70,6 +70,11 @@ class Lowerer(PouGenerator, StatementGenerator, ExpressionGenerator):
         # references whose scalar target a loop keeps in a Python local (hold_derefs_in_loops):
         # the reference variable's key → the local
         self.held: dict[str, str] = {}
+        # `share_struct_sources`: the struct source whose leaves the code just written holds in
+        # `_h0`, `_h1`, ... (source code, struct type), and the call statement being written
+        # when it may share (`GenStmt.hoist_safe_call`); None otherwise
+        self.hoisted: tuple[str, t.StructType, tuple] | None = None
+        self.sharing: object | None = None
 
     def assign_names(self) -> None:
         for i, (key, st) in enumerate(sorted(self.model.structs.items())):

@@ -22,14 +22,33 @@ class StatementGenerator:
     """Statements: `statement(s)` writes the lines of one ST statement."""
 
     def body(self, stmts: tuple[n.Statement, ...]) -> None:
+        # `share_struct_sources` keeps a source only within one statement list: a list starts
+        # with nothing kept (the previous POU's last call, a block's enclosing statement) and
+        # leaves nothing kept behind
+        self.hoisted = None
         if not stmts:
             self.w.line("pass")
             return
         for s in stmts:
             self.statement(s)
+        self.hoisted = None
 
     def statement(self, s: n.Statement) -> None:
         self.w.span = s.span
+        # `share_struct_sources`: a struct source read by the previous statement stays in locals
+        # only across a run of plain native FB call statements (`hoist_safe_call`)
+        safe = self.options.share_struct_sources and self.options.cache_locals and self.hoist_safe_call(s)
+        if not safe or (self.hoisted is not None and not self.unowned_by(self.hoisted[2], s)):  # type: ignore[arg-type]
+            self.hoisted = None
+        self.sharing = s if safe else None
+        try:
+            self.statement_body(s)
+        finally:
+            self.sharing = None
+        if not safe:
+            self.hoisted = None   # nor out of a compound statement's inner blocks
+
+    def statement_body(self, s: n.Statement) -> None:
         # a statement calling a FUNCTION catches its instruction errors; under
         # array_oob=skip_statement, a statement with an array access is skipped when an index
         # is out of range (a compound one only for its own expressions: inner statements skip
@@ -428,7 +447,7 @@ class StatementGenerator:
             attr = var_attr(var.name)
             code = self.arg_code(var, value)
             if var.section != IN_OUT and isinstance(var.type, t.StructType):
-                if not self.inline_input_copy(f"{inst}.{attr}", self.expr(value), var.type):
+                if not self.inline_input_copy(f"{inst}.{attr}", self.expr(value), var.type, value):
                     self.w.line(f"{inst}.{attr}._assign({self.expr(value)})")
             elif var.section != IN_OUT and isinstance(var.type, t.ArrayType) and var.type.dims is not None:
                 self.w.line(f"_assign_array({inst}.{attr}, {self.expr(value)})")
@@ -450,7 +469,66 @@ class StatementGenerator:
                 continue
             self.store(target, value, target_type)
 
-    def inline_input_copy(self, dst: str, src: str, st: t.StructType) -> bool:
+    def hoist_safe_call(self, s: n.Statement) -> bool:
+        """`share_struct_sources`: a call statement across which a struct source's leaf values
+        cannot change: a native FB called directly (its implementation touches only its own
+        instance), no EN/ENO, no caught errors, no in-out but ARRAY[*] ones (an `ArrayRef` reaches
+        a list, never a struct field), no reference or pointer pin, every input a plain variable
+        path or literal (no call, no property, no computed index), every output a plain scalar
+        variable of the caller or a global (never a struct field, a reference or a property)."""
+        if not isinstance(s, n.CallStatement) or not isinstance(s.call, n.Call):
+            return False
+        if s.nid in self.plan.catches_function_errors or s.nid in self.plan.skips_on_bad_index \
+                or s.nid in self.plan.held_derefs:
+            return False
+        info = self.facts.calls.get(s.call.nid)
+        if info is None or not info.is_fb or info.oo or info.en is not None or info.eno is not None \
+                or not info.pou.native or s.call.nid not in self.plan.direct_native \
+                or s.call.nid in self.plan.inlined_fbs or info.extra:
+            return False
+        for var in info.pou.variables.values():
+            if isinstance(var.type, t.RefType) or (var.section == IN_OUT and not isinstance(var.type, t.ArrayType)):
+                return False
+        if info.instance is None or not self.plain_path(info.instance):
+            return False
+        for _, value in info.inputs:
+            if not self.plain_path(value):
+                return False
+        for var, target, _ in info.outputs:
+            if not isinstance(target, n.Name) or target.nid in self.facts.auto_deref \
+                    or (self.facts.props and target.nid in self.facts.props):
+                return False
+            ref = self.facts.names.get(target.nid)
+            if ref is None or ref.kind not in ("var", "global") or ref.variable is None \
+                    or ref.variable.section == IN_OUT or t.is_aggregate(ref.variable.type) \
+                    or t.is_aggregate(var.type):
+                return False
+        return True
+
+    def plain_path(self, e: n.Expr) -> bool:
+        """A variable path (`a`, `a.b`, `a.b[3]`), or a literal: evaluated without a call, a
+        property or an index that could fault."""
+        if self.facts.props and e.nid in self.facts.props:
+            return False
+        if isinstance(e, _LITERALS):
+            return True
+        if isinstance(e, n.Name):
+            return e.nid not in self.facts.auto_deref
+        if isinstance(e, n.Member):
+            return e.nid not in self.facts.auto_deref and self.plain_path(e.base)
+        if isinstance(e, n.Index):
+            base = self.facts.types.get(e.base.nid)
+            if not isinstance(base, t.ArrayType) or not base.dims or len(base.dims) != len(e.indices) \
+                    or e.nid in self.facts.auto_deref:
+                return False
+            for ix, (lo, hi) in zip(e.indices, base.dims):
+                value = self.facts.consts.get(ix.nid)
+                if not isinstance(ix, n.IntLiteral) or not isinstance(value, int) or not lo <= value <= hi:
+                    return False
+            return self.plain_path(e.base)
+        return False
+
+    def inline_input_copy(self, dst: str, src: str, st: t.StructType, node: n.Expr | None = None) -> bool:
         """`inline_input_copy`: a STRUCT input of an FB call copied field by field in place, no
         `_assign` call (the thesis copies its `_sSOCKET` into three socket FBs per CBT FB and
         its parameter structs into every CBT FB, every scan). Only for structs of at most
@@ -460,9 +538,95 @@ class StatementGenerator:
             return False
         # `_assign`'s `src is self` shortcut is not needed: copying a struct onto itself field
         # by field changes nothing
+        if node is not None and self.share_source(dst, src, st, node):
+            return True
         self.w.line(f"_sd = {dst}; _ss = {src}")
         self.struct_assign_body("_sd", "_ss", st, 0)
         return True
+
+    def share_source(self, dst: str, src: str, st: t.StructType, node: n.Expr) -> bool:
+        """`share_struct_sources`: inside a run of `hoist_safe_call` statements, the first copy
+        from `src` keeps its leaf values in locals (`_h0`, `_h1`, ...) and the later copies from
+        the same `src` store those (the thesis copies `CBT.Socket` into three to six socket FBs
+        in a row). Only for structs of scalar leaves, and never when a destination lies inside
+        the source's root or the source inside the destination's (then nothing is kept). False:
+        not applied, the plain copy is written."""
+        call = self.sharing
+        if not self.options.share_struct_sources or not self.options.cache_locals or call is None:
+            return False
+        leaves = scalar_leaves(st)
+        shape = source_shape(self.facts, node)
+        if leaves is None or shape is None or not self.unowned_by(shape, call):
+            return False
+        hoisted = self.hoisted
+        if hoisted is not None and hoisted[0] == src and hoisted[1] == st:
+            self.w.line(f"_sd = {dst}")
+            self.shared_copy_body("_sd", leaves, 0, [0])
+            return True
+        self.w.line(f"_sd = {dst}; _ss = {src}")
+        self.shared_first_copy("_sd", "_ss", st, 0, [0])
+        self.hoisted = (src, st, shape)
+        return True
+
+    def unowned_by(self, shape: tuple, call: n.CallStatement) -> bool:
+        """Can the struct a source path (`source_shape`) reaches not be part of the instance this
+        call's native writes? It is part of it only if one of its containers is that instance,
+        or, past a reference or in-out, if the container it points to could lie inside it (its
+        type is one the callee's variables hold)."""
+        info = self.facts.calls[call.call.nid]
+        callee = type_key(t.FBType(name=info.pou.name, qualname=info.pou.qualname))
+        indirect, pointed, containers = shape
+        if callee in {type_key(c) for c in containers}:
+            return False
+        return not indirect or (pointed is not None and type_key(pointed) not in self.owned_types(info.pou))
+
+    def owned_types(self, pou) -> set:
+        """Keys of the struct and FB types an instance of `pou` holds by value (its in-outs and
+        references excluded: they hold nothing)."""
+        seen: set = set()
+
+        def walk(ty) -> None:
+            if isinstance(ty, t.ArrayType):
+                walk(ty.element)
+            elif isinstance(ty, t.StructType):
+                key = type_key(ty)
+                if key not in seen:
+                    seen.add(key)
+                    for _, fty in ty.fields:
+                        walk(fty)
+            elif isinstance(ty, t.FBType):
+                key = type_key(ty)
+                if key not in seen:
+                    seen.add(key)
+                    inner = self.model.pous.get(ty.qualname.lower())
+                    for var in (inner.variables.values() if inner is not None else ()):
+                        if var.section != IN_OUT:
+                            walk(var.type)
+        for var in pou.variables.values():
+            if var.section != IN_OUT:
+                walk(var.type)
+        return seen
+
+    def shared_first_copy(self, dst: str, src: str, st: t.StructType, depth: int, counter: list[int]) -> None:
+        for name, fty in st.fields:
+            attr = var_attr(name)
+            if isinstance(fty, t.StructType):
+                d, s = f"d{depth}", f"s{depth}"
+                self.w.line(f"{d} = {dst}.{attr}; {s} = {src}.{attr}")
+                self.shared_first_copy(d, s, fty, depth + 1, counter)
+            else:
+                self.w.line(f"{dst}.{attr} = _h{counter[0]} = {src}.{attr}")
+                counter[0] += 1
+
+    def shared_copy_body(self, dst: str, leaves: list, depth: int, counter: list[int]) -> None:
+        for attr, sub in leaves:
+            if sub is not None:
+                d = f"d{depth}"
+                self.w.line(f"{d} = {dst}.{attr}")
+                self.shared_copy_body(d, sub, depth + 1, counter)
+            else:
+                self.w.line(f"{dst}.{attr} = _h{counter[0]}")
+                counter[0] += 1
 
     def inline_output_copy(self, target: n.Expr, value: str, st: t.StructType) -> bool:
         """`inline_input_copy` for a STRUCT output (`Socket => CBT.Socket`, every scan in the
@@ -520,6 +684,63 @@ class StatementGenerator:
         finally:
             self.pou, self.owner, self.cached, self.used, self.assigned, self.range_vars, self.unchecked = saved
             self.w.span = span
+
+
+def type_key(ty: t.Type) -> tuple[str, str]:
+    """A struct or FB type by kind and qualified name (what `unowned_by` compares)."""
+    if isinstance(ty, t.FBType):
+        return ("fb", ty.qualname.lower())
+    if isinstance(ty, t.StructType):
+        return ("struct", ty.qualname.lower())
+    return ("other", repr(ty))
+
+
+def source_shape(facts, e: n.Expr) -> tuple[bool, t.Type | None, list[t.Type]] | None:
+    """(through a reference or in-out, the type it points to, the types of the objects the path
+    passes through from the root or from that reference on) of a plain variable path; None for
+    anything else."""
+    if isinstance(e, n.Name):
+        ref = facts.names.get(e.nid)
+        ty = facts.types.get(e.nid)
+        if ref is None or ref.variable is None or ty is None:
+            return None
+        var = ref.variable
+        if var.section == IN_OUT or isinstance(var.type, t.RefType) or e.nid in facts.auto_deref:
+            return (True, ty, [ty])
+        return (False, None, [ty])
+    if isinstance(e, (n.Member, n.Index)):
+        inner = source_shape(facts, e.base)
+        ty = facts.types.get(e.nid)
+        if inner is None or ty is None:
+            return None
+        if e.nid in facts.auto_deref or isinstance(facts.types.get(e.base.nid), t.RefType):
+            return (True, ty, [ty])
+        indirect, pointed, containers = inner
+        return (indirect, pointed, containers + [ty])
+    return None
+
+
+def scalar_leaves(st: t.StructType) -> list | None:
+    """`[(attr, sub)]` of a struct whose every leaf is a scalar (`sub` None, or the nested
+    struct's list), in `struct_assign_body`'s order; None when a leaf is an array, a union, a
+    reference or an FB (copied otherwise, or aliased)."""
+    out: list = []
+    for name, fty in st.fields:
+        if isinstance(fty, t.UnionType):
+            return None
+        if isinstance(fty, t.StructType):
+            sub = scalar_leaves(fty)
+            if sub is None or not fty.fields:
+                return None
+            out.append((var_attr(name), sub))
+        elif t.is_aggregate(fty) or isinstance(fty, (t.RefType, t.InterfaceType)):
+            return None
+        else:
+            out.append((var_attr(name), None))
+    return out
+
+
+_LITERALS = (n.IntLiteral, n.RealLiteral, n.BoolLiteral, n.StringLiteral, n.TimeLiteral)
 
 
 def struct_leaves(st: t.StructType) -> int:

@@ -50,6 +50,15 @@ class LowerOptions:
     # less per input and call). Safe: the same stores in the same order; a struct of more than 32
     # leaf fields keeps the call.
     inline_input_copy: bool = True
+    # In a run of plain native FB call statements (`fb(Socket := CBT.Socket, ...)` three to six
+    # times in a row in every thesis FB), the first field-by-field copy from a struct keeps its
+    # leaf values in Python locals and the next copies from the same struct store those. Safe: a
+    # natively implemented FB touches only its own instance, and the run admits only calls whose
+    # in-outs are arrays (no struct field reachable), whose inputs are plain variable paths and
+    # whose outputs are plain scalar variables; any other statement, and any copy into the
+    # source's own instance, ends it. Needs `inline_input_copy` and `cache_locals` (the debug build
+    # switches the latter off: a debugger stopped between two calls may change the source).
+    share_struct_sources: bool = True
     # A native FB's call site calls its implementation (`fb._impl.call(fb, _ctx)`) instead of the
     # generated `__call__` that only forwards to it: one Python frame less per call (the thesis
     # makes ~30 socket and timer FB calls a scan). Safe: the same call, and the instance is of

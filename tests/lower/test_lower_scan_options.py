@@ -22,7 +22,7 @@ from stvm.lower import codegen
 from stvm.lower.options import DEFAULT_OPTIONS, LowerOptions
 
 SCAN_OPTIONS = ("hot_path_cache", "inline_input_copy", "direct_native_calls", "skip_quiet_native_calls",
-                "reuse_array_refs", "inline_small_fbs")
+                "reuse_array_refs", "inline_small_fbs", "share_struct_sources")
 
 
 @contextlib.contextmanager
@@ -104,6 +104,40 @@ def test_hot_path_cache_leaves_step_variables_on_the_instance():
     assert seen[-1]["Main.s.total"] > 0 and any(row["Main.done"] for row in seen)
 
 
+COLD_FOR = """
+FUNCTION_BLOCK Sender
+VAR_INPUT go : BOOL; END_VAR
+VAR_OUTPUT sum : BYTE; END_VAR
+VAR step : INT; i : UINT; data : ARRAY[0..9] OF BYTE; END_VAR
+IF go AND step = 0 THEN step := 10; END_IF;
+IF step > 0 THEN
+  CASE step OF
+    10: data[3] := 7; data[5] := 9; step := 20;
+    20: step := 30;
+    30: step := 40;
+    40: sum := 0; FOR i := 1 TO 9 DO sum := sum XOR data[i]; END_FOR; step := 50;
+    50: IF NOT go THEN step := 0; END_IF;
+  END_CASE;
+END_IF;
+END_FUNCTION_BLOCK
+PROGRAM Main
+VAR s : Sender; go : BOOL; sum : BYTE; END_VAR
+s(go := go, sum => sum);
+END_PROGRAM
+"""
+
+
+def test_hot_path_cache_leaves_a_cold_for_variable_on_the_instance():
+    # the FOR runs in one step of five: a local would cost a load and a write-back on every call
+    paths = ["Main.sum", "Main.s.i", "Main.s.step"]
+    on, off, seen = run_both(COLD_FOR, "hot_path_cache", 16, lambda k: {"Main.go": k % 8 < 6}, paths)
+    sender_on, sender_off = (code[code.index("_sender:"):code.index("class ", code.index("_sender:"))]
+                             for code in (on, off))
+    assert not re.search(r"^\s+v_i = self\.v_i$", sender_on, re.M) and "while self.v_i <= " in sender_on
+    assert re.search(r"^\s+v_i = self\.v_i$", sender_off, re.M) and "for v_i in _range" in sender_off
+    assert seen[-1]["Main.sum"] == 7 ^ 9 and seen[-1]["Main.s.i"] == 10
+
+
 SOCKET_COPY = """
 TYPE Addr : STRUCT port : UINT; ip : STRING[16]; END_STRUCT; END_TYPE
 TYPE Sock : STRUCT handle : UDINT; src : Addr; dst : Addr; END_STRUCT; END_TYPE
@@ -120,6 +154,76 @@ u(s := mine, h => h, port => port);
 u(s := u.s);   (* a struct onto itself: a no-op *)
 END_PROGRAM
 """
+
+
+SOCKET_RUN = """
+PROGRAM Main
+VAR clr : SktClearBuf; send : SktTCPSend; rcv : SktTCPRcv; other : SktClearBuf; last : SktClose;
+    sock : _sSOCKET; data : ARRAY[0..9] OF BYTE; got : UINT; n : INT; END_VAR
+n := n + 1;
+sock.Handle := sock.Handle + 1;
+sock.DstAdr.PortNo := sock.DstAdr.PortNo + 2;
+sock.SrcAdr.IpAdr := CONCAT('10.0.0.', INT_TO_STRING(n));
+clr(Execute := FALSE, Socket := sock);
+send(Execute := FALSE, Socket := sock, SendDat := data[0], Size := 3);
+rcv(Execute := FALSE, Socket := sock, TimeOut := 0, Size := 4, RcvDat := data[0], RcvSize => got);
+other(Execute := FALSE, Socket := sock);
+last(Execute := FALSE, Socket := other.Socket);   (* a source inside a called instance *)
+other(Execute := FALSE, Socket := send.Socket);
+last(Execute := FALSE, Socket := other.Socket);   (* other was called since: read again *)
+END_PROGRAM
+"""
+
+
+def test_share_struct_sources_copies_one_source_into_a_run_of_socket_fbs():
+    paths = ["Main.clr.Socket.Handle", "Main.send.Socket.DstAdr.PortNo", "Main.rcv.Socket.SrcAdr.IpAdr",
+             "Main.other.Socket.Handle", "Main.last.Socket.Handle", "Main.last.Socket.SrcAdr.IpAdr", "Main.got"]
+    on, off, seen = run_both(SOCKET_RUN, "share_struct_sources", 4, lambda k: {}, paths)
+    main_on, main_off = (code[code.rindex("_main:"):] for code in (on, off))
+    # the first copy from `sock` keeps the five leaves, the next three store them; each other
+    # source is read by its first copy
+    assert main_on.count("_sd.v_handle = _h0 = _ss.v_handle") == 4 and main_on.count("_sd.v_handle = _h0\n") == 3
+    assert "_h0" not in main_off
+    # `other.Socket` is read again after `other` was called: nothing kept across that call
+    assert main_on.count("_ss = self.v_other.v_socket") == 2 or main_on.count("_ss = v_other.v_socket") == 2
+    assert seen[-1]["Main.last.Socket.Handle"] == 4 and seen[-1]["Main.rcv.Socket.SrcAdr.IpAdr"] == b"10.0.0.4"
+
+
+def test_share_struct_sources_keeps_nothing_from_one_pou_to_the_next():
+    source = """
+PROGRAM First
+VAR clr : SktClearBuf; sock : _sSOCKET; END_VAR
+sock.Handle := 5;
+clr(Execute := FALSE, Socket := sock);
+clr(Execute := FALSE, Socket := sock);
+END_PROGRAM
+PROGRAM Second
+VAR clr : SktClearBuf; sock : _sSOCKET; END_VAR
+clr(Execute := FALSE, Socket := sock);
+clr(Execute := FALSE, Socket := sock);
+END_PROGRAM
+CONFIGURATION C RESOURCE R ON PLC
+TASK T(INTERVAL := T#10ms, PRIORITY := 1);
+PROGRAM First_Instance WITH T : First;
+PROGRAM Second_Instance WITH T : Second;
+END_RESOURCE END_CONFIGURATION
+"""
+    project = load_with(source, DEFAULT_OPTIONS)
+    code = project.lowered.source
+    for name in ("_first:", "_second:"):
+        body = code[code.index(name):]
+        body = body[body.index("def __call__"):]
+        body = body[:body.index("class ")] if "class " in body else body
+        assert body.count("_sd.v_handle = _h0 = _ss.v_handle") == 1 and body.count("_sd.v_handle = _h0\n") == 1
+    vm = project.start(scan="10ms")
+    vm.scan()
+    assert vm["First_Instance.clr.Socket.Handle"] == 5 and vm["Second_Instance.clr.Socket.Handle"] == 0
+
+
+def test_share_struct_sources_not_in_the_debug_build():
+    from stvm.debug.build import DEBUG_OPTIONS
+    code = load_with(SOCKET_RUN, DEBUG_OPTIONS).lowered.source
+    assert "_h0" not in code[code.rindex("_main:"):]
 
 
 def test_inline_input_copy_copies_field_by_field_at_the_call():
