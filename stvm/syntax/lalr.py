@@ -657,7 +657,14 @@ class Driver:
             raise Unsupported("use_bytes and the regex module are not supported")
         try:
             lexers = contextual.lexers
-            parts = {id(lexers[s]): (lexers[s], _lexer_parts(lexers[s])) for s in range(n_states)}
+            # one entry per distinct BasicLexer (Lark shares one among the states that accept the
+            # same terminals: ~190 for ~870 states); `_lexer_parts` runs Lark's `_create_unless`,
+            # which matches every string terminal against every regex terminal, once for each
+            parts: dict[int, tuple] = {}
+            for s in range(n_states):
+                basic = lexers[s]
+                if id(basic) not in parts:
+                    parts[id(basic)] = (basic, _lexer_parts(basic))
             skip = self._skip_terminal([(basic, terms) for basic, (terms, _c) in parts.values()], user_callbacks)
             scanners = []
             by_lexer: dict[int, tuple] = {}
