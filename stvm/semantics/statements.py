@@ -240,6 +240,11 @@ class StatementChecker(BodyPart):
                     and isinstance(src, t.FBType) and src.qualname.lower() == dst.qualname.lower()):
                 self.error("function block instances cannot be assigned", span, "E052")
             return
+        if not allows(self.settings.dialect, "fb_assign") and (_array_of_fb(dst) or _array_of_fb(src)):
+            # the rule above holds for the elements too: without it `B := A` of two ARRAY OF FB
+            # was accepted and left B's elements the very instances of A (no copy is defined here)
+            self.error("arrays of function block instances cannot be assigned", span, "E052")
+            return
         if isinstance(src, t.VoidType):
             self.error("this call has no result value", span, "E052")
             return
@@ -390,3 +395,12 @@ class StatementChecker(BodyPart):
         TwinCAT, CODESYS; docs/memory_model.md)."""
         return isinstance(ty, t.RefType) and ty.flavour == "POINTER" and not ty.is_null \
             and allows(self.settings.dialect, "pointer_arithmetic")
+
+
+def _array_of_fb(ty: t.Type) -> bool:
+    """True for an ARRAY (of arrays…) whose elements are function block instances."""
+    while isinstance(ty, t.ArrayType):
+        ty = ty.element
+        if isinstance(ty, t.FBType):
+            return True
+    return False

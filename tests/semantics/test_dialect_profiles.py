@@ -376,6 +376,14 @@ def probe_fb_assign(dialect, value):
                      "PROGRAM Main VAR f, g : FB; r, q : INT; END_VAR\n"
                      "f(x := 4); g := f; g(x := 9); r := g.x; q := f.x; END_PROGRAM", dialect, ["Main.r", "Main.q"])
     assert (result == (9, 4)) is value
+    # the same for arrays of instances: each element copied, or the assignment refused (never
+    # two arrays sharing their instances)
+    arrays = outcome("FUNCTION_BLOCK FB VAR_INPUT x : INT; END_VAR END_FUNCTION_BLOCK\n"
+                     "PROGRAM Main VAR a, b : ARRAY[1..2] OF FB; r, q : INT; END_VAR\n"
+                     "a[1](x := 4); b := a; b[1](x := 9); r := b[1].x; q := a[1].x; END_PROGRAM",
+                     dialect, ["Main.r", "Main.q"])
+    assert (arrays == (9, 4)) is value
+    assert accepted(arrays) is value
 
 
 def probe_fb_input_assign(dialect, value):
