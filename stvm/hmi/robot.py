@@ -35,6 +35,10 @@ def from_lockstep(transport) -> PoseSource:
     executor = robot.executor
 
     def capture() -> tuple:
+        if executor.catch_up is not None:
+            # quiet lockstep steps leave the robot's clocks behind the link's until something
+            # reads them (emulator/transport.py, docs/lockstep_cost.md): bring them to this scan
+            executor.catch_up()
         return (tuple(executor.active), executor.time_ns, executor.rest_tcp, robot.base, robot.state.value,
                 robot.paused, executor.moving, robot.base_name)
 

@@ -7,6 +7,7 @@ import pytest
 import stvm
 from stvm.frontend import VariableBridge
 from stvm.frontend.bridge import FlagWatch
+from stvm.settings import Dialect, SysmacSettings
 
 SOURCE = """
 FUNCTION_BLOCK Axis
@@ -40,7 +41,8 @@ GROUPS = [("Main.C.A.Error", "Main.C.A.ErrorID"), ("Main.B[1].Error", "Main.B[1]
 def vm(tmp_path):
     path = tmp_path / "main.st"
     path.write_text(SOURCE)
-    return stvm.load([str(path)]).start(scan="1ms")
+    # TwinCAT: `B := Spare` copies an array of FB instances there (IEC and Sysmac refuse it)
+    return stvm.load([str(path)], settings=SysmacSettings(dialect=Dialect.TWINCAT)).start(scan="1ms")
 
 
 def watching(vm):
