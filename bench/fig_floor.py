@@ -216,7 +216,11 @@ def _socket_in(target, handle, src_port, src_ip, dst_port, dst_ip) -> None:
 
 def connect_hand(fb, ctx, array_ref, get_time) -> None:
     """CBT_Connect (st_src/CBT_Connect.st) by hand: every statement of its body with the steps 80
-    and 90 of its step CASE (the connected scans), and none of the others (idle: not busy)."""
+    and 90 of its step CASE (the connected scans), and none of the others (idle: not busy).
+
+    Its status CASE repeats `changebase_hand`'s line for line on purpose: every thesis FB carries
+    its own copy of that CASE in ST, and a Python function shared by the two would add a call the
+    ST does not make (the figure compares like with like)."""
     execute = fb.v_execute
     cbt = fb.v_cbt
     trig = fb.v_r_trig_execute          # R_TRIG(CLK := Execute, Q => FlagExecute)
