@@ -36,13 +36,12 @@ from concurrent.futures import Future
 from dataclasses import dataclass
 from typing import Any, Callable, Iterable, Mapping
 
-from stvm.lower.layout import is_storage_name
 from stvm.runtime.catalog import Catalog
 from stvm.runtime.format import format_value
 from stvm.runtime.vm import VM, PathError, UnboundInOut, coerce_python_value
 from stvm.semantics import types as t
 from stvm.semantics.literals import literal_value   # Choice: the one literal reader `--set` uses
-from stvm.trace.signals import Signal, make_sampler
+from stvm.trace.signals import Signal, build_reader, compile_reads, make_sampler
 
 MAX_PENDING_WRITES = 1024
 """Write batches queued for the next scan; more are rejected (a front end cannot stall the VM)."""
@@ -216,56 +215,11 @@ def make_probe(flags: list[Signal], group: list[Signal]) -> Callable[[tuple], bo
     from the tuple `last`, reading from the roots as `make_sampler` does (shared prefixes once,
     one attribute or item access per step; only validated storage names and integer indices go
     into the text) and stopping at the first TRUE flag."""
-    roots: list[Any] = []
-    root_ids: dict[int, int] = {}
-    routes: list[tuple] = []
-    for signal in flags + group:
-        index = root_ids.get(id(signal.root))
-        if index is None:
-            index = root_ids[id(signal.root)] = len(roots)
-            roots.append(signal.root)
-        routes.append((index,) + tuple(signal.steps))
-    uses: dict[tuple, int] = {}
-    for route in routes:
-        for k in range(2, len(route)):
-            uses[route[:k]] = uses.get(route[:k], 0) + 1
-    local_of: dict[tuple, str] = {}
-    lines: list[str] = []
-
-    def expression(route: tuple) -> str:
-        for k in range(len(route) - 1, 1, -1):
-            name = local_of.get(route[:k])
-            if name is not None:
-                return _steps_text(name, route[k:])
-        return _steps_text(f"r{route[0]}", route[1:])
-
-    for prefix in sorted((p for p, count in uses.items() if count > 1), key=len):
-        name = f"p{len(local_of)}"
-        lines.append(f"        {name} = {expression(prefix)}")
-        local_of[prefix] = name
-    texts = [expression(route) for route in routes]
-    tests = texts[:len(flags)]
+    reads = compile_reads(flags + group)
+    tests = reads.expressions[:len(flags)]
     if group:
-        tests.append(f"({', '.join(texts[len(flags):])},) != last")
-    params = "".join(f", r{i}=r{i}" for i in range(len(roots)))
-    source = (f"def make({', '.join(f'r{i}' for i in range(len(roots)))}):\n"
-              f"    def probe(last{params}):\n" + "".join(line + "\n" for line in lines) +
-              f"        return {' or '.join(tests) or 'False'}\n    return probe\n")
-    namespace: dict[str, Any] = {}
-    exec(compile(source, "<stvm-bridge-probe>", "exec"), namespace)
-    return namespace["make"](*roots)
-
-
-def _steps_text(root_name: str, steps: tuple) -> str:
-    parts = [root_name]
-    for step in steps:
-        if isinstance(step, int):
-            parts.append(f"[{int(step)}]")
-        elif is_storage_name(step):
-            parts.append("." + step)
-        else:   # the catalog hands out the layout's storage names only: an stvm bug if not
-            raise AssertionError(f"unsafe attribute {step!r}")
-    return "".join(parts)
+        tests.append(f"({', '.join(reads.expressions[len(flags):])},) != last")
+    return build_reader(reads, "probe", "last", " or ".join(tests) or "False", "<stvm-bridge-probe>")
 
 
 def _read_all(paths: list[str], accessors: list) -> dict[str, Any]:

@@ -193,14 +193,18 @@ def _expression(root_name: str, steps: tuple) -> str:
     return "".join(parts)
 
 
-def make_sampler(signals: list[Signal]) -> Callable[[], tuple]:
-    """A compiled function returning the current values of `signals` as one tuple.
+@dataclass(frozen=True)
+class CompiledReads:
+    """The generated text that reads `signals` from their roots (`compile_reads`)."""
 
-    Generated code (`p0 = r0.v_cobot; return (p0.v_connected, p0.v_socket.v_handle, …)`) costs
-    one attribute or item access per step, shared prefixes once per call, and no interpretation;
-    only validated storage names (`is_storage_name`) and integer indices go into it. Every call walks from the roots
-    again, so replaced objects (an array of structs assigned as a whole) are never stale.
-    """
+    roots: list[Any]          # the root objects, bound as default arguments r0, r1, … of the function
+    prelude: list[str]        # `        p0 = r0.v_cobot`: each prefix shared by several signals, once
+    expressions: list[str]    # one expression per signal, through the prelude's locals
+
+
+def compile_reads(signals: list[Signal]) -> CompiledReads:
+    """The text of one attribute or item access per step, shared prefixes read once into locals.
+    Only validated storage names (`is_storage_name`) and integer indices go into it."""
     roots: list[Any] = []
     root_ids: dict[int, int] = {}
     paths: list[tuple] = []
@@ -216,7 +220,7 @@ def make_sampler(signals: list[Signal]) -> Callable[[], tuple]:
             uses[path[:k]] = uses.get(path[:k], 0) + 1
     shared = sorted((prefix for prefix, count in uses.items() if count > 1), key=len)
     local_of: dict[tuple, str] = {}
-    body_lines = []
+    prelude = []
 
     def expression(path: tuple) -> str:
         for k in range(len(path) - 1, 1, -1):
@@ -227,14 +231,33 @@ def make_sampler(signals: list[Signal]) -> Callable[[], tuple]:
 
     for prefix in shared:
         name = f"p{len(local_of)}"
-        body_lines.append(f"        {name} = {expression(prefix)}")
+        prelude.append(f"        {name} = {expression(prefix)}")
         local_of[prefix] = name
-    exprs = [expression(path) for path in paths]
-    params = ", ".join(f"r{i}=r{i}" for i in range(len(roots)))
-    result = ", ".join(exprs) + ("," if len(exprs) == 1 else "")
+    return CompiledReads(roots, prelude, [expression(path) for path in paths])
+
+
+def build_reader(reads: CompiledReads, name: str, args: str, returned: str, filename: str) -> Callable:
+    """`def name(args, r0=r0, …)` running the prelude and returning `returned`, compiled once."""
+    roots = reads.roots
+    params = "".join(f", r{i}=r{i}" for i in range(len(roots)))
+    params = (args + params) if args else params[2:]
     source = (f"def make({', '.join(f'r{i}' for i in range(len(roots)))}):\n"
-              f"    def sample({params}):\n" + "".join(line + "\n" for line in body_lines) +
-              f"        return ({result})\n    return sample\n")
+              f"    def {name}({params}):\n" + "".join(line + "\n" for line in reads.prelude) +
+              f"        return {returned}\n    return {name}\n")
     namespace: dict[str, Any] = {}
-    exec(compile(source, "<stvm-trace-sampler>", "exec"), namespace)
+    exec(compile(source, filename, "exec"), namespace)
     return namespace["make"](*roots)
+
+
+def make_sampler(signals: list[Signal]) -> Callable[[], tuple]:
+    """A compiled function returning the current values of `signals` as one tuple.
+
+    Generated code (`p0 = r0.v_cobot; return (p0.v_connected, p0.v_socket.v_handle, …)`) costs
+    one attribute or item access per step, shared prefixes once per call, and no interpretation;
+    only validated storage names (`is_storage_name`) and integer indices go into it. Every call walks from the roots
+    again, so replaced objects (an array of structs assigned as a whole) are never stale.
+    """
+    reads = compile_reads(signals)
+    exprs = reads.expressions
+    result = "(" + ", ".join(exprs) + ("," if len(exprs) == 1 else "") + ")"
+    return build_reader(reads, "sample", "", result, "<stvm-trace-sampler>")
