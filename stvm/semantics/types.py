@@ -7,8 +7,10 @@ They behave as `dataclass(frozen=True)` classes did (the same `__init__` paramet
 the same class and fields, `hash`, `repr`, assignment raising `FrozenInstanceError`, the
 instance `__dict__` that pickle stores), but are written out: `dataclass` builds each class's
 methods with `exec` when the module is imported, ~10 ms of every `stvm run` for these 17
-classes (issue 33 item 5). Each class lists its fields in `_FIELDS`; a test compares every
-class with the dataclass it replaces (tests/semantics/test_types_records.py).
+classes (issue 33 item 5). Each class writes its `__init__` and lists its fields in `_FIELDS`
+(and `_COMPARED` where `==` leaves some out); `Type` derives `==`, `hash` (one `attrgetter`
+call) and `repr` from them. A test compares every class with the dataclass it replaces
+(tests/semantics/test_types_records.py).
 
 Runtime representation of each type (what generated code and native POUs see):
 
@@ -30,6 +32,7 @@ Runtime representation of each type (what generated code and native POUs see):
 from __future__ import annotations
 
 from dataclasses import FrozenInstanceError
+from operator import attrgetter
 from reprlib import recursive_repr
 
 _set = object.__setattr__
@@ -38,23 +41,36 @@ _set = object.__setattr__
 class Type:
     """An ST data type as the checker and the lowering see it; `name` is the user's spelling."""
 
-    _FIELDS = ("name",)
-    __match_args__ = _FIELDS
+    _FIELDS = ("name",)          # every field, in order: the constructor's, repr's, pickle's
+    _COMPARED: tuple[str, ...] | None = None   # the fields `==` and `hash` use, when not all
+
+    def __init_subclass__(cls, **kwargs) -> None:
+        super().__init_subclass__(**kwargs)
+        cls._make_key()
+
+    @classmethod
+    def _make_key(cls) -> None:
+        """`_key(obj)`: the tuple `==` and `hash` compare (what the dataclass compared), one C call."""
+        compared = cls._COMPARED or cls._FIELDS
+        getter = attrgetter(*compared)
+        cls._key = staticmethod(getter if len(compared) > 1 else lambda obj: (getter(obj),))
+        cls.__match_args__ = cls._FIELDS
 
     def __init__(self, name: str) -> None:
         _set(self, "name", name)
 
     @recursive_repr()
     def __repr__(self) -> str:
-        return f"{self.__class__.__qualname__}(name={self.name!r})"
+        fields = ", ".join(f"{name}={getattr(self, name)!r}" for name in self._FIELDS)
+        return f"{self.__class__.__qualname__}({fields})"
 
     def __eq__(self, other: object):
         if other.__class__ is self.__class__:
-            return (self.name,) == (other.name,)   # type: ignore[attr-defined]
+            return self._key(self) == self._key(other)
         return NotImplemented
 
     def __hash__(self) -> int:
-        return hash((self.name,))
+        return hash(self._key(self))
 
     def __setattr__(self, name: str, value: object) -> None:
         raise FrozenInstanceError(f"cannot assign to field {name!r}")
@@ -70,6 +86,9 @@ class Type:
         return self.name
 
 
+Type._make_key()    # __init_subclass__ does it for every subclass
+
+
 class BoolType(Type):
     """BOOL."""
 
@@ -82,25 +101,12 @@ class IntType(Type):
     """Signed/unsigned integers and bit strings (BYTE…LWORD are unsigned, `bitstring`)."""
 
     _FIELDS = ('name', 'bits', 'signed', 'bitstring')
-    __match_args__ = _FIELDS
 
     def __init__(self, name: str, bits: int = 16, signed: bool = True, bitstring: bool = False) -> None:
         _set(self, "name", name)
         _set(self, "bits", bits)
         _set(self, "signed", signed)
         _set(self, "bitstring", bitstring)
-
-    @recursive_repr()
-    def __repr__(self) -> str:
-        return f"{self.__class__.__qualname__}(name={self.name!r}, bits={self.bits!r}, signed={self.signed!r}, bitstring={self.bitstring!r})"
-
-    def __eq__(self, other: object):
-        if other.__class__ is self.__class__:
-            return (self.name, self.bits, self.signed, self.bitstring) == (other.name, other.bits, other.signed, other.bitstring)   # type: ignore[attr-defined]
-        return NotImplemented
-
-    def __hash__(self) -> int:
-        return hash((self.name, self.bits, self.signed, self.bitstring))
 
     @property
     def kind(self) -> str:
@@ -133,7 +139,6 @@ class SubrangeType(IntType):
     a value computed at run time outside follows `subrange_check`."""
 
     _FIELDS = ('name', 'bits', 'signed', 'bitstring', 'low', 'high')
-    __match_args__ = _FIELDS
 
     def __init__(self, name: str, bits: int = 16, signed: bool = True, bitstring: bool = False,
                  low: int = 0, high: int = 0) -> None:
@@ -143,18 +148,6 @@ class SubrangeType(IntType):
         _set(self, "bitstring", bitstring)
         _set(self, "low", low)
         _set(self, "high", high)
-
-    @recursive_repr()
-    def __repr__(self) -> str:
-        return f"{self.__class__.__qualname__}(name={self.name!r}, bits={self.bits!r}, signed={self.signed!r}, bitstring={self.bitstring!r}, low={self.low!r}, high={self.high!r})"
-
-    def __eq__(self, other: object):
-        if other.__class__ is self.__class__:
-            return (self.name, self.bits, self.signed, self.bitstring, self.low, self.high) == (other.name, other.bits, other.signed, other.bitstring, other.low, other.high)   # type: ignore[attr-defined]
-        return NotImplemented
-
-    def __hash__(self) -> int:
-        return hash((self.name, self.bits, self.signed, self.bitstring, self.low, self.high))
 
     @property
     def text(self) -> str:
@@ -169,23 +162,10 @@ class RealType(Type):
     """REAL (32 bits) or LREAL (64 bits)."""
 
     _FIELDS = ('name', 'bits')
-    __match_args__ = _FIELDS
 
     def __init__(self, name: str, bits: int = 32) -> None:
         _set(self, "name", name)
         _set(self, "bits", bits)
-
-    @recursive_repr()
-    def __repr__(self) -> str:
-        return f"{self.__class__.__qualname__}(name={self.name!r}, bits={self.bits!r})"
-
-    def __eq__(self, other: object):
-        if other.__class__ is self.__class__:
-            return (self.name, self.bits) == (other.name, other.bits)   # type: ignore[attr-defined]
-        return NotImplemented
-
-    def __hash__(self) -> int:
-        return hash((self.name, self.bits))
 
     @property
     def kind(self) -> str:
@@ -222,23 +202,10 @@ class StringType(Type):
     """STRING[size]: `size` bytes of storage including the terminating NUL (Omron)."""
 
     _FIELDS = ('name', 'size')
-    __match_args__ = _FIELDS
 
     def __init__(self, name: str, size: int = 1986) -> None:
         _set(self, "name", name)
         _set(self, "size", size)
-
-    @recursive_repr()
-    def __repr__(self) -> str:
-        return f"{self.__class__.__qualname__}(name={self.name!r}, size={self.size!r})"
-
-    def __eq__(self, other: object):
-        if other.__class__ is self.__class__:
-            return (self.name, self.size) == (other.name, other.size)   # type: ignore[attr-defined]
-        return NotImplemented
-
-    def __hash__(self) -> int:
-        return hash((self.name, self.size))
 
     @property
     def kind(self) -> str:
@@ -273,7 +240,6 @@ class EnumType(Type):
     says what they change in which dialect)."""
 
     _FIELDS = ('name', 'qualname', 'members', 'base', 'default', 'strict', 'to_string')
-    __match_args__ = _FIELDS
 
     def __init__(self, name: str, qualname: str = "", members: tuple[tuple[str, int], ...] = (), base: Type | None = None,
                  default: int | None = None, strict: bool = False, to_string: bool = False) -> None:
@@ -284,18 +250,6 @@ class EnumType(Type):
         _set(self, "default", default)
         _set(self, "strict", strict)
         _set(self, "to_string", to_string)
-
-    @recursive_repr()
-    def __repr__(self) -> str:
-        return f"{self.__class__.__qualname__}(name={self.name!r}, qualname={self.qualname!r}, members={self.members!r}, base={self.base!r}, default={self.default!r}, strict={self.strict!r}, to_string={self.to_string!r})"
-
-    def __eq__(self, other: object):
-        if other.__class__ is self.__class__:
-            return (self.name, self.qualname, self.members, self.base, self.default, self.strict, self.to_string) == (other.name, other.qualname, other.members, other.base, other.default, other.strict, other.to_string)   # type: ignore[attr-defined]
-        return NotImplemented
-
-    def __hash__(self) -> int:
-        return hash((self.name, self.qualname, self.members, self.base, self.default, self.strict, self.to_string))
 
     @property
     def kind(self) -> str:
@@ -319,24 +273,12 @@ class StructType(Type):
     leave out (two structs are the same type by name and qualified name)."""
 
     _FIELDS = ('name', 'qualname', 'fields')
-    __match_args__ = _FIELDS
+    _COMPARED = ('name', 'qualname')
 
     def __init__(self, name: str, qualname: str = "", fields: tuple[tuple[str, Type], ...] = ()) -> None:
         _set(self, "name", name)
         _set(self, "qualname", qualname)
         _set(self, "fields", fields)
-
-    @recursive_repr()
-    def __repr__(self) -> str:
-        return f"{self.__class__.__qualname__}(name={self.name!r}, qualname={self.qualname!r}, fields={self.fields!r})"
-
-    def __eq__(self, other: object):
-        if other.__class__ is self.__class__:
-            return (self.name, self.qualname) == (other.name, other.qualname)   # type: ignore[attr-defined]
-        return NotImplemented
-
-    def __hash__(self) -> int:
-        return hash((self.name, self.qualname))
 
     @property
     def kind(self) -> str:
@@ -369,7 +311,6 @@ class ArrayType(Type):
     dimensions of an open array (`dims` None): 1 for ARRAY[*], 2 for ARRAY[*, *], …"""
 
     _FIELDS = ('name', 'element', 'dims', 'rank')
-    __match_args__ = _FIELDS
 
     def __init__(self, name: str, element: Type = None,   # type: ignore[assignment]
                  dims: tuple[tuple[int, int], ...] | None = (), rank: int = 1) -> None:
@@ -377,18 +318,6 @@ class ArrayType(Type):
         _set(self, "element", element)
         _set(self, "dims", dims)
         _set(self, "rank", rank)
-
-    @recursive_repr()
-    def __repr__(self) -> str:
-        return f"{self.__class__.__qualname__}(name={self.name!r}, element={self.element!r}, dims={self.dims!r}, rank={self.rank!r})"
-
-    def __eq__(self, other: object):
-        if other.__class__ is self.__class__:
-            return (self.name, self.element, self.dims, self.rank) == (other.name, other.element, other.dims, other.rank)   # type: ignore[attr-defined]
-        return NotImplemented
-
-    def __hash__(self) -> int:
-        return hash((self.name, self.element, self.dims, self.rank))
 
     @property
     def kind(self) -> str:
@@ -406,24 +335,11 @@ class FBType(Type):
     """A FUNCTION_BLOCK or PROGRAM type; members are looked up in the project index."""
 
     _FIELDS = ('name', 'qualname', 'is_program')
-    __match_args__ = _FIELDS
 
     def __init__(self, name: str, qualname: str = "", is_program: bool = False) -> None:
         _set(self, "name", name)
         _set(self, "qualname", qualname)
         _set(self, "is_program", is_program)
-
-    @recursive_repr()
-    def __repr__(self) -> str:
-        return f"{self.__class__.__qualname__}(name={self.name!r}, qualname={self.qualname!r}, is_program={self.is_program!r})"
-
-    def __eq__(self, other: object):
-        if other.__class__ is self.__class__:
-            return (self.name, self.qualname, self.is_program) == (other.name, other.qualname, other.is_program)   # type: ignore[attr-defined]
-        return NotImplemented
-
-    def __hash__(self) -> int:
-        return hash((self.name, self.qualname, self.is_program))
 
     @property
     def kind(self) -> str:
@@ -435,23 +351,10 @@ class InterfaceType(Type):
     implementing it (at run time the instance object itself), or NULL (None)."""
 
     _FIELDS = ('name', 'qualname')
-    __match_args__ = _FIELDS
 
     def __init__(self, name: str, qualname: str = "") -> None:
         _set(self, "name", name)
         _set(self, "qualname", qualname)
-
-    @recursive_repr()
-    def __repr__(self) -> str:
-        return f"{self.__class__.__qualname__}(name={self.name!r}, qualname={self.qualname!r})"
-
-    def __eq__(self, other: object):
-        if other.__class__ is self.__class__:
-            return (self.name, self.qualname) == (other.name, other.qualname)   # type: ignore[attr-defined]
-        return NotImplemented
-
-    def __hash__(self) -> int:
-        return hash((self.name, self.qualname))
 
     @property
     def kind(self) -> str:
@@ -498,25 +401,12 @@ class RefType(Type):
     """
 
     _FIELDS = ('name', 'target', 'flavour')
-    __match_args__ = _FIELDS
 
     def __init__(self, name: str, target: Type = None,   # type: ignore[assignment]  # None only for the NULL literal's type
                  flavour: str = "REF_TO") -> None:
         _set(self, "name", name)
         _set(self, "target", target)
         _set(self, "flavour", flavour)
-
-    @recursive_repr()
-    def __repr__(self) -> str:
-        return f"{self.__class__.__qualname__}(name={self.name!r}, target={self.target!r}, flavour={self.flavour!r})"
-
-    def __eq__(self, other: object):
-        if other.__class__ is self.__class__:
-            return (self.name, self.target, self.flavour) == (other.name, other.target, other.flavour)   # type: ignore[attr-defined]
-        return NotImplemented
-
-    def __hash__(self) -> int:
-        return hash((self.name, self.target, self.flavour))
 
     @property
     def kind(self) -> str:
