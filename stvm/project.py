@@ -15,9 +15,9 @@ import pickle
 import re
 from dataclasses import dataclass, replace
 from pathlib import Path
-from reprlib import recursive_repr
 from typing import TYPE_CHECKING, Sequence
 
+from stvm.records import Record
 from stvm.version import __version__
 from stvm.diagnostics import Diagnostic, has_errors, render, sort_key
 from stvm.manifest import MANIFEST, ManifestError, project_files, read_manifest  # noqa: F401 (API)
@@ -36,7 +36,6 @@ if TYPE_CHECKING:
 # cached load needs none of it, which halves the start-up time of `stvm run`.
 
 
-
 class LoadError(Exception):
     """The ST sources have errors; `diagnostics` holds all of them."""
 
@@ -50,14 +49,15 @@ class LoadError(Exception):
 
 
 # Project, Parsed, Checked and Compiled behave as the dataclasses they were (`__init__`, `==` over
-# every field, `repr`, unhashable, the `__dict__` pickle stores) but are written out: `dataclass`
+# every field, `repr`, unhashable, the `__dict__` pickle stores) but are `stvm.records` classes
+# (`__init__` written out, the rest derived from `_FIELDS`): `dataclass`
 # builds a class's methods with `exec` at import, a cost of every `stvm run` (issue 33 item 5;
 # tests/project/test_project_records.py compares them). Options and ProjectSpec stay dataclasses
 # (callers `dataclasses.replace` them).
 _FACTORY = object()   # "no argument": a fresh list or dict, as a dataclass `default_factory`
 
 
-class Project:
+class Project(Record):
     """A loaded project: its model, its lowered code and what a run or a check needs beside.
 
     `code`: the generated module's code objects, run in order (lower.product.compile_module);
@@ -66,7 +66,6 @@ class Project:
     the SysFile folder (stdlib/sys_file.py). Written out, not a dataclass (see `_FACTORY`)."""
 
     _FIELDS = ('model', 'lowered', 'code', 'sources', 'settings', 'warnings', 'from_cache', 'manifest', 'root', 'native_modules', 'natives_known', 'files_root')
-    __match_args__ = _FIELDS
 
     def __init__(self, model: ProjectModel, lowered: LoweredProject, code: tuple, sources: dict[str, str],
                  settings: SysmacSettings, warnings: list[Diagnostic] = _FACTORY, from_cache: bool = False,
@@ -84,17 +83,6 @@ class Project:
         self.native_modules = native_modules
         self.natives_known = natives_known
         self.files_root = files_root
-
-    @recursive_repr()
-    def __repr__(self) -> str:
-        return f"{self.__class__.__qualname__}(model={self.model!r}, lowered={self.lowered!r}, code={self.code!r}, sources={self.sources!r}, settings={self.settings!r}, warnings={self.warnings!r}, from_cache={self.from_cache!r}, manifest={self.manifest!r}, root={self.root!r}, native_modules={self.native_modules!r}, natives_known={self.natives_known!r}, files_root={self.files_root!r})"
-
-    def __eq__(self, other: object):
-        if other.__class__ is self.__class__:
-            return (self.model, self.lowered, self.code, self.sources, self.settings, self.warnings, self.from_cache, self.manifest, self.root, self.native_modules, self.natives_known, self.files_root) == (other.model, other.lowered, other.code, other.sources, other.settings, other.warnings, other.from_cache, other.manifest, other.root, other.native_modules, other.natives_known, other.files_root)   # type: ignore[attr-defined]
-        return NotImplemented
-
-    __hash__ = None   # type: ignore[assignment]  # mutable and compared by value
 
     def start(self, scan: str | int = "10ms", realtime: bool = False, start_dt_ns: int = 0,
               transport=None) -> "VM":
@@ -684,13 +672,12 @@ def _analyze(units, diags, settings):
 # that need a step's product: lint reads the checked tree, the debugger the checker and a build
 # lowered with other options. Every step starts from a `ProjectSpec` (`resolve`).
 
-class Parsed:
+class Parsed(Record):
     """The parse stage's product: the texts ((name, text) of each user file, libraries first),
     the syntax trees (the stdlib's, then the files'), the diagnostics of reading and parsing,
     and the sources excerpts show (every file and the stdlib)."""
 
     _FIELDS = ('spec', 'texts', 'units', 'diagnostics', 'sources')
-    __match_args__ = _FIELDS
 
     def __init__(self, spec: ProjectSpec, texts: list[tuple[str, str]], units: list,
                  diagnostics: list[Diagnostic], sources: dict[str, str]) -> None:
@@ -700,29 +687,17 @@ class Parsed:
         self.diagnostics = diagnostics
         self.sources = sources
 
-    @recursive_repr()
-    def __repr__(self) -> str:
-        return f"{self.__class__.__qualname__}(spec={self.spec!r}, texts={self.texts!r}, units={self.units!r}, diagnostics={self.diagnostics!r}, sources={self.sources!r})"
-
-    def __eq__(self, other: object):
-        if other.__class__ is self.__class__:
-            return (self.spec, self.texts, self.units, self.diagnostics, self.sources) == (other.spec, other.texts, other.units, other.diagnostics, other.sources)   # type: ignore[attr-defined]
-        return NotImplemented
-
-    __hash__ = None   # type: ignore[assignment]  # mutable and compared by value
-
     @property
     def files(self) -> list[str]:
         return [name for name, _ in self.texts]
 
 
-class Checked:
+class Checked(Record):
     """The check stage's product: the analysis (semantics.Analysis; None after an error), the
     Checker whose index types expressions (the debugger's) and every diagnostic (reading,
     parsing and checking, sorted)."""
 
     _FIELDS = ('parsed', 'analysis', 'checker', 'diagnostics')
-    __match_args__ = _FIELDS
 
     def __init__(self, parsed: Parsed, analysis: object | None, checker: object | None,
                  diagnostics: list[Diagnostic]) -> None:
@@ -730,17 +705,6 @@ class Checked:
         self.analysis = analysis
         self.checker = checker
         self.diagnostics = diagnostics
-
-    @recursive_repr()
-    def __repr__(self) -> str:
-        return f"{self.__class__.__qualname__}(parsed={self.parsed!r}, analysis={self.analysis!r}, checker={self.checker!r}, diagnostics={self.diagnostics!r})"
-
-    def __eq__(self, other: object):
-        if other.__class__ is self.__class__:
-            return (self.parsed, self.analysis, self.checker, self.diagnostics) == (other.parsed, other.analysis, other.checker, other.diagnostics)   # type: ignore[attr-defined]
-        return NotImplemented
-
-    __hash__ = None   # type: ignore[assignment]  # mutable and compared by value
 
     @property
     def spec(self) -> ProjectSpec:
@@ -751,27 +715,15 @@ class Checked:
         return self.parsed.sources
 
 
-class Compiled:
+class Compiled(Record):
     """The lowering stage's product: the generated Python and its compiled code."""
 
     _FIELDS = ('checked', 'lowered', 'code')
-    __match_args__ = _FIELDS
 
     def __init__(self, checked: Checked, lowered: LoweredProject, code: tuple) -> None:
         self.checked = checked
         self.lowered = lowered
         self.code = code
-
-    @recursive_repr()
-    def __repr__(self) -> str:
-        return f"{self.__class__.__qualname__}(checked={self.checked!r}, lowered={self.lowered!r}, code={self.code!r})"
-
-    def __eq__(self, other: object):
-        if other.__class__ is self.__class__:
-            return (self.checked, self.lowered, self.code) == (other.checked, other.lowered, other.code)   # type: ignore[attr-defined]
-        return NotImplemented
-
-    __hash__ = None   # type: ignore[assignment]  # mutable and compared by value
 
     def project(self) -> Project:
         spec = self.checked.spec

@@ -16,14 +16,16 @@ whose message lists the allowed values; the CLI turns it into a usage error, exi
 from __future__ import annotations
 
 import re
-from dataclasses import MISSING, FrozenInstanceError, dataclass, field, fields, replace
+from dataclasses import MISSING, dataclass, field, fields, replace
 from enum import Enum
 from reprlib import recursive_repr
 from typing import Any, Callable, Mapping
 
+from stvm.records import FrozenRecord
+
 
 # Table and Declaration behave as the frozen dataclasses they were (constructor, ==, hash, repr,
-# frozenness) but are written out, and SysmacSettings, still a dataclass (`replace`, `fields`),
+# frozenness) but are `stvm.records` classes (`__init__` written out), and SysmacSettings, still a dataclass (`replace`, `fields`),
 # has its ==, hash and repr written out: `dataclass` builds each method with `exec` at import,
 # a cost of every `stvm run` (issue 33 item 5; tests/test_settings_records.py compares them).
 _set = object.__setattr__
@@ -360,36 +362,17 @@ def _default_skt_error_codes() -> dict[str, int]:
     }
 
 
-class Table:
+class Table(FrozenRecord):
     """A setting whose value is a name → integer table (settable from Python or `stvm.toml`);
     `distinct`: the values must differ (they are an enum's)."""
 
     _FIELDS = ('keys', 'lo', 'hi', 'distinct')
-    __match_args__ = _FIELDS
 
     def __init__(self, keys: tuple[str, ...], lo: int, hi: int, distinct: bool) -> None:
         _set(self, "keys", keys)
         _set(self, "lo", lo)
         _set(self, "hi", hi)
         _set(self, "distinct", distinct)
-
-    @recursive_repr()
-    def __repr__(self) -> str:
-        return f"{self.__class__.__qualname__}(keys={self.keys!r}, lo={self.lo!r}, hi={self.hi!r}, distinct={self.distinct!r})"
-
-    def __eq__(self, other: object):
-        if other.__class__ is self.__class__:
-            return (self.keys, self.lo, self.hi, self.distinct) == (other.keys, other.lo, other.hi, other.distinct)   # type: ignore[attr-defined]
-        return NotImplemented
-
-    def __hash__(self) -> int:
-        return hash((self.keys, self.lo, self.hi, self.distinct))
-
-    def __setattr__(self, name: str, value: object) -> None:
-        raise FrozenInstanceError(f"cannot assign to field {name!r}")
-
-    def __delattr__(self, name: str) -> None:
-        raise FrozenInstanceError(f"cannot delete field {name!r}")
 
     def check(self, name: str, value: object) -> dict[str, int]:
         if not isinstance(value, Mapping):
@@ -599,12 +582,11 @@ _SHOWN = tuple(f.name for f in fields(SysmacSettings) if f.repr)
 
 # ---- the declarations, read from the dataclass ---------------------------------------------------
 
-class Declaration:
+class Declaration(FrozenRecord):
     """What one field declares: name, type (an Enum class, int or dict), default, spec section,
     range."""
 
     _FIELDS = ('name', 'kind', 'default', 'spec', 'lo', 'hi', 'table', 'doc')
-    __match_args__ = _FIELDS
 
     def __init__(self, name: str, kind: Any, default: Any, spec: str, lo: int | None, hi: int | None,
                  table: Table | None, doc: str) -> None:
@@ -616,24 +598,6 @@ class Declaration:
         _set(self, "hi", hi)
         _set(self, "table", table)
         _set(self, "doc", doc)
-
-    @recursive_repr()
-    def __repr__(self) -> str:
-        return f"{self.__class__.__qualname__}(name={self.name!r}, kind={self.kind!r}, default={self.default!r}, spec={self.spec!r}, lo={self.lo!r}, hi={self.hi!r}, table={self.table!r}, doc={self.doc!r})"
-
-    def __eq__(self, other: object):
-        if other.__class__ is self.__class__:
-            return (self.name, self.kind, self.default, self.spec, self.lo, self.hi, self.table, self.doc) == (other.name, other.kind, other.default, other.spec, other.lo, other.hi, other.table, other.doc)   # type: ignore[attr-defined]
-        return NotImplemented
-
-    def __hash__(self) -> int:
-        return hash((self.name, self.kind, self.default, self.spec, self.lo, self.hi, self.table, self.doc))
-
-    def __setattr__(self, name: str, value: object) -> None:
-        raise FrozenInstanceError(f"cannot assign to field {name!r}")
-
-    def __delattr__(self, name: str) -> None:
-        raise FrozenInstanceError(f"cannot delete field {name!r}")
 
     @property
     def meaning(self) -> str:

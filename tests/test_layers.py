@@ -43,6 +43,7 @@ PACKAGES = ("stvm", "emulator")
 # An import may only go to the same layer or a lower one.
 LAYERS: list[tuple[str, ...]] = [
     ("emulator",),                       # the TM robot: knows nothing of stvm
+    ("stvm.records",),                   # value records without dataclass's import cost
     ("stvm.version", "stvm.settings", "stvm.dialects"),   # the vendor profiles: data the settings read
     ("stvm.numeric",),                   # REAL rounding, STRING fitting: checker, lowering, runtime
     # spans, read_source, SourceError; the private cache folder and its signed entries; the collector's pause

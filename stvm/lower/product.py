@@ -5,40 +5,29 @@ that a cached load and the VM unpickle them without importing the generator and 
 from __future__ import annotations
 
 import bisect
-from reprlib import recursive_repr
 from types import CodeType
 
+from stvm.records import Record
 from stvm.lower.layout import ProjectLayout
 from stvm.semantics import types as t
 from stvm.source import Span
 
 # LineMap and LoweredProject behave as the dataclasses they were (`__init__`, `==` over every
-# field, `repr`, unhashable, the `__dict__` pickle stores) but are written out: `dataclass` builds
+# field, `repr`, unhashable, the `__dict__` pickle stores) but are `stvm.records` classes
+# (`__init__` written out, the rest derived from `_FIELDS`): `dataclass` builds
 # a class's methods with `exec` at import, a cost of every `stvm run` (issue 33 item 5;
 # tests/lower/test_product_records.py compares them).
 _FACTORY = object()   # "no argument": a fresh list, as a dataclass `default_factory`
 
-class LineMap:
+class LineMap(Record):
     """Generated line → ST span; `span_at` finds the statement a generated line belongs to
     (`spans`: None for generated glue, no ST line)."""
 
     _FIELDS = ('lines', 'spans')
-    __match_args__ = _FIELDS
 
     def __init__(self, lines: list[int] = _FACTORY, spans: list[Span | None] = _FACTORY) -> None:
         self.lines = [] if lines is _FACTORY else lines
         self.spans = [] if spans is _FACTORY else spans
-
-    @recursive_repr()
-    def __repr__(self) -> str:
-        return f"{self.__class__.__qualname__}(lines={self.lines!r}, spans={self.spans!r})"
-
-    def __eq__(self, other: object):
-        if other.__class__ is self.__class__:
-            return (self.lines, self.spans) == (other.lines, other.spans)   # type: ignore[attr-defined]
-        return NotImplemented
-
-    __hash__ = None   # type: ignore[assignment]  # mutable and compared by value
 
     def add(self, line: int, span: Span | None) -> None:
         if self.lines and self.lines[-1] == line:
@@ -62,7 +51,7 @@ class LineMap:
         return out
 
 
-class LoweredProject:
+class LoweredProject(Record):
     """What the lowering gives the VM: the Python source, where each line comes from, and the
     names and constants the generated module is bound with.
 
@@ -73,7 +62,6 @@ class LoweredProject:
     debugger and the front ends read variables through, set by `lower_project`."""
 
     _FIELDS = ('source', 'line_map', 'classes', 'natives', 'native_fbs', 'types', 'sites', 'globals_class', 'layouts')
-    __match_args__ = _FIELDS
 
     def __init__(self, source: str, line_map: LineMap, classes: dict[str, str], natives: dict[str, str],
                  native_fbs: dict[str, str], types: list[t.Type], sites: list[Span],
@@ -87,17 +75,6 @@ class LoweredProject:
         self.sites = sites
         self.globals_class = globals_class
         self.layouts = layouts
-
-    @recursive_repr()
-    def __repr__(self) -> str:
-        return f"{self.__class__.__qualname__}(source={self.source!r}, line_map={self.line_map!r}, classes={self.classes!r}, natives={self.natives!r}, native_fbs={self.native_fbs!r}, types={self.types!r}, sites={self.sites!r}, globals_class={self.globals_class!r}, layouts={self.layouts!r})"
-
-    def __eq__(self, other: object):
-        if other.__class__ is self.__class__:
-            return (self.source, self.line_map, self.classes, self.natives, self.native_fbs, self.types, self.sites, self.globals_class, self.layouts) == (other.source, other.line_map, other.classes, other.natives, other.native_fbs, other.types, other.sites, other.globals_class, other.layouts)   # type: ignore[attr-defined]
-        return NotImplemented
-
-    __hash__ = None   # type: ignore[assignment]  # mutable and compared by value
 
 
 CHUNK_LINES = 1500

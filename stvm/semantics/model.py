@@ -7,9 +7,8 @@ name resolves to) live in `Analysis.facts`, keyed by node identity, and are not 
 
 from __future__ import annotations
 
-from dataclasses import FrozenInstanceError
-from reprlib import recursive_repr
 
+from stvm.records import FrozenRecord, Record
 from stvm.semantics.types import Type
 from stvm.source import NO_SPAN, Span   # start-up: not the syntax tree (a cached load unpickles this)
 
@@ -18,44 +17,26 @@ INPUT, OUTPUT, IN_OUT, LOCAL, TEMP, GLOBAL, EXTERNAL = (
 
 # The classes below behave as the dataclasses they were (`__init__` parameters and defaults, `==`
 # over every field, `repr`, frozenness, unhashable when mutable, the `__dict__` pickle stores)
-# but are written out: `dataclass` builds each class's methods with `exec` at import, a cost of
+# but are `stvm.records` classes (`__init__` written out, the rest derived from `_FIELDS`): `dataclass`
+# builds each class's methods with `exec` at import, a cost of
 # every `stvm run` (issue 33 item 5; tests/semantics/test_model_records.py compares them).
 _set = object.__setattr__
 _FACTORY = object()   # "no argument": a fresh dict, as a dataclass `default_factory`
 
 
-class SiblingInstance:
+class SiblingInstance(FrozenRecord):
     """The initial value (or FB_init argument) `itf : I_X := fbOther;` / `fb : F(fbOther)` in a
     FUNCTION_BLOCK or PROGRAM: the instance `name` declared before it in the same POU (CODESYS /
     TwinCAT: the instance's address is a constant of the load). The lowering writes the sibling's
     storage."""
 
     _FIELDS = ('name',)
-    __match_args__ = _FIELDS
 
     def __init__(self, name: str) -> None:
         _set(self, "name", name)
 
-    @recursive_repr()
-    def __repr__(self) -> str:
-        return f"{self.__class__.__qualname__}(name={self.name!r})"
 
-    def __eq__(self, other: object):
-        if other.__class__ is self.__class__:
-            return (self.name,) == (other.name,)   # type: ignore[attr-defined]
-        return NotImplemented
-
-    def __hash__(self) -> int:
-        return hash((self.name,))
-
-    def __setattr__(self, name: str, value: object) -> None:
-        raise FrozenInstanceError(f"cannot assign to field {name!r}")
-
-    def __delattr__(self, name: str) -> None:
-        raise FrozenInstanceError(f"cannot delete field {name!r}")
-
-
-class AddressInit:
+class AddressInit(FrozenRecord):
     """The initial value `r : REF_TO INT := REF(counter);` (or ADR() for a POINTER TO; the
     `ref_initial_value` row): a reference bound when the instance (`scope` "self": a PROGRAM's or
     FUNCTION_BLOCK's variable) or the globals (`scope` "global") are made. `steps` lead from there
@@ -65,33 +46,14 @@ class AddressInit:
     it)."""
 
     _FIELDS = ('scope', 'steps', 'aggregate')
-    __match_args__ = _FIELDS
 
     def __init__(self, scope: str, steps: tuple[tuple[str, object], ...], aggregate: bool) -> None:
         _set(self, "scope", scope)
         _set(self, "steps", steps)
         _set(self, "aggregate", aggregate)
 
-    @recursive_repr()
-    def __repr__(self) -> str:
-        return f"{self.__class__.__qualname__}(scope={self.scope!r}, steps={self.steps!r}, aggregate={self.aggregate!r})"
 
-    def __eq__(self, other: object):
-        if other.__class__ is self.__class__:
-            return (self.scope, self.steps, self.aggregate) == (other.scope, other.steps, other.aggregate)   # type: ignore[attr-defined]
-        return NotImplemented
-
-    def __hash__(self) -> int:
-        return hash((self.scope, self.steps, self.aggregate))
-
-    def __setattr__(self, name: str, value: object) -> None:
-        raise FrozenInstanceError(f"cannot assign to field {name!r}")
-
-    def __delattr__(self, name: str) -> None:
-        raise FrozenInstanceError(f"cannot delete field {name!r}")
-
-
-class Variable:
+class Variable(Record):
     """One declared variable: its section, type, initial value and attributes.
 
     `name`: the user's spelling; `section`: VAR_INPUT, VAR_OUTPUT, VAR_IN_OUT, VAR, VAR_TEMP,
@@ -102,7 +64,6 @@ class Variable:
     (stdlib/tc2_system.py `fill_instance_paths`)."""
 
     _FIELDS = ('name', 'section', 'type', 'constant', 'span', 'init', 'fb_args', 'instance_path')
-    __match_args__ = _FIELDS
 
     def __init__(self, name: str, section: str, type: Type, constant: bool = False, span: Span = NO_SPAN,
                  init: object = None, fb_args: dict | None = None, instance_path: bool = False) -> None:
@@ -115,23 +76,12 @@ class Variable:
         self.fb_args = fb_args
         self.instance_path = instance_path
 
-    @recursive_repr()
-    def __repr__(self) -> str:
-        return f"{self.__class__.__qualname__}(name={self.name!r}, section={self.section!r}, type={self.type!r}, constant={self.constant!r}, span={self.span!r}, init={self.init!r}, fb_args={self.fb_args!r}, instance_path={self.instance_path!r})"
-
-    def __eq__(self, other: object):
-        if other.__class__ is self.__class__:
-            return (self.name, self.section, self.type, self.constant, self.span, self.init, self.fb_args, self.instance_path) == (other.name, other.section, other.type, other.constant, other.span, other.init, other.fb_args, other.instance_path)   # type: ignore[attr-defined]
-        return NotImplemented
-
-    __hash__ = None   # type: ignore[assignment]  # mutable and compared by value
-
     @property
     def key(self) -> str:
         return self.name.lower()
 
 
-class POUInfo:
+class POUInfo(Record):
     """One PROGRAM, FUNCTION_BLOCK, FUNCTION or METHOD: its kind, result and variables.
 
     `qualname`: the namespace path joined with '\\'; `kind`: FUNCTION, FUNCTION_BLOCK, PROGRAM,
@@ -149,7 +99,6 @@ class POUInfo:
     `call_after_init`: a METHOD with {attribute 'call_after_init'} (CODESYS), run after FB_init."""
 
     _FIELDS = ('name', 'qualname', 'kind', 'return_type', 'variables', 'native', 'generic', 'variadic', 'typed', 'aliases', 'quiet_pin', 'file', 'span', 'methods', 'properties', 'base', 'interfaces', 'owner', 'access', 'abstract', 'final', 'inherited', 'inst_vars', 'stat_vars', 'call_after_init')
-    __match_args__ = _FIELDS
 
     def __init__(self, name: str, qualname: str, kind: str, return_type: Type | None,
                  variables: dict[str, Variable] = _FACTORY, native: bool = False, generic: bool = False,
@@ -186,17 +135,6 @@ class POUInfo:
         self.stat_vars = {} if stat_vars is _FACTORY else stat_vars
         self.call_after_init = call_after_init
 
-    @recursive_repr()
-    def __repr__(self) -> str:
-        return f"{self.__class__.__qualname__}(name={self.name!r}, qualname={self.qualname!r}, kind={self.kind!r}, return_type={self.return_type!r}, variables={self.variables!r}, native={self.native!r}, generic={self.generic!r}, variadic={self.variadic!r}, typed={self.typed!r}, aliases={self.aliases!r}, quiet_pin={self.quiet_pin!r}, file={self.file!r}, span={self.span!r}, methods={self.methods!r}, properties={self.properties!r}, base={self.base!r}, interfaces={self.interfaces!r}, owner={self.owner!r}, access={self.access!r}, abstract={self.abstract!r}, final={self.final!r}, inherited={self.inherited!r}, inst_vars={self.inst_vars!r}, stat_vars={self.stat_vars!r}, call_after_init={self.call_after_init!r})"
-
-    def __eq__(self, other: object):
-        if other.__class__ is self.__class__:
-            return (self.name, self.qualname, self.kind, self.return_type, self.variables, self.native, self.generic, self.variadic, self.typed, self.aliases, self.quiet_pin, self.file, self.span, self.methods, self.properties, self.base, self.interfaces, self.owner, self.access, self.abstract, self.final, self.inherited, self.inst_vars, self.stat_vars, self.call_after_init) == (other.name, other.qualname, other.kind, other.return_type, other.variables, other.native, other.generic, other.variadic, other.typed, other.aliases, other.quiet_pin, other.file, other.span, other.methods, other.properties, other.base, other.interfaces, other.owner, other.access, other.abstract, other.final, other.inherited, other.inst_vars, other.stat_vars, other.call_after_init)   # type: ignore[attr-defined]
-        return NotImplemented
-
-    __hash__ = None   # type: ignore[assignment]  # mutable and compared by value
-
     def replace(self, **changes) -> "POUInfo":
         """A copy with `changes` (what `dataclasses.replace` gave: the same values otherwise)."""
         unknown = set(changes) - set(self._FIELDS)
@@ -223,12 +161,11 @@ class POUInfo:
         return self.variables.get(key)
 
 
-class PropertyInfo:
+class PropertyInfo(Record):
     """PROPERTY P : T of an FB or interface: GET is a METHOD returning T (named P), SET a METHOD
     with the input P."""
 
     _FIELDS = ('name', 'type', 'getter', 'setter', 'owner', 'access', 'span')
-    __match_args__ = _FIELDS
 
     def __init__(self, name: str, type: Type, getter: POUInfo | None, setter: POUInfo | None,
                  owner: str = "", access: str = "PUBLIC", span: Span = NO_SPAN) -> None:
@@ -240,28 +177,16 @@ class PropertyInfo:
         self.access = access
         self.span = span
 
-    @recursive_repr()
-    def __repr__(self) -> str:
-        return f"{self.__class__.__qualname__}(name={self.name!r}, type={self.type!r}, getter={self.getter!r}, setter={self.setter!r}, owner={self.owner!r}, access={self.access!r}, span={self.span!r})"
-
-    def __eq__(self, other: object):
-        if other.__class__ is self.__class__:
-            return (self.name, self.type, self.getter, self.setter, self.owner, self.access, self.span) == (other.name, other.type, other.getter, other.setter, other.owner, other.access, other.span)   # type: ignore[attr-defined]
-        return NotImplemented
-
-    __hash__ = None   # type: ignore[assignment]  # mutable and compared by value
-
     @property
     def key(self) -> str:
         return self.name.lower()
 
 
-class TaskInfo:
+class TaskInfo(Record):
     """One task of the configuration: period, priority and the program instances it runs,
     (instance name, program qualname)."""
 
     _FIELDS = ('name', 'interval_ns', 'priority', 'programs')
-    __match_args__ = _FIELDS
 
     def __init__(self, name: str, interval_ns: int, priority: int, programs: list[tuple[str, str]]) -> None:
         self.name = name
@@ -269,25 +194,13 @@ class TaskInfo:
         self.priority = priority
         self.programs = programs
 
-    @recursive_repr()
-    def __repr__(self) -> str:
-        return f"{self.__class__.__qualname__}(name={self.name!r}, interval_ns={self.interval_ns!r}, priority={self.priority!r}, programs={self.programs!r})"
 
-    def __eq__(self, other: object):
-        if other.__class__ is self.__class__:
-            return (self.name, self.interval_ns, self.priority, self.programs) == (other.name, other.interval_ns, other.priority, other.programs)   # type: ignore[attr-defined]
-        return NotImplemented
-
-    __hash__ = None   # type: ignore[assignment]  # mutable and compared by value
-
-
-class ProjectModel:
+class ProjectModel(Record):
     """What the checker hands the lowering: POUs (qualname key → POU), globals (key → global
     variable), tasks (empty: a default task for the lone programs), the program qualnames to run
     in the default task, and the declared types (qualname key → StructType / EnumType)."""
 
     _FIELDS = ('pous', 'globals', 'tasks', 'default_programs', 'structs', 'enums')
-    __match_args__ = _FIELDS
 
     def __init__(self, pous: dict[str, POUInfo], globals: dict[str, Variable], tasks: list[TaskInfo],
                  default_programs: list[str], structs: dict[str, Type], enums: dict[str, Type]) -> None:
@@ -298,13 +211,3 @@ class ProjectModel:
         self.structs = structs
         self.enums = enums
 
-    @recursive_repr()
-    def __repr__(self) -> str:
-        return f"{self.__class__.__qualname__}(pous={self.pous!r}, globals={self.globals!r}, tasks={self.tasks!r}, default_programs={self.default_programs!r}, structs={self.structs!r}, enums={self.enums!r})"
-
-    def __eq__(self, other: object):
-        if other.__class__ is self.__class__:
-            return (self.pous, self.globals, self.tasks, self.default_programs, self.structs, self.enums) == (other.pous, other.globals, other.tasks, other.default_programs, other.structs, other.enums)   # type: ignore[attr-defined]
-        return NotImplemented
-
-    __hash__ = None   # type: ignore[assignment]  # mutable and compared by value

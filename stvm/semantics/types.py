@@ -8,8 +8,8 @@ the same class and fields, `hash`, `repr`, assignment raising `FrozenInstanceErr
 instance `__dict__` that pickle stores), but are written out: `dataclass` builds each class's
 methods with `exec` when the module is imported, ~10 ms of every `stvm run` for these 17
 classes (issue 33 item 5). Each class writes its `__init__` and lists its fields in `_FIELDS`
-(and `_COMPARED` where `==` leaves some out); `Type` derives `==`, `hash` (one `attrgetter`
-call) and `repr` from them. A test compares every class with the dataclass it replaces
+(and `_COMPARED` where `==` leaves some out); `stvm.records.FrozenRecord` derives `==`, `hash`
+and `repr` from them. A test compares every class with the dataclass it replaces
 (tests/semantics/test_types_records.py).
 
 Runtime representation of each type (what generated code and native POUs see):
@@ -31,52 +31,18 @@ Runtime representation of each type (what generated code and native POUs see):
 
 from __future__ import annotations
 
-from dataclasses import FrozenInstanceError
-from operator import attrgetter
-from reprlib import recursive_repr
+from stvm.records import FrozenRecord
 
 _set = object.__setattr__
 
 
-class Type:
+class Type(FrozenRecord):
     """An ST data type as the checker and the lowering see it; `name` is the user's spelling."""
 
-    _FIELDS = ("name",)          # every field, in order: the constructor's, repr's, pickle's
-    _COMPARED: tuple[str, ...] | None = None   # the fields `==` and `hash` use, when not all
-
-    def __init_subclass__(cls, **kwargs) -> None:
-        super().__init_subclass__(**kwargs)
-        cls._make_key()
-
-    @classmethod
-    def _make_key(cls) -> None:
-        """`_key(obj)`: the tuple `==` and `hash` compare (what the dataclass compared), one C call."""
-        compared = cls._COMPARED or cls._FIELDS
-        getter = attrgetter(*compared)
-        cls._key = staticmethod(getter if len(compared) > 1 else lambda obj: (getter(obj),))
-        cls.__match_args__ = cls._FIELDS
+    _FIELDS = ("name",)
 
     def __init__(self, name: str) -> None:
         _set(self, "name", name)
-
-    @recursive_repr()
-    def __repr__(self) -> str:
-        fields = ", ".join(f"{name}={getattr(self, name)!r}" for name in self._FIELDS)
-        return f"{self.__class__.__qualname__}({fields})"
-
-    def __eq__(self, other: object):
-        if other.__class__ is self.__class__:
-            return self._key(self) == self._key(other)
-        return NotImplemented
-
-    def __hash__(self) -> int:
-        return hash(self._key(self))
-
-    def __setattr__(self, name: str, value: object) -> None:
-        raise FrozenInstanceError(f"cannot assign to field {name!r}")
-
-    def __delattr__(self, name: str) -> None:
-        raise FrozenInstanceError(f"cannot delete field {name!r}")
 
     @property
     def kind(self) -> str:
@@ -84,9 +50,6 @@ class Type:
 
     def __str__(self) -> str:
         return self.name
-
-
-Type._make_key()    # __init_subclass__ does it for every subclass
 
 
 class BoolType(Type):
