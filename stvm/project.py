@@ -17,7 +17,7 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Sequence
 
-from stvm.records import Record
+from stvm.records import FACTORY, Record
 from stvm.version import __version__
 from stvm.diagnostics import Diagnostic, has_errors, render, sort_key
 from stvm.manifest import MANIFEST, ManifestError, project_files, read_manifest  # noqa: F401 (API)
@@ -54,7 +54,6 @@ class LoadError(Exception):
 # builds a class's methods with `exec` at import, a cost of every `stvm run` (issue 33 item 5;
 # tests/project/test_project_records.py compares them). Options and ProjectSpec stay dataclasses
 # (callers `dataclasses.replace` them).
-_FACTORY = object()   # "no argument": a fresh list or dict, as a dataclass `default_factory`
 
 
 class Project(Record):
@@ -63,22 +62,22 @@ class Project(Record):
     `code`: the generated module's code objects, run in order (lower.product.compile_module);
     `native_modules`: the stdlib modules implementing the natives it calls; `natives_known`:
     native_modules is complete (a cached load), import only those; `files_root`: `--files-root`,
-    the SysFile folder (stdlib/sys_file.py). Written out, not a dataclass (see `_FACTORY`)."""
+    the SysFile folder (stdlib/sys_file.py). Written out, not a dataclass (see stvm/records.py)."""
 
     _FIELDS = ('model', 'lowered', 'code', 'sources', 'settings', 'warnings', 'from_cache', 'manifest', 'root', 'native_modules', 'natives_known', 'files_root')
 
     def __init__(self, model: ProjectModel, lowered: LoweredProject, code: tuple, sources: dict[str, str],
-                 settings: SysmacSettings, warnings: list[Diagnostic] = _FACTORY, from_cache: bool = False,
-                 manifest: dict = _FACTORY, root: Path | None = None, native_modules: tuple[str, ...] = (),
+                 settings: SysmacSettings, warnings: list[Diagnostic] = FACTORY, from_cache: bool = False,
+                 manifest: dict = FACTORY, root: Path | None = None, native_modules: tuple[str, ...] = (),
                  natives_known: bool = False, files_root: str | None = None) -> None:
         self.model = model
         self.lowered = lowered
         self.code = code
         self.sources = sources
         self.settings = settings
-        self.warnings = [] if warnings is _FACTORY else warnings
+        self.warnings = [] if warnings is FACTORY else warnings
         self.from_cache = from_cache
-        self.manifest = {} if manifest is _FACTORY else manifest
+        self.manifest = {} if manifest is FACTORY else manifest
         self.root = root
         self.native_modules = native_modules
         self.natives_known = natives_known

@@ -20,6 +20,11 @@ from reprlib import recursive_repr
 from typing import Any, Callable
 
 
+# The default of a constructor parameter whose dataclass field had a `default_factory`: the
+# constructor stores a fresh list or dict when it sees this (`{} if x is FACTORY else x`).
+FACTORY: Any = object()
+
+
 def _key_function(names: tuple[str, ...]) -> Callable[[Any], tuple]:
     """The tuple of `names`' values, in one C call where there are several."""
     if len(names) > 1:
@@ -52,6 +57,16 @@ class Record:
         return NotImplemented
 
     __hash__ = None   # type: ignore[assignment]  # mutable and compared by value
+
+    def replace(self, **changes):
+        """A copy with `changes` (what `dataclasses.replace` gave: the same values otherwise)."""
+        unknown = set(changes) - set(self._FIELDS)
+        if unknown:
+            raise TypeError(f"{self.__class__.__name__} has no field {sorted(unknown)[0]!r}")
+        new = self.__class__.__new__(self.__class__)
+        new.__dict__.update(self.__dict__)
+        new.__dict__.update(changes)
+        return new
 
 
 class FrozenRecord(Record):

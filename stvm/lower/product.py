@@ -7,7 +7,7 @@ from __future__ import annotations
 import bisect
 from types import CodeType
 
-from stvm.records import Record
+from stvm.records import FACTORY, Record
 from stvm.lower.layout import ProjectLayout
 from stvm.semantics import types as t
 from stvm.source import Span
@@ -17,7 +17,6 @@ from stvm.source import Span
 # (`__init__` written out, the rest derived from `_FIELDS`): `dataclass` builds
 # a class's methods with `exec` at import, a cost of every `stvm run` (issue 33 item 5;
 # tests/lower/test_product_records.py compares them).
-_FACTORY = object()   # "no argument": a fresh list, as a dataclass `default_factory`
 
 class LineMap(Record):
     """Generated line → ST span; `span_at` finds the statement a generated line belongs to
@@ -25,9 +24,9 @@ class LineMap(Record):
 
     _FIELDS = ('lines', 'spans')
 
-    def __init__(self, lines: list[int] = _FACTORY, spans: list[Span | None] = _FACTORY) -> None:
-        self.lines = [] if lines is _FACTORY else lines
-        self.spans = [] if spans is _FACTORY else spans
+    def __init__(self, lines: list[int] = FACTORY, spans: list[Span | None] = FACTORY) -> None:
+        self.lines = [] if lines is FACTORY else lines
+        self.spans = [] if spans is FACTORY else spans
 
     def add(self, line: int, span: Span | None) -> None:
         if self.lines and self.lines[-1] == line:

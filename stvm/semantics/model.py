@@ -8,7 +8,7 @@ name resolves to) live in `Analysis.facts`, keyed by node identity, and are not 
 from __future__ import annotations
 
 
-from stvm.records import FrozenRecord, Record
+from stvm.records import FACTORY, FrozenRecord, Record
 from stvm.semantics.types import Type
 from stvm.source import NO_SPAN, Span   # start-up: not the syntax tree (a cached load unpickles this)
 
@@ -21,7 +21,6 @@ INPUT, OUTPUT, IN_OUT, LOCAL, TEMP, GLOBAL, EXTERNAL = (
 # builds each class's methods with `exec` at import, a cost of
 # every `stvm run` (issue 33 item 5; tests/semantics/test_model_records.py compares them).
 _set = object.__setattr__
-_FACTORY = object()   # "no argument": a fresh dict, as a dataclass `default_factory`
 
 
 class SiblingInstance(FrozenRecord):
@@ -101,29 +100,29 @@ class POUInfo(Record):
     _FIELDS = ('name', 'qualname', 'kind', 'return_type', 'variables', 'native', 'generic', 'variadic', 'typed', 'aliases', 'quiet_pin', 'file', 'span', 'methods', 'properties', 'base', 'interfaces', 'owner', 'access', 'abstract', 'final', 'inherited', 'inst_vars', 'stat_vars', 'call_after_init')
 
     def __init__(self, name: str, qualname: str, kind: str, return_type: Type | None,
-                 variables: dict[str, Variable] = _FACTORY, native: bool = False, generic: bool = False,
-                 variadic: bool = False, typed: bool = False, aliases: dict[str, str] = _FACTORY,
+                 variables: dict[str, Variable] = FACTORY, native: bool = False, generic: bool = False,
+                 variadic: bool = False, typed: bool = False, aliases: dict[str, str] = FACTORY,
                  quiet_pin: str | None = None, file: str = "", span: Span = NO_SPAN,
-                 methods: dict[str, POUInfo] = _FACTORY, properties: dict[str, PropertyInfo] = _FACTORY,
+                 methods: dict[str, POUInfo] = FACTORY, properties: dict[str, PropertyInfo] = FACTORY,
                  base: str | None = None, interfaces: tuple[str, ...] = (), owner: str = "",
                  access: str = "PUBLIC", abstract: bool = False, final: bool = False, inherited: int = 0,
-                 inst_vars: dict[str, str] = _FACTORY, stat_vars: dict[str, str] = _FACTORY,
+                 inst_vars: dict[str, str] = FACTORY, stat_vars: dict[str, str] = FACTORY,
                  call_after_init: bool = False) -> None:
         self.name = name
         self.qualname = qualname
         self.kind = kind
         self.return_type = return_type
-        self.variables = {} if variables is _FACTORY else variables
+        self.variables = {} if variables is FACTORY else variables
         self.native = native
         self.generic = generic
         self.variadic = variadic
         self.typed = typed
-        self.aliases = {} if aliases is _FACTORY else aliases
+        self.aliases = {} if aliases is FACTORY else aliases
         self.quiet_pin = quiet_pin
         self.file = file
         self.span = span
-        self.methods = {} if methods is _FACTORY else methods
-        self.properties = {} if properties is _FACTORY else properties
+        self.methods = {} if methods is FACTORY else methods
+        self.properties = {} if properties is FACTORY else properties
         self.base = base
         self.interfaces = interfaces
         self.owner = owner
@@ -131,19 +130,9 @@ class POUInfo(Record):
         self.abstract = abstract
         self.final = final
         self.inherited = inherited
-        self.inst_vars = {} if inst_vars is _FACTORY else inst_vars
-        self.stat_vars = {} if stat_vars is _FACTORY else stat_vars
+        self.inst_vars = {} if inst_vars is FACTORY else inst_vars
+        self.stat_vars = {} if stat_vars is FACTORY else stat_vars
         self.call_after_init = call_after_init
-
-    def replace(self, **changes) -> "POUInfo":
-        """A copy with `changes` (what `dataclasses.replace` gave: the same values otherwise)."""
-        unknown = set(changes) - set(self._FIELDS)
-        if unknown:
-            raise TypeError(f"POUInfo has no field {sorted(unknown)[0]!r}")
-        new = POUInfo.__new__(POUInfo)
-        new.__dict__.update(self.__dict__)
-        new.__dict__.update(changes)
-        return new
 
     @property
     def key(self) -> str:

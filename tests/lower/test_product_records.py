@@ -3,6 +3,7 @@ and must behave as the dataclasses they were."""
 
 from __future__ import annotations
 
+from stvm.records import FACTORY
 from stvm.lower import product
 from stvm.semantics import types as t
 from stvm.source import Span
@@ -14,7 +15,7 @@ SPAN = Span("a.st", 1, 1, 1, 5)
 def test_line_map_behaves_as_its_dataclass():
     first = {"lines": [1, 4], "spans": [SPAN, None]}
     second = {"lines": [2], "spans": [None]}
-    assert_behaves_as_mutable_dataclass(product.LineMap, product._FACTORY,
+    assert_behaves_as_mutable_dataclass(product.LineMap, FACTORY,
                                         samples_varying(product.LineMap, first, second))
 
 
@@ -24,5 +25,5 @@ def test_lowered_project_behaves_as_its_dataclass():
              "layouts": None}
     second = {"source": "", "line_map": product.LineMap(), "classes": {}, "natives": {"N1_ABS": "abs"},
               "native_fbs": {"TON": "ton"}, "types": [], "sites": [], "globals_class": "G_other", "layouts": "x"}
-    assert_behaves_as_mutable_dataclass(product.LoweredProject, product._FACTORY,
+    assert_behaves_as_mutable_dataclass(product.LoweredProject, FACTORY,
                                         samples_varying(product.LoweredProject, first, second))

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import pytest
 
+from stvm.records import FACTORY
 from stvm import project as p
 from stvm.settings import DEFAULT_SETTINGS
 from tests.record_helpers import assert_behaves_as_mutable_dataclass, samples_varying
@@ -21,4 +22,4 @@ SECOND = {"model": "m2", "lowered": "l2", "code": (1,), "sources": {}, "settings
 
 @pytest.mark.parametrize("cls", [p.Project, p.Parsed, p.Checked, p.Compiled], ids=lambda c: c.__name__)
 def test_a_stage_product_behaves_as_its_dataclass(cls):
-    assert_behaves_as_mutable_dataclass(cls, p._FACTORY, samples_varying(cls, FIRST, SECOND))
+    assert_behaves_as_mutable_dataclass(cls, FACTORY, samples_varying(cls, FIRST, SECOND))

@@ -13,6 +13,7 @@ import pickle
 
 import pytest
 
+from stvm.records import FACTORY
 from stvm.semantics import model as m
 from stvm.semantics import types as t
 from stvm.source import Span
@@ -27,7 +28,7 @@ def _reference(cls, frozen: bool):
     specs = []
     for name in cls._FIELDS:
         default = params[name].default
-        if default is m._FACTORY:
+        if default is FACTORY:
             specs.append((name, object, dataclasses.field(default_factory=dict)))
         elif default is inspect.Parameter.empty:
             specs.append((name, object))
