@@ -11,16 +11,19 @@ from stvm.semantics.literals import literal_value
 from stvm.lockstep import LOCKSTEP_HOST, LOCKSTEP_PORT, LockstepTransport
 
 
-def test_pose_at_a_later_time_is_the_pose_the_robot_then_reports():
+def connected_cell():
+    """The thesis project in lockstep with the emulator at a quarter of its speed, connected."""
     transport = LockstepTransport(latency_scans=1, settings=DEFAULT_SETTINGS.with_(time_scale=0.25))
     vm = stvm.load([str(THESIS)]).start(scan="1ms", transport=transport)
     transport.attach(vm)
-    robot = transport.link.robot
     vm["Connect_AddressIP"], vm["Connect_Dest_PortIP"], vm["Connect_Time_Out"] = LOCKSTEP_HOST, LOCKSTEP_PORT, 100
     vm["Connect_Execute"] = True
     vm.run(cycles=3000)
-    assert vm["Cobot.Connected"]
-    assert robot.pose_at(robot.now_ns) == robot.snapshot()["pose"]      # at rest: the same pose
+    return vm, transport
+
+
+def start_ptp_move(vm) -> None:
+    """CBT_MoveAbsolute to a point 350 mm out and up, PTP at 50 %."""
     for path, value in {"MoveAbs_Param.CommandID": 2, "MoveAbs_Param.MovementCommand": "PTP",
                         "MoveAbs_Param.DataFormat": "CPP_Abs", "MoveAbs_Param.Speed": 50,
                         "MoveAbs_Param.AccelTime": 200, "MoveAbs_Param.TargetPosition.X": 350.0,
@@ -29,6 +32,14 @@ def test_pose_at_a_later_time_is_the_pose_the_robot_then_reports():
                         "MoveAbs_Param.RobotPose.Pose3": 4}.items():
         vm[path] = literal_value(value, vm.accessor(path).type) if isinstance(value, str) else value
     vm["MoveAbs_Execute"] = True
+
+
+def test_pose_at_a_later_time_is_the_pose_the_robot_then_reports():
+    vm, transport = connected_cell()
+    robot = transport.link.robot
+    assert vm["Cobot.Connected"]
+    assert robot.pose_at(robot.now_ns) == robot.snapshot()["pose"]      # at rest: the same pose
+    start_ptp_move(vm)
     moving = []
     for _ in range(400):
         vm.run(cycles=20)
@@ -52,15 +63,10 @@ def test_the_lockstep_pose_source_reads_in_the_vm_thread_what_the_robot_reports(
     """`from_lockstep`: the VM thread only takes references (`read`), the server thread computes
     the pose (`finish`); the result is `Robot.snapshot()`'s, at rest and along a move."""
     from stvm.hmi.robot import from_lockstep
-    transport = LockstepTransport(latency_scans=1, settings=DEFAULT_SETTINGS.with_(time_scale=0.25))
-    vm = stvm.load([str(THESIS)]).start(scan="1ms", transport=transport)
-    transport.attach(vm)
+    vm, transport = connected_cell()
     robot = transport.link.robot
     source = from_lockstep(transport)
     assert source.in_vm_thread and source.finish is not None
-    vm["Connect_AddressIP"], vm["Connect_Dest_PortIP"], vm["Connect_Time_Out"] = LOCKSTEP_HOST, LOCKSTEP_PORT, 100
-    vm["Connect_Execute"] = True
-    vm.run(cycles=3000)
     keys = ("pose", "state", "paused", "moving", "base")
 
     def same() -> dict:
@@ -70,14 +76,7 @@ def test_the_lockstep_pose_source_reads_in_the_vm_thread_what_the_robot_reports(
         assert source.finish(raw) == expected
         return expected
     assert not same()["moving"]
-    for path, value in {"MoveAbs_Param.CommandID": 2, "MoveAbs_Param.MovementCommand": "PTP",
-                        "MoveAbs_Param.DataFormat": "CPP_Abs", "MoveAbs_Param.Speed": 50,
-                        "MoveAbs_Param.AccelTime": 200, "MoveAbs_Param.TargetPosition.X": 350.0,
-                        "MoveAbs_Param.TargetPosition.Z": 350.0, "MoveAbs_Param.TargetPosition.RX": 180.0,
-                        "MoveAbs_Param.TargetPosition.RZ": 90.0, "MoveAbs_Param.RobotPose.Pose2": 2,
-                        "MoveAbs_Param.RobotPose.Pose3": 4}.items():
-        vm[path] = literal_value(value, vm.accessor(path).type) if isinstance(value, str) else value
-    vm["MoveAbs_Execute"] = True
+    start_ptp_move(vm)
     seen_moving = 0
     for _ in range(300):
         seen_moving += same()["moving"]
